@@ -1,0 +1,25 @@
+#version 460
+// gbuffer: writes normal + reflectivity, albedo + roughness, material id.
+#include "frame.glsl"
+
+layout(binding = 2, std430) readonly buffer Materials { Material materials[]; };
+
+layout(location = 0) in vec3 in_world;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) flat in uint in_material;
+
+layout(location = 0) out vec4 out_normal;   // xyz: unit world normal facing the camera; w: reflectivity
+layout(location = 1) out vec4 out_albedo;   // rgb: albedo; a: roughness
+layout(location = 2) out uint out_material; // material index (MATERIAL_NONE where empty)
+
+void main() {
+    Material m = materials[in_material];
+    vec3 n = normalize(in_normal);
+    // Culling is off (scenes mix windings): make the normal face the viewer.
+    if (dot(n, frame.camera_pos.xyz - in_world) < 0.0) {
+        n = -n;
+    }
+    out_normal = vec4(n, m.reflectivity);
+    out_albedo = vec4(m.albedo, m.roughness);
+    out_material = in_material;
+}

@@ -1,0 +1,17 @@
+#version 460
+// gbuffer: transforms pulled vertices; passes world position, normal and material.
+#include "frame.glsl"
+
+layout(binding = 1, std430) readonly buffer Vertices { Vertex vertices[]; };
+
+layout(location = 0) out vec3 out_world;
+layout(location = 1) out vec3 out_normal;
+layout(location = 2) flat out uint out_material;
+
+void main() {
+    Vertex v = vertices[gl_VertexIndex];
+    out_world = v.position;
+    out_normal = v.normal;
+    out_material = v.material;
+    gl_Position = frame.view_proj * vec4(v.position, 1.0);
+}

@@ -1,0 +1,33 @@
+#version 460
+// light.direct: deferred shading of the G-buffer with the sun and its shadow map.
+#include "shading.glsl"
+
+layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
+
+layout(binding = 1) uniform sampler2D gb_depth;
+layout(binding = 2) uniform sampler2D gb_normal;
+layout(binding = 3) uniform sampler2D gb_albedo;
+layout(binding = 4) uniform usampler2D gb_material;
+layout(binding = 5) uniform sampler2D shadow_map;
+layout(binding = 6, rgba32f) uniform writeonly image2D lit;
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(p, ivec2(frame.resolution)))) {
+        return;
+    }
+    float depth = texelFetch(gb_depth, p, 0).r;
+    uint material = texelFetch(gb_material, p, 0).r;
+    vec3 w = world_from_depth(p, depth);
+    vec3 to_camera = frame.camera_pos.xyz - w;
+    vec3 color;
+    if (material == MATERIAL_NONE) {
+        color = sky_radiance(-normalize(to_camera));
+    } else {
+        vec4 nr = texelFetch(gb_normal, p, 0);
+        vec4 ar = texelFetch(gb_albedo, p, 0);
+        float vis = shadow_visibility(shadow_map, w);
+        color = shade_direct(ar.rgb, ar.a, nr.w, normalize(nr.xyz), normalize(to_camera), vis);
+    }
+    imageStore(lit, p, vec4(color, 1.0));
+}

@@ -1,0 +1,24 @@
+// The per-frame uniform block at binding 0 and helpers that only need it.
+#ifndef FRAME_GLSL
+#define FRAME_GLSL
+#include "types.glsl"
+
+layout(binding = 0) uniform FrameUniforms { FRAME_UNIFORMS_BLOCK } frame;
+
+// Sky radiance seen along unit direction `d`: zenith-to-horizon gradient above the
+// horizon, a darker ground colour below. Mirrored by cpu_ref::shading::sky.
+vec3 sky_radiance(vec3 d) {
+    float up = clamp(d.y, -1.0, 1.0);
+    if (up >= 0.0) {
+        return mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, sqrt(up));
+    }
+    return frame.sky_horizon.rgb * mix(0.6, 0.25, min(-up * 4.0, 1.0));
+}
+
+// World position of pixel `p` (integer coordinates) at G-buffer depth `depth`.
+vec3 world_from_depth(ivec2 p, float depth) {
+    vec2 ndc = (vec2(p) + 0.5) / vec2(frame.resolution) * 2.0 - 1.0;
+    vec4 w = frame.inv_view_proj * vec4(ndc, depth, 1.0);
+    return w.xyz / w.w;
+}
+#endif

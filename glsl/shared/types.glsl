@@ -1,0 +1,36 @@
+// Structs shared with Rust: src/gpu_types.rs. Offsets are checked by tests/layout.rs.
+#ifndef TYPES_GLSL
+#define TYPES_GLSL
+
+struct Vertex {
+    vec3 position;
+    uint material;
+    vec3 normal;
+    uint _pad0;
+};
+
+struct Material {
+    vec3 albedo;
+    float roughness;
+    float reflectivity;
+    float _pad0[3];
+};
+
+#define FRAME_UNIFORMS_BLOCK                                                         \
+    mat4 view_proj;                                                                   \
+    mat4 inv_view_proj;                                                               \
+    mat4 light_view_proj;                                                             \
+    vec4 camera_pos;                                                                  \
+    vec4 light_dir;                                                                   \
+    vec4 light_color;                                                                 \
+    vec4 sky_zenith;                                                                  \
+    vec4 sky_horizon;                                                                 \
+    uvec2 resolution;                                                                 \
+    uint shadow_map_size;                                                             \
+    uint pcf_radius;                                                                  \
+    float shadow_bias;                                                                \
+    float exposure;                                                                   \
+    float ambient;                                                                    \
+    float _pad0;
+
+#endif

@@ -1,0 +1,23 @@
+//! CPU references of the GPU kernels, written to mirror the GLSL line by line. Tests
+//! and benchmarks compare GPU output against these.
+
+pub mod compose;
+pub mod shading;
+
+/// Decodes tightly packed RGBA16F texels.
+pub fn rgba16f_to_f32(raw: &[u8]) -> Vec<[f32; 4]> {
+    raw.chunks_exact(8)
+        .map(|t| {
+            let h = |i: usize| half::f16::from_le_bytes([t[2 * i], t[2 * i + 1]]).to_f32();
+            [h(0), h(1), h(2), h(3)]
+        })
+        .collect()
+}
+
+/// Encodes RGBA f32 texels as tightly packed RGBA16F (round to nearest).
+pub fn f32_to_rgba16f(texels: &[[f32; 4]]) -> Vec<u8> {
+    texels
+        .iter()
+        .flat_map(|t| t.iter().flat_map(|&c| half::f16::from_f32(c).to_le_bytes()))
+        .collect()
+}

@@ -1,0 +1,104 @@
+//! Reference of `glsl/shared/shading.glsl` and `frame.glsl` (light.direct).
+
+use crate::gpu_types::FrameUniforms;
+use crate::shader_defines::MAX_PCF_RADIUS;
+use glam::{IVec2, Vec2, Vec3, Vec3Swizzles, Vec4, Vec4Swizzles};
+
+/// Sky radiance along unit direction `d` (`sky_radiance`).
+pub fn sky(frame: &FrameUniforms, d: Vec3) -> Vec3 {
+    let up = d.y.clamp(-1.0, 1.0);
+    let (zen, hor) = (frame.sky_zenith.xyz(), frame.sky_horizon.xyz());
+    if up >= 0.0 {
+        hor.lerp(zen, up.sqrt())
+    } else {
+        hor * (0.6 + (0.25 - 0.6) * (-up * 4.0).min(1.0))
+    }
+}
+
+/// World position of pixel `p` at depth `depth` (`world_from_depth`).
+pub fn world_from_depth(frame: &FrameUniforms, p: IVec2, depth: f32) -> Vec3 {
+    let res = Vec2::new(frame.resolution[0] as f32, frame.resolution[1] as f32);
+    let ndc = (p.as_vec2() + 0.5) / res * 2.0 - 1.0;
+    let w = frame.inv_view_proj * Vec4::new(ndc.x, ndc.y, depth, 1.0);
+    w.xyz() / w.w
+}
+
+/// A square shadow map of `size`² depths, row-major.
+pub struct ShadowMap<'a> {
+    pub size: u32,
+    pub depth: &'a [f32],
+}
+
+impl ShadowMap<'_> {
+    fn texel(&self, q: IVec2, ref_depth: f32) -> f32 {
+        let last = self.size as i32 - 1;
+        let q = q.clamp(IVec2::ZERO, IVec2::splat(last));
+        if self.depth[(q.y * self.size as i32 + q.x) as usize] >= ref_depth {
+            1.0
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Fraction of light reaching `w` (`shadow_visibility`).
+pub fn shadow_visibility(frame: &FrameUniforms, map: &ShadowMap<'_>, w: Vec3) -> f32 {
+    let c = frame.light_view_proj * w.extend(1.0);
+    let ndc = c.xyz() / c.w;
+    let uv = ndc.xy() * 0.5 + 0.5;
+    if uv.x < 0.0 || uv.y < 0.0 || uv.x > 1.0 || uv.y > 1.0 || ndc.z > 1.0 {
+        return 1.0;
+    }
+    let ref_depth = ndc.z - frame.shadow_bias;
+    let t = uv * frame.shadow_map_size as f32 - 0.5;
+    let cell = t.floor();
+    let f = t - cell;
+    let r = frame.pcf_radius.min(MAX_PCF_RADIUS) as i32;
+    let base = cell.as_ivec2() - r;
+    let n = 2 * r + 2;
+    let mut sum = 0.0;
+    for j in 0..n {
+        let wy = if j == 0 {
+            1.0 - f.y
+        } else if j == n - 1 {
+            f.y
+        } else {
+            1.0
+        };
+        for i in 0..n {
+            let wx = if i == 0 {
+                1.0 - f.x
+            } else if i == n - 1 {
+                f.x
+            } else {
+                1.0
+            };
+            sum += wx * wy * map.texel(base + IVec2::new(i, j), ref_depth);
+        }
+    }
+    sum / ((2 * r + 1) * (2 * r + 1)) as f32
+}
+
+/// Direct radiance towards `v` (`shade_direct`).
+pub fn shade_direct(
+    frame: &FrameUniforms,
+    albedo: Vec3,
+    roughness: f32,
+    reflectivity: f32,
+    n: Vec3,
+    v: Vec3,
+    visibility: f32,
+) -> Vec3 {
+    let l = frame.light_dir.xyz();
+    let ndl = n.dot(l).max(0.0);
+    let diffuse = albedo * (1.0 - reflectivity) * std::f32::consts::FRAC_1_PI;
+    let r = roughness.max(0.05);
+    let e = 2.0 / (r * r) - 2.0;
+    let h = (l + v).normalize();
+    let spec = (e + 8.0) / (8.0 * std::f32::consts::PI) * n.dot(h).max(0.0).powf(e);
+    let ks = 0.04 + 0.96 * reflectivity;
+    let direct = (diffuse + Vec3::splat(ks * spec)) * frame.light_color.xyz() * ndl * visibility;
+    let sky = frame.sky_horizon.xyz().lerp(frame.sky_zenith.xyz(), n.y * 0.5 + 0.5);
+    let ambient = albedo * (1.0 - reflectivity) * sky * frame.ambient;
+    direct + ambient
+}

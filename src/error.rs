@@ -1,0 +1,73 @@
+//! The library's one error type. Binaries wrap it in `anyhow`; every message is one
+//! line that names the problem (a file, a value, a limit), never a panic.
+
+use ash::vk;
+use std::path::PathBuf;
+
+/// Everything that can go wrong in the library.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A Vulkan call failed; `what` names the call.
+    #[error("Vulkan call {what} failed: {result}")]
+    Vulkan { what: &'static str, result: vk::Result },
+    /// The Vulkan loader (libvulkan.so.1) could not be opened.
+    #[error("cannot load the Vulkan loader: {0} (install libvulkan1 and a driver such as mesa-vulkan-drivers)")]
+    Loader(String),
+    /// No device is usable, or `--device` matched none.
+    #[error("{0}")]
+    NoDevice(String),
+    /// Validation was asked for but the layer is not installed.
+    #[error("validation requested but VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)")]
+    NoValidationLayer,
+    /// GPU memory could not be allocated.
+    #[error("GPU memory allocation for '{name}' failed: {source}")]
+    Allocation {
+        name: String,
+        #[source]
+        source: gpu_allocator::AllocationError,
+    },
+    /// A settings value is outside what the renderer or the device supports.
+    #[error("invalid setting: {0}")]
+    Settings(String),
+    /// A scene name that no built-in scene has.
+    #[error("unknown scene '{name}' (built-in scenes: {known}; or give a path to an .obj file)")]
+    UnknownScene { name: String, known: String },
+    /// A file that should exist does not, or cannot be read.
+    #[error("cannot read {what} '{path}': {source}")]
+    Io {
+        what: &'static str,
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// An OBJ, MTL or texture file that exists but is not valid.
+    #[error("invalid {what} '{path}': {detail}")]
+    BadAsset {
+        what: &'static str,
+        path: PathBuf,
+        detail: String,
+    },
+    /// Geometry that cannot be rendered: no triangles, non-finite coordinates.
+    #[error("invalid geometry in '{source_name}': {detail}")]
+    BadGeometry { source_name: String, detail: String },
+    /// A SPIR-V module the reflection code cannot read.
+    #[error("SPIR-V module '{0}' is malformed: {1}")]
+    Spirv(&'static str, String),
+    /// Writing an output file failed.
+    #[error("cannot write '{path}': {detail}")]
+    Output { path: PathBuf, detail: String },
+}
+
+/// Shorthand used throughout the crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Attaches the name of the Vulkan call to a `vk::Result`.
+pub(crate) trait VkContext<T> {
+    fn vk(self, what: &'static str) -> Result<T>;
+}
+
+impl<T> VkContext<T> for std::result::Result<T, vk::Result> {
+    fn vk(self, what: &'static str) -> Result<T> {
+        self.map_err(|result| Error::Vulkan { what, result })
+    }
+}

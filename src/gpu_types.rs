@@ -1,0 +1,70 @@
+//! Structs shared by Rust and GLSL (`glsl/shared/types.glsl`). Each is `#[repr(C)]`
+//! and Pod; padding is named `_padN`; sizes are asserted here and member offsets are
+//! checked against the compiled SPIR-V by `tests/layout.rs`.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
+
+/// One vertex in world space, pulled by the vertex shaders from a storage buffer
+/// (std430, 32 bytes). Later passes (BVH, ray tracing) read the same buffer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVertex {
+    pub position: [f32; 3],
+    /// Index into the material buffer.
+    pub material: u32,
+    /// Unit normal.
+    pub normal: [f32; 3],
+    pub _pad0: u32,
+}
+
+/// A material (std430, 32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// Linear RGB diffuse albedo in [0, 1].
+    pub albedo: [f32; 3],
+    /// Perceptual roughness in [0, 1]: 0 is a perfect mirror.
+    pub roughness: f32,
+    /// Fraction of light reflected specularly in [0, 1] (used by reflection passes).
+    pub reflectivity: f32,
+    pub _pad0: [f32; 3],
+}
+
+/// Per-frame constants (std140 uniform buffer, 304 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct FrameUniforms {
+    /// World → clip of the camera (Vulkan clip space: y down, depth 0..1).
+    pub view_proj: Mat4,
+    pub inv_view_proj: Mat4,
+    /// World → clip of the shadow-casting light.
+    pub light_view_proj: Mat4,
+    /// xyz: camera position in world units; w unused.
+    pub camera_pos: Vec4,
+    /// xyz: unit vector from a surface towards the light; w unused.
+    pub light_dir: Vec4,
+    /// rgb: light radiance (colour × intensity); w unused.
+    pub light_color: Vec4,
+    /// rgb: sky colour straight up; w unused.
+    pub sky_zenith: Vec4,
+    /// rgb: sky colour at the horizon; w unused.
+    pub sky_horizon: Vec4,
+    /// Render target size in pixels.
+    pub resolution: [u32; 2],
+    /// Shadow map edge in texels.
+    pub shadow_map_size: u32,
+    /// PCF kernel radius in texels: (2r+1)^2 bilinear taps.
+    pub pcf_radius: u32,
+    /// Depth bias (in light clip-space depth units) subtracted before the compare.
+    pub shadow_bias: f32,
+    /// Exposure multiplier applied before tonemapping.
+    pub exposure: f32,
+    /// Strength of the hemispherical sky ambient term.
+    pub ambient: f32,
+    pub _pad0: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<GpuVertex>() == 32);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 32);
+const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 304);

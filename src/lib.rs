@@ -1,0 +1,29 @@
+//! Speculum: a real-time hybrid reflection renderer on raw Vulkan.
+//!
+//! Layout: `vk` is Vulkan plumbing only; `passes` holds one file per pass; `renderer`
+//! records a frame top to bottom; `scene` loads and builds scenes; `cpu_ref` mirrors
+//! every GPU kernel on the CPU for tests. See DESIGN.md in the shared folder.
+
+pub mod cpu_ref;
+pub mod error;
+pub mod gpu_types;
+pub mod headless;
+pub mod passes;
+pub mod renderer;
+pub mod scene;
+pub mod settings;
+pub mod vk;
+
+/// Constants shared with GLSL (also compiled into build.rs).
+pub mod shader_defines {
+    include!("shader_defines.rs");
+}
+
+/// Compiled SPIR-V of every shader under `glsl/`, as bytes.
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}
+
+pub use error::{Error, Result};
+pub use renderer::Renderer;
+pub use settings::Settings;

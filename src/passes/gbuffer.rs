@@ -1,0 +1,143 @@
+//! `gbuffer`: rasterizes the scene from the camera into depth, normal + reflectivity,
+//! albedo + roughness and material id.
+
+use super::{set_viewport, SceneGeometry};
+use crate::error::Result;
+use crate::shader_defines::MATERIAL_NONE;
+use crate::shaders;
+use crate::vk::{Buffer, Context, GraphicsDesc, Image, Pipeline, Resource};
+use ash::vk;
+use std::sync::Arc;
+
+pub const NAME: &str = "gbuffer";
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// xyz: unit world normal facing the camera; w: reflectivity.
+pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// rgb: albedo; a: roughness.
+pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+/// Material index, `MATERIAL_NONE` where no geometry covers the pixel.
+pub const MATERIAL_FORMAT: vk::Format = vk::Format::R32_UINT;
+
+/// The G-buffer images; `SHADER_READ_ONLY_OPTIMAL` between frames.
+pub struct GBuffer {
+    pub depth: Image,
+    pub normal: Image,
+    pub albedo: Image,
+    pub material: Image,
+}
+
+impl GBuffer {
+    fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        let color =
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
+        let depth = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC;
+        Ok(Self {
+            depth: Image::new(ctx, "gbuffer.depth", extent, DEPTH_FORMAT, depth)?,
+            normal: Image::new(ctx, "gbuffer.normal", extent, NORMAL_FORMAT, color)?,
+            albedo: Image::new(ctx, "gbuffer.albedo", extent, ALBEDO_FORMAT, color)?,
+            material: Image::new(ctx, "gbuffer.material", extent, MATERIAL_FORMAT, color)?,
+        })
+    }
+
+    /// The colour targets, in attachment order.
+    pub fn colors(&self) -> [&Image; 3] {
+        [&self.normal, &self.albedo, &self.material]
+    }
+}
+
+pub struct GBufferPass {
+    ctx: Arc<Context>,
+    pipeline: Pipeline,
+    pub targets: GBuffer,
+}
+
+impl GBufferPass {
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        let pipeline = Pipeline::graphics(
+            ctx,
+            NAME,
+            &GraphicsDesc {
+                vertex: ("gbuffer.vert", shaders::GBUFFER_VERT),
+                fragment: Some(("gbuffer.frag", shaders::GBUFFER_FRAG)),
+                color_formats: &[NORMAL_FORMAT, ALBEDO_FORMAT, MATERIAL_FORMAT],
+                depth_format: DEPTH_FORMAT,
+                depth_bias: None,
+                push_size: 0,
+            },
+        )?;
+        Ok(Self {
+            ctx: ctx.clone(),
+            pipeline,
+            targets: GBuffer::new(ctx, extent)?,
+        })
+    }
+
+    /// Recreates the targets at a new size.
+    pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
+        self.targets = GBuffer::new(&self.ctx, extent)?;
+        Ok(())
+    }
+
+    /// Records the raster. Colour targets must be in `COLOR_ATTACHMENT_OPTIMAL`, depth
+    /// in `DEPTH_ATTACHMENT_OPTIMAL`.
+    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, materials: &Buffer, geometry: &SceneGeometry<'_>) {
+        let device = &self.ctx.device;
+        let clear_float = vk::ClearValue {
+            color: vk::ClearColorValue { float32: [0.0; 4] },
+        };
+        let clear_none = vk::ClearValue {
+            color: vk::ClearColorValue {
+                uint32: [MATERIAL_NONE; 4],
+            },
+        };
+        let colors: Vec<_> = self
+            .targets
+            .colors()
+            .iter()
+            .zip([clear_float, clear_float, clear_none])
+            .map(|(img, clear)| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(img.view)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(clear)
+            })
+            .collect();
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(self.targets.depth.view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
+            });
+        let extent = self.targets.depth.extent;
+        let info = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent,
+            })
+            .layer_count(1)
+            .color_attachments(&colors)
+            .depth_attachment(&depth);
+        unsafe { device.cmd_begin_rendering(cmd, &info) };
+        set_viewport(device, cmd, extent);
+        self.pipeline.bind(
+            cmd,
+            &[
+                Resource::Buffer(frame),
+                Resource::Buffer(geometry.vertices),
+                Resource::Buffer(materials),
+            ],
+            &[],
+        );
+        unsafe {
+            device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
+            device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
+            device.cmd_end_rendering(cmd);
+        }
+    }
+}

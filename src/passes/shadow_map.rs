@@ -1,0 +1,86 @@
+//! `shadow.map`: depth-only raster of the scene from the directional light, into a
+//! square D32 map that `light.direct` filters with PCF.
+
+use super::{set_viewport, SceneGeometry};
+use crate::error::Result;
+use crate::shaders;
+use crate::vk::{Buffer, Context, GraphicsDesc, Image, Pipeline, Resource};
+use ash::vk;
+use std::sync::Arc;
+
+pub const NAME: &str = "shadow.map";
+pub const FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+pub struct ShadowMapPass {
+    ctx: Arc<Context>,
+    pipeline: Pipeline,
+    /// The shadow map; `SHADER_READ_ONLY_OPTIMAL` between frames.
+    pub map: Image,
+}
+
+impl ShadowMapPass {
+    /// `size`: map edge in texels; `slope_bias`: raster slope-scaled depth bias.
+    pub fn new(ctx: &Arc<Context>, size: u32, slope_bias: f32) -> Result<Self> {
+        let pipeline = Pipeline::graphics(
+            ctx,
+            NAME,
+            &GraphicsDesc {
+                vertex: ("shadow_map.vert", shaders::SHADOW_MAP_VERT),
+                fragment: None,
+                color_formats: &[],
+                depth_format: FORMAT,
+                depth_bias: Some((0.0, slope_bias)),
+                push_size: 0,
+            },
+        )?;
+        let map = Image::new(
+            ctx,
+            "shadow.map",
+            vk::Extent2D {
+                width: size,
+                height: size,
+            },
+            FORMAT,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC,
+        )?;
+        Ok(Self {
+            ctx: ctx.clone(),
+            pipeline,
+            map,
+        })
+    }
+
+    /// Records the depth pass. The map must be in `DEPTH_ATTACHMENT_OPTIMAL`.
+    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, geometry: &SceneGeometry<'_>) {
+        let device = &self.ctx.device;
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(self.map.view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
+            });
+        let info = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent: self.map.extent,
+            })
+            .layer_count(1)
+            .depth_attachment(&depth);
+        unsafe { device.cmd_begin_rendering(cmd, &info) };
+        set_viewport(device, cmd, self.map.extent);
+        self.pipeline.bind(
+            cmd,
+            &[Resource::Buffer(frame), Resource::Buffer(geometry.vertices)],
+            &[],
+        );
+        unsafe {
+            device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
+            device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
+            device.cmd_end_rendering(cmd);
+        }
+    }
+}

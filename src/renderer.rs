@@ -1,0 +1,358 @@
+//! Owns the passes and records one frame top to bottom: every pass under its timer
+//! scope, every barrier with the hazard it resolves.
+//!
+//! Frame (this subset of DESIGN.md's table):
+//! uniforms → `shadow.map` → `gbuffer` → `light.direct` → `compose`.
+
+use crate::error::{Error, Result, VkContext};
+use crate::gpu_types::{FrameUniforms, GpuMaterial};
+use crate::passes::{compose, gbuffer, light_direct, shadow_map, SceneGeometry};
+use crate::scene::Scene;
+use crate::settings::Settings;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, GpuTimer, Image};
+use ash::vk;
+use glam::{Mat4, Vec3};
+use std::sync::Arc;
+
+/// Timer scope of the whole frame.
+pub const FRAME: &str = "frame";
+/// Timer scope of the per-frame uniform upload.
+pub const UNIFORMS: &str = "uniforms";
+
+/// The scene's buffers on the GPU.
+struct SceneBuffers {
+    vertices: Buffer,
+    indices: Buffer,
+    materials: Buffer,
+    index_count: u32,
+}
+
+pub struct Renderer {
+    ctx: Arc<Context>,
+    settings: Settings,
+    scene: SceneBuffers,
+    frame_ubo: Buffer,
+    uniforms: FrameUniforms,
+    pub shadow: shadow_map::ShadowMapPass,
+    pub gbuffer: gbuffer::GBufferPass,
+    pub light: light_direct::LightDirectPass,
+    pub compose: compose::ComposePass,
+    timer: GpuTimer,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+}
+
+/// The light's world → clip transform: an orthographic box around the scene's
+/// bounding sphere, looking along the light direction.
+fn light_view_proj(direction: Vec3, lo: Vec3, hi: Vec3) -> Mat4 {
+    let center = 0.5 * (lo + hi);
+    let r = (0.5 * (hi - lo).length()).max(1e-3) * 1.01;
+    let up = if direction.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    let view = glam::camera::rh::view::look_at_mat4(center + direction * 2.0 * r, center, up);
+    glam::camera::rh::proj::vulkan::orthographic(-r, r, -r, r, r, 3.0 * r) * view
+}
+
+/// Frame uniforms for `scene` seen with `settings`.
+pub fn frame_uniforms(scene: &Scene, settings: &Settings) -> FrameUniforms {
+    let aspect = settings.width as f32 / settings.height as f32;
+    let view_proj = scene.camera.view_proj(aspect);
+    let (lo, hi) = scene.bounds();
+    let light = &scene.light;
+    FrameUniforms {
+        view_proj,
+        inv_view_proj: view_proj.inverse(),
+        light_view_proj: light_view_proj(light.direction, lo, hi),
+        camera_pos: scene.camera.position.extend(1.0),
+        light_dir: light.direction.normalize().extend(0.0),
+        light_color: (light.color * light.intensity).extend(0.0),
+        sky_zenith: scene.sky.zenith.extend(0.0),
+        sky_horizon: scene.sky.horizon.extend(0.0),
+        resolution: [settings.width, settings.height],
+        shadow_map_size: settings.shadow_map_size,
+        pcf_radius: settings.pcf_radius,
+        shadow_bias: settings.shadow_bias,
+        exposure: settings.exposure,
+        ambient: settings.ambient,
+        _pad0: 0.0,
+    }
+}
+
+impl Renderer {
+    /// Uploads the scene and creates every pass at the settings' resolution.
+    pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings) -> Result<Self> {
+        settings.validate()?;
+        scene.validate()?;
+        let max = ctx.limits.max_image_dimension2_d;
+        if settings.width > max || settings.height > max || settings.shadow_map_size > max {
+            return Err(Error::Settings(format!(
+                "resolution {}x{} (shadow map {}) exceeds this device's maxImageDimension2D {max}",
+                settings.width, settings.height, settings.shadow_map_size
+            )));
+        }
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let materials: Vec<GpuMaterial> = scene.materials.iter().map(|m| m.gpu()).collect();
+        let scene_buffers = SceneBuffers {
+            vertices: Buffer::with_data(ctx, "scene.vertices", storage, bytemuck::cast_slice(&scene.vertices))?,
+            indices: Buffer::with_data(
+                ctx,
+                "scene.indices",
+                vk::BufferUsageFlags::INDEX_BUFFER | storage,
+                bytemuck::cast_slice(&scene.indices),
+            )?,
+            materials: Buffer::with_data(ctx, "scene.materials", storage, bytemuck::cast_slice(&materials))?,
+            index_count: scene.indices.len() as u32,
+        };
+        let frame_ubo = Buffer::new(
+            ctx,
+            "frame.uniforms",
+            std::mem::size_of::<FrameUniforms>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
+        let extent = vk::Extent2D {
+            width: settings.width,
+            height: settings.height,
+        };
+        let cmd = ctx.allocate_command_buffer()?;
+        let fence = unsafe { ctx.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+        let renderer = Self {
+            ctx: ctx.clone(),
+            settings: settings.clone(),
+            scene: scene_buffers,
+            frame_ubo,
+            uniforms: frame_uniforms(scene, settings),
+            shadow: shadow_map::ShadowMapPass::new(ctx, settings.shadow_map_size, settings.shadow_slope_bias)?,
+            gbuffer: gbuffer::GBufferPass::new(ctx, extent)?,
+            light: light_direct::LightDirectPass::new(ctx, extent)?,
+            compose: compose::ComposePass::new(ctx, extent)?,
+            timer: GpuTimer::new(ctx, 16)?,
+            cmd,
+            fence,
+        };
+        Ok(renderer)
+    }
+
+    /// The uniforms the next frame uses.
+    pub fn uniforms(&self) -> &FrameUniforms {
+        &self.uniforms
+    }
+
+    /// Replaces the camera (e.g. for an animated or interactive view).
+    pub fn set_uniforms(&mut self, uniforms: FrameUniforms) {
+        self.uniforms = uniforms;
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Records, submits and waits for one frame; returns its GPU time per scope (ms).
+    pub fn render_frame(&mut self) -> Result<Vec<(&'static str, f64)>> {
+        let device = self.ctx.device.clone();
+        unsafe {
+            device
+                .reset_command_buffer(self.cmd, vk::CommandBufferResetFlags::empty())
+                .vk("vkResetCommandBuffer")?;
+            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            device
+                .begin_command_buffer(self.cmd, &begin)
+                .vk("vkBeginCommandBuffer")?;
+        }
+        self.record(self.cmd);
+        unsafe {
+            device.end_command_buffer(self.cmd).vk("vkEndCommandBuffer")?;
+            device.reset_fences(&[self.fence]).vk("vkResetFences")?;
+            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
+            let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+            device
+                .queue_submit2(self.ctx.queue, &submit, self.fence)
+                .vk("vkQueueSubmit2")?;
+            device
+                .wait_for_fences(&[self.fence], true, u64::MAX)
+                .vk("vkWaitForFences")?;
+        }
+        self.timer.results()
+    }
+
+    /// Records one frame into `cmd`.
+    fn record(&mut self, cmd: vk::CommandBuffer) {
+        use vk::ImageLayout as L;
+        let device = self.ctx.device.clone();
+        let d = &device;
+        let geometry = SceneGeometry {
+            vertices: &self.scene.vertices,
+            indices: &self.scene.indices,
+            index_count: self.scene.index_count,
+        };
+        let color = vk::ImageAspectFlags::COLOR;
+        let depth = vk::ImageAspectFlags::DEPTH;
+        let timer = &mut self.timer;
+        timer.reset(cmd);
+        timer.begin(cmd, FRAME);
+
+        timer.begin(cmd, UNIFORMS);
+        // WAR: the previous frame's shader reads of the uniforms finish before they change.
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::ANY_SHADER_READ, access::TRANSFER_WRITE)],
+            &[],
+        );
+        unsafe { d.cmd_update_buffer(cmd, self.frame_ubo.raw, 0, bytemuck::bytes_of(&self.uniforms)) };
+        // RAW: every pass below reads the uniforms just written.
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::TRANSFER_WRITE, access::ANY_SHADER_READ)],
+            &[],
+        );
+        timer.end(cmd, UNIFORMS);
+
+        timer.begin(cmd, shadow_map::NAME);
+        let map = self.shadow.map.raw;
+        // WAR: the previous frame's light.direct reads finish before the map is cleared (old contents discarded).
+        let to_attachment = barrier::image(
+            map,
+            depth,
+            access::COMPUTE_READ,
+            access::DEPTH_WRITE,
+            L::UNDEFINED,
+            L::DEPTH_ATTACHMENT_OPTIMAL,
+        );
+        barrier::record(d, cmd, &[], &[to_attachment]);
+        self.shadow.record(cmd, &self.frame_ubo, &geometry);
+        // RAW: light.direct samples the depth written above.
+        let to_read = barrier::image(
+            map,
+            depth,
+            access::DEPTH_WRITE,
+            access::COMPUTE_READ,
+            L::DEPTH_ATTACHMENT_OPTIMAL,
+            L::SHADER_READ_ONLY_OPTIMAL,
+        );
+        barrier::record(d, cmd, &[], &[to_read]);
+        timer.end(cmd, shadow_map::NAME);
+
+        timer.begin(cmd, gbuffer::NAME);
+        let t = &self.gbuffer.targets;
+        // WAR: the previous frame's light.direct reads finish before the targets are cleared.
+        let mut into: Vec<_> = t
+            .colors()
+            .iter()
+            .map(|i| {
+                barrier::image(
+                    i.raw,
+                    color,
+                    access::COMPUTE_READ,
+                    access::COLOR_WRITE,
+                    L::UNDEFINED,
+                    L::COLOR_ATTACHMENT_OPTIMAL,
+                )
+            })
+            .collect();
+        into.push(barrier::image(
+            t.depth.raw,
+            depth,
+            access::COMPUTE_READ,
+            access::DEPTH_WRITE,
+            L::UNDEFINED,
+            L::DEPTH_ATTACHMENT_OPTIMAL,
+        ));
+        barrier::record(d, cmd, &[], &into);
+        self.gbuffer
+            .record(cmd, &self.frame_ubo, &self.scene.materials, &geometry);
+        // RAW: light.direct reads the G-buffer written above.
+        let mut out: Vec<_> = t
+            .colors()
+            .iter()
+            .map(|i| {
+                barrier::image(
+                    i.raw,
+                    color,
+                    access::COLOR_WRITE,
+                    access::COMPUTE_READ,
+                    L::COLOR_ATTACHMENT_OPTIMAL,
+                    L::SHADER_READ_ONLY_OPTIMAL,
+                )
+            })
+            .collect();
+        out.push(barrier::image(
+            t.depth.raw,
+            depth,
+            access::DEPTH_WRITE,
+            access::COMPUTE_READ,
+            L::DEPTH_ATTACHMENT_OPTIMAL,
+            L::SHADER_READ_ONLY_OPTIMAL,
+        ));
+        barrier::record(d, cmd, &[], &out);
+        timer.end(cmd, gbuffer::NAME);
+
+        timer.begin(cmd, light_direct::NAME);
+        // WAR: the previous frame's compose reads of `lit` finish before it is overwritten.
+        let lit_in = barrier::image(
+            self.light.lit.raw,
+            color,
+            access::COMPUTE_READ,
+            access::COMPUTE_WRITE,
+            L::UNDEFINED,
+            L::GENERAL,
+        );
+        barrier::record(d, cmd, &[], &[lit_in]);
+        self.light
+            .record(cmd, &self.frame_ubo, &self.gbuffer.targets, &self.shadow.map);
+        // RAW: compose reads the lit colour written above.
+        let lit_out = barrier::image(
+            self.light.lit.raw,
+            color,
+            access::COMPUTE_WRITE,
+            access::COMPUTE_READ,
+            L::GENERAL,
+            L::GENERAL,
+        );
+        barrier::record(d, cmd, &[], &[lit_out]);
+        timer.end(cmd, light_direct::NAME);
+
+        timer.begin(cmd, compose::NAME);
+        // WAR: earlier reads of the LDR image (readback copies) finish before it is overwritten.
+        let ldr_in = barrier::image(
+            self.compose.ldr.raw,
+            color,
+            access::ALL_READ_WRITE,
+            access::COMPUTE_WRITE,
+            L::UNDEFINED,
+            L::GENERAL,
+        );
+        barrier::record(d, cmd, &[], &[ldr_in]);
+        self.compose.record(cmd, &self.light.lit, self.settings.exposure);
+        timer.end(cmd, compose::NAME);
+
+        timer.end(cmd, FRAME);
+    }
+
+    /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).
+    pub fn read_output(&self) -> Result<Vec<u8>> {
+        self.compose.ldr.read(vk::ImageLayout::GENERAL)
+    }
+
+    /// The last frame's lit HDR image as RGBA f32.
+    pub fn read_lit(&self) -> Result<Vec<[f32; 4]>> {
+        let raw = self.light.lit.read(vk::ImageLayout::GENERAL)?;
+        Ok(crate::cpu_ref::rgba16f_to_f32(&raw))
+    }
+
+    /// Reads a G-buffer (or shadow map) image left in `SHADER_READ_ONLY_OPTIMAL`.
+    pub fn read_target(&self, image: &Image) -> Result<Vec<u8>> {
+        image.read(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.ctx.device.device_wait_idle();
+            self.ctx.device.destroy_fence(self.fence, None);
+        }
+        self.ctx.free_command_buffer(self.cmd);
+    }
+}

@@ -1,0 +1,234 @@
+//! Scenes: triangles in world space, materials, a camera and a light.
+//!
+//! A scene comes from a built-in procedural builder (`procedural`) or an OBJ file
+//! (`obj`). Either way it is validated before the GPU sees it: at least one triangle,
+//! finite coordinates, indices in range.
+
+pub mod camera;
+pub mod geometry;
+pub mod obj;
+pub mod procedural;
+
+pub use camera::Camera;
+pub use geometry::TriMesh;
+
+use crate::error::{Error, Result};
+use crate::gpu_types::{GpuMaterial, GpuVertex};
+use glam::{Mat4, Vec3};
+
+/// A surface description.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGB albedo in [0, 1].
+    pub albedo: Vec3,
+    /// 0 = mirror, 1 = fully rough.
+    pub roughness: f32,
+    /// Specular reflectance in [0, 1]; later passes trace reflections where it is > 0.
+    pub reflectivity: f32,
+}
+
+impl Material {
+    pub fn new(name: &str, albedo: [f32; 3], roughness: f32, reflectivity: f32) -> Self {
+        Self {
+            name: name.into(),
+            albedo: Vec3::from(albedo),
+            roughness,
+            reflectivity,
+        }
+    }
+
+    pub fn gpu(&self) -> GpuMaterial {
+        GpuMaterial {
+            albedo: self.albedo.clamp(Vec3::ZERO, Vec3::ONE).to_array(),
+            roughness: self.roughness.clamp(0.0, 1.0),
+            reflectivity: self.reflectivity.clamp(0.0, 1.0),
+            _pad0: [0.0; 3],
+        }
+    }
+}
+
+/// A directional light (the sun): parallel rays, one shadow map.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    /// Unit vector from surfaces towards the light.
+    pub direction: Vec3,
+    /// Linear RGB colour.
+    pub color: Vec3,
+    /// Radiance scale.
+    pub intensity: f32,
+}
+
+/// Sky colours, also used as hemispherical ambient light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sky {
+    pub zenith: Vec3,
+    pub horizon: Vec3,
+}
+
+/// A renderable scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub vertices: Vec<GpuVertex>,
+    pub indices: Vec<u32>,
+    pub materials: Vec<Material>,
+    pub camera: Camera,
+    pub light: Light,
+    pub sky: Sky,
+}
+
+/// Accumulates meshes into a scene.
+pub struct SceneBuilder {
+    scene: Scene,
+}
+
+impl SceneBuilder {
+    pub fn new(name: &str) -> Self {
+        Self {
+            scene: Scene {
+                name: name.into(),
+                vertices: Vec::new(),
+                indices: Vec::new(),
+                materials: Vec::new(),
+                camera: Camera {
+                    position: Vec3::new(0.0, 2.0, 6.0),
+                    target: Vec3::ZERO,
+                    up: Vec3::Y,
+                    fov_y_deg: 50.0,
+                    near: 0.05,
+                    far: 100.0,
+                },
+                light: Light {
+                    direction: Vec3::new(-0.4, 0.8, 0.45).normalize(),
+                    color: Vec3::new(1.0, 0.96, 0.9),
+                    intensity: 3.0,
+                },
+                sky: Sky {
+                    zenith: Vec3::new(0.25, 0.45, 0.85),
+                    horizon: Vec3::new(0.75, 0.8, 0.9),
+                },
+            },
+        }
+    }
+
+    /// Adds a material and returns its index.
+    pub fn material(&mut self, m: Material) -> u32 {
+        self.scene.materials.push(m);
+        self.scene.materials.len() as u32 - 1
+    }
+
+    /// Adds a mesh moved by `transform`, using material `material`.
+    pub fn mesh(&mut self, mesh: TriMesh, transform: Mat4, material: u32) -> &mut Self {
+        let mesh = mesh.transformed(transform);
+        let base = self.scene.vertices.len() as u32;
+        self.scene
+            .vertices
+            .extend(mesh.positions.iter().zip(&mesh.normals).map(|(p, n)| GpuVertex {
+                position: p.to_array(),
+                material,
+                normal: n.to_array(),
+                _pad0: 0,
+            }));
+        self.scene.indices.extend(mesh.indices.iter().map(|i| base + i));
+        self
+    }
+
+    pub fn camera(&mut self, camera: Camera) -> &mut Self {
+        self.scene.camera = camera;
+        self
+    }
+
+    pub fn light(&mut self, light: Light) -> &mut Self {
+        self.scene.light = Light {
+            direction: light.direction.normalize(),
+            ..light
+        };
+        self
+    }
+
+    /// Finishes and validates the scene.
+    pub fn build(self) -> Result<Scene> {
+        self.scene.validate()?;
+        Ok(self.scene)
+    }
+}
+
+impl Scene {
+    /// Axis-aligned bounds of all vertices (min, max).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.vertices
+            .iter()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), v| {
+                let p = Vec3::from(v.position);
+                (lo.min(p), hi.max(p))
+            })
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Checks what the GPU passes rely on.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |detail: String| {
+            Err(Error::BadGeometry {
+                source_name: self.name.clone(),
+                detail,
+            })
+        };
+        if self.indices.is_empty() || self.vertices.is_empty() {
+            return bad("the scene has no triangles".into());
+        }
+        if !self.indices.len().is_multiple_of(3) {
+            return bad(format!(
+                "{} indices is not a whole number of triangles",
+                self.indices.len()
+            ));
+        }
+        if let Some(i) = self.indices.iter().position(|&i| i as usize >= self.vertices.len()) {
+            return bad(format!(
+                "index {} at position {i} is past the {} vertices",
+                self.indices[i],
+                self.vertices.len()
+            ));
+        }
+        for (i, v) in self.vertices.iter().enumerate() {
+            if !v.position.iter().chain(&v.normal).all(|c| c.is_finite()) {
+                return bad(format!("vertex {i} has a non-finite coordinate {:?}", v.position));
+            }
+            if v.material as usize >= self.materials.len() {
+                return bad(format!(
+                    "vertex {i} uses material {} but the scene has {}",
+                    v.material,
+                    self.materials.len()
+                ));
+            }
+        }
+        let (lo, hi) = self.bounds();
+        if (hi - lo).max_element() > 1e7 {
+            return bad(format!(
+                "the scene spans {:.3e} units; coordinates beyond 1e7 lose float precision",
+                (hi - lo).max_element()
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Loads a scene by built-in name or from an `.obj` path.
+pub fn load(name_or_path: &str) -> Result<Scene> {
+    if let Some(scene) = procedural::by_name(name_or_path) {
+        return scene;
+    }
+    let path = std::path::Path::new(name_or_path);
+    let looks_like_path = path.extension().is_some() || name_or_path.contains('/') || path.exists();
+    if looks_like_path {
+        return obj::load(path);
+    }
+    Err(Error::UnknownScene {
+        name: name_or_path.into(),
+        known: procedural::NAMES.join(", "),
+    })
+}

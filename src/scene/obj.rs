@@ -1,0 +1,204 @@
+//! OBJ + MTL loading through tobj.
+//!
+//! Material mapping (MTL → Speculum):
+//! - albedo = `Kd` (grey 0.8 without one), times the mean colour of `map_Kd` when the
+//!   material has a diffuse texture (textures are not sampled per texel yet);
+//! - roughness = `Pr` when given, else `sqrt(2 / (Ns + 2))` (the Blinn-Phong exponent
+//!   to Beckmann roughness mapping), else 0.8;
+//! - reflectivity = `refl` (a Speculum key) or `Pm` when given, else `max(Ks)` for
+//!   illumination models 3-9 (the MTL models with reflection on), else 0.
+//!
+//! Faces are triangulated; missing normals are computed (area-weighted).
+
+use super::{Camera, Material, Scene, SceneBuilder, TriMesh};
+use crate::error::{Error, Result};
+use glam::{Mat4, Vec3};
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+
+fn mtl_number(m: &tobj::Material, key: &str) -> Option<f32> {
+    m.unknown_param.get(key).and_then(|v| v.trim().parse::<f32>().ok())
+}
+
+/// Mean linear RGB of a texture file, which must exist and decode.
+fn texture_mean(path: &Path) -> Result<Vec3> {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        what: "texture",
+        path: path.into(),
+        source,
+    })?;
+    let img = image::load_from_memory(&bytes).map_err(|e| Error::BadAsset {
+        what: "texture",
+        path: path.into(),
+        detail: e.to_string(),
+    })?;
+    let rgb = img.to_rgb32f();
+    let n = (rgb.width() as f64 * rgb.height() as f64).max(1.0);
+    let mut sum = [0f64; 3];
+    for p in rgb.pixels() {
+        for (s, c) in sum.iter_mut().zip(p.0) {
+            // sRGB-encoded texels to linear (the usual 2.2 approximation suffices for a mean).
+            *s += (c as f64).powf(2.2);
+        }
+    }
+    Ok(Vec3::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32))
+}
+
+fn convert_material(m: &tobj::Material, dir: &Path) -> Result<Material> {
+    let mut albedo = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
+    if let Some(tex) = m.diffuse_texture.as_deref().filter(|t| !t.trim().is_empty()) {
+        albedo *= texture_mean(&dir.join(tex.trim()))?;
+    }
+    let roughness = mtl_number(m, "Pr")
+        .or_else(|| m.shininess.map(|ns| (2.0 / (ns.max(0.0) + 2.0)).sqrt()))
+        .unwrap_or(0.8);
+    let reflective_model = matches!(m.illumination_model, Some(3..=9));
+    let reflectivity = mtl_number(m, "refl")
+        .or_else(|| mtl_number(m, "Pm"))
+        .unwrap_or_else(|| {
+            if reflective_model {
+                m.specular.map_or(0.0, |s| s[0].max(s[1]).max(s[2]))
+            } else {
+                0.0
+            }
+        });
+    let mat = Material::new(&m.name, albedo.to_array(), roughness, reflectivity);
+    if !(mat.albedo.is_finite() && mat.roughness.is_finite() && mat.reflectivity.is_finite()) {
+        return Err(Error::BadAsset {
+            what: "material",
+            path: dir.join(&m.name),
+            detail: "non-finite value".into(),
+        });
+    }
+    Ok(mat)
+}
+
+/// Area-weighted vertex normals for a mesh that has none.
+fn computed_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    for t in indices.chunks_exact(3) {
+        let (a, b, c) = (
+            positions[t[0] as usize],
+            positions[t[1] as usize],
+            positions[t[2] as usize],
+        );
+        let n = (b - a).cross(c - a); // length = 2 × area: larger faces weigh more
+        for &i in t {
+            normals[i as usize] += n;
+        }
+    }
+    normals.into_iter().map(|n| n.normalize_or(Vec3::Y)).collect()
+}
+
+/// Loads an OBJ file (and the MTL files it names) as a scene.
+pub fn load(path: &Path) -> Result<Scene> {
+    let text = std::fs::read(path).map_err(|source| Error::Io {
+        what: "OBJ file",
+        path: path.into(),
+        source,
+    })?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let mtl_failure: RefCell<Option<Error>> = RefCell::new(None);
+    let (models, materials) = tobj::load_obj_buf(&mut text.as_slice(), &options, |mtl: &Path| {
+        let mtl_path: PathBuf = dir.join(mtl);
+        match std::fs::read(&mtl_path) {
+            Err(source) => {
+                mtl_failure.replace(Some(Error::Io {
+                    what: "MTL file",
+                    path: mtl_path,
+                    source,
+                }));
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+            Ok(bytes) => tobj::load_mtl_buf(&mut bytes.as_slice()).inspect_err(|e| {
+                mtl_failure.replace(Some(Error::BadAsset {
+                    what: "MTL file",
+                    path: mtl_path.clone(),
+                    detail: e.to_string(),
+                }));
+            }),
+        }
+    })
+    .map_err(|e| Error::BadAsset {
+        what: "OBJ file",
+        path: path.into(),
+        detail: e.to_string(),
+    })?;
+    if let Some(e) = mtl_failure.into_inner() {
+        return Err(e);
+    }
+    let materials = materials.map_err(|e| Error::BadAsset {
+        what: "MTL file",
+        path: path.into(),
+        detail: e.to_string(),
+    })?;
+
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "obj".into());
+    let mut b = SceneBuilder::new(&path.display().to_string());
+    let ids: Vec<u32> = materials
+        .iter()
+        .map(|m| convert_material(m, &dir).map(|m| b.material(m)))
+        .collect::<Result<_>>()?;
+    let mut default_material = None;
+    for model in &models {
+        let mesh = &model.mesh;
+        if mesh.indices.is_empty() {
+            continue;
+        }
+        let positions: Vec<Vec3> = mesh
+            .positions
+            .chunks_exact(3)
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect();
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(Error::BadGeometry {
+                source_name: path.display().to_string(),
+                detail: format!(
+                    "object '{}' vertex {i} has a non-finite coordinate {:?}",
+                    model.name, positions[i]
+                ),
+            });
+        }
+        let normals = if mesh.normals.len() == mesh.positions.len() {
+            mesh.normals
+                .chunks_exact(3)
+                .map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or(Vec3::Y))
+                .collect()
+        } else {
+            computed_normals(&positions, &mesh.indices)
+        };
+        let material = match mesh.material_id.and_then(|i| ids.get(i)) {
+            Some(&id) => id,
+            None => *default_material.get_or_insert_with(|| b.material(Material::new("default", [0.8; 3], 0.8, 0.0))),
+        };
+        b.mesh(
+            TriMesh {
+                positions,
+                normals,
+                indices: mesh.indices.clone(),
+            },
+            Mat4::IDENTITY,
+            material,
+        );
+    }
+    let mut scene = b.build().map_err(|e| match e {
+        Error::BadGeometry { detail, .. } => Error::BadGeometry {
+            source_name: path.display().to_string(),
+            detail,
+        },
+        other => other,
+    })?;
+    let (lo, hi) = scene.bounds();
+    scene.camera = Camera::framing(lo, hi);
+    scene.name = name;
+    Ok(scene)
+}

@@ -1,0 +1,85 @@
+//! Thin synchronization2 helpers (after zeux/niagara's `stageBarrier`/`imageBarrier`).
+//! Callers put a one-line comment naming the hazard next to each use.
+
+use ash::vk;
+
+/// An image barrier over the whole image (all mips and layers of `aspect`).
+pub fn image(
+    image: vk::Image,
+    aspect: vk::ImageAspectFlags,
+    (src_stage, src_access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+    (dst_stage, dst_access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+    old_layout: vk::ImageLayout,
+    new_layout: vk::ImageLayout,
+) -> vk::ImageMemoryBarrier2<'static> {
+    vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(src_stage)
+        .src_access_mask(src_access)
+        .dst_stage_mask(dst_stage)
+        .dst_access_mask(dst_access)
+        .old_layout(old_layout)
+        .new_layout(new_layout)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image)
+        .subresource_range(
+            vk::ImageSubresourceRange::default()
+                .aspect_mask(aspect)
+                .level_count(vk::REMAINING_MIP_LEVELS)
+                .layer_count(vk::REMAINING_ARRAY_LAYERS),
+        )
+}
+
+/// A global memory barrier (covers every buffer).
+pub fn memory(
+    (src_stage, src_access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+    (dst_stage, dst_access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+) -> vk::MemoryBarrier2<'static> {
+    vk::MemoryBarrier2::default()
+        .src_stage_mask(src_stage)
+        .src_access_mask(src_access)
+        .dst_stage_mask(dst_stage)
+        .dst_access_mask(dst_access)
+}
+
+/// Records one `vkCmdPipelineBarrier2` with the given barriers.
+pub fn record(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    memory: &[vk::MemoryBarrier2<'_>],
+    images: &[vk::ImageMemoryBarrier2<'_>],
+) {
+    let info = vk::DependencyInfo::default()
+        .memory_barriers(memory)
+        .image_memory_barriers(images);
+    // SAFETY: `cmd` is in the recording state; the barriers reference live objects.
+    unsafe { device.cmd_pipeline_barrier2(cmd, &info) };
+}
+
+/// Common (stage, access) pairs, named for what they are.
+pub mod access {
+    use ash::vk::{AccessFlags2 as A, PipelineStageFlags2 as S};
+
+    pub const NONE: (S, A) = (S::NONE, A::NONE);
+    pub const TRANSFER_WRITE: (S, A) = (S::ALL_TRANSFER, A::TRANSFER_WRITE);
+    pub const TRANSFER_READ: (S, A) = (S::ALL_TRANSFER, A::TRANSFER_READ);
+    pub const HOST_READ: (S, A) = (S::HOST, A::HOST_READ);
+    pub const COMPUTE_READ: (S, A) = (S::COMPUTE_SHADER, A::SHADER_READ);
+    pub const COMPUTE_WRITE: (S, A) = (S::COMPUTE_SHADER, A::SHADER_WRITE);
+    pub const ANY_SHADER_READ: (S, A) = (
+        S::from_raw(S::VERTEX_SHADER.as_raw() | S::FRAGMENT_SHADER.as_raw() | S::COMPUTE_SHADER.as_raw()),
+        A::from_raw(A::SHADER_READ.as_raw() | A::UNIFORM_READ.as_raw()),
+    );
+    pub const ALL_READ_WRITE: (S, A) = (
+        S::ALL_COMMANDS,
+        A::from_raw(A::MEMORY_READ.as_raw() | A::MEMORY_WRITE.as_raw()),
+    );
+    pub const COLOR_WRITE: (S, A) = (
+        S::COLOR_ATTACHMENT_OUTPUT,
+        A::from_raw(A::COLOR_ATTACHMENT_WRITE.as_raw() | A::COLOR_ATTACHMENT_READ.as_raw()),
+    );
+    pub const DEPTH_WRITE: (S, A) = (
+        S::from_raw(S::EARLY_FRAGMENT_TESTS.as_raw() | S::LATE_FRAGMENT_TESTS.as_raw()),
+        A::from_raw(A::DEPTH_STENCIL_ATTACHMENT_WRITE.as_raw() | A::DEPTH_STENCIL_ATTACHMENT_READ.as_raw()),
+    );
+}

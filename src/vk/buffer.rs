@@ -1,0 +1,170 @@
+//! Buffers with debug names, allocated through gpu-allocator, plus staged upload and
+//! readback. Device-local memory is never mapped: real GPUs may not allow it.
+
+use super::barrier::{self, access};
+use super::context::Context;
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// A buffer and its memory; freed on drop.
+pub struct Buffer {
+    ctx: Arc<Context>,
+    pub raw: vk::Buffer,
+    /// Size in bytes.
+    pub size: u64,
+    allocation: Option<Allocation>,
+}
+
+impl Buffer {
+    /// Creates a buffer of `size` bytes (at least 4, so empty data still binds).
+    pub fn new(
+        ctx: &Arc<Context>,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Self> {
+        let size = size.max(4);
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage);
+        let raw = unsafe { ctx.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
+        let allocation = ctx
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| {
+                unsafe { ctx.device.destroy_buffer(raw, None) };
+                Error::Allocation {
+                    name: name.into(),
+                    source,
+                }
+            })?;
+        let buffer = Self {
+            ctx: ctx.clone(),
+            raw,
+            size,
+            allocation: Some(allocation),
+        };
+        let a = buffer.allocation.as_ref().expect("just set");
+        unsafe { ctx.device.bind_buffer_memory(raw, a.memory(), a.offset()) }.vk("vkBindBufferMemory")?;
+        ctx.set_name(raw, name);
+        Ok(buffer)
+    }
+
+    /// A device-local buffer filled with `data` through a staging copy.
+    pub fn with_data(ctx: &Arc<Context>, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> Result<Self> {
+        let buffer = Self::new(
+            ctx,
+            name,
+            data.len() as u64,
+            usage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        buffer.write(data)?;
+        Ok(buffer)
+    }
+
+    /// Host-visible bytes, for buffers created `CpuToGpu` or `GpuToCpu`.
+    pub fn mapped(&self) -> Option<&[u8]> {
+        let a = self.allocation.as_ref()?;
+        a.mapped_slice().map(|s| &s[..self.size as usize])
+    }
+
+    /// Mutable host-visible bytes, for buffers created `CpuToGpu`.
+    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
+        let size = self.size as usize;
+        let a = self.allocation.as_mut()?;
+        a.mapped_slice_mut().map(|s| &mut s[..size])
+    }
+
+    /// Overwrites the start of the buffer with `data` through a staging buffer, then
+    /// makes the write visible to every later command.
+    pub fn write(&self, data: &[u8]) -> Result<()> {
+        if data.is_empty() {
+            return Ok(());
+        }
+        let mut staging = Self::new(
+            &self.ctx,
+            "staging.upload",
+            data.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.mapped_mut().expect("CpuToGpu is mapped")[..data.len()].copy_from_slice(data);
+        let device = &self.ctx.device;
+        self.ctx.one_shot(|cmd| {
+            // WAR/WAW: earlier GPU work on this buffer finishes before the copy overwrites it.
+            barrier::record(
+                device,
+                cmd,
+                &[barrier::memory(access::ALL_READ_WRITE, access::TRANSFER_WRITE)],
+                &[],
+            );
+            let region = vk::BufferCopy::default().size(data.len() as u64);
+            unsafe { device.cmd_copy_buffer(cmd, staging.raw, self.raw, &[region]) };
+            // RAW: the uploaded bytes are visible to every later command.
+            barrier::record(
+                device,
+                cmd,
+                &[barrier::memory(access::TRANSFER_WRITE, access::ALL_READ_WRITE)],
+                &[],
+            );
+        })
+    }
+
+    /// Copies the whole buffer back to the host.
+    pub fn read(&self) -> Result<Vec<u8>> {
+        let staging = Self::new(
+            &self.ctx,
+            "staging.readback",
+            self.size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let device = &self.ctx.device;
+        self.ctx.one_shot(|cmd| {
+            // RAW: earlier GPU writes to this buffer land before the copy reads it.
+            barrier::record(
+                device,
+                cmd,
+                &[barrier::memory(access::ALL_READ_WRITE, access::TRANSFER_READ)],
+                &[],
+            );
+            let region = vk::BufferCopy::default().size(self.size);
+            unsafe { device.cmd_copy_buffer(cmd, self.raw, staging.raw, &[region]) };
+            // RAW: the copy is visible to the host before it maps the staging buffer.
+            barrier::record(
+                device,
+                cmd,
+                &[barrier::memory(access::TRANSFER_WRITE, access::HOST_READ)],
+                &[],
+            );
+        })?;
+        Ok(staging.mapped().expect("GpuToCpu is mapped").to_vec())
+    }
+
+    /// The whole buffer as a descriptor range.
+    pub fn info(&self) -> vk::DescriptorBufferInfo {
+        vk::DescriptorBufferInfo::default()
+            .buffer(self.raw)
+            .range(vk::WHOLE_SIZE)
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(a) = self.allocation.take() {
+            // A free can only fail on a foreign allocation; nothing to do about it here.
+            let _ = self.ctx.allocator().free(a);
+        }
+        unsafe { self.ctx.device.destroy_buffer(self.raw, None) };
+    }
+}

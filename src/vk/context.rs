@@ -1,0 +1,498 @@
+//! Instance, device selection, the queue, the memory allocator and the validation
+//! messenger. Everything else in `vk/` takes a `&Context`.
+//!
+//! Contract: one graphics+compute queue; Vulkan 1.3 with synchronization2 and dynamic
+//! rendering, plus `VK_KHR_push_descriptor`. Validation (with synchronization
+//! validation) is switched on by `ContextDesc::validation`; every warning or error the
+//! layer reports is printed and counted in `Context::validation_messages`.
+
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::{c_void, CStr};
+use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Mutex;
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How to create a context.
+#[derive(Clone, Debug, Default)]
+pub struct ContextDesc {
+    /// Enable `VK_LAYER_KHRONOS_validation` with synchronization validation.
+    pub validation: bool,
+    /// Pick a device by index (as `speculum devices` lists) or by a case-insensitive
+    /// substring of its name; `None` prefers a discrete GPU and falls back to a CPU one.
+    pub device: Option<String>,
+}
+
+/// One physical device as `speculum devices` shows it.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub index: usize,
+    pub name: String,
+    pub kind: vk::PhysicalDeviceType,
+    pub api_version: u32,
+    /// `Err(reason)` when Speculum cannot run on it.
+    pub usable: std::result::Result<(), String>,
+}
+
+impl DeviceInfo {
+    /// "discrete GPU", "CPU", ... for listings.
+    pub fn kind_name(&self) -> &'static str {
+        match self.kind {
+            vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+            vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+            vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+            vk::PhysicalDeviceType::CPU => "CPU",
+            _ => "other",
+        }
+    }
+
+    /// Preference order when no device is named: lower is better.
+    fn rank(&self) -> u32 {
+        match self.kind {
+            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+            vk::PhysicalDeviceType::CPU => 3,
+            _ => 4,
+        }
+    }
+}
+
+/// Counts validation messages; lives in a `Box` whose address the messenger holds.
+#[derive(Default)]
+struct MessageCounter {
+    count: AtomicU32,
+}
+
+/// The Vulkan context every pass and resource is created from. Shared as `Arc<Context>`:
+/// every resource holds one, so the device outlives everything made from it.
+pub struct Context {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    /// Device name, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+    pub device_name: String,
+    pub limits: vk::PhysicalDeviceLimits,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period_ns: f64,
+    /// Bits of a timestamp that are valid on our queue (results wrap at 2^bits).
+    pub timestamp_valid_bits: u32,
+    pub push_descriptor: ash::khr::push_descriptor::Device,
+    /// Present when the loader offers VK_EXT_debug_utils: object names and labels.
+    pub debug_utils: Option<ash::ext::debug_utils::Device>,
+    debug_instance: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    counter: Box<MessageCounter>,
+    validation: bool,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    command_pool: vk::CommandPool,
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes valid callback data; `user` is the boxed counter that
+    // outlives the messenger (destroyed first in Drop).
+    let message = unsafe {
+        let data = &*data;
+        if data.p_message.is_null() {
+            String::from("(no message)")
+        } else {
+            CStr::from_ptr(data.p_message).to_string_lossy().into_owned()
+        }
+    };
+    let counted = types
+        .intersects(vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE);
+    if counted {
+        let counter = unsafe { &*(user as *const MessageCounter) };
+        counter.count.fetch_add(1, Ordering::SeqCst);
+    }
+    eprintln!("[vulkan {severity:?} {types:?}] {message}");
+    vk::FALSE
+}
+
+fn load_entry() -> Result<ash::Entry> {
+    // SAFETY: loading the system Vulkan loader; no other code is running inside it.
+    unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))
+}
+
+fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instance, bool)> {
+    let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
+    let has_layer = layers
+        .iter()
+        .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
+    if validation && !has_layer {
+        return Err(Error::NoValidationLayer);
+    }
+    let extensions =
+        unsafe { entry.enumerate_instance_extension_properties(None) }.vk("vkEnumerateInstanceExtensionProperties")?;
+    let has_debug_utils = extensions.iter().any(|e| {
+        e.extension_name_as_c_str()
+            .is_ok_and(|n| n == ash::ext::debug_utils::NAME)
+    });
+
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"speculum")
+        .engine_name(c"speculum")
+        .api_version(vk::API_VERSION_1_3);
+    let layer_names = if validation {
+        vec![VALIDATION_LAYER.as_ptr()]
+    } else {
+        vec![]
+    };
+    let ext_names = if has_debug_utils {
+        vec![ash::ext::debug_utils::NAME.as_ptr()]
+    } else {
+        vec![]
+    };
+    let enabled = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled);
+    let mut info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layer_names)
+        .enabled_extension_names(&ext_names);
+    if validation {
+        info = info.push_next(&mut features);
+    }
+    let instance = unsafe { entry.create_instance(&info, None) }.vk("vkCreateInstance")?;
+    Ok((instance, has_debug_utils))
+}
+
+/// Why a physical device cannot run Speculum, if it cannot.
+fn check_device(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::result::Result<u32, String> {
+    let props = unsafe { instance.get_physical_device_properties(pd) };
+    if props.api_version < vk::API_VERSION_1_3 {
+        return Err(format!(
+            "Vulkan {}.{} < 1.3",
+            vk::api_version_major(props.api_version),
+            vk::api_version_minor(props.api_version)
+        ));
+    }
+    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.map_err(|e| e.to_string())?;
+    if !exts.iter().any(|e| {
+        e.extension_name_as_c_str()
+            .is_ok_and(|n| n == ash::khr::push_descriptor::NAME)
+    }) {
+        return Err("no VK_KHR_push_descriptor".into());
+    }
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+    unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+    if f13.synchronization2 == 0 || f13.dynamic_rendering == 0 {
+        return Err("no synchronization2 or dynamic rendering".into());
+    }
+    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    families
+        .iter()
+        .position(|f| {
+            f.queue_flags
+                .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
+                && f.timestamp_valid_bits > 0
+        })
+        .map(|i| i as u32)
+        .ok_or_else(|| "no graphics+compute queue with timestamps".to_string())
+}
+
+fn describe(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceInfo)>> {
+    let pds = unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+    Ok(pds
+        .into_iter()
+        .enumerate()
+        .map(|(index, pd)| {
+            let props = unsafe { instance.get_physical_device_properties(pd) };
+            let name = props
+                .device_name_as_c_str()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let usable = check_device(instance, pd).map(|_| ());
+            let info = DeviceInfo {
+                index,
+                name,
+                kind: props.device_type,
+                api_version: props.api_version,
+                usable,
+            };
+            (pd, info)
+        })
+        .collect())
+}
+
+/// Lists the physical devices, usable or not, in the order `--device INDEX` counts them.
+pub fn list_devices() -> Result<Vec<DeviceInfo>> {
+    let entry = load_entry()?;
+    let (instance, _) = create_instance(&entry, false)?;
+    let list = describe(&instance);
+    unsafe { instance.destroy_instance(None) };
+    Ok(list?.into_iter().map(|(_, info)| info).collect())
+}
+
+/// Picks the device `wanted` names, or the best usable one.
+fn select(list: &[(vk::PhysicalDevice, DeviceInfo)], wanted: Option<&str>) -> Result<usize> {
+    let names = || {
+        list.iter()
+            .map(|(_, d)| format!("{}: {}", d.index, d.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let chosen = match wanted {
+        Some(w) => {
+            let found = match w.trim().parse::<usize>() {
+                Ok(i) => list.iter().position(|(_, d)| d.index == i),
+                Err(_) => {
+                    let w = w.to_lowercase();
+                    list.iter().position(|(_, d)| d.name.to_lowercase().contains(&w))
+                }
+            };
+            let i = found.ok_or_else(|| {
+                Error::NoDevice(format!(
+                    "no Vulkan device matches --device '{w}' (devices: {})",
+                    names()
+                ))
+            })?;
+            if let Err(why) = &list[i].1.usable {
+                return Err(Error::NoDevice(format!(
+                    "device '{}' cannot run Speculum: {why}",
+                    list[i].1.name
+                )));
+            }
+            i
+        }
+        None => list
+            .iter()
+            .enumerate()
+            .filter(|(_, (_, d))| d.usable.is_ok())
+            .min_by_key(|(_, (_, d))| d.rank())
+            .map(|(i, _)| i)
+            .ok_or_else(|| {
+                Error::NoDevice(format!(
+                    "no usable Vulkan 1.3 device found (devices: {}); install mesa-vulkan-drivers for lavapipe",
+                    if list.is_empty() { "none".into() } else { names() }
+                ))
+            })?,
+    };
+    Ok(chosen)
+}
+
+impl Context {
+    /// Creates the instance, picks a device and creates the queue and allocator.
+    pub fn new(desc: &ContextDesc) -> Result<std::sync::Arc<Self>> {
+        let entry = load_entry()?;
+        let (instance, has_debug_utils) = create_instance(&entry, desc.validation)?;
+        // From here on, a failure must destroy the instance: build the rest in a helper.
+        match Self::with_instance(entry, instance.clone(), has_debug_utils, desc) {
+            Ok(ctx) => Ok(std::sync::Arc::new(ctx)),
+            Err(e) => {
+                unsafe { instance.destroy_instance(None) };
+                Err(e)
+            }
+        }
+    }
+
+    fn with_instance(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        has_debug_utils: bool,
+        desc: &ContextDesc,
+    ) -> Result<Self> {
+        let counter = Box::<MessageCounter>::default();
+        let debug_instance = if has_debug_utils {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(&*counter as *const MessageCounter as *mut c_void);
+            let messenger =
+                unsafe { loader.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
+            Some((loader, messenger))
+        } else {
+            None
+        };
+        let destroy_messenger = |d: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
+            if let Some((loader, m)) = d {
+                unsafe { loader.destroy_debug_utils_messenger(*m, None) };
+            }
+        };
+
+        let list = describe(&instance).inspect_err(|_| destroy_messenger(&debug_instance))?;
+        let chosen = select(&list, desc.device.as_deref()).inspect_err(|_| destroy_messenger(&debug_instance))?;
+        let (physical_device, info) = list[chosen].clone();
+        let queue_family = check_device(&instance, physical_device).expect("checked by select");
+        let props = unsafe { instance.get_physical_device_properties(physical_device) };
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
+
+        let priorities = [1.0f32];
+        let queue_infos = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
+        let dev_exts = [ash::khr::push_descriptor::NAME.as_ptr()];
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+            .synchronization2(true)
+            .dynamic_rendering(true);
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+        let dinfo = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_infos)
+            .enabled_extension_names(&dev_exts)
+            .push_next(&mut f2);
+        let device = unsafe { instance.create_device(physical_device, &dinfo, None) }
+            .vk("vkCreateDevice")
+            .inspect_err(|_| destroy_messenger(&debug_instance))?;
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
+        let debug_utils = has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+
+        let cleanup = |device: &ash::Device| {
+            unsafe { device.destroy_device(None) };
+            destroy_messenger(&debug_instance);
+        };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| {
+            cleanup(&device);
+            Error::Allocation {
+                name: "allocator".into(),
+                source,
+            }
+        })?;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let command_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
+            Ok(p) => p,
+            Err(result) => {
+                drop(allocator);
+                cleanup(&device);
+                return Err(Error::Vulkan {
+                    what: "vkCreateCommandPool",
+                    result,
+                });
+            }
+        };
+
+        Ok(Self {
+            entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family,
+            device_name: info.name,
+            limits: props.limits,
+            timestamp_period_ns: props.limits.timestamp_period as f64,
+            timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,
+            push_descriptor,
+            debug_utils,
+            debug_instance,
+            counter,
+            validation: desc.validation,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            command_pool,
+        })
+    }
+
+    /// Validation warnings and errors reported so far (0 when validation is off).
+    pub fn validation_messages(&self) -> u32 {
+        self.counter.count.load(Ordering::SeqCst)
+    }
+
+    /// Whether the validation layer is on.
+    pub fn validation_enabled(&self) -> bool {
+        self.validation
+    }
+
+    /// The memory allocator, shared by buffers and images.
+    pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
+        self.allocator.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Gives a Vulkan object a debug name (shown by validation messages and tools).
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(du) = &self.debug_utils {
+            let Ok(cname) = std::ffi::CString::new(name) else {
+                return;
+            };
+            let info = vk::DebugUtilsObjectNameInfoEXT::default()
+                .object_handle(handle)
+                .object_name(&cname);
+            // Naming is a debugging aid: a failure here must not fail rendering.
+            let _ = unsafe { du.set_debug_utils_object_name(&info) };
+        }
+    }
+
+    /// Allocates a primary command buffer from the context's pool.
+    pub fn allocate_command_buffer(&self) -> Result<vk::CommandBuffer> {
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        Ok(unsafe { self.device.allocate_command_buffers(&info) }.vk("vkAllocateCommandBuffers")?[0])
+    }
+
+    /// Frees a command buffer allocated by `allocate_command_buffer`.
+    pub fn free_command_buffer(&self, cmd: vk::CommandBuffer) {
+        unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
+    }
+
+    /// Submits `cmd` (already ended) and blocks until the GPU has finished it.
+    pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<()> {
+        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+        let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos)];
+        let result = unsafe { self.device.queue_submit2(self.queue, &submit, fence) }
+            .vk("vkQueueSubmit2")
+            .and_then(|_| unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
+        unsafe { self.device.destroy_fence(fence, None) };
+        result
+    }
+
+    /// Records `record` into a fresh command buffer, submits it and waits: for uploads,
+    /// readbacks and tests. Not for frames (those reuse their command buffers).
+    pub fn one_shot(&self, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
+        let cmd = self.allocate_command_buffer()?;
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let result = unsafe { self.device.begin_command_buffer(cmd, &begin) }
+            .vk("vkBeginCommandBuffer")
+            .and_then(|_| {
+                record(cmd);
+                unsafe { self.device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")
+            })
+            .and_then(|_| self.submit_and_wait(cmd));
+        self.free_command_buffer(cmd);
+        result
+    }
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(self.command_pool, None);
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+            if let Some((loader, messenger)) = &self.debug_instance {
+                loader.destroy_debug_utils_messenger(*messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}

@@ -1,0 +1,274 @@
+//! 2D images with a view and a debug name, samplers, and readback for tests and PNGs.
+
+use super::barrier::{self, access};
+use super::buffer::Buffer;
+use super::context::Context;
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// A 2D single-mip image with one view; freed on drop.
+pub struct Image {
+    ctx: Arc<Context>,
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    pub aspect: vk::ImageAspectFlags,
+    allocation: Option<Allocation>,
+}
+
+/// Bytes per texel of the formats Speculum uses.
+pub fn texel_bytes(format: vk::Format) -> u64 {
+    match format {
+        vk::Format::R8G8B8A8_UNORM | vk::Format::R8G8B8A8_SRGB | vk::Format::B8G8R8A8_UNORM => 4,
+        vk::Format::R32_UINT | vk::Format::R32_SFLOAT | vk::Format::D32_SFLOAT => 4,
+        vk::Format::R16G16B16A16_SFLOAT => 8,
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        other => panic!("texel_bytes: format {other:?} is not used by Speculum"),
+    }
+}
+
+impl Image {
+    /// Creates a device-local image. Depth formats get the DEPTH aspect.
+    pub fn new(
+        ctx: &Arc<Context>,
+        name: &str,
+        extent: vk::Extent2D,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self> {
+        let max = ctx.limits.max_image_dimension2_d;
+        if extent.width == 0 || extent.height == 0 || extent.width > max || extent.height > max {
+            return Err(Error::Settings(format!(
+                "image '{name}' of {}x{} is outside 1..={max} texels per side on this device",
+                extent.width, extent.height
+            )));
+        }
+        let aspect = if format == vk::Format::D32_SFLOAT {
+            vk::ImageAspectFlags::DEPTH
+        } else {
+            vk::ImageAspectFlags::COLOR
+        };
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D {
+                width: extent.width,
+                height: extent.height,
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let raw = unsafe { ctx.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        let requirements = unsafe { ctx.device.get_image_memory_requirements(raw) };
+        let allocation = ctx
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| {
+                unsafe { ctx.device.destroy_image(raw, None) };
+                Error::Allocation {
+                    name: name.into(),
+                    source,
+                }
+            })?;
+        let mut image = Self {
+            ctx: ctx.clone(),
+            raw,
+            view: vk::ImageView::null(),
+            format,
+            extent,
+            aspect,
+            allocation: Some(allocation),
+        };
+        let a = image.allocation.as_ref().expect("just set");
+        unsafe { ctx.device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(
+                vk::ImageSubresourceRange::default()
+                    .aspect_mask(aspect)
+                    .level_count(1)
+                    .layer_count(1),
+            );
+        image.view = unsafe { ctx.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
+        ctx.set_name(raw, name);
+        ctx.set_name(image.view, name);
+        Ok(image)
+    }
+
+    /// Size in bytes of the tightly packed texels.
+    pub fn byte_size(&self) -> u64 {
+        self.extent.width as u64 * self.extent.height as u64 * texel_bytes(self.format)
+    }
+
+    fn copy_region(&self) -> vk::BufferImageCopy {
+        vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(self.aspect)
+                    .layer_count(1),
+            )
+            .image_extent(vk::Extent3D {
+                width: self.extent.width,
+                height: self.extent.height,
+                depth: 1,
+            })
+    }
+
+    /// Copies the texels to the host (tightly packed rows). The image is in `layout`
+    /// before and after; all earlier GPU work on it is waited for.
+    pub fn read(&self, layout: vk::ImageLayout) -> Result<Vec<u8>> {
+        let staging = Buffer::new(
+            &self.ctx,
+            "staging.image_readback",
+            self.byte_size(),
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let device = &self.ctx.device;
+        self.ctx.one_shot(|cmd| {
+            // RAW: earlier writes to the image finish before the copy reads it.
+            let to_src = barrier::image(
+                self.raw,
+                self.aspect,
+                access::ALL_READ_WRITE,
+                access::TRANSFER_READ,
+                layout,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            );
+            barrier::record(device, cmd, &[], &[to_src]);
+            unsafe {
+                device.cmd_copy_image_to_buffer(
+                    cmd,
+                    self.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    staging.raw,
+                    &[self.copy_region()],
+                )
+            };
+            // WAR: later users wait for the copy; the image returns to its layout.
+            let back = barrier::image(
+                self.raw,
+                self.aspect,
+                access::TRANSFER_READ,
+                access::ALL_READ_WRITE,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                layout,
+            );
+            // RAW: the host reads the staging buffer after the copy wrote it.
+            barrier::record(
+                device,
+                cmd,
+                &[barrier::memory(access::TRANSFER_WRITE, access::HOST_READ)],
+                &[back],
+            );
+        })?;
+        Ok(staging.mapped().expect("GpuToCpu is mapped").to_vec())
+    }
+
+    /// Fills the image with tightly packed texels and leaves it in `layout`.
+    pub fn write(&self, data: &[u8], layout: vk::ImageLayout) -> Result<()> {
+        assert_eq!(
+            data.len() as u64,
+            self.byte_size(),
+            "Image::write: data size does not match the image"
+        );
+        let staging = Buffer::new(
+            &self.ctx,
+            "staging.image_upload",
+            self.byte_size(),
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let mut staging = staging;
+        staging.mapped_mut().expect("CpuToGpu is mapped").copy_from_slice(data);
+        let device = &self.ctx.device;
+        self.ctx.one_shot(|cmd| {
+            // WAR: earlier users of the image finish before the copy overwrites it.
+            let to_dst = barrier::image(
+                self.raw,
+                self.aspect,
+                access::ALL_READ_WRITE,
+                access::TRANSFER_WRITE,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            );
+            barrier::record(device, cmd, &[], &[to_dst]);
+            unsafe {
+                device.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.raw,
+                    self.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[self.copy_region()],
+                )
+            };
+            // RAW: later commands read the uploaded texels.
+            let done = barrier::image(
+                self.raw,
+                self.aspect,
+                access::TRANSFER_WRITE,
+                access::ALL_READ_WRITE,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                layout,
+            );
+            barrier::record(device, cmd, &[], &[done]);
+        })
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        unsafe {
+            self.ctx.device.destroy_image_view(self.view, None);
+            self.ctx.device.destroy_image(self.raw, None);
+        }
+        if let Some(a) = self.allocation.take() {
+            let _ = self.ctx.allocator().free(a);
+        }
+    }
+}
+
+/// A sampler; freed on drop.
+pub struct Sampler {
+    ctx: Arc<Context>,
+    pub raw: vk::Sampler,
+}
+
+impl Sampler {
+    /// Nearest-texel, clamp-to-edge: for `texelFetch`-style reads and exact kernels.
+    pub fn nearest_clamp(ctx: &Arc<Context>, name: &str) -> Result<Self> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(0.0);
+        let raw = unsafe { ctx.device.create_sampler(&info, None) }.vk("vkCreateSampler")?;
+        ctx.set_name(raw, name);
+        Ok(Self { ctx: ctx.clone(), raw })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_sampler(self.raw, None) };
+    }
+}

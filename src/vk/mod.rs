@@ -1,0 +1,15 @@
+//! Vulkan plumbing only: no knowledge of passes or scenes.
+
+pub mod barrier;
+pub mod buffer;
+pub mod context;
+pub mod image;
+pub mod pipeline;
+pub mod spirv;
+pub mod timing;
+
+pub use buffer::Buffer;
+pub use context::{list_devices, Context, ContextDesc, DeviceInfo};
+pub use image::{Image, Sampler};
+pub use pipeline::{GraphicsDesc, Pipeline, Resource};
+pub use timing::{GpuTimer, Timings};

@@ -1,0 +1,355 @@
+//! Compute and graphics pipelines with push descriptors; the set layout is reflected
+//! from SPIR-V (niagara-style): a resource's binding is its position in the array
+//! passed to `bind`, and its kind is checked against the shader.
+
+use super::buffer::Buffer;
+use super::context::Context;
+use super::image::{Image, Sampler};
+use super::spirv::{self, Reflection};
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use std::sync::Arc;
+
+/// One resource to bind, in binding order.
+pub enum Resource<'a> {
+    /// A storage or uniform buffer (the shader decides which).
+    Buffer(&'a Buffer),
+    /// A storage image in `GENERAL` layout.
+    StorageImage(&'a Image),
+    /// A combined image sampler in `SHADER_READ_ONLY_OPTIMAL` layout.
+    Sampled(&'a Image, &'a Sampler),
+}
+
+/// A shader given by name (for errors) and SPIR-V bytes.
+pub type Shader = (&'static str, &'static [u8]);
+
+/// How to build a graphics pipeline (dynamic rendering, no vertex input: vertices are
+/// pulled from storage buffers).
+pub struct GraphicsDesc<'a> {
+    pub vertex: Shader,
+    /// `None` for depth-only passes.
+    pub fragment: Option<Shader>,
+    pub color_formats: &'a [vk::Format],
+    pub depth_format: vk::Format,
+    /// (constant, slope) depth bias, for shadow maps.
+    pub depth_bias: Option<(f32, f32)>,
+    /// Bytes of push constants (0 for none).
+    pub push_size: u32,
+}
+
+/// A pipeline, its layout and its push-descriptor set layout; freed on drop.
+pub struct Pipeline {
+    ctx: Arc<Context>,
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    bindings: Vec<(u32, vk::DescriptorType)>,
+    bind_point: vk::PipelineBindPoint,
+    stages: vk::ShaderStageFlags,
+    push_size: u32,
+    /// Workgroup size of a compute pipeline.
+    pub local_size: [u32; 3],
+}
+
+struct Module {
+    raw: vk::ShaderModule,
+    reflection: Reflection,
+}
+
+fn module(ctx: &Context, (name, bytes): Shader) -> Result<Module> {
+    let words = spirv::words(name, bytes)?;
+    let reflection = spirv::reflect(name, &words)?;
+    let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    let raw = unsafe { ctx.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
+    Ok(Module { raw, reflection })
+}
+
+/// Merges the bindings of several stages; the same binding must agree on its kind.
+fn merge(
+    name: &str,
+    stages: &[(vk::ShaderStageFlags, &Reflection)],
+) -> Result<Vec<(u32, vk::DescriptorType, vk::ShaderStageFlags)>> {
+    let mut all: Vec<(u32, vk::DescriptorType, vk::ShaderStageFlags)> = Vec::new();
+    for (stage, r) in stages {
+        for &(b, ty) in &r.bindings {
+            match all.iter_mut().find(|e| e.0 == b) {
+                Some(e) if e.1 == ty => e.2 |= *stage,
+                Some(e) => {
+                    return Err(Error::Settings(format!(
+                        "pipeline {name}: binding {b} is {:?} in one stage and {ty:?} in another",
+                        e.1
+                    )))
+                }
+                None => all.push((b, ty, *stage)),
+            }
+        }
+    }
+    all.sort_by_key(|e| e.0);
+    Ok(all)
+}
+
+impl Pipeline {
+    fn layouts(
+        ctx: &Context,
+        name: &str,
+        bindings: &[(u32, vk::DescriptorType, vk::ShaderStageFlags)],
+        push_stages: vk::ShaderStageFlags,
+        push_size: u32,
+    ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
+        if push_size > ctx.limits.max_push_constants_size || !push_size.is_multiple_of(4) {
+            return Err(Error::Settings(format!(
+                "pipeline {name}: {push_size} B of push constants is not allowed"
+            )));
+        }
+        let vk_bindings: Vec<_> = bindings
+            .iter()
+            .map(|&(b, ty, st)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(st)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default()
+            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+            .bindings(&vk_bindings);
+        let set_layout =
+            unsafe { ctx.device.create_descriptor_set_layout(&info, None) }.vk("vkCreateDescriptorSetLayout")?;
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(push_stages)
+            .size(push_size)];
+        let set_layouts = [set_layout];
+        let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if push_size > 0 {
+            info = info.push_constant_ranges(&ranges);
+        }
+        let layout = unsafe { ctx.device.create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
+        ctx.set_name(layout, name);
+        Ok((set_layout, layout))
+    }
+
+    /// A compute pipeline from one module; `push_size` bytes of push constants.
+    pub fn compute(ctx: &Arc<Context>, name: &'static str, shader: Shader, push_size: u32) -> Result<Self> {
+        let m = module(ctx, shader)?;
+        let stage = vk::ShaderStageFlags::COMPUTE;
+        let bindings = merge(name, &[(stage, &m.reflection)])?;
+        let result = Self::layouts(ctx, name, &bindings, stage, push_size).and_then(|(set_layout, layout)| {
+            let info = vk::ComputePipelineCreateInfo::default()
+                .stage(
+                    vk::PipelineShaderStageCreateInfo::default()
+                        .stage(stage)
+                        .module(m.raw)
+                        .name(c"main"),
+                )
+                .layout(layout);
+            let raw = unsafe {
+                ctx.device
+                    .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+            }
+            .map_err(|(_, r)| r)
+            .vk("vkCreateComputePipelines")?[0];
+            ctx.set_name(raw, name);
+            Ok(Self {
+                ctx: ctx.clone(),
+                raw,
+                layout,
+                set_layout,
+                bindings: bindings.iter().map(|b| (b.0, b.1)).collect(),
+                bind_point: vk::PipelineBindPoint::COMPUTE,
+                stages: stage,
+                push_size,
+                local_size: m.reflection.local_size.unwrap_or([1, 1, 1]),
+            })
+        });
+        unsafe { ctx.device.destroy_shader_module(m.raw, None) };
+        result
+    }
+
+    /// A graphics pipeline for dynamic rendering: triangle lists, no culling (scenes
+    /// may mix windings; shaders make normals face the viewer), depth test LESS.
+    pub fn graphics(ctx: &Arc<Context>, name: &'static str, desc: &GraphicsDesc<'_>) -> Result<Self> {
+        let vs = module(ctx, desc.vertex)?;
+        let fs = match desc.fragment.map(|f| module(ctx, f)).transpose() {
+            Ok(fs) => fs,
+            Err(e) => {
+                unsafe { ctx.device.destroy_shader_module(vs.raw, None) };
+                return Err(e);
+            }
+        };
+        let mut reflections = vec![(vk::ShaderStageFlags::VERTEX, &vs.reflection)];
+        let mut stage_infos = vec![vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vs.raw)
+            .name(c"main")];
+        let mut push_stages = vk::ShaderStageFlags::VERTEX;
+        if let Some(fs) = &fs {
+            reflections.push((vk::ShaderStageFlags::FRAGMENT, &fs.reflection));
+            stage_infos.push(
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::FRAGMENT)
+                    .module(fs.raw)
+                    .name(c"main"),
+            );
+            push_stages |= vk::ShaderStageFlags::FRAGMENT;
+        }
+        let result = merge(name, &reflections).and_then(|bindings| {
+            let (set_layout, layout) = Self::layouts(ctx, name, &bindings, push_stages, desc.push_size)?;
+            let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+            let assembly =
+                vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+            let viewport = vk::PipelineViewportStateCreateInfo::default()
+                .viewport_count(1)
+                .scissor_count(1);
+            let (bias_on, bias_c, bias_s) = desc.depth_bias.map_or((false, 0.0, 0.0), |(c, s)| (true, c, s));
+            let raster = vk::PipelineRasterizationStateCreateInfo::default()
+                .polygon_mode(vk::PolygonMode::FILL)
+                .cull_mode(vk::CullModeFlags::NONE)
+                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+                .depth_bias_enable(bias_on)
+                .depth_bias_constant_factor(bias_c)
+                .depth_bias_slope_factor(bias_s)
+                .line_width(1.0);
+            let multisample =
+                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+                .depth_test_enable(true)
+                .depth_write_enable(true)
+                .depth_compare_op(vk::CompareOp::LESS);
+            let attachments: Vec<_> = desc
+                .color_formats
+                .iter()
+                .map(|_| {
+                    vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)
+                })
+                .collect();
+            let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+            let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+            let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+            let mut rendering = vk::PipelineRenderingCreateInfo::default()
+                .color_attachment_formats(desc.color_formats)
+                .depth_attachment_format(desc.depth_format);
+            let info = vk::GraphicsPipelineCreateInfo::default()
+                .stages(&stage_infos)
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&assembly)
+                .viewport_state(&viewport)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&depth)
+                .color_blend_state(&blend)
+                .dynamic_state(&dynamic)
+                .layout(layout)
+                .push_next(&mut rendering);
+            let raw = unsafe {
+                ctx.device
+                    .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+            }
+            .map_err(|(_, r)| r)
+            .vk("vkCreateGraphicsPipelines")?[0];
+            ctx.set_name(raw, name);
+            Ok(Self {
+                ctx: ctx.clone(),
+                raw,
+                layout,
+                set_layout,
+                bindings: bindings.iter().map(|b| (b.0, b.1)).collect(),
+                bind_point: vk::PipelineBindPoint::GRAPHICS,
+                stages: push_stages,
+                push_size: desc.push_size,
+                local_size: [1, 1, 1],
+            })
+        });
+        unsafe {
+            ctx.device.destroy_shader_module(vs.raw, None);
+            if let Some(fs) = fs {
+                ctx.device.destroy_shader_module(fs.raw, None);
+            }
+        }
+        result
+    }
+
+    /// Binds the pipeline, pushes its descriptors (`resources[i]` is binding `i`;
+    /// bindings the compiler removed as unused are skipped) and its push constants.
+    pub fn bind(&self, cmd: vk::CommandBuffer, resources: &[Resource<'_>], push: &[u8]) {
+        assert_eq!(
+            push.len() as u32,
+            self.push_size,
+            "push constant size does not match the pipeline"
+        );
+        enum Info {
+            Buffer(vk::DescriptorBufferInfo),
+            Image(vk::DescriptorImageInfo),
+        }
+        let infos: Vec<(u32, vk::DescriptorType, Info)> = self
+            .bindings
+            .iter()
+            .map(|&(b, ty)| {
+                let resource = resources
+                    .get(b as usize)
+                    .unwrap_or_else(|| panic!("binding {b} ({ty:?}) has no resource: {} given", resources.len()));
+                let info = match (resource, ty) {
+                    (
+                        Resource::Buffer(buf),
+                        vk::DescriptorType::STORAGE_BUFFER | vk::DescriptorType::UNIFORM_BUFFER,
+                    ) => Info::Buffer(buf.info()),
+                    (Resource::StorageImage(img), vk::DescriptorType::STORAGE_IMAGE) => Info::Image(
+                        vk::DescriptorImageInfo::default()
+                            .image_view(img.view)
+                            .image_layout(vk::ImageLayout::GENERAL),
+                    ),
+                    (Resource::Sampled(img, s), vk::DescriptorType::COMBINED_IMAGE_SAMPLER) => Info::Image(
+                        vk::DescriptorImageInfo::default()
+                            .image_view(img.view)
+                            .sampler(s.raw)
+                            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                    ),
+                    _ => panic!("binding {b}: the shader wants {ty:?}, a different kind of resource was given"),
+                };
+                (b, ty, info)
+            })
+            .collect();
+        let writes: Vec<vk::WriteDescriptorSet<'_>> = infos
+            .iter()
+            .map(|(b, ty, info)| {
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_binding(*b)
+                    .descriptor_type(*ty)
+                    .descriptor_count(1);
+                match info {
+                    Info::Buffer(i) => w.buffer_info(std::slice::from_ref(i)),
+                    Info::Image(i) => w.image_info(std::slice::from_ref(i)),
+                }
+            })
+            .collect();
+        let device = &self.ctx.device;
+        // SAFETY: `cmd` is recording; every write references a live resource.
+        unsafe {
+            device.cmd_bind_pipeline(cmd, self.bind_point, self.raw);
+            if !writes.is_empty() {
+                self.ctx
+                    .push_descriptor
+                    .cmd_push_descriptor_set(cmd, self.bind_point, self.layout, 0, &writes);
+            }
+            if !push.is_empty() {
+                device.cmd_push_constants(cmd, self.layout, self.stages, 0, push);
+            }
+        }
+    }
+
+    /// Dispatches enough workgroups to cover `size` invocations per axis.
+    pub fn dispatch_covering(&self, cmd: vk::CommandBuffer, size: [u32; 3]) {
+        let g = |i: usize| size[i].div_ceil(self.local_size[i]);
+        unsafe { self.ctx.device.cmd_dispatch(cmd, g(0), g(1), g(2)) };
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        unsafe {
+            self.ctx.device.destroy_pipeline(self.raw, None);
+            self.ctx.device.destroy_pipeline_layout(self.layout, None);
+            self.ctx.device.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}

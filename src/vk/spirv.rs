@@ -1,0 +1,195 @@
+//! Just enough SPIR-V reflection for push-descriptor layouts and layout tests:
+//! descriptor bindings (set 0), push-constant use, workgroup size, and the member
+//! offsets of named structs. Opcodes and enums from the SPIR-V 1.6 specification.
+
+use crate::error::{Error, Result};
+use ash::vk;
+use std::collections::HashMap;
+
+const MAGIC: u32 = 0x0723_0203;
+const OP_NAME: u32 = 5;
+const OP_MEMBER_NAME: u32 = 6;
+const OP_EXECUTION_MODE: u32 = 16;
+const OP_TYPE_IMAGE: u32 = 25;
+const OP_TYPE_SAMPLER: u32 = 26;
+const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
+const OP_TYPE_ARRAY: u32 = 28;
+const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
+const OP_TYPE_STRUCT: u32 = 30;
+const OP_TYPE_POINTER: u32 = 32;
+const OP_VARIABLE: u32 = 59;
+const OP_DECORATE: u32 = 71;
+const OP_MEMBER_DECORATE: u32 = 72;
+const DEC_BLOCK: u32 = 2;
+const DEC_BUFFER_BLOCK: u32 = 3;
+const DEC_ARRAY_STRIDE: u32 = 6;
+const DEC_BINDING: u32 = 33;
+const DEC_SET: u32 = 34;
+const DEC_OFFSET: u32 = 35;
+const MODE_LOCAL_SIZE: u32 = 17;
+const SC_UNIFORM_CONSTANT: u32 = 0;
+const SC_UNIFORM: u32 = 2;
+const SC_PUSH_CONSTANT: u32 = 9;
+const SC_STORAGE_BUFFER: u32 = 12;
+
+/// What a module declares.
+#[derive(Debug, Default, Clone)]
+pub struct Reflection {
+    /// (binding, type) of every descriptor in set 0, sorted by binding.
+    pub bindings: Vec<(u32, vk::DescriptorType)>,
+    /// Whether the module reads push constants.
+    pub push_constants: bool,
+    /// `local_size` of a compute module.
+    pub local_size: Option<[u32; 3]>,
+    /// Named structs: name → [(member name, byte offset)], in declaration order.
+    pub structs: HashMap<String, Vec<(String, u32)>>,
+    /// Struct name → array stride of any (runtime) array whose element is that struct.
+    pub array_strides: HashMap<String, u32>,
+}
+
+/// Words of a SPIR-V module given as bytes (as `include_bytes!` yields them).
+pub fn words(name: &'static str, bytes: &[u8]) -> Result<Vec<u32>> {
+    if !bytes.len().is_multiple_of(4) || bytes.len() < 20 {
+        return Err(Error::Spirv(
+            name,
+            format!("{} bytes is not a SPIR-V module", bytes.len()),
+        ));
+    }
+    let words: Vec<u32> = bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    if words[0] != MAGIC {
+        return Err(Error::Spirv(name, format!("bad magic {:#x}", words[0])));
+    }
+    Ok(words)
+}
+
+fn string(words: &[u32]) -> String {
+    let bytes: Vec<u8> = words
+        .iter()
+        .flat_map(|w| w.to_le_bytes())
+        .take_while(|&b| b != 0)
+        .collect();
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+/// Reflects a module.
+pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
+    let mut names: HashMap<u32, String> = HashMap::new();
+    let mut member_names: HashMap<(u32, u32), String> = HashMap::new();
+    let mut decorations: HashMap<(u32, u32), u32> = HashMap::new(); // (id, decoration) → first literal
+    let mut member_offsets: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut types: HashMap<u32, (u32, Vec<u32>)> = HashMap::new(); // id → (opcode, operands after result)
+    let mut variables: Vec<(u32, u32, u32)> = Vec::new(); // (id, pointer type, storage class)
+    let mut out = Reflection::default();
+
+    let mut i = 5;
+    while i < words.len() {
+        let count = (words[i] >> 16) as usize;
+        let op = words[i] & 0xffff;
+        if count == 0 || i + count > words.len() {
+            return Err(Error::Spirv(name, format!("truncated instruction at word {i}")));
+        }
+        let args = &words[i + 1..i + count];
+        match op {
+            OP_NAME if !args.is_empty() => {
+                names.insert(args[0], string(&args[1..]));
+            }
+            OP_MEMBER_NAME if args.len() >= 2 => {
+                member_names.insert((args[0], args[1]), string(&args[2..]));
+            }
+            OP_EXECUTION_MODE if args.len() >= 5 && args[1] == MODE_LOCAL_SIZE => {
+                out.local_size = Some([args[2], args[3], args[4]]);
+            }
+            OP_DECORATE if args.len() >= 2 => {
+                decorations.insert((args[0], args[1]), args.get(2).copied().unwrap_or(0));
+            }
+            OP_MEMBER_DECORATE if args.len() >= 4 && args[2] == DEC_OFFSET => {
+                member_offsets.insert((args[0], args[1]), args[3]);
+            }
+            OP_TYPE_IMAGE
+            | OP_TYPE_SAMPLER
+            | OP_TYPE_SAMPLED_IMAGE
+            | OP_TYPE_ARRAY
+            | OP_TYPE_RUNTIME_ARRAY
+            | OP_TYPE_STRUCT
+            | OP_TYPE_POINTER
+                if !args.is_empty() =>
+            {
+                types.insert(args[0], (op, args[1..].to_vec()));
+            }
+            OP_VARIABLE if args.len() >= 3 => variables.push((args[1], args[0], args[2])),
+            _ => {}
+        }
+        i += count;
+    }
+
+    // Strip arrays to the element type.
+    let element = |mut t: u32| {
+        while let Some((OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY, ops)) = types.get(&t) {
+            t = ops[0];
+        }
+        t
+    };
+    for (id, ptr, class) in variables {
+        if class == SC_PUSH_CONSTANT {
+            out.push_constants = true;
+            continue;
+        }
+        let Some(&binding) = decorations.get(&(id, DEC_BINDING)) else {
+            continue;
+        };
+        if decorations.get(&(id, DEC_SET)).copied().unwrap_or(0) != 0 {
+            return Err(Error::Spirv(name, "only descriptor set 0 is supported".into()));
+        }
+        let pointee = match types.get(&ptr) {
+            Some((OP_TYPE_POINTER, ops)) if ops.len() >= 2 => element(ops[1]),
+            _ => return Err(Error::Spirv(name, format!("variable {id} is not a pointer"))),
+        };
+        let ty = match (class, types.get(&pointee)) {
+            (SC_STORAGE_BUFFER, _) => vk::DescriptorType::STORAGE_BUFFER,
+            (SC_UNIFORM, _) if decorations.contains_key(&(pointee, DEC_BUFFER_BLOCK)) => {
+                vk::DescriptorType::STORAGE_BUFFER
+            }
+            (SC_UNIFORM, _) if decorations.contains_key(&(pointee, DEC_BLOCK)) => vk::DescriptorType::UNIFORM_BUFFER,
+            (SC_UNIFORM_CONSTANT, Some((OP_TYPE_SAMPLED_IMAGE, _))) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            (SC_UNIFORM_CONSTANT, Some((OP_TYPE_SAMPLER, _))) => vk::DescriptorType::SAMPLER,
+            // OpTypeImage operands after the result: sampled type, dim, depth, arrayed, ms, sampled.
+            (SC_UNIFORM_CONSTANT, Some((OP_TYPE_IMAGE, ops))) if ops.len() >= 6 && ops[5] == 2 => {
+                vk::DescriptorType::STORAGE_IMAGE
+            }
+            (SC_UNIFORM_CONSTANT, Some((OP_TYPE_IMAGE, _))) => vk::DescriptorType::SAMPLED_IMAGE,
+            _ => {
+                return Err(Error::Spirv(
+                    name,
+                    format!("binding {binding}: unsupported descriptor kind"),
+                ))
+            }
+        };
+        out.bindings.push((binding, ty));
+    }
+    out.bindings.sort_by_key(|b| b.0);
+
+    for (&id, (op, ops)) in &types {
+        if *op == OP_TYPE_STRUCT {
+            if let Some(struct_name) = names.get(&id) {
+                let members = (0..ops.len() as u32)
+                    .filter_map(|m| {
+                        let offset = member_offsets.get(&(id, m))?;
+                        Some((member_names.get(&(id, m)).cloned().unwrap_or_default(), *offset))
+                    })
+                    .collect::<Vec<_>>();
+                if members.len() == ops.len() {
+                    out.structs.insert(struct_name.clone(), members);
+                }
+            }
+        }
+        if matches!(*op, OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY) {
+            if let (Some(elem_name), Some(&stride)) = (names.get(&ops[0]), decorations.get(&(id, DEC_ARRAY_STRIDE))) {
+                out.array_strides.insert(elem_name.clone(), stride);
+            }
+        }
+    }
+    Ok(out)
+}

@@ -24,6 +24,9 @@ fn main() {
     options.set_target_spirv(shaderc::SpirvVersion::V1_5);
     options.set_optimization_level(shaderc::OptimizationLevel::Performance);
     options.set_warnings_as_errors();
+    // Keeps OpName/OpMemberName through the optimizer: the layout test and validation
+    // messages need struct and member names.
+    options.set_generate_debug_info();
     for (name, value) in SHADER_DEFINES {
         options.add_macro_definition(name, Some(&format!("{value}u")));
     }

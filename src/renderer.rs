@@ -338,7 +338,8 @@ impl Renderer {
     /// The last frame's lit HDR image as RGBA f32.
     pub fn read_lit(&self) -> Result<Vec<[f32; 4]>> {
         let raw = self.light.lit.read(vk::ImageLayout::GENERAL)?;
-        Ok(crate::cpu_ref::rgba16f_to_f32(&raw))
+        debug_assert_eq!(light_direct::FORMAT, vk::Format::R32G32B32A32_SFLOAT);
+        Ok(bytemuck::pod_collect_to_vec(&raw))
     }
 
     /// Reads a G-buffer (or shadow map) image left in `SHADER_READ_ONLY_OPTIMAL`.

@@ -54,7 +54,7 @@ vec3 shade_direct(vec3 albedo, float roughness, float reflectivity, vec3 n, vec3
     // Normalized Blinn-Phong highlight of the sun; roughness floored so that mirrors
     // keep a finite, visible highlight.
     float r = max(roughness, 0.05);
-    float e = 2.0 / (r * r) - 2.0;
+    float e = max(2.0 / (r * r) - 2.0, 1.0); // >= 1: pow(x, 0) is undefined at x = 0
     vec3 h = normalize(l + v);
     float spec = (e + 8.0) / (8.0 * PI) * pow(max(dot(n, h), 0.0), e);
     float ks = 0.04 + 0.96 * reflectivity;

@@ -93,7 +93,7 @@ pub fn shade_direct(
     let ndl = n.dot(l).max(0.0);
     let diffuse = albedo * (1.0 - reflectivity) * std::f32::consts::FRAC_1_PI;
     let r = roughness.max(0.05);
-    let e = 2.0 / (r * r) - 2.0;
+    let e = (2.0 / (r * r) - 2.0).max(1.0);
     let h = (l + v).normalize();
     let spec = (e + 8.0) / (8.0 * std::f32::consts::PI) * n.dot(h).max(0.0).powf(e);
     let ks = 0.04 + 0.96 * reflectivity;

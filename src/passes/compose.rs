@@ -34,7 +34,7 @@ fn ldr_image(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Image> {
         "compose.ldr",
         extent,
         FORMAT,
-        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST,
     )
 }
 

@@ -27,12 +27,11 @@ pub struct GBuffer {
 }
 
 impl GBuffer {
-    fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let color =
-            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
-        let depth = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC;
+    /// Creates the targets. They accept transfers too, so tests can fill and read them.
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        let transfer = vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+        let color = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | transfer;
+        let depth = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | transfer;
         Ok(Self {
             depth: Image::new(ctx, "gbuffer.depth", extent, DEPTH_FORMAT, depth)?,
             normal: Image::new(ctx, "gbuffer.normal", extent, NORMAL_FORMAT, color)?,

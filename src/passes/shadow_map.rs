@@ -43,7 +43,8 @@ impl ShadowMapPass {
             FORMAT,
             vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
                 | vk::ImageUsageFlags::SAMPLED
-                | vk::ImageUsageFlags::TRANSFER_SRC,
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST,
         )?;
         Ok(Self {
             ctx: ctx.clone(),

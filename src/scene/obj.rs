@@ -73,6 +73,25 @@ fn convert_material(m: &tobj::Material, dir: &Path) -> Result<Material> {
     Ok(mat)
 }
 
+/// Colour statements need three numbers: tobj 4 panics on fewer, so they are checked
+/// here first, with the line number in the error.
+fn check_mtl_colors(bytes: &[u8], path: &Path) -> Result<()> {
+    for (i, line) in String::from_utf8_lossy(bytes).lines().enumerate() {
+        let mut parts = line.split_whitespace();
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke" | "Tf")) = parts.next() {
+            let numbers: Vec<_> = parts.map(str::parse::<f32>).collect();
+            if numbers.len() != 3 || numbers.iter().any(|n| n.is_err()) {
+                return Err(Error::BadAsset {
+                    what: "MTL file",
+                    path: path.into(),
+                    detail: format!("line {}: '{key}' needs three numbers, got '{}'", i + 1, line.trim()),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Area-weighted vertex normals for a mesh that has none.
 fn computed_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
     let mut normals = vec![Vec3::ZERO; positions.len()];
@@ -116,13 +135,22 @@ pub fn load(path: &Path) -> Result<Scene> {
                 }));
                 Err(tobj::LoadError::OpenFileFailed)
             }
-            Ok(bytes) => tobj::load_mtl_buf(&mut bytes.as_slice()).inspect_err(|e| {
-                mtl_failure.replace(Some(Error::BadAsset {
-                    what: "MTL file",
-                    path: mtl_path.clone(),
-                    detail: e.to_string(),
-                }));
-            }),
+            Ok(bytes) => check_mtl_colors(&bytes, &mtl_path)
+                .map_err(|e| {
+                    mtl_failure.replace(Some(e));
+                    tobj::LoadError::MaterialParseError
+                })
+                .and_then(|_| tobj::load_mtl_buf(&mut bytes.as_slice()))
+                .inspect_err(|e| {
+                    if mtl_failure.borrow().is_some() {
+                        return;
+                    }
+                    mtl_failure.replace(Some(Error::BadAsset {
+                        what: "MTL file",
+                        path: mtl_path.clone(),
+                        detail: e.to_string(),
+                    }));
+                }),
         }
     })
     .map_err(|e| Error::BadAsset {

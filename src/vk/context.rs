@@ -287,7 +287,8 @@ impl Context {
         let entry = load_entry()?;
         let (instance, has_debug_utils) = create_instance(&entry, desc.validation)?;
         // From here on, a failure must destroy the instance: build the rest in a helper.
-        match Self::with_instance(entry, instance.clone(), has_debug_utils, desc) {
+        // `entry` (the loaded library) must outlive the instance destroyed below.
+        match Self::with_instance(entry.clone(), instance.clone(), has_debug_utils, desc) {
             Ok(ctx) => Ok(std::sync::Arc::new(ctx)),
             Err(e) => {
                 unsafe { instance.destroy_instance(None) };

@@ -1,0 +1,29 @@
+//! Shared test helpers: a validated context and the zero-message check.
+#![allow(dead_code)]
+
+use speculum::vk::{Context, ContextDesc};
+use std::sync::Arc;
+
+/// A context with validation and synchronization validation on (always, in tests).
+pub fn context() -> Arc<Context> {
+    Context::new(&ContextDesc {
+        validation: true,
+        device: std::env::var("SPECULUM_TEST_DEVICE").ok(),
+    })
+    .expect("a Vulkan device with validation layers (run tools/test, which installs them)")
+}
+
+/// Fails the test if the validation layer reported anything.
+pub fn assert_no_validation_messages(ctx: &Context) {
+    assert_eq!(
+        ctx.validation_messages(),
+        0,
+        "validation messages were reported (see stderr)"
+    );
+}
+
+/// A deterministic RNG per test, so a failure reproduces.
+pub fn rng(seed: u64) -> rand::rngs::StdRng {
+    use rand::SeedableRng;
+    rand::rngs::StdRng::seed_from_u64(seed)
+}

@@ -1,0 +1,89 @@
+//! Device creation, device listing, and the GPU timer.
+
+mod common;
+
+use speculum::vk::{list_devices, Context, ContextDesc, GpuTimer};
+
+/// A context comes up with validation on and names a device that `list_devices` lists.
+#[test]
+fn context_creates_with_validation_and_lists_its_device() {
+    let ctx = common::context();
+    assert!(ctx.validation_enabled());
+    assert!(!ctx.device_name.is_empty());
+    let list = list_devices().unwrap();
+    assert!(list.iter().any(|d| d.name == ctx.device_name && d.usable.is_ok()));
+    assert!(ctx.timestamp_valid_bits > 0 && ctx.timestamp_period_ns > 0.0);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// `--device` with an index or name that matches nothing is an error naming the choice.
+#[test]
+fn unknown_device_is_a_clear_error() {
+    for wanted in ["no-such-gpu-xyz", "999"] {
+        let err = Context::new(&ContextDesc {
+            validation: false,
+            device: Some(wanted.into()),
+        })
+        .err()
+        .expect("no device should match");
+        let msg = err.to_string();
+        assert!(msg.contains(wanted), "{msg}");
+    }
+}
+
+/// Picking the device by its listed index or by a name substring selects it.
+#[test]
+fn device_selects_by_index_and_name() {
+    let list = list_devices().unwrap();
+    let first = list.iter().find(|d| d.usable.is_ok()).expect("a usable device");
+    let by_index = Context::new(&ContextDesc {
+        validation: false,
+        device: Some(first.index.to_string()),
+    })
+    .unwrap();
+    assert_eq!(by_index.device_name, first.name);
+    let needle: String = first.name.chars().take(6).collect::<String>().to_uppercase();
+    let by_name = Context::new(&ContextDesc {
+        validation: false,
+        device: Some(needle),
+    })
+    .unwrap();
+    assert!(by_name
+        .device_name
+        .to_uppercase()
+        .contains(&first.name.chars().take(6).collect::<String>().to_uppercase()));
+}
+
+/// Nested named scopes come back by name, with the outer scope at least as long as the inner.
+#[test]
+fn timer_scopes_report_by_name() {
+    let ctx = common::context();
+    let mut timer = GpuTimer::new(&ctx, 4).unwrap();
+    let data = vec![7u8; 1 << 20];
+    let src = speculum::vk::Buffer::with_data(&ctx, "src", ash::vk::BufferUsageFlags::TRANSFER_SRC, &data).unwrap();
+    let dst = speculum::vk::Buffer::new(
+        &ctx,
+        "dst",
+        data.len() as u64,
+        ash::vk::BufferUsageFlags::TRANSFER_DST | ash::vk::BufferUsageFlags::TRANSFER_SRC,
+        gpu_allocator::MemoryLocation::GpuOnly,
+    )
+    .unwrap();
+    ctx.one_shot(|cmd| {
+        timer.reset(cmd);
+        timer.begin(cmd, "outer");
+        timer.begin(cmd, "copy");
+        let region = ash::vk::BufferCopy::default().size(data.len() as u64);
+        unsafe { ctx.device.cmd_copy_buffer(cmd, src.raw, dst.raw, &[region]) };
+        timer.end(cmd, "copy");
+        timer.end(cmd, "outer");
+    })
+    .unwrap();
+    let results = timer.results().unwrap();
+    let names: Vec<_> = results.iter().map(|r| r.0).collect();
+    assert_eq!(names, ["outer", "copy"]);
+    assert!(results[1].1 > 0.0, "a 1 MiB copy takes measurable time");
+    assert!(results[0].1 >= results[1].1);
+    assert_eq!(dst.read().unwrap(), data, "the copy itself ran");
+    common::assert_no_validation_messages(&ctx);
+}

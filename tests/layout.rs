@@ -1,0 +1,132 @@
+//! Rust/GLSL shared structs: member names and byte offsets in the compiled SPIR-V
+//! (std430/std140 as glslang laid them out) equal the `#[repr(C)]` Rust offsets.
+
+use speculum::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex};
+use speculum::passes::compose::ComposePush;
+use speculum::shaders;
+use speculum::vk::spirv::{reflect, words, Reflection};
+use std::mem::{offset_of, size_of};
+
+fn reflected(name: &'static str, spv: &[u8]) -> Reflection {
+    reflect(name, &words(name, spv).unwrap()).unwrap()
+}
+
+macro_rules! rust_layout {
+    ($ty:ty { $($field:ident),* $(,)? }) => {
+        vec![$((stringify!($field).to_string(), offset_of!($ty, $field) as u32)),*]
+    };
+}
+
+fn check(r: &Reflection, glsl_name: &str, rust: Vec<(String, u32)>) {
+    let glsl = r
+        .structs
+        .get(glsl_name)
+        .unwrap_or_else(|| panic!("struct {glsl_name} not found in SPIR-V"));
+    assert_eq!(
+        glsl, &rust,
+        "layout of {glsl_name} differs between GLSL (left) and Rust (right)"
+    );
+}
+
+/// `Vertex` (std430 storage buffer): offsets and array stride.
+#[test]
+fn vertex_layout_matches_glsl() {
+    let r = reflected("gbuffer.vert", shaders::GBUFFER_VERT);
+    check(
+        &r,
+        "Vertex",
+        rust_layout!(GpuVertex {
+            position,
+            material,
+            normal,
+            _pad0
+        }),
+    );
+    assert_eq!(r.array_strides["Vertex"] as usize, size_of::<GpuVertex>());
+}
+
+/// `Material` (std430 storage buffer): offsets and array stride.
+#[test]
+fn material_layout_matches_glsl() {
+    let r = reflected("gbuffer.frag", shaders::GBUFFER_FRAG);
+    check(
+        &r,
+        "Material",
+        rust_layout!(GpuMaterial {
+            albedo,
+            roughness,
+            reflectivity,
+            _pad0
+        }),
+    );
+    assert_eq!(r.array_strides["Material"] as usize, size_of::<GpuMaterial>());
+}
+
+/// `FrameUniforms` (std140 uniform block) in every shader that declares it.
+#[test]
+fn frame_uniforms_layout_matches_glsl() {
+    let rust = rust_layout!(FrameUniforms {
+        view_proj,
+        inv_view_proj,
+        light_view_proj,
+        camera_pos,
+        light_dir,
+        light_color,
+        sky_zenith,
+        sky_horizon,
+        resolution,
+        shadow_map_size,
+        pcf_radius,
+        shadow_bias,
+        exposure,
+        ambient,
+        _pad0,
+    });
+    for (name, spv) in [
+        ("gbuffer.vert", shaders::GBUFFER_VERT),
+        ("light_direct.comp", shaders::LIGHT_DIRECT_COMP),
+        ("shadow_map.vert", shaders::SHADOW_MAP_VERT),
+    ] {
+        check(&reflected(name, spv), "FrameUniforms", rust.clone());
+    }
+}
+
+/// `ComposePush` (push constants).
+#[test]
+fn compose_push_layout_matches_glsl() {
+    let r = reflected("compose.comp", shaders::COMPOSE_COMP);
+    check(&r, "ComposePush", rust_layout!(ComposePush { size, exposure, _pad0 }));
+}
+
+/// The reflection itself: a layout mismatch is detected (the check can fail).
+#[test]
+fn layout_check_detects_a_mismatch() {
+    let r = reflected("gbuffer.frag", shaders::GBUFFER_FRAG);
+    let wrong = vec![("albedo".to_string(), 0), ("roughness".to_string(), 16)];
+    let result = std::panic::catch_unwind(|| check(&r, "Material", wrong));
+    assert!(result.is_err());
+}
+
+/// Descriptor reflection sees light.direct's bindings in order with their kinds.
+#[test]
+fn light_direct_bindings_are_reflected() {
+    use ash::vk::DescriptorType as D;
+    let r = reflected("light_direct.comp", shaders::LIGHT_DIRECT_COMP);
+    let kinds: Vec<_> = r.bindings.iter().map(|b| b.1).collect();
+    assert_eq!(
+        kinds,
+        [
+            D::UNIFORM_BUFFER,
+            D::COMBINED_IMAGE_SAMPLER,
+            D::COMBINED_IMAGE_SAMPLER,
+            D::COMBINED_IMAGE_SAMPLER,
+            D::COMBINED_IMAGE_SAMPLER,
+            D::COMBINED_IMAGE_SAMPLER,
+            D::STORAGE_IMAGE
+        ]
+    );
+    assert_eq!(
+        r.local_size,
+        Some([speculum::shader_defines::WG_2D, speculum::shader_defines::WG_2D, 1])
+    );
+}

@@ -1,0 +1,125 @@
+//! Whole frames: shadows darken occluded points, and the default scene matches its
+//! stored golden image.
+
+mod common;
+
+use glam::{Mat4, Vec3, Vec4Swizzles};
+use speculum::scene::{Camera, Light, Material, SceneBuilder, TriMesh};
+use speculum::{headless, Renderer, Settings};
+
+/// Pixel of world point `w` in a frame rendered with `frame`.
+fn pixel_of(frame: &speculum::gpu_types::FrameUniforms, w: Vec3) -> (usize, usize) {
+    let c = frame.view_proj * w.extend(1.0);
+    let ndc = c.xyz() / c.w;
+    let x = ((ndc.x * 0.5 + 0.5) * frame.resolution[0] as f32) as usize;
+    let y = ((ndc.y * 0.5 + 0.5) * frame.resolution[1] as f32) as usize;
+    (x, y)
+}
+
+fn luminance(c: [f32; 4]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// Luminance at a point under a floating box and at a point beside it, with the box
+/// present and (as a control) absent.
+fn under_and_beside(with_box: bool) -> (f32, f32) {
+    let ctx = common::context();
+    let mut b = SceneBuilder::new("shadow");
+    let ground = b.material(Material::new("ground", [0.8, 0.8, 0.8], 0.9, 0.0));
+    let blocker = b.material(Material::new("blocker", [0.2, 0.2, 0.8], 0.9, 0.0));
+    b.mesh(TriMesh::quad(12.0, 12.0), Mat4::IDENTITY, ground);
+    // A thin post in the far corner keeps the scene bounds (and so the light's
+    // frustum) identical with and without the box.
+    b.mesh(
+        TriMesh::cuboid(Vec3::new(0.1, 2.5, 0.1)),
+        Mat4::from_translation(Vec3::new(-5.5, 1.25, -5.5)),
+        blocker,
+    );
+    if with_box {
+        b.mesh(
+            TriMesh::cuboid(Vec3::new(1.5, 0.3, 1.5)),
+            Mat4::from_translation(Vec3::new(0.0, 1.5, 0.0)),
+            blocker,
+        );
+    }
+    b.camera(Camera {
+        position: Vec3::new(0.0, 6.0, 6.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_y_deg: 50.0,
+        near: 0.1,
+        far: 50.0,
+    });
+    b.light(Light {
+        direction: Vec3::new(0.0, 1.0, 0.0),
+        color: Vec3::ONE,
+        intensity: 3.0,
+    });
+    let scene = b.build().unwrap();
+    let settings = Settings {
+        width: 128,
+        height: 96,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
+    r.render_frame().unwrap();
+    let lit = r.read_lit().unwrap();
+    let frame = *r.uniforms();
+    let at = |w: Vec3| {
+        let (x, y) = pixel_of(&frame, w);
+        luminance(lit[y * settings.width as usize + x])
+    };
+    let result = (at(Vec3::new(0.0, 0.0, 0.0)), at(Vec3::new(3.0, 0.0, 0.0)));
+    common::assert_no_validation_messages(&ctx);
+    result
+}
+
+/// A point straight under an occluder (sun overhead) is much darker than a lit point;
+/// without the occluder the same point is as bright as the lit one.
+#[test]
+fn occluded_point_is_darker_than_lit_point() {
+    let (under, beside) = under_and_beside(true);
+    assert!(under < 0.5 * beside, "under the box {under}, beside it {beside}");
+    let (under_free, beside_free) = under_and_beside(false);
+    assert!(
+        (under_free - beside_free).abs() < 0.05 * beside_free,
+        "no box: {under_free} vs {beside_free}"
+    );
+}
+
+const GOLDEN: &str = "tests/golden/room_192x108.png";
+
+/// The default scene at 192x108 matches the stored golden image: mean absolute
+/// error under 1.5/255 per channel (lavapipe is deterministic; the margin absorbs
+/// LLVM version differences). `SPECULUM_BLESS=1` rewrites the golden image.
+#[test]
+fn room_matches_golden_image() {
+    let ctx = common::context();
+    let scene = speculum::scene::procedural::room().unwrap();
+    let settings = Settings {
+        width: 192,
+        height: 108,
+        ..Default::default()
+    };
+    let out = headless::render(&ctx, &scene, &settings, 0, 1).unwrap();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(GOLDEN);
+    if std::env::var("SPECULUM_BLESS").is_ok_and(|v| v == "1") {
+        headless::save_png(&path, &out.rgba, settings.width, settings.height).unwrap();
+    }
+    let golden = image::open(&path)
+        .expect("golden image (SPECULUM_BLESS=1 writes it)")
+        .to_rgba8();
+    assert_eq!(golden.dimensions(), (settings.width, settings.height));
+    let sum: u64 = golden
+        .as_raw()
+        .iter()
+        .zip(&out.rgba)
+        .map(|(a, b)| (*a as i64 - *b as i64).unsigned_abs())
+        .sum();
+    let mean = sum as f64 / out.rgba.len() as f64;
+    assert!(mean < 1.5, "mean absolute error {mean:.3}/255 against {GOLDEN}");
+    // The image is not trivially flat: the comparison means something.
+    let distinct: std::collections::HashSet<_> = out.rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect();
+    assert!(distinct.len() > 500, "only {} distinct colours", distinct.len());
+    common::assert_no_validation_messages(&ctx);
+}

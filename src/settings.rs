@@ -83,3 +83,53 @@ impl Settings {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        Settings::default().validate().unwrap();
+    }
+
+    #[test]
+    fn rejects_out_of_range_values() {
+        let bad = [
+            Settings {
+                width: 0,
+                ..Default::default()
+            },
+            Settings {
+                height: MAX_SIDE + 1,
+                ..Default::default()
+            },
+            Settings {
+                shadow_map_size: 0,
+                ..Default::default()
+            },
+            Settings {
+                pcf_radius: crate::shader_defines::MAX_PCF_RADIUS + 1,
+                ..Default::default()
+            },
+            Settings {
+                exposure: f32::NAN,
+                ..Default::default()
+            },
+            Settings {
+                shadow_bias: -1.0,
+                ..Default::default()
+            },
+        ];
+        for s in bad {
+            assert!(s.validate().is_err(), "{s:?}");
+        }
+    }
+
+    #[test]
+    fn json_round_trip_and_unknown_fields() {
+        let s: Settings = serde_json::from_str(r#"{"width": 320, "pcf_radius": 2}"#).unwrap();
+        assert_eq!((s.width, s.height, s.pcf_radius), (320, Settings::default().height, 2));
+        assert!(serde_json::from_str::<Settings>(r#"{"widht": 320}"#).is_err());
+    }
+}

@@ -232,3 +232,53 @@ pub fn load(name_or_path: &str) -> Result<Scene> {
         known: procedural::NAMES.join(", "),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn room_is_valid_and_bounded() {
+        let room = procedural::room().unwrap();
+        assert!(room.triangle_count() > 1000);
+        let (lo, hi) = room.bounds();
+        assert!(lo.y >= -1e-4 && hi.y <= 4.0 + 1e-4, "{lo} {hi}");
+    }
+
+    #[test]
+    fn validation_rejects_broken_geometry() {
+        let mut s = procedural::room().unwrap();
+        s.vertices[3].position[1] = f32::INFINITY;
+        assert!(s.validate().unwrap_err().to_string().contains("non-finite"));
+        let mut s = procedural::room().unwrap();
+        s.indices[7] = s.vertices.len() as u32;
+        assert!(s.validate().unwrap_err().to_string().contains("past the"));
+        let mut s = procedural::room().unwrap();
+        s.indices.clear();
+        assert!(s.validate().unwrap_err().to_string().contains("no triangles"));
+    }
+
+    #[test]
+    fn unknown_names_list_the_built_in_scenes() {
+        let e = load("nope").unwrap_err().to_string();
+        assert!(e.contains("unknown scene 'nope'") && e.contains("room"), "{e}");
+    }
+
+    #[test]
+    fn sphere_vertices_lie_on_the_sphere_with_outward_normals() {
+        let m = TriMesh::sphere(2.0, 16, 8);
+        for (p, n) in m.positions.iter().zip(&m.normals) {
+            assert!((p.length() - 2.0).abs() < 1e-5);
+            assert!(p.normalize().dot(*n) > 0.9999);
+        }
+        // Winding: every triangle's geometric normal points outwards.
+        for t in m.indices.chunks_exact(3) {
+            let (a, b, c) = (
+                m.positions[t[0] as usize],
+                m.positions[t[1] as usize],
+                m.positions[t[2] as usize],
+            );
+            assert!((b - a).cross(c - a).dot(a + b + c) > 0.0);
+        }
+    }
+}

@@ -193,3 +193,21 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_non_spirv_bytes() {
+        assert!(words("x", &[1, 2, 3]).is_err());
+        assert!(words("x", &[0u8; 24]).is_err(), "wrong magic");
+    }
+
+    #[test]
+    fn rejects_truncated_instruction() {
+        // Header, then an instruction claiming 9 words with only 1 present.
+        let module = [MAGIC, 0x0001_0500, 0, 10, 0, (9 << 16) | OP_NAME];
+        assert!(reflect("x", &module).is_err());
+    }
+}

@@ -157,3 +157,26 @@ pub fn median(values: &[f64]) -> f64 {
         0.5 * (v[n / 2 - 1] + v[n / 2])
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_samples() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert!(median(&[]).is_nan());
+    }
+
+    #[test]
+    fn timings_sum_repeated_scopes_within_a_frame() {
+        let mut t = Timings::default();
+        t.add_frame(&[("a", 1.0), ("b", 2.0), ("a", 0.5)]);
+        t.add_frame(&[("a", 3.0), ("b", 4.0)]);
+        t.add_frame(&[("a", 2.0), ("b", 3.0)]);
+        let m = t.medians();
+        assert_eq!(m["a"], 2.0);
+        assert_eq!(m["b"], 3.0);
+    }
+}

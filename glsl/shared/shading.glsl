@@ -6,17 +6,16 @@
 
 const float PI = 3.14159265358979;
 
-// 1 where the shadow-map texel `q` (clamped to the map) is at or beyond `ref_depth`.
-float shadow_texel(sampler2D shadow_map, ivec2 q, float ref_depth) {
-    int last = int(frame.shadow_map_size) - 1;
-    q = clamp(q, ivec2(0), ivec2(last));
-    return texelFetch(shadow_map, q, 0).r >= ref_depth ? 1.0 : 0.0;
+// Weight of texel column/row k of the (2r+2)-wide PCF footprint with sub-texel offset f.
+float pcf_weight(int k, int n, float f) {
+    return k == 0 ? 1.0 - f : (k == n - 1 ? f : 1.0);
 }
 
 // Fraction of light reaching world point `w`: the mean of (2r+1)^2 bilinearly
 // filtered depth compares centred on w's shadow-map position. Equivalent to that
-// mean but computed over the (2r+2)^2 texels it touches, each fetched once: interior
-// texels weigh 1, the border rows and columns (1-f) and f.
+// mean but computed over the (2r+2)^2 texels it touches, each read once, four at a
+// time with textureGather (clamp-to-edge sampler): interior texels weigh 1, the
+// border rows and columns (1-f) and f.
 float shadow_visibility(sampler2D shadow_map, vec3 w) {
     vec4 c = frame.light_view_proj * vec4(w, 1.0);
     vec3 ndc = c.xyz / c.w;
@@ -25,18 +24,26 @@ float shadow_visibility(sampler2D shadow_map, vec3 w) {
         return 1.0; // outside the light's frustum: unshadowed
     }
     float ref_depth = ndc.z - frame.shadow_bias;
-    vec2 t = uv * float(frame.shadow_map_size) - 0.5;
+    float size = float(frame.shadow_map_size);
+    vec2 t = uv * size - 0.5;
     vec2 cell = floor(t);
     vec2 f = t - cell;
     int r = int(min(frame.pcf_radius, MAX_PCF_RADIUS));
     ivec2 base = ivec2(cell) - r;
-    int n = 2 * r + 2;
+    int n = 2 * r + 2; // even: the footprint is whole 2x2 gathers
     float sum = 0.0;
-    for (int j = 0; j < n; ++j) {
-        float wy = j == 0 ? 1.0 - f.y : (j == n - 1 ? f.y : 1.0);
-        for (int i = 0; i < n; ++i) {
-            float wx = i == 0 ? 1.0 - f.x : (i == n - 1 ? f.x : 1.0);
-            sum += wx * wy * shadow_texel(shadow_map, base + ivec2(i, j), ref_depth);
+    for (int j = 0; j < n; j += 2) {
+        float wy0 = pcf_weight(j, n, f.y);
+        float wy1 = pcf_weight(j + 1, n, f.y);
+        for (int i = 0; i < n; i += 2) {
+            float wx0 = pcf_weight(i, n, f.x);
+            float wx1 = pcf_weight(i + 1, n, f.x);
+            // The centre of the 2x2 block whose lower corner texel is base + (i, j):
+            // exactly half a texel from every texel centre, so the footprint is exact.
+            vec2 g = (vec2(base + ivec2(i, j)) + 1.0) / size;
+            // Gather order: x = (i, j+1), y = (i+1, j+1), z = (i+1, j), w = (i, j).
+            vec4 lit = step(vec4(ref_depth), textureGather(shadow_map, g, 0));
+            sum += lit.w * wx0 * wy0 + lit.z * wx1 * wy0 + lit.x * wx0 * wy1 + lit.y * wx1 * wy1;
         }
     }
     float taps = float((2 * r + 1) * (2 * r + 1));

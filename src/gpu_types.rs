@@ -68,3 +68,43 @@ pub struct FrameUniforms {
 const _: () = assert!(std::mem::size_of::<GpuVertex>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 32);
 const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 304);
+
+/// A BVH node (std430, 32 bytes); layout documented in `glsl/shared/bvh.glsl`.
+/// Internal: `left`/`right` are child node indices. Leaf: `left` is
+/// `BVH_LEAF_BIT | triangle id`, `right` is `BVH_INVALID`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    pub lo: [f32; 3],
+    pub left: u32,
+    pub hi: [f32; 3],
+    pub right: u32,
+}
+
+/// A ray for `rt.trace` (std430, 32 bytes). Hits count for `tmin < t < tmax`, with t
+/// in units of `dir`'s length.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Ray {
+    pub origin: [f32; 3],
+    pub tmin: f32,
+    pub dir: [f32; 3],
+    pub tmax: f32,
+}
+
+/// The result of tracing a `Ray` (std430, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Hit {
+    /// Hit distance; `tmax` on a miss; -1 if the traversal stack overflowed.
+    pub t: f32,
+    /// Triangle id with bit 31 set for the dynamic BVH; `BVH_INVALID` on a miss.
+    pub prim: u32,
+    /// Barycentric weights of the triangle's second and third corners.
+    pub u: f32,
+    pub v: f32,
+}
+
+const _: () = assert!(std::mem::size_of::<BvhNode>() == 32);
+const _: () = assert!(std::mem::size_of::<Ray>() == 32);
+const _: () = assert!(std::mem::size_of::<Hit>() == 16);

@@ -17,9 +17,40 @@ pub const MATERIAL_NONE: u32 = 0xffff_ffff;
 /// (2r+1)^2 taps bound the cost of the shadow lookup per pixel.
 pub const MAX_PCF_RADIUS: u32 = 4;
 
+/// Workgroup size of the 1D LBVH kernels (bounds, morton, hierarchy, fit, trace):
+/// 256 = 32 subgroups on lavapipe, 8 on NVIDIA; enough to hide latency on GPUs.
+pub const LBVH_WG: u32 = 256;
+
+/// Radix-sort digit width in bits. 4 bits (16 bins) keeps every thread's per-digit
+/// counts in shared memory (16 x 256 x 4 B = 16 KiB, within lavapipe's 32 KiB), so the
+/// scatter ranks keys stably without any workgroup waiting on another.
+pub const SORT_RADIX_BITS: u32 = 4;
+/// Bins per radix pass.
+pub const SORT_BINS: u32 = 1 << SORT_RADIX_BITS;
+/// Threads per radix-sort workgroup.
+pub const SORT_WG: u32 = 256;
+/// Keys each sort thread owns, consecutively: a tile is SORT_WG x SORT_ITEMS keys.
+pub const SORT_ITEMS: u32 = 16;
+
+/// Marks a BVH node's `left` field as a leaf; the low 31 bits are the primitive id.
+pub const BVH_LEAF_BIT: u32 = 0x8000_0000;
+/// "No node / no primitive" (parent of the root, the primitive of a miss).
+pub const BVH_INVALID: u32 = 0xffff_ffff;
+/// Traversal stack entries per ray. A 2N-1 node LBVH over 30-bit keys is at most
+/// 30 + log2(N) levels deep (equal keys split by index); 64 covers 2^34 triangles.
+pub const TRACE_STACK: u32 = 64;
+
 /// Every constant above, as `(name, value)`, in the form build.rs hands to shaderc.
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("WG_2D", WG_2D),
     ("MATERIAL_NONE", MATERIAL_NONE),
     ("MAX_PCF_RADIUS", MAX_PCF_RADIUS),
+    ("LBVH_WG", LBVH_WG),
+    ("SORT_RADIX_BITS", SORT_RADIX_BITS),
+    ("SORT_BINS", SORT_BINS),
+    ("SORT_WG", SORT_WG),
+    ("SORT_ITEMS", SORT_ITEMS),
+    ("BVH_LEAF_BIT", BVH_LEAF_BIT),
+    ("BVH_INVALID", BVH_INVALID),
+    ("TRACE_STACK", TRACE_STACK),
 ];

@@ -2,7 +2,9 @@
 //! and benchmarks compare GPU output against these.
 
 pub mod compose;
+pub mod lbvh;
 pub mod shading;
+pub mod trace;
 
 /// Decodes tightly packed RGBA16F texels.
 pub fn rgba16f_to_f32(raw: &[u8]) -> Vec<[f32; 4]> {

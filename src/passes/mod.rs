@@ -4,7 +4,9 @@
 
 pub mod compose;
 pub mod gbuffer;
+pub mod lbvh;
 pub mod light_direct;
+pub mod rt_trace;
 pub mod shadow_map;
 
 use ash::vk;

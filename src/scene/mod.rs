@@ -8,6 +8,7 @@ pub mod camera;
 pub mod geometry;
 pub mod obj;
 pub mod procedural;
+pub mod soup;
 
 pub use camera::Camera;
 pub use geometry::TriMesh;

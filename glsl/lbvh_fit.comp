@@ -1,0 +1,73 @@
+#version 460
+// lbvh.fit (and lbvh.refit): leaf boxes from the triangles, then bottom-up unions.
+// Each leaf's invocation climbs towards the root; at every internal node the first
+// child to arrive stops (atomic visit counter), the second computes the union and
+// goes on, so each node is written exactly once, after both children (Karras 2012,
+// section 4; Lauterbach et al. 2009). No invocation ever waits for another.
+// The visit counters must be zero before the dispatch.
+//
+// Memory ordering: box stores are made visible to the sibling's invocation with
+// memoryBarrierBuffer() on a `coherent` buffer, between the store and the visit
+// (release) and between the visit and the loads (acquire). The climb advances in
+// lockstep steps whose trip count is workgroup-uniform (a vote ends the loop), so
+// every memory barrier sits in uniform control flow: lavapipe 22.3 treats a memory
+// barrier in divergent flow like a workgroup barrier and loses invocations.
+#include "bvh.glsl"
+
+layout(local_size_x = LBVH_WG) in;
+
+layout(binding = 0, std430) readonly buffer Vertices { Vertex vertices[]; };
+layout(binding = 1, std430) readonly buffer Indices { uint indices[]; };
+layout(binding = 2, std430) coherent buffer Nodes { BvhNode nodes[]; };
+layout(binding = 3, std430) readonly buffer Parents { uint parents[]; };
+layout(binding = 4, std430) coherent buffer Visits { uint visits[]; };
+
+layout(push_constant) uniform Push { uint n; } pc;
+
+shared uint s_any_active;
+
+void main() {
+    uint j = gl_GlobalInvocationID.x;
+    bool climbing = j < pc.n;
+    uint parent = BVH_INVALID;
+    if (climbing) {
+        uint node = pc.n - 1u + j;
+        uint prim = nodes[node].left & ~BVH_LEAF_BIT;
+        TRIANGLE_CORNERS(vertices, indices, prim, a, b, c)
+        nodes[node].lo = min(a, min(b, c));
+        nodes[node].hi = max(a, max(b, c));
+        parent = parents[node];
+        climbing = parent != BVH_INVALID;
+    }
+    while (true) {
+        // Release: this invocation's last box is visible before its visit is counted.
+        memoryBarrierBuffer();
+        if (climbing && atomicAdd(visits[parent], 1u) == 0u) {
+            climbing = false; // first child here: the sibling's invocation continues
+        }
+        // Acquire: the sibling's box, stored before its visit, is visible now.
+        memoryBarrierBuffer();
+        if (climbing) {
+            uint l = nodes[parent].left;
+            uint r = nodes[parent].right;
+            nodes[parent].lo = min(nodes[l].lo, nodes[r].lo);
+            nodes[parent].hi = max(nodes[l].hi, nodes[r].hi);
+            parent = parents[parent];
+            climbing = parent != BVH_INVALID;
+        }
+        // Workgroup vote: stop when no invocation of the group is still climbing.
+        if (gl_LocalInvocationID.x == 0u) {
+            s_any_active = 0u;
+        }
+        barrier();
+        if (climbing) {
+            s_any_active = 1u;
+        }
+        barrier();
+        bool any_active = s_any_active != 0u;
+        barrier();
+        if (!any_active) {
+            break;
+        }
+    }
+}

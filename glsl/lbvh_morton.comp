@@ -1,0 +1,65 @@
+#version 460
+// lbvh.morton: Morton code of each triangle's center, quantized in the center
+// bounds; values start as the triangle ids. 30-bit codes (10 bits per axis) in one
+// word, or 63-bit codes (21 bits per axis) in two words, low word first.
+// Mirrored by cpu_ref::lbvh::{morton30, morton63}.
+#include "bvh.glsl"
+
+layout(local_size_x = LBVH_WG) in;
+
+layout(binding = 0, std430) readonly buffer Vertices { Vertex vertices[]; };
+layout(binding = 1, std430) readonly buffer Indices { uint indices[]; };
+layout(binding = 2, std430) readonly buffer Bounds { uint bounds[12]; };
+layout(binding = 3, std430) writeonly buffer Keys { uint keys[]; };
+layout(binding = 4, std430) writeonly buffer Values { uint values[]; };
+
+layout(push_constant) uniform Push {
+    uint tri_count;
+    uint key_words; // 1: 30-bit codes, 2: 63-bit codes
+} pc;
+
+// Spreads the low 10 bits of x to every third bit:
+// ---- ---- ---- ---- ---- --98 7654 3210 -> ---- 9--8 --7- -6-- 5--4 --3- -2-- 1--0
+uint expand_bits10(uint x) {
+    x = (x | (x << 16)) & 0x030000ffu;
+    x = (x | (x << 8)) & 0x0300f00fu;
+    x = (x | (x << 4)) & 0x030c30c3u;
+    x = (x | (x << 2)) & 0x09249249u;
+    return x;
+}
+
+void main() {
+    uint t = gl_GlobalInvocationID.x;
+    if (t >= pc.tri_count) {
+        return;
+    }
+    TRIANGLE_CORNERS(vertices, indices, t, a, b, c)
+    vec3 center = (a + b + c) * (1.0 / 3.0);
+    vec3 lo = vec3(ordered_to_float(bounds[0]), ordered_to_float(bounds[1]), ordered_to_float(bounds[2]));
+    vec3 hi = vec3(ordered_to_float(bounds[3]), ordered_to_float(bounds[4]), ordered_to_float(bounds[5]));
+    vec3 extent = hi - lo;
+    // A flat axis (all centroids equal along it) quantizes to 0.
+    vec3 unit = clamp((center - lo) / max(extent, vec3(1e-30)), 0.0, 1.0);
+    if (pc.key_words == 1u) {
+        uvec3 q = uvec3(min(unit * 1024.0, vec3(1023.0)));
+        keys[t] = (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z);
+    } else {
+        uvec3 q = uvec3(min(unit * 2097152.0, vec3(2097151.0)));
+        // Bit 3b+2 of the code is bit b of x, 3b+1 of y, 3b of z (x most significant).
+        uvec2 code = uvec2(0u);
+        for (uint b = 0u; b < 21u; ++b) {
+            for (uint axis = 0u; axis < 3u; ++axis) {
+                uint bit = (q[axis] >> b) & 1u;
+                uint pos = 3u * b + (2u - axis);
+                if (pos < 32u) {
+                    code.x |= bit << pos;
+                } else {
+                    code.y |= bit << (pos - 32u);
+                }
+            }
+        }
+        keys[2u * t] = code.x;
+        keys[2u * t + 1u] = code.y;
+    }
+    values[t] = t;
+}

@@ -1,0 +1,32 @@
+#version 460
+// lbvh.sort, step 1 of 3 per pass: the digit histogram of each tile, written
+// digit-major (counts[digit * num_tiles + tile]) so that one exclusive scan of the
+// whole array gives every (digit, tile) its first output position.
+#include "radix.glsl"
+
+layout(local_size_x = SORT_WG) in;
+
+layout(binding = 0, std430) readonly buffer Keys { uint keys[]; };
+layout(binding = 1, std430) writeonly buffer Counts { uint counts[]; };
+
+shared uint s_hist[SORT_BINS];
+
+void main() {
+    uint l = gl_LocalInvocationID.x;
+    uint tile = gl_WorkGroupID.x;
+    if (l < SORT_BINS) {
+        s_hist[l] = 0u;
+    }
+    barrier();
+    uint base = tile * SORT_TILE + l * SORT_ITEMS;
+    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+        uint i = base + k;
+        if (i < pc.n) {
+            atomicAdd(s_hist[DIGIT_OF(keys, i)], 1u);
+        }
+    }
+    barrier();
+    if (l < SORT_BINS) {
+        counts[l * pc.num_tiles + tile] = s_hist[l];
+    }
+}

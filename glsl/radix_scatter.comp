@@ -1,0 +1,73 @@
+#version 460
+// lbvh.sort, step 3 of 3 per pass: stable scatter. Each invocation owns SORT_ITEMS
+// consecutive keys of the tile. Its per-digit counts go to shared memory digit-major
+// (s_counts[digit * SORT_WG + invocation]); an exclusive scan of that array gives,
+// for every (digit, invocation), how many keys of that digit come earlier in the tile.
+// Adding the scanned global offset of (digit, tile) gives each key its output slot,
+// in input order within equal digits: the sort is stable (LSD radix sort needs it).
+#include "radix.glsl"
+#define WG_SCAN_SIZE SORT_WG
+#include "wg_scan.glsl"
+
+layout(local_size_x = SORT_WG) in;
+
+layout(binding = 0, std430) readonly buffer KeysIn { uint keys_in[]; };
+layout(binding = 1, std430) readonly buffer ValuesIn { uint values_in[]; };
+layout(binding = 2, std430) writeonly buffer KeysOut { uint keys_out[]; };
+layout(binding = 3, std430) writeonly buffer ValuesOut { uint values_out[]; };
+layout(binding = 4, std430) readonly buffer Offsets { uint offsets[]; };
+
+shared uint s_counts[SORT_BINS * SORT_WG];
+
+void main() {
+    uint l = gl_LocalInvocationID.x;
+    uint tile = gl_WorkGroupID.x;
+    uint base = tile * SORT_TILE + l * SORT_ITEMS;
+
+    for (uint d = 0u; d < SORT_BINS; ++d) {
+        s_counts[d * SORT_WG + l] = 0u;
+    }
+    // Own column only: no other invocation touches s_counts[* + l] until the barrier.
+    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+        uint i = base + k;
+        if (i < pc.n) {
+            s_counts[DIGIT_OF(keys_in, i) * SORT_WG + l] += 1u;
+        }
+    }
+    barrier();
+
+    // Exclusive scan of the SORT_BINS * SORT_WG counts: invocation l scans the
+    // SORT_BINS consecutive entries starting at l * SORT_BINS.
+    uint seg = l * SORT_BINS;
+    uint sum = 0u;
+    for (uint k = 0u; k < SORT_BINS; ++k) {
+        sum += s_counts[seg + k];
+    }
+    uint total;
+    uint running = wg_exclusive_scan(sum, total);
+    for (uint k = 0u; k < SORT_BINS; ++k) {
+        uint c = s_counts[seg + k];
+        s_counts[seg + k] = running;
+        running += c;
+    }
+    barrier();
+
+    // Keys of digit d before this invocation's keys, counted from the tile's first key
+    // of digit d: s_counts[d * SORT_WG + l] - s_counts[d * SORT_WG].
+    uint seen[SORT_BINS];
+    for (uint d = 0u; d < SORT_BINS; ++d) {
+        seen[d] = 0u;
+    }
+    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+        uint i = base + k;
+        if (i < pc.n) {
+            uint d = DIGIT_OF(keys_in, i);
+            uint slot = offsets[d * pc.num_tiles + tile] + (s_counts[d * SORT_WG + l] - s_counts[d * SORT_WG]) + seen[d];
+            seen[d] += 1u;
+            for (uint w = 0u; w < pc.key_words; ++w) {
+                keys_out[slot * pc.key_words + w] = keys_in[i * pc.key_words + w];
+            }
+            values_out[slot] = values_in[i];
+        }
+    }
+}

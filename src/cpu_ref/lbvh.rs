@@ -1,0 +1,295 @@
+//! References of the LBVH kernels (`glsl/lbvh_*.comp`, `glsl/radix_*.comp`) and the
+//! checks every built BVH must pass.
+
+use crate::gpu_types::{BvhNode, GpuVertex};
+use crate::shader_defines::{BVH_INVALID, BVH_LEAF_BIT};
+use glam::{UVec3, Vec3};
+
+/// Corners of triangle `t`.
+pub fn triangle(vertices: &[GpuVertex], indices: &[u32], t: usize) -> [Vec3; 3] {
+    [0, 1, 2].map(|k| Vec3::from(vertices[indices[3 * t + k] as usize].position))
+}
+
+/// Centroid as the GPU computes it: (a + b + c) * (1/3), in f32.
+pub fn centroid(tri: &[Vec3; 3]) -> Vec3 {
+    (tri[0] + tri[1] + tri[2]) * (1.0 / 3.0)
+}
+
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub lo: Vec3,
+    pub hi: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb {
+        lo: Vec3::splat(f32::MAX),
+        hi: Vec3::splat(f32::MIN),
+    };
+
+    pub fn of_triangle(tri: &[Vec3; 3]) -> Self {
+        Self {
+            lo: tri[0].min(tri[1]).min(tri[2]),
+            hi: tri[0].max(tri[1]).max(tri[2]),
+        }
+    }
+    pub fn union(self, o: Self) -> Self {
+        Self {
+            lo: self.lo.min(o.lo),
+            hi: self.hi.max(o.hi),
+        }
+    }
+    pub fn grow(self, p: Vec3) -> Self {
+        Self {
+            lo: self.lo.min(p),
+            hi: self.hi.max(p),
+        }
+    }
+    pub fn contains(&self, o: &Self) -> bool {
+        self.lo.cmple(o.lo).all() && self.hi.cmpge(o.hi).all()
+    }
+    /// Surface area (0 for empty or flat-in-two-axes boxes).
+    pub fn area(&self) -> f32 {
+        let d = (self.hi - self.lo).max(Vec3::ZERO);
+        2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+    }
+    pub fn of_node(n: &BvhNode) -> Self {
+        Self {
+            lo: Vec3::from(n.lo),
+            hi: Vec3::from(n.hi),
+        }
+    }
+}
+
+/// `lbvh.bounds`: (centroid bounds, scene bounds).
+pub fn bounds(vertices: &[GpuVertex], indices: &[u32]) -> (Aabb, Aabb) {
+    (0..indices.len() / 3).fold((Aabb::EMPTY, Aabb::EMPTY), |(c, s), t| {
+        let tri = triangle(vertices, indices, t);
+        (c.grow(centroid(&tri)), s.union(Aabb::of_triangle(&tri)))
+    })
+}
+
+/// Inverse of the kernels' order-preserving float → uint mapping (`bvh.glsl`).
+pub fn ordered_to_float(u: u32) -> f32 {
+    f32::from_bits(if u & 0x8000_0000 != 0 { u & 0x7fff_ffff } else { !u })
+}
+
+/// Spreads the low 10 bits of x to every third bit (see `expand_bits10` in GLSL).
+pub fn expand_bits10(mut x: u32) -> u32 {
+    x = (x | (x << 16)) & 0x0300_00ff;
+    x = (x | (x << 8)) & 0x0300_f00f;
+    x = (x | (x << 4)) & 0x030c_30c3;
+    x = (x | (x << 2)) & 0x0924_9249;
+    x
+}
+
+/// 30-bit Morton code, x most significant.
+pub fn morton30(q: UVec3) -> u32 {
+    (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z)
+}
+
+/// 63-bit Morton code, x most significant (bit 3b+2 is bit b of x).
+pub fn morton63(q: UVec3) -> u64 {
+    (0..21).fold(0u64, |code, b| {
+        code | (((q.x as u64 >> b) & 1) << (3 * b + 2))
+            | (((q.y as u64 >> b) & 1) << (3 * b + 1))
+            | (((q.z as u64 >> b) & 1) << (3 * b))
+    })
+}
+
+/// `lbvh.morton`: the key of every triangle (as u64; 30-bit codes when `key_words` is 1).
+pub fn morton_keys(vertices: &[GpuVertex], indices: &[u32], key_words: u32) -> Vec<u64> {
+    let (cb, _) = bounds(vertices, indices);
+    let extent = cb.hi - cb.lo;
+    (0..indices.len() / 3)
+        .map(|t| {
+            let c = centroid(&triangle(vertices, indices, t));
+            let unit = ((c - cb.lo) / extent.max(Vec3::splat(1e-30))).clamp(Vec3::ZERO, Vec3::ONE);
+            if key_words == 1 {
+                morton30((unit * 1024.0).min(Vec3::splat(1023.0)).as_uvec3()) as u64
+            } else {
+                morton63((unit * 2_097_152.0).min(Vec3::splat(2_097_151.0)).as_uvec3())
+            }
+        })
+        .collect()
+}
+
+/// `lbvh.sort`: a stable sort of (key, value) pairs by key.
+pub fn sort_pairs(keys: &[u64], values: &[u32]) -> (Vec<u64>, Vec<u32>) {
+    let mut pairs: Vec<(u64, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
+    pairs.sort_by_key(|p| p.0); // stable
+    pairs.into_iter().unzip()
+}
+
+fn delta(keys: &[u64], key_words: u32, i: i64, j: i64) -> i64 {
+    if j < 0 || j >= keys.len() as i64 {
+        return -1;
+    }
+    let bits = 32 * key_words as i64;
+    let x = keys[i as usize] ^ keys[j as usize];
+    if x != 0 {
+        x.leading_zeros() as i64 - (64 - bits)
+    } else {
+        bits + (i as u32 ^ j as u32).leading_zeros() as i64
+    }
+}
+
+/// `lbvh.hierarchy` (Karras 2012): child links of the 2N-1 nodes (boxes left zero) and
+/// the parent of every node, from sorted keys and their primitive ids.
+pub fn hierarchy(keys: &[u64], values: &[u32], key_words: u32) -> (Vec<BvhNode>, Vec<u32>) {
+    let n = keys.len() as i64;
+    let mut nodes = vec![BvhNode::default(); (2 * n - 1).max(0) as usize];
+    let mut parents = vec![0u32; nodes.len()];
+    if n == 0 {
+        return (nodes, parents);
+    }
+    for (i, v) in values.iter().enumerate() {
+        nodes[(n - 1) as usize + i].left = BVH_LEAF_BIT | v;
+        nodes[(n - 1) as usize + i].right = BVH_INVALID;
+    }
+    parents[0] = BVH_INVALID;
+    let delta = |i: i64, j: i64| delta(keys, key_words, i, j);
+    for i in 0..n - 1 {
+        let d = if delta(i, i + 1) - delta(i, i - 1) >= 0 { 1 } else { -1 };
+        let delta_min = delta(i, i - d);
+        let mut l_max = 2;
+        while delta(i, i + l_max * d) > delta_min {
+            l_max *= 2;
+        }
+        let mut l = 0;
+        let mut t = l_max / 2;
+        while t >= 1 {
+            if delta(i, i + (l + t) * d) > delta_min {
+                l += t;
+            }
+            t /= 2;
+        }
+        let j = i + l * d;
+        let delta_node = delta(i, j);
+        let mut s = 0;
+        let mut div = 2;
+        loop {
+            let t = (l + div - 1) / div;
+            if delta(i, i + (s + t) * d) > delta_node {
+                s += t;
+            }
+            if t == 1 {
+                break;
+            }
+            div *= 2;
+        }
+        let gamma = i + s * d + d.min(0);
+        let left = if i.min(j) == gamma { n - 1 + gamma } else { gamma } as u32;
+        let right = if i.max(j) == gamma + 1 {
+            n - 1 + gamma + 1
+        } else {
+            gamma + 1
+        } as u32;
+        nodes[i as usize].left = left;
+        nodes[i as usize].right = right;
+        parents[left as usize] = i as u32;
+        parents[right as usize] = i as u32;
+    }
+    (nodes, parents)
+}
+
+/// `lbvh.fit`: fills the boxes of a tree whose links are set.
+pub fn fit(nodes: &mut [BvhNode], vertices: &[GpuVertex], indices: &[u32]) {
+    fn visit(nodes: &mut [BvhNode], i: usize, vertices: &[GpuVertex], indices: &[u32]) -> Aabb {
+        let nd = nodes[i];
+        let b = if nd.left & BVH_LEAF_BIT != 0 {
+            Aabb::of_triangle(&triangle(vertices, indices, (nd.left & !BVH_LEAF_BIT) as usize))
+        } else {
+            let l = visit(nodes, nd.left as usize, vertices, indices);
+            let r = visit(nodes, nd.right as usize, vertices, indices);
+            l.union(r)
+        };
+        nodes[i].lo = b.lo.to_array();
+        nodes[i].hi = b.hi.to_array();
+        b
+    }
+    if !nodes.is_empty() {
+        visit(nodes, 0, vertices, indices);
+    }
+}
+
+/// Checks what every BVH over `vertices`/`indices` must satisfy: 2N-1 nodes forming
+/// one tree rooted at 0; every triangle in exactly one leaf; each leaf box equal to its
+/// triangle's box; each parent box containing its children; the root box equal to the
+/// scene box; `parents` consistent with the links (when given).
+pub fn check_bvh(
+    nodes: &[BvhNode],
+    parents: Option<&[u32]>,
+    vertices: &[GpuVertex],
+    indices: &[u32],
+) -> Result<(), String> {
+    let n = indices.len() / 3;
+    if nodes.len() != 2 * n - 1 {
+        return Err(format!("{} nodes for {n} triangles (want {})", nodes.len(), 2 * n - 1));
+    }
+    let mut seen_node = vec![false; nodes.len()];
+    let mut seen_tri = vec![false; n];
+    let mut stack = vec![(0usize, BVH_INVALID)];
+    while let Some((i, parent)) = stack.pop() {
+        if i >= nodes.len() {
+            return Err(format!("link to node {i} past the end"));
+        }
+        if std::mem::replace(&mut seen_node[i], true) {
+            return Err(format!("node {i} is reached twice"));
+        }
+        if let Some(p) = parents {
+            if p[i] != parent {
+                return Err(format!("parent of node {i} is {} (want {parent})", p[i]));
+            }
+        }
+        let nd = &nodes[i];
+        let b = Aabb::of_node(nd);
+        if nd.left & BVH_LEAF_BIT != 0 {
+            let t = (nd.left & !BVH_LEAF_BIT) as usize;
+            if t >= n || std::mem::replace(&mut seen_tri[t], true) {
+                return Err(format!("leaf {i}: triangle {t} out of range or in two leaves"));
+            }
+            let want = Aabb::of_triangle(&triangle(vertices, indices, t));
+            if b != want {
+                return Err(format!("leaf {i}: box {b:?} is not its triangle's {want:?}"));
+            }
+        } else {
+            for c in [nd.left, nd.right] {
+                let cb = Aabb::of_node(
+                    nodes
+                        .get(c as usize)
+                        .ok_or(format!("node {i}: child {c} out of range"))?,
+                );
+                if !b.contains(&cb) {
+                    return Err(format!("node {i}: box {b:?} does not contain child {c}'s {cb:?}"));
+                }
+                stack.push((c as usize, i as u32));
+            }
+        }
+    }
+    if let Some(i) = seen_node.iter().position(|s| !s) {
+        return Err(format!("node {i} is not in the tree"));
+    }
+    if let Some(t) = seen_tri.iter().position(|s| !s) {
+        return Err(format!("triangle {t} is in no leaf"));
+    }
+    let (_, scene) = bounds(vertices, indices);
+    if Aabb::of_node(&nodes[0]) != scene {
+        return Err(format!(
+            "root box {:?} is not the scene box {scene:?}",
+            Aabb::of_node(&nodes[0])
+        ));
+    }
+    Ok(())
+}
+
+/// Surface-area-heuristic cost of a tree (MacDonald & Booth 1990) with unit costs for
+/// a traversal step and a triangle test, relative to the root's area.
+pub fn sah_cost_nodes(nodes: &[BvhNode]) -> f64 {
+    let root = Aabb::of_node(&nodes[0]).area() as f64;
+    nodes
+        .iter()
+        .map(|nd| Aabb::of_node(nd).area() as f64 / root)
+        .sum::<f64>()
+}

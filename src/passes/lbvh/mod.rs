@@ -1,0 +1,316 @@
+//! `lbvh.*`: a linear BVH built on the GPU from Morton codes (Lauterbach et al. 2009;
+//! Karras 2012). Kernels, each under its timer scope:
+//! `lbvh.bounds` → `lbvh.morton` → `lbvh.sort` → `lbvh.hierarchy` → `lbvh.fit`,
+//! or `lbvh.refit` alone when vertices moved but the triangles stayed the same.
+//! Node layout: `glsl/shared/bvh.glsl` (2N-1 nodes of 32 bytes, root at 0).
+
+pub mod sort;
+
+use crate::cpu_ref::lbvh::{ordered_to_float, Aabb};
+use crate::error::{Error, Result};
+use crate::gpu_types::BvhNode;
+use crate::shader_defines::LBVH_WG;
+use crate::shaders;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, GpuTimer, Pipeline, Resource};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use gpu_allocator::MemoryLocation;
+use sort::{RadixSort, SortBuffers};
+use std::sync::Arc;
+
+pub const BOUNDS: &str = "lbvh.bounds";
+pub const MORTON: &str = "lbvh.morton";
+pub const SORT: &str = "lbvh.sort";
+pub const HIERARCHY: &str = "lbvh.hierarchy";
+pub const FIT: &str = "lbvh.fit";
+pub const REFIT: &str = "lbvh.refit";
+
+/// Most triangles in one BVH: 1D dispatches of LBVH_WG invocations, at most 65535
+/// workgroups.
+pub const MAX_TRIANGLES: u32 = 65535 * LBVH_WG;
+
+/// Morton code width: 30 bits (10 per axis, one word) or 63 bits (21 per axis, two
+/// words). 63-bit codes separate close centroids in large scenes at twice the sort time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum MortonBits {
+    #[serde(rename = "30")]
+    Bits30,
+    #[serde(rename = "63")]
+    Bits63,
+}
+
+impl MortonBits {
+    pub fn key_words(self) -> u32 {
+        match self {
+            MortonBits::Bits30 => 1,
+            MortonBits::Bits63 => 2,
+        }
+    }
+}
+
+/// Triangles on the GPU: the scene's vertex and index buffers.
+#[derive(Clone, Copy)]
+pub struct Geometry<'a> {
+    pub vertices: &'a Buffer,
+    pub indices: &'a Buffer,
+    pub tri_count: u32,
+}
+
+/// A BVH on the GPU and the scratch memory to rebuild it.
+pub struct Bvh {
+    /// 2N-1 nodes (`BvhNode`).
+    pub nodes: Buffer,
+    /// Parent of every node (`BVH_INVALID` for the root).
+    pub parents: Buffer,
+    visits: Buffer,
+    bounds: Buffer,
+    pub sort: SortBuffers,
+    pub tri_count: u32,
+    pub bits: MortonBits,
+}
+
+impl Bvh {
+    /// Memory for a BVH over `tri_count` triangles.
+    pub fn new(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits) -> Result<Self> {
+        if tri_count == 0 {
+            return Err(Error::Settings("a BVH needs at least one triangle".into()));
+        }
+        if tri_count > MAX_TRIANGLES {
+            return Err(Error::Settings(format!(
+                "{tri_count} triangles exceed the LBVH limit of {MAX_TRIANGLES}"
+            )));
+        }
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let buf = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        let nodes = 2 * tri_count as u64 - 1;
+        Ok(Self {
+            nodes: buf("lbvh.nodes", nodes * std::mem::size_of::<BvhNode>() as u64)?,
+            parents: buf("lbvh.parents", nodes * 4)?,
+            visits: buf("lbvh.visits", (tri_count as u64 - 1).max(1) * 4)?,
+            bounds: buf("lbvh.bounds", 12 * 4)?,
+            sort: SortBuffers::new(ctx, tri_count, bits.key_words())?,
+            tri_count,
+            bits,
+        })
+    }
+
+    /// Bytes of the BVH itself (nodes + parents), without the rebuild scratch.
+    pub fn bytes(&self) -> u64 {
+        self.nodes.size + self.parents.size
+    }
+
+    /// (centroid bounds, scene bounds) from the last `lbvh.bounds`, read back.
+    pub fn read_bounds(&self) -> Result<(Aabb, Aabb)> {
+        let w: Vec<u32> = bytemuck::pod_collect_to_vec(&self.bounds.read()?);
+        let v = |i: usize| {
+            Vec3::new(
+                ordered_to_float(w[i]),
+                ordered_to_float(w[i + 1]),
+                ordered_to_float(w[i + 2]),
+            )
+        };
+        Ok((Aabb { lo: v(0), hi: v(3) }, Aabb { lo: v(6), hi: v(9) }))
+    }
+
+    /// The nodes, read back (for tests and benchmarks).
+    pub fn read_nodes(&self) -> Result<Vec<BvhNode>> {
+        Ok(bytemuck::pod_collect_to_vec(&self.nodes.read()?))
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push2 {
+    a: u32,
+    b: u32,
+}
+
+/// The LBVH kernels.
+pub struct LbvhBuilder {
+    ctx: Arc<Context>,
+    bounds: Pipeline,
+    morton: Pipeline,
+    pub sort: RadixSort,
+    hierarchy: Pipeline,
+    fit: Pipeline,
+}
+
+/// Compute reads and writes, the destination of most barriers here.
+const COMPUTE_RW: (vk::PipelineStageFlags2, vk::AccessFlags2) = (
+    vk::PipelineStageFlags2::COMPUTE_SHADER,
+    vk::AccessFlags2::from_raw(vk::AccessFlags2::SHADER_READ.as_raw() | vk::AccessFlags2::SHADER_WRITE.as_raw()),
+);
+
+impl LbvhBuilder {
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        let p4 = 4;
+        let p8 = 8;
+        Ok(Self {
+            ctx: ctx.clone(),
+            bounds: Pipeline::compute(ctx, BOUNDS, ("lbvh_bounds.comp", shaders::LBVH_BOUNDS_COMP), p4)?,
+            morton: Pipeline::compute(ctx, MORTON, ("lbvh_morton.comp", shaders::LBVH_MORTON_COMP), p8)?,
+            sort: RadixSort::new(ctx)?,
+            hierarchy: Pipeline::compute(
+                ctx,
+                HIERARCHY,
+                ("lbvh_hierarchy.comp", shaders::LBVH_HIERARCHY_COMP),
+                p8,
+            )?,
+            fit: Pipeline::compute(ctx, FIT, ("lbvh_fit.comp", shaders::LBVH_FIT_COMP), p4)?,
+        })
+    }
+
+    fn dispatch_1d(&self, cmd: vk::CommandBuffer, n: u32) {
+        unsafe { self.ctx.device.cmd_dispatch(cmd, n.div_ceil(LBVH_WG), 1, 1) };
+    }
+
+    /// Records a full build of `bvh` over `geom`, each stage under its timer scope. The
+    /// geometry must be visible to compute reads; the nodes end visible to all later
+    /// reads. Earlier GPU use of the BVH's buffers must be complete (caller's barrier).
+    pub fn record_build(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, geom: Geometry<'_>, bvh: &Bvh) {
+        assert_eq!(geom.tri_count, bvh.tri_count, "BVH sized for another triangle count");
+        timer.begin(cmd, BOUNDS);
+        self.record_bounds(cmd, geom, bvh);
+        timer.end(cmd, BOUNDS);
+        timer.begin(cmd, MORTON);
+        self.record_morton(cmd, geom, bvh);
+        timer.end(cmd, MORTON);
+        timer.begin(cmd, SORT);
+        self.sort.record(cmd, &bvh.sort, geom.tri_count);
+        timer.end(cmd, SORT);
+        timer.begin(cmd, HIERARCHY);
+        self.record_hierarchy(cmd, bvh);
+        timer.end(cmd, HIERARCHY);
+        timer.begin(cmd, FIT);
+        self.record_fit(cmd, geom, bvh);
+        timer.end(cmd, FIT);
+    }
+
+    /// `lbvh.bounds`: centroid and scene bounds into the BVH's bounds buffer.
+    pub fn record_bounds(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh) {
+        let d = &self.ctx.device;
+        let n = geom.tri_count;
+        // Reset the atomic min/max targets: min words to 0xffffffff, max words to 0.
+        unsafe {
+            d.cmd_fill_buffer(cmd, bvh.bounds.raw, 0, 12, u32::MAX);
+            d.cmd_fill_buffer(cmd, bvh.bounds.raw, 12, 12, 0);
+            d.cmd_fill_buffer(cmd, bvh.bounds.raw, 24, 12, u32::MAX);
+            d.cmd_fill_buffer(cmd, bvh.bounds.raw, 36, 12, 0);
+        }
+        // RAW: the bounds kernel's atomics read the reset values.
+        barrier::record(d, cmd, &[barrier::memory(access::TRANSFER_WRITE, COMPUTE_RW)], &[]);
+        self.bounds.bind(
+            cmd,
+            &[
+                Resource::Buffer(geom.vertices),
+                Resource::Buffer(geom.indices),
+                Resource::Buffer(&bvh.bounds),
+            ],
+            bytemuck::bytes_of(&n),
+        );
+        self.dispatch_1d(cmd, n);
+        // RAW: Morton codes are quantized in the bounds just reduced.
+        barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, COMPUTE_RW)], &[]);
+    }
+
+    /// `lbvh.morton`: keys and triangle ids into `bvh.sort.keys[0]` / `values[0]`.
+    pub fn record_morton(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh) {
+        let n = geom.tri_count;
+        self.morton.bind(
+            cmd,
+            &[
+                Resource::Buffer(geom.vertices),
+                Resource::Buffer(geom.indices),
+                Resource::Buffer(&bvh.bounds),
+                Resource::Buffer(&bvh.sort.keys[0]),
+                Resource::Buffer(&bvh.sort.values[0]),
+            ],
+            bytemuck::bytes_of(&Push2 {
+                a: n,
+                b: bvh.bits.key_words(),
+            }),
+        );
+        self.dispatch_1d(cmd, n);
+        // RAW: the sort reads the codes and ids.
+        barrier::record(
+            &self.ctx.device,
+            cmd,
+            &[barrier::memory(access::COMPUTE_WRITE, COMPUTE_RW)],
+            &[],
+        );
+    }
+
+    /// `lbvh.hierarchy`: node links and parents from the sorted keys.
+    pub fn record_hierarchy(&self, cmd: vk::CommandBuffer, bvh: &Bvh) {
+        let n = bvh.tri_count;
+        self.hierarchy.bind(
+            cmd,
+            &[
+                Resource::Buffer(&bvh.sort.keys[0]),
+                Resource::Buffer(&bvh.sort.values[0]),
+                Resource::Buffer(&bvh.nodes),
+                Resource::Buffer(&bvh.parents),
+            ],
+            bytemuck::bytes_of(&Push2 {
+                a: n,
+                b: bvh.bits.key_words(),
+            }),
+        );
+        self.dispatch_1d(cmd, n);
+        // RAW: the fit reads the links and parents.
+        barrier::record(
+            &self.ctx.device,
+            cmd,
+            &[barrier::memory(access::COMPUTE_WRITE, COMPUTE_RW)],
+            &[],
+        );
+    }
+
+    /// Records a refit: new boxes for the same tree after the vertices moved.
+    pub fn record_refit(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, geom: Geometry<'_>, bvh: &Bvh) {
+        assert_eq!(geom.tri_count, bvh.tri_count, "BVH sized for another triangle count");
+        timer.begin(cmd, REFIT);
+        self.record_fit(cmd, geom, bvh);
+        timer.end(cmd, REFIT);
+    }
+
+    /// `lbvh.fit`: leaf boxes from the triangles, then the internal boxes bottom-up.
+    pub fn record_fit(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh) {
+        let d = &self.ctx.device;
+        unsafe { d.cmd_fill_buffer(cmd, bvh.visits.raw, 0, vk::WHOLE_SIZE, 0) };
+        // RAW: the fit's visit counters start from zero; WAR: earlier reads of the
+        // nodes (traversal) finish before the fit rewrites the boxes.
+        barrier::record(
+            d,
+            cmd,
+            &[
+                barrier::memory(access::TRANSFER_WRITE, COMPUTE_RW),
+                barrier::memory(access::COMPUTE_READ, access::COMPUTE_WRITE),
+            ],
+            &[],
+        );
+        self.fit.bind(
+            cmd,
+            &[
+                Resource::Buffer(geom.vertices),
+                Resource::Buffer(geom.indices),
+                Resource::Buffer(&bvh.nodes),
+                Resource::Buffer(&bvh.parents),
+                Resource::Buffer(&bvh.visits),
+            ],
+            bytemuck::bytes_of(&geom.tri_count),
+        );
+        self.dispatch_1d(cmd, geom.tri_count);
+        // RAW: traversal (or a readback) reads the finished boxes.
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::COMPUTE_WRITE, access::ALL_READ_WRITE)],
+            &[],
+        );
+    }
+}

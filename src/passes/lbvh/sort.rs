@@ -1,0 +1,154 @@
+//! `lbvh.sort`: stable LSD radix sort of (key, value) pairs, 4 bits per pass, each pass
+//! count → scan → scatter (reduce-then-scan: no workgroup waits on another).
+
+use crate::error::{Error, Result};
+use crate::shader_defines::{SORT_BINS, SORT_ITEMS, SORT_RADIX_BITS, SORT_WG};
+use crate::shaders;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, Pipeline, Resource};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// Keys per tile (one workgroup of the count and scatter kernels).
+pub const TILE: u32 = SORT_WG * SORT_ITEMS;
+/// Most keys one sort handles: the scan kernel's array and the 65535-workgroup limit.
+pub const MAX_KEYS: u32 = 65535 * TILE;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct SortPush {
+    n: u32,
+    shift: u32,
+    key_words: u32,
+    num_tiles: u32,
+}
+
+/// Ping-pong buffers for sorting up to `capacity` keys of `key_words` words.
+pub struct SortBuffers {
+    /// Keys; the sorted result is in `keys[0]` (every sort has an even pass count).
+    pub keys: [Buffer; 2],
+    /// Values; the sorted result is in `values[0]`.
+    pub values: [Buffer; 2],
+    counts: Buffer,
+    pub capacity: u32,
+    pub key_words: u32,
+}
+
+impl SortBuffers {
+    pub fn new(ctx: &Arc<Context>, capacity: u32, key_words: u32) -> Result<Self> {
+        if capacity > MAX_KEYS {
+            return Err(Error::Settings(format!(
+                "{capacity} keys exceed the radix sort's limit of {MAX_KEYS}"
+            )));
+        }
+        assert!(key_words == 1 || key_words == 2);
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let buf = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        let n = capacity.max(1) as u64;
+        let tiles = capacity.div_ceil(TILE).max(1) as u64;
+        Ok(Self {
+            keys: [
+                buf("sort.keys0", n * 4 * key_words as u64)?,
+                buf("sort.keys1", n * 4 * key_words as u64)?,
+            ],
+            values: [buf("sort.values0", n * 4)?, buf("sort.values1", n * 4)?],
+            counts: buf("sort.counts", tiles * SORT_BINS as u64 * 4)?,
+            capacity,
+            key_words,
+        })
+    }
+}
+
+pub struct RadixSort {
+    ctx: Arc<Context>,
+    count: Pipeline,
+    scan: Pipeline,
+    scatter: Pipeline,
+}
+
+impl RadixSort {
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        let push = std::mem::size_of::<SortPush>() as u32;
+        Ok(Self {
+            ctx: ctx.clone(),
+            count: Pipeline::compute(
+                ctx,
+                "lbvh.sort.count",
+                ("radix_count.comp", shaders::RADIX_COUNT_COMP),
+                push,
+            )?,
+            scan: Pipeline::compute(
+                ctx,
+                "lbvh.sort.scan",
+                ("radix_scan.comp", shaders::RADIX_SCAN_COMP),
+                push,
+            )?,
+            scatter: Pipeline::compute(
+                ctx,
+                "lbvh.sort.scatter",
+                ("radix_scatter.comp", shaders::RADIX_SCATTER_COMP),
+                push,
+            )?,
+        })
+    }
+
+    /// Records the sort of the first `n` pairs in `keys[0]`/`values[0]`, which must be
+    /// visible to compute reads; the result is left in `keys[0]`/`values[0]`, visible
+    /// to compute reads.
+    pub fn record(&self, cmd: vk::CommandBuffer, b: &SortBuffers, n: u32) {
+        assert!(n <= b.capacity, "sorting {n} keys in buffers for {}", b.capacity);
+        if n <= 1 {
+            return;
+        }
+        let d = &self.ctx.device;
+        let num_tiles = n.div_ceil(TILE);
+        let passes = 32 * b.key_words / SORT_RADIX_BITS;
+        let step = |src: (vk::PipelineStageFlags2, vk::AccessFlags2)| {
+            [barrier::memory(
+                src,
+                (
+                    vk::PipelineStageFlags2::COMPUTE_SHADER,
+                    vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_WRITE,
+                ),
+            )]
+        };
+        for pass in 0..passes {
+            let (i, o) = ((pass % 2) as usize, ((pass + 1) % 2) as usize);
+            let push = SortPush {
+                n,
+                shift: pass * SORT_RADIX_BITS,
+                key_words: b.key_words,
+                num_tiles,
+            };
+            let push = bytemuck::bytes_of(&push);
+            self.count
+                .bind(cmd, &[Resource::Buffer(&b.keys[i]), Resource::Buffer(&b.counts)], push);
+            unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
+            // RAW: the scan reads the histograms just written.
+            barrier::record(d, cmd, &step(access::COMPUTE_WRITE), &[]);
+            self.scan.bind(cmd, &[Resource::Buffer(&b.counts)], push);
+            unsafe { d.cmd_dispatch(cmd, 1, 1, 1) };
+            // RAW: the scatter reads the scanned offsets.
+            barrier::record(d, cmd, &step(access::COMPUTE_WRITE), &[]);
+            self.scatter.bind(
+                cmd,
+                &[
+                    Resource::Buffer(&b.keys[i]),
+                    Resource::Buffer(&b.values[i]),
+                    Resource::Buffer(&b.keys[o]),
+                    Resource::Buffer(&b.values[o]),
+                    Resource::Buffer(&b.counts),
+                ],
+                push,
+            );
+            unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
+            // RAW: the next pass (or the caller) reads the scattered pairs; WAR: the
+            // next pass's count overwrites the offsets the scatter read.
+            barrier::record(d, cmd, &step(access::COMPUTE_WRITE), &[]);
+        }
+    }
+}

@@ -1,0 +1,148 @@
+//! `rt.trace`: closest-hit or any-hit traversal of the static and the dynamic BVH for a
+//! list of rays. Usable on its own (`TracePass::trace`) for tests and benchmarks; the
+//! reflection passes record it over their compacted ray lists.
+
+use super::lbvh::{Bvh, Geometry};
+use crate::error::{Error, Result};
+use crate::gpu_types::{Hit, Ray};
+use crate::shaders;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, GpuTimer, Pipeline, Resource};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+pub const NAME: &str = "rt.trace";
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TracePush {
+    ray_count: u32,
+    static_tris: u32,
+    dynamic_tris: u32,
+    any_hit: u32,
+}
+
+/// One BVH and the triangles it was built over.
+#[derive(Clone, Copy)]
+pub struct Traceable<'a> {
+    pub bvh: &'a Bvh,
+    pub geometry: Geometry<'a>,
+}
+
+/// The BVHs a trace walks: the static one, the dynamic one, or both.
+#[derive(Clone, Copy, Default)]
+pub struct TraceScene<'a> {
+    pub static_bvh: Option<Traceable<'a>>,
+    pub dynamic_bvh: Option<Traceable<'a>>,
+}
+
+/// Rays on the GPU and where their hits go.
+#[derive(Clone, Copy)]
+pub struct RayBatch<'a> {
+    pub rays: &'a Buffer,
+    pub hits: &'a Buffer,
+    pub count: u32,
+    /// Stop at the first hit (shadow rays) instead of finding the closest.
+    pub any_hit: bool,
+}
+
+pub struct TracePass {
+    ctx: Arc<Context>,
+    pipeline: Pipeline,
+}
+
+impl TracePass {
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        let push = std::mem::size_of::<TracePush>() as u32;
+        Ok(Self {
+            ctx: ctx.clone(),
+            pipeline: Pipeline::compute(ctx, NAME, ("rt_trace.comp", shaders::RT_TRACE_COMP), push)?,
+        })
+    }
+
+    /// Records the traversal of a batch of rays. At least one BVH must be given; rays,
+    /// nodes and geometry must be visible to compute reads.
+    pub fn record(&self, cmd: vk::CommandBuffer, batch: RayBatch<'_>, scene: TraceScene<'_>) {
+        let any = scene.static_bvh.or(scene.dynamic_bvh).expect("rt.trace needs a BVH");
+        // A missing BVH is bound to the other's buffers with a triangle count of 0.
+        let s = scene.static_bvh.unwrap_or(any);
+        let dy = scene.dynamic_bvh.unwrap_or(any);
+        let push = TracePush {
+            ray_count: batch.count,
+            static_tris: scene.static_bvh.map_or(0, |b| b.geometry.tri_count),
+            dynamic_tris: scene.dynamic_bvh.map_or(0, |b| b.geometry.tri_count),
+            any_hit: batch.any_hit as u32,
+        };
+        self.pipeline.bind(
+            cmd,
+            &[
+                Resource::Buffer(batch.rays),
+                Resource::Buffer(batch.hits),
+                Resource::Buffer(&s.bvh.nodes),
+                Resource::Buffer(s.geometry.vertices),
+                Resource::Buffer(s.geometry.indices),
+                Resource::Buffer(&dy.bvh.nodes),
+                Resource::Buffer(dy.geometry.vertices),
+                Resource::Buffer(dy.geometry.indices),
+            ],
+            bytemuck::bytes_of(&push),
+        );
+        self.pipeline.dispatch_covering(cmd, [batch.count, 1, 1]);
+    }
+
+    /// Uploads `rays`, traces them, and returns the hits and the GPU time of the
+    /// traversal in milliseconds.
+    pub fn trace(&self, rays: &[Ray], scene: TraceScene<'_>, any_hit: bool) -> Result<(Vec<Hit>, f64)> {
+        if rays.is_empty() {
+            return Ok((Vec::new(), 0.0));
+        }
+        if scene.static_bvh.is_none() && scene.dynamic_bvh.is_none() {
+            return Err(Error::Settings("tracing needs at least one BVH".into()));
+        }
+        let ctx = &self.ctx;
+        let rays_buf = Buffer::with_data(
+            ctx,
+            "trace.rays",
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            bytemuck::cast_slice(rays),
+        )?;
+        let hits_buf = Buffer::new(
+            ctx,
+            "trace.hits",
+            (rays.len() * std::mem::size_of::<Hit>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        let mut timer = GpuTimer::new(ctx, 1)?;
+        ctx.one_shot(|cmd| {
+            // Poison: a hit the kernel fails to write cannot pass as a result.
+            unsafe {
+                ctx.device
+                    .cmd_fill_buffer(cmd, hits_buf.raw, 0, vk::WHOLE_SIZE, 0x7fc0_dead)
+            };
+            // RAW/WAW: the kernel overwrites the poison after the fill.
+            barrier::record(
+                &ctx.device,
+                cmd,
+                &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_WRITE)],
+                &[],
+            );
+            timer.reset(cmd);
+            timer.begin(cmd, NAME);
+            let batch = RayBatch {
+                rays: &rays_buf,
+                hits: &hits_buf,
+                count: rays.len() as u32,
+                any_hit,
+            };
+            self.record(cmd, batch, scene);
+            timer.end(cmd, NAME);
+        })?;
+        let ms = timer.results()?.first().map_or(0.0, |r| r.1);
+        Ok((bytemuck::pod_collect_to_vec(&hits_buf.read()?), ms))
+    }
+}

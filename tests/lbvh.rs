@@ -1,0 +1,335 @@
+//! The GPU LBVH against its CPU references: Morton codes and the radix sort exactly,
+//! the hierarchy's topology exactly, boxes exactly (min/max are exact in f32), the
+//! BVH invariants on random and degenerate inputs, and refit.
+
+mod common;
+
+use ash::vk;
+use glam::Vec3;
+use rand::Rng;
+use speculum::cpu_ref::lbvh as cref;
+use speculum::gpu_types::GpuVertex;
+use speculum::passes::lbvh::sort::SortBuffers;
+use speculum::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
+use speculum::scene::soup::{default_size, random_soup};
+use speculum::vk::{Buffer, Context, GpuTimer};
+use std::sync::Arc;
+
+pub struct GpuGeometry {
+    pub vertices: Buffer,
+    pub indices: Buffer,
+    pub tri_count: u32,
+}
+
+impl GpuGeometry {
+    pub fn new(ctx: &Arc<Context>, vertices: &[GpuVertex], indices: &[u32]) -> Self {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Self {
+            vertices: Buffer::with_data(ctx, "test.vertices", usage, bytemuck::cast_slice(vertices)).unwrap(),
+            indices: Buffer::with_data(ctx, "test.indices", usage, bytemuck::cast_slice(indices)).unwrap(),
+            tri_count: (indices.len() / 3) as u32,
+        }
+    }
+    pub fn geometry(&self) -> Geometry<'_> {
+        Geometry {
+            vertices: &self.vertices,
+            indices: &self.indices,
+            tri_count: self.tri_count,
+        }
+    }
+}
+
+fn build(ctx: &Arc<Context>, b: &LbvhBuilder, g: &GpuGeometry, bits: MortonBits) -> Bvh {
+    let bvh = Bvh::new(ctx, g.tri_count, bits).unwrap();
+    // Poison the nodes: a node the kernels fail to write cannot pass the checks.
+    bvh.nodes.write(&vec![0xa5u8; bvh.nodes.size as usize]).unwrap();
+    let mut timer = GpuTimer::new(ctx, 8).unwrap();
+    ctx.one_shot(|cmd| {
+        timer.reset(cmd);
+        b.record_build(cmd, &mut timer, g.geometry(), &bvh);
+    })
+    .unwrap();
+    bvh
+}
+
+fn keys_u64(raw: &[u32], key_words: u32) -> Vec<u64> {
+    if key_words == 1 {
+        raw.iter().map(|&k| k as u64).collect()
+    } else {
+        raw.chunks_exact(2).map(|w| w[0] as u64 | (w[1] as u64) << 32).collect()
+    }
+}
+
+/// Random soups of every size the issue names, both key widths: bounds, Morton codes,
+/// and the sorted (key, id) pairs equal the CPU's exactly.
+#[test]
+fn bounds_morton_and_sort_match_cpu_exactly() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    for (seed, &n) in [1usize, 2, 3, 1000, 65537, 300000].iter().enumerate() {
+        let (v, i) = random_soup(n, 10.0, default_size(n) * 10.0, seed as u64);
+        let g = GpuGeometry::new(&ctx, &v, &i);
+        for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+            let kw = bits.key_words();
+            let bvh = Bvh::new(&ctx, g.tri_count, bits).unwrap();
+            bvh.sort.keys[0]
+                .write(&vec![0xeeu8; bvh.sort.keys[0].size as usize])
+                .unwrap();
+            ctx.one_shot(|cmd| {
+                b.record_bounds(cmd, g.geometry(), &bvh);
+                b.record_morton(cmd, g.geometry(), &bvh);
+            })
+            .unwrap();
+            let (cb, sb) = bvh.read_bounds().unwrap();
+            assert_eq!((cb, sb), cref::bounds(&v, &i), "n={n}: bounds");
+            let gpu_keys = keys_u64(
+                &bytemuck::pod_collect_to_vec(&bvh.sort.keys[0].read().unwrap())[..n * kw as usize],
+                kw,
+            );
+            let cpu_keys = cref::morton_keys(&v, &i, kw);
+            assert_eq!(gpu_keys, cpu_keys, "n={n} {bits:?}: Morton codes");
+            ctx.one_shot(|cmd| b.sort.record(cmd, &bvh.sort, n as u32)).unwrap();
+            let sorted_keys = keys_u64(
+                &bytemuck::pod_collect_to_vec(&bvh.sort.keys[0].read().unwrap())[..n * kw as usize],
+                kw,
+            );
+            let sorted_values: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.sort.values[0].read().unwrap());
+            let (want_k, want_v) = cref::sort_pairs(&cpu_keys, &(0..n as u32).collect::<Vec<_>>());
+            assert_eq!(sorted_keys, want_k, "n={n} {bits:?}: sorted keys");
+            assert_eq!(
+                &sorted_values[..n],
+                &want_v[..],
+                "n={n} {bits:?}: sorted ids (stability)"
+            );
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The radix sort alone on random keys with many duplicates (few distinct values and
+/// full-range values), random payloads, 1- and 2-word keys: equal to a stable sort.
+#[test]
+fn radix_sort_is_a_stable_sort() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let mut rng = common::rng(7);
+    for &n in &[1u32, 2, 3, 1000, 4096, 4097, 65537, 300000] {
+        for kw in [1u32, 2] {
+            for distinct in [Some(5u64), None] {
+                let keys: Vec<u64> = (0..n)
+                    .map(|_| {
+                        let k: u64 = rng.random();
+                        let k = distinct.map_or(k, |d| (k % d).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+                        if kw == 1 {
+                            k & 0xffff_ffff
+                        } else {
+                            k
+                        }
+                    })
+                    .collect();
+                let values: Vec<u32> = (0..n).map(|_| rng.random()).collect();
+                let bufs = SortBuffers::new(&ctx, n, kw).unwrap();
+                let raw: Vec<u32> = if kw == 1 {
+                    keys.iter().map(|&k| k as u32).collect()
+                } else {
+                    keys.iter().flat_map(|&k| [k as u32, (k >> 32) as u32]).collect()
+                };
+                bufs.keys[0].write(bytemuck::cast_slice(&raw)).unwrap();
+                bufs.values[0].write(bytemuck::cast_slice(&values)).unwrap();
+                bufs.keys[1].write(&vec![0x5au8; bufs.keys[1].size as usize]).unwrap();
+                ctx.one_shot(|cmd| b.sort.record(cmd, &bufs, n)).unwrap();
+                let got_k = keys_u64(
+                    &bytemuck::pod_collect_to_vec(&bufs.keys[0].read().unwrap())[..(n * kw) as usize],
+                    kw,
+                );
+                let got_v: Vec<u32> = bytemuck::pod_collect_to_vec(&bufs.values[0].read().unwrap());
+                let (want_k, want_v) = cref::sort_pairs(&keys, &values);
+                assert_eq!(got_k, want_k, "n={n} kw={kw} distinct={distinct:?}");
+                assert_eq!(
+                    &got_v[..n as usize],
+                    &want_v[..],
+                    "n={n} kw={kw} distinct={distinct:?}: payload order"
+                );
+            }
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Full builds: links and parents equal Karras on the CPU exactly, boxes equal the CPU
+/// fit exactly, and the invariants hold.
+#[test]
+fn hierarchy_and_fit_match_cpu_exactly() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    for (seed, &n) in [1usize, 2, 3, 1000, 65537].iter().enumerate() {
+        let (v, i) = random_soup(n, 3.0, default_size(n) * 3.0, 100 + seed as u64);
+        let g = GpuGeometry::new(&ctx, &v, &i);
+        for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+            let bvh = build(&ctx, &b, &g, bits);
+            let nodes = bvh.read_nodes().unwrap();
+            let parents: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.parents.read().unwrap());
+            let keys = cref::morton_keys(&v, &i, bits.key_words());
+            let (sk, sv) = cref::sort_pairs(&keys, &(0..n as u32).collect::<Vec<_>>());
+            let (mut want, want_parents) = cref::hierarchy(&sk, &sv, bits.key_words());
+            cref::fit(&mut want, &v, &i);
+            assert_eq!(parents, want_parents, "n={n} {bits:?}: parents");
+            for (k, (got, exp)) in nodes.iter().zip(&want).enumerate() {
+                assert_eq!(
+                    (got.left, got.right),
+                    (exp.left, exp.right),
+                    "n={n} {bits:?}: links of node {k}"
+                );
+                assert_eq!(got, exp, "n={n} {bits:?}: node {k}");
+            }
+            cref::check_bvh(&nodes, Some(&parents), &v, &i).unwrap_or_else(|e| panic!("n={n} {bits:?}: {e}"));
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+fn soup_from(tris: &[[Vec3; 3]]) -> (Vec<GpuVertex>, Vec<u32>) {
+    let v = tris
+        .iter()
+        .flatten()
+        .map(|p| GpuVertex {
+            position: p.to_array(),
+            material: 0,
+            normal: [0.0, 1.0, 0.0],
+            _pad0: 0,
+        })
+        .collect();
+    (v, (0..3 * tris.len() as u32).collect())
+}
+
+/// Degenerate inputs still give valid BVHs: all triangles coplanar, all centroids
+/// equal, zero-area triangles, huge and tiny coordinates.
+#[test]
+fn degenerate_inputs_give_valid_bvhs() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let mut rng = common::rng(11);
+    let mut r = |s: f32| {
+        Vec3::new(
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+        )
+    };
+    let n = 5000;
+    let cases: Vec<(&str, Vec<[Vec3; 3]>)> = vec![
+        (
+            "coplanar",
+            (0..n)
+                .map(|_| [r(1.0), r(1.0), r(1.0)].map(|p| Vec3::new(p.x, 0.5, p.z)))
+                .collect(),
+        ),
+        (
+            "equal centroids",
+            (0..n)
+                .map(|_| {
+                    let d = r(1.0);
+                    let e = r(1.0);
+                    [Vec3::ONE + d, Vec3::ONE + e, Vec3::ONE - d - e]
+                })
+                .collect(),
+        ),
+        (
+            "zero area",
+            (0..n)
+                .map(|_| {
+                    let p = r(1.0);
+                    let d = r(0.1);
+                    [p, p + d, p + 2.0 * d]
+                })
+                .collect(),
+        ),
+        ("single point", (0..n).map(|_| [Vec3::splat(2.0); 3]).collect()),
+        (
+            "huge",
+            (0..n)
+                .map(|_| {
+                    let c = r(1e6);
+                    [c, c + r(1e3), c + r(1e3)]
+                })
+                .collect(),
+        ),
+        (
+            "tiny",
+            (0..n)
+                .map(|_| {
+                    let c = r(1e-6);
+                    [c, c + r(1e-9), c + r(1e-9)]
+                })
+                .collect(),
+        ),
+    ];
+    for (name, tris) in cases {
+        let (v, i) = soup_from(&tris);
+        let g = GpuGeometry::new(&ctx, &v, &i);
+        for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+            let bvh = build(&ctx, &b, &g, bits);
+            let nodes = bvh.read_nodes().unwrap();
+            let parents: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.parents.read().unwrap());
+            cref::check_bvh(&nodes, Some(&parents), &v, &i).unwrap_or_else(|e| panic!("{name} {bits:?}: {e}"));
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The invariant checker rejects broken trees (so the tests above can fail).
+#[test]
+fn invariant_checker_rejects_broken_trees() {
+    let (v, i) = random_soup(100, 1.0, 0.1, 3);
+    let keys = cref::morton_keys(&v, &i, 1);
+    let (sk, sv) = cref::sort_pairs(&keys, &(0..100).collect::<Vec<_>>());
+    let (mut nodes, parents) = cref::hierarchy(&sk, &sv, 1);
+    cref::fit(&mut nodes, &v, &i);
+    cref::check_bvh(&nodes, Some(&parents), &v, &i).unwrap();
+    let mut shrunk = nodes.clone();
+    shrunk[5].hi[0] -= 1e-3;
+    assert!(cref::check_bvh(&shrunk, None, &v, &i).is_err());
+    let mut dup = nodes.clone();
+    let leaf = dup.len() - 1;
+    dup[leaf].left = dup[leaf - 1].left;
+    assert!(cref::check_bvh(&dup, None, &v, &i).is_err());
+    let mut bad_parent = parents.clone();
+    bad_parent[3] = 0;
+    assert!(cref::check_bvh(&nodes, Some(&bad_parent), &v, &i).is_err() || parents[3] == 0);
+}
+
+/// Refit after moving every vertex equals a CPU fit of the same tree over the moved
+/// triangles, and passes the invariants.
+#[test]
+fn refit_matches_cpu_fit_after_moving_vertices() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let n = 20000;
+    let (v, i) = random_soup(n, 2.0, default_size(n) * 2.0, 5);
+    let g = GpuGeometry::new(&ctx, &v, &i);
+    let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
+    let before = bvh.read_nodes().unwrap();
+    // Deform: a wave that keeps topology.
+    let moved: Vec<GpuVertex> = v
+        .iter()
+        .map(|p| {
+            let mut q = *p;
+            q.position[1] += 0.3 * (q.position[0] * 2.0).sin();
+            q
+        })
+        .collect();
+    g.vertices.write(bytemuck::cast_slice(&moved)).unwrap();
+    let mut timer = GpuTimer::new(&ctx, 2).unwrap();
+    ctx.one_shot(|cmd| {
+        timer.reset(cmd);
+        b.record_refit(cmd, &mut timer, g.geometry(), &bvh);
+    })
+    .unwrap();
+    let after = bvh.read_nodes().unwrap();
+    let mut want = before.clone();
+    cref::fit(&mut want, &moved, &i);
+    assert_eq!(after, want);
+    assert_ne!(after, before, "the boxes moved");
+    cref::check_bvh(&after, None, &moved, &i).unwrap();
+    common::assert_no_validation_messages(&ctx);
+}

@@ -1,0 +1,288 @@
+//! `rt.trace` against the CPU: closest hits equal brute force (ids exactly, t within
+//! 1e-5 relative), over one BVH and over static + dynamic together; any-hit agrees on
+//! occlusion; a refit BVH traces like a fresh build.
+
+mod common;
+
+use ash::vk;
+use glam::Vec3;
+use rand::Rng;
+use speculum::cpu_ref::lbvh::triangle;
+use speculum::cpu_ref::trace::{brute_force, intersect, CpuBvh};
+use speculum::gpu_types::{GpuVertex, Hit, Ray};
+use speculum::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
+use speculum::passes::rt_trace::{TracePass, TraceScene, Traceable};
+use speculum::scene::soup::{default_size, random_soup};
+use speculum::shader_defines::BVH_INVALID;
+use speculum::vk::{Buffer, Context, GpuTimer};
+use std::sync::Arc;
+
+struct Built {
+    vertices: Buffer,
+    indices: Buffer,
+    bvh: Bvh,
+}
+
+impl Built {
+    fn new(ctx: &Arc<Context>, b: &LbvhBuilder, v: &[GpuVertex], i: &[u32], bits: MortonBits) -> Self {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let vertices = Buffer::with_data(ctx, "t.vertices", usage, bytemuck::cast_slice(v)).unwrap();
+        let indices = Buffer::with_data(ctx, "t.indices", usage, bytemuck::cast_slice(i)).unwrap();
+        let bvh = Bvh::new(ctx, (i.len() / 3) as u32, bits).unwrap();
+        let built = Self { vertices, indices, bvh };
+        built.rebuild(ctx, b);
+        built
+    }
+    fn geometry(&self) -> Geometry<'_> {
+        Geometry {
+            vertices: &self.vertices,
+            indices: &self.indices,
+            tri_count: self.bvh.tri_count,
+        }
+    }
+    fn traceable(&self) -> Traceable<'_> {
+        Traceable {
+            bvh: &self.bvh,
+            geometry: self.geometry(),
+        }
+    }
+    fn rebuild(&self, ctx: &Arc<Context>, b: &LbvhBuilder) {
+        let mut timer = GpuTimer::new(ctx, 8).unwrap();
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            b.record_build(cmd, &mut timer, self.geometry(), &self.bvh);
+        })
+        .unwrap();
+    }
+}
+
+/// Rays from random points around the soup: half aimed at random triangles (hits),
+/// half in random directions (many misses).
+fn random_rays(n: usize, v: &[GpuVertex], i: &[u32], scale: f32, seed: u64) -> Vec<Ray> {
+    let mut rng = common::rng(seed);
+    let tris = i.len() / 3;
+    (0..n)
+        .map(|k| {
+            let o = Vec3::new(
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+            ) * scale;
+            let d = if k % 2 == 0 {
+                let t = triangle(v, i, rng.random_range(0..tris));
+                let (a, b): (f32, f32) = (rng.random(), rng.random());
+                let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                (t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b) - o
+            } else {
+                Vec3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                )
+            };
+            Ray {
+                origin: o.to_array(),
+                tmin: 0.0,
+                dir: d.to_array(),
+                tmax: 1e30,
+            }
+        })
+        .collect()
+}
+
+/// Compares GPU and CPU hits. Equal t between two triangles is a tie the two sides may
+/// break differently only if their float results differ: such a pair passes when the
+/// GPU's triangle really is hit at the CPU's t; ties are counted and must be rare.
+fn compare(gpu: &[Hit], cpu: &[Hit], rays: &[Ray], tri_of: impl Fn(u32) -> [Vec3; 3]) -> usize {
+    let mut ties = 0;
+    for (k, ((g, c), r)) in gpu.iter().zip(cpu).zip(rays).enumerate() {
+        assert!(g.t >= 0.0, "ray {k}: traversal stack overflow");
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
+        if g.prim == c.prim {
+            assert!(close(g.t, c.t), "ray {k}: t {} vs {}", g.t, c.t);
+            if g.prim != BVH_INVALID {
+                assert!(
+                    (g.u - c.u).abs() < 1e-4 && (g.v - c.v).abs() < 1e-4,
+                    "ray {k}: barycentrics"
+                );
+            }
+        } else {
+            assert!(
+                g.prim != BVH_INVALID && c.prim != BVH_INVALID,
+                "ray {k}: gpu {g:?} cpu {c:?}"
+            );
+            let t = intersect(r, &tri_of(g.prim)).map(|h| h.0);
+            assert!(
+                t.is_some_and(|t| close(t, c.t)) && close(g.t, c.t),
+                "ray {k}: gpu {g:?} cpu {c:?}"
+            );
+            ties += 1;
+        }
+    }
+    ties
+}
+
+/// 10,000+ random rays against a 3,000-triangle soup: every hit equals brute force, with
+/// both key widths; the CPU SAH BVH (the benchmark's reference) agrees with brute force.
+#[test]
+fn closest_hits_equal_brute_force() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let tracer = TracePass::new(&ctx).unwrap();
+    let n = 3000;
+    let (v, i) = random_soup(n, 1.0, default_size(n), 21);
+    let rays = random_rays(12000, &v, &i, 1.0, 22);
+    let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
+    let hits = cpu.iter().filter(|h| h.prim != BVH_INVALID).count();
+    assert!(hits > 6000 && hits < 11500, "a mix of hits and misses: {hits}");
+    let sah = CpuBvh::build(&v, &i);
+    let via_sah: Vec<Hit> = rays.iter().map(|r| sah.trace(r, &v, &i)).collect();
+    assert_eq!(via_sah, cpu, "CPU SAH BVH traversal equals brute force");
+    for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+        let built = Built::new(&ctx, &b, &v, &i, bits);
+        let scene = TraceScene {
+            static_bvh: Some(built.traceable()),
+            dynamic_bvh: None,
+        };
+        let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
+        let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
+        assert!(ties <= rays.len() / 1000, "{ties} ties");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Static and dynamic BVHs traced together equal brute force over both triangle sets
+/// (dynamic ids carry bit 31).
+#[test]
+fn static_and_dynamic_bvhs_together() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let tracer = TracePass::new(&ctx).unwrap();
+    let (sv, si) = random_soup(2000, 1.0, default_size(4000), 31);
+    let (dv, di) = random_soup(2000, 1.0, default_size(4000), 32);
+    let st = Built::new(&ctx, &b, &sv, &si, MortonBits::Bits30);
+    let dy = Built::new(&ctx, &b, &dv, &di, MortonBits::Bits30);
+    let mut all_v = sv.clone();
+    all_v.extend(&dv);
+    let all_i: Vec<u32> = (0..all_v.len() as u32).collect();
+    let rays = random_rays(10000, &all_v, &all_i, 1.0, 33);
+    let cpu: Vec<Hit> = rays
+        .iter()
+        .map(|r| {
+            let mut h = brute_force(r, &all_v, &all_i);
+            if h.prim != BVH_INVALID && h.prim >= 2000 {
+                h.prim = (h.prim - 2000) | 0x8000_0000;
+            }
+            h
+        })
+        .collect();
+    let scene = TraceScene {
+        static_bvh: Some(st.traceable()),
+        dynamic_bvh: Some(dy.traceable()),
+    };
+    let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
+    let tri_of = |p: u32| {
+        if p & 0x8000_0000 != 0 {
+            triangle(&dv, &di, (p & 0x7fff_ffff) as usize)
+        } else {
+            triangle(&sv, &si, p as usize)
+        }
+    };
+    let ties = compare(&gpu, &cpu, &rays, tri_of);
+    assert!(ties <= 10, "{ties} ties");
+    assert!(
+        gpu.iter().any(|h| h.prim != BVH_INVALID && h.prim & 0x8000_0000 != 0),
+        "some hits are dynamic"
+    );
+    assert!(
+        gpu.iter().any(|h| h.prim != BVH_INVALID && h.prim & 0x8000_0000 == 0),
+        "some hits are static"
+    );
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Any-hit (shadow rays) reports a hit exactly when closest-hit finds one, and the hit
+/// it reports is a real intersection inside the interval.
+#[test]
+fn any_hit_agrees_on_occlusion() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let tracer = TracePass::new(&ctx).unwrap();
+    let (v, i) = random_soup(3000, 1.0, default_size(3000), 41);
+    let built = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
+    // Finite segments, as shadow rays are.
+    let rays: Vec<Ray> = random_rays(10000, &v, &i, 1.0, 42)
+        .into_iter()
+        .map(|r| Ray { tmax: 0.9, ..r })
+        .collect();
+    let scene = TraceScene {
+        static_bvh: Some(built.traceable()),
+        dynamic_bvh: None,
+    };
+    let (closest, _) = tracer.trace(&rays, scene, false).unwrap();
+    let (any, _) = tracer.trace(&rays, scene, true).unwrap();
+    let mut occluded = 0;
+    for (k, ((c, a), r)) in closest.iter().zip(&any).zip(&rays).enumerate() {
+        assert_eq!(c.prim == BVH_INVALID, a.prim == BVH_INVALID, "ray {k}");
+        if a.prim != BVH_INVALID {
+            occluded += 1;
+            let t = intersect(r, &triangle(&v, &i, a.prim as usize))
+                .expect("any-hit names a real hit")
+                .0;
+            assert!((t - a.t).abs() <= 1e-5 * t.abs().max(1.0) && a.t > r.tmin && a.t < r.tmax && a.t >= c.t);
+        }
+    }
+    assert!(occluded > 1000 && occluded < 9000, "{occluded}");
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// After moving the vertices, a refit BVH gives exactly the hits of a fresh build.
+#[test]
+fn refit_traces_like_a_fresh_build() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let tracer = TracePass::new(&ctx).unwrap();
+    let (v, i) = random_soup(4000, 1.0, default_size(4000), 51);
+    let refit = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
+    let moved: Vec<GpuVertex> = v
+        .iter()
+        .map(|p| {
+            let mut q = *p;
+            q.position[0] += 0.2 * (3.0 * q.position[1]).sin();
+            q.position[2] += 0.1 * q.position[0];
+            q
+        })
+        .collect();
+    refit.vertices.write(bytemuck::cast_slice(&moved)).unwrap();
+    let mut timer = GpuTimer::new(&ctx, 2).unwrap();
+    ctx.one_shot(|cmd| {
+        timer.reset(cmd);
+        b.record_refit(cmd, &mut timer, refit.geometry(), &refit.bvh);
+    })
+    .unwrap();
+    let fresh = Built::new(&ctx, &b, &moved, &i, MortonBits::Bits30);
+    let rays = random_rays(10000, &moved, &i, 1.0, 52);
+    let (a, _) = tracer
+        .trace(
+            &rays,
+            TraceScene {
+                static_bvh: Some(refit.traceable()),
+                dynamic_bvh: None,
+            },
+            false,
+        )
+        .unwrap();
+    let (f, _) = tracer
+        .trace(
+            &rays,
+            TraceScene {
+                static_bvh: Some(fresh.traceable()),
+                dynamic_bvh: None,
+            },
+            false,
+        )
+        .unwrap();
+    assert_eq!(a, f);
+    assert!(a.iter().filter(|h| h.prim != BVH_INVALID).count() > 4000);
+    common::assert_no_validation_messages(&ctx);
+}

@@ -20,15 +20,21 @@ shared vec3 s_smin[LBVH_WG];
 shared vec3 s_smax[LBVH_WG];
 
 void main() {
-    uint t = gl_GlobalInvocationID.x;
     uint l = gl_LocalInvocationID.x;
     vec3 cmin = vec3(3.4e38), cmax = vec3(-3.4e38), smin = vec3(3.4e38), smax = vec3(-3.4e38);
-    if (t < pc.tri_count) {
-        TRIANGLE_CORNERS(vertices, indices, t, a, b, c)
-        vec3 center = (a + b + c) * (1.0 / 3.0);
-        cmin = cmax = center;
-        smin = min(a, min(b, c));
-        smax = max(a, max(b, c));
+    // Each invocation folds LBVH_BOUNDS_ITEMS triangles (strided by the workgroup size,
+    // so neighbouring invocations read neighbouring triangles) before the reduction.
+    uint first = gl_WorkGroupID.x * LBVH_WG * LBVH_BOUNDS_ITEMS + l;
+    for (uint k = 0u; k < LBVH_BOUNDS_ITEMS; ++k) {
+        uint t = first + k * LBVH_WG;
+        if (t < pc.tri_count) {
+            TRIANGLE_CORNERS(vertices, indices, t, a, b, c)
+            vec3 center = (a + b + c) * (1.0 / 3.0);
+            cmin = min(cmin, center);
+            cmax = max(cmax, center);
+            smin = min(smin, min(a, min(b, c)));
+            smax = max(smax, max(a, max(b, c)));
+        }
     }
     s_cmin[l] = cmin; s_cmax[l] = cmax; s_smin[l] = smin; s_smax[l] = smax;
     barrier();

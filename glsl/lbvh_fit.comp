@@ -24,7 +24,10 @@ layout(binding = 4, std430) coherent buffer Visits { uint visits[]; };
 
 layout(push_constant) uniform Push { uint n; } pc;
 
-shared uint s_any_active;
+// Triple-buffered vote flags: iteration k sets flag k%3 and clears flag (k+1)%3 for
+// the next iteration, so one barrier per iteration suffices (flag (k+2)%3 was last read
+// before the previous iteration's barrier).
+shared uint s_vote[3];
 
 void main() {
     uint j = gl_GlobalInvocationID.x;
@@ -39,7 +42,11 @@ void main() {
         parent = parents[node];
         climbing = parent != BVH_INVALID;
     }
-    while (true) {
+    if (gl_LocalInvocationID.x == 0u) {
+        s_vote[0] = 0u;
+    }
+    barrier();
+    for (uint it = 0u;; ++it) {
         // Release: this invocation's last box is visible before its visit is counted.
         memoryBarrierBuffer();
         if (climbing && atomicAdd(visits[parent], 1u) == 0u) {
@@ -56,17 +63,14 @@ void main() {
             climbing = parent != BVH_INVALID;
         }
         // Workgroup vote: stop when no invocation of the group is still climbing.
-        if (gl_LocalInvocationID.x == 0u) {
-            s_any_active = 0u;
-        }
-        barrier();
         if (climbing) {
-            s_any_active = 1u;
+            s_vote[it % 3u] = 1u;
+        }
+        if (gl_LocalInvocationID.x == 0u) {
+            s_vote[(it + 1u) % 3u] = 0u;
         }
         barrier();
-        bool any_active = s_any_active != 0u;
-        barrier();
-        if (!any_active) {
+        if (s_vote[it % 3u] == 0u) {
             break;
         }
     }

@@ -4,6 +4,7 @@
 //! records a frame top to bottom; `scene` loads and builds scenes; `cpu_ref` mirrors
 //! every GPU kernel on the CPU for tests. See DESIGN.md in the shared folder.
 
+pub mod bench;
 pub mod cpu_ref;
 pub mod error;
 pub mod gpu_types;

@@ -24,6 +24,47 @@ enum Command {
     Render(RenderArgs),
     /// List the Vulkan devices, in the order --device INDEX counts them.
     Devices,
+    /// GPU timing benchmarks (each also checks what it times).
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// LBVH build (per stage), refit, SAH quality and traversal throughput.
+    Lbvh(BenchLbvhArgs),
+}
+
+#[derive(Args)]
+struct BenchLbvhArgs {
+    /// Random triangle soups of these sizes (default 10000 100000 1000000 when no
+    /// --scene is given).
+    #[arg(long, num_args = 1..)]
+    tris: Vec<u32>,
+    /// Built-in scene names or .obj paths to benchmark as well.
+    #[arg(long, num_args = 1..)]
+    scene: Vec<String>,
+    /// Morton code width: 30 or 63 bits.
+    #[arg(long, default_value = "30", value_parser = ["30", "63"])]
+    bits: String,
+    /// Timed repetitions of each build and trace (medians are reported).
+    #[arg(long, default_value_t = 5)]
+    repeats: u32,
+    /// Rays per ray set (coherent and incoherent).
+    #[arg(long, default_value_t = 262144)]
+    rays: u32,
+    /// Rays of each set checked against the CPU reference.
+    #[arg(long, default_value_t = 2000)]
+    check_rays: u32,
+    /// Write the report as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Device by index or name substring (see `speculum devices`).
+    #[arg(long)]
+    device: Option<String>,
+    /// Enable Vulkan validation + synchronization validation.
+    #[arg(long)]
+    validation: bool,
 }
 
 #[derive(Args, Clone)]
@@ -120,6 +161,107 @@ fn render(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+fn bench_lbvh(args: BenchLbvhArgs) -> Result<()> {
+    use speculum::bench::lbvh::{run_case, Options, Report, STAGES};
+    use speculum::passes::lbvh::MortonBits;
+    let bits = if args.bits == "63" {
+        MortonBits::Bits63
+    } else {
+        MortonBits::Bits30
+    };
+    let opts = Options {
+        repeats: args.repeats.max(1),
+        rays: args.rays.max(1),
+        check_rays: args.check_rays,
+        bits,
+    };
+    let mut tris = args.tris.clone();
+    if tris.is_empty() && args.scene.is_empty() {
+        tris = vec![10_000, 100_000, 1_000_000];
+    }
+    // Load every input first: a bad scene fails before any GPU work.
+    let mut inputs = Vec::new();
+    for &n in &tris {
+        if n == 0 {
+            anyhow::bail!("--tris 0: a BVH needs at least one triangle");
+        }
+        let (v, i) = speculum::scene::soup::random_soup(
+            n as usize,
+            1.0,
+            speculum::scene::soup::default_size(n as usize),
+            n as u64,
+        );
+        inputs.push((format!("soup-{n}"), v, i));
+    }
+    for name in &args.scene {
+        let scene = speculum::scene::load(name)?;
+        inputs.push((scene.name.clone(), scene.vertices, scene.indices));
+    }
+    let validation = args.validation || validation_from_env();
+    let ctx = Context::new(&ContextDesc {
+        validation,
+        device: args.device.clone(),
+    })?;
+    println!(
+        "LBVH on {} ({}-bit Morton, median of {} runs)",
+        ctx.device_name, args.bits, opts.repeats
+    );
+    let mut cases = Vec::new();
+    for (name, v, i) in &inputs {
+        let c = run_case(&ctx, name, v, i, &opts)?;
+        let stages: Vec<String> = STAGES
+            .iter()
+            .map(|s| {
+                format!(
+                    "{} {:.3}",
+                    s.trim_start_matches("lbvh."),
+                    c.stages_ms.get(*s).copied().unwrap_or(f64::NAN)
+                )
+            })
+            .collect();
+        println!(
+            "{:<14} {:>9} tris  build {:9.3} ms ({:7.2} Mtris/s) [{}]  refit {:.3} ms",
+            c.name,
+            c.triangles,
+            c.build_ms,
+            c.mtris_per_s,
+            stages.join(", "),
+            c.refit_ms
+        );
+        println!(
+            "{:<14} SAH {:.2} vs CPU binned {:.2} (ratio {:.3}); {:.1} B/tri; coherent {:.2} Mrays/s, incoherent {:.2} Mrays/s; {}",
+            "",
+            c.sah_lbvh,
+            c.sah_cpu_binned,
+            c.sah_ratio,
+            c.bytes_per_triangle,
+            c.coherent.mrays_per_s,
+            c.incoherent.mrays_per_s,
+            if c.valid { "valid".to_string() } else { format!("INVALID: {:?} {} {} mismatches", c.invariant_error, c.coherent.mismatches, c.incoherent.mismatches) }
+        );
+        cases.push(c);
+    }
+    let valid = cases.iter().all(|c| c.valid);
+    let report = Report {
+        device: ctx.device_name.clone(),
+        repeats: opts.repeats,
+        cases,
+        valid,
+    };
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&report)? + "\n")
+            .with_context(|| format!("cannot write '{}'", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    if validation && ctx.validation_messages() > 0 {
+        anyhow::bail!("{} validation message(s) reported", ctx.validation_messages());
+    }
+    if !valid {
+        anyhow::bail!("a benchmark check failed (see the report)");
+    }
+    Ok(())
+}
+
 fn devices() -> Result<()> {
     let list = list_devices()?;
     if list.is_empty() {
@@ -148,6 +290,7 @@ fn main() {
         None => render(RenderArgs::default()),
         Some(Command::Render(args)) => render(args),
         Some(Command::Devices) => devices(),
+        Some(Command::Bench(BenchCommand::Lbvh(args))) => bench_lbvh(args),
     };
     if let Err(e) = result {
         // One line: the chain of causes, outermost first.

@@ -21,6 +21,10 @@ pub const MAX_PCF_RADIUS: u32 = 4;
 /// 256 = 32 subgroups on lavapipe, 8 on NVIDIA; enough to hide latency on GPUs.
 pub const LBVH_WG: u32 = 256;
 
+/// Triangles each `lbvh.bounds` invocation folds before the workgroup reduction: fewer
+/// workgroups, so fewer reduction rounds and global atomics.
+pub const LBVH_BOUNDS_ITEMS: u32 = 16;
+
 /// Radix-sort digit width in bits. 4 bits (16 bins) keeps every thread's per-digit
 /// counts in shared memory (16 x 256 x 4 B = 16 KiB, within lavapipe's 32 KiB), so the
 /// scatter ranks keys stably without any workgroup waiting on another.
@@ -46,6 +50,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("MATERIAL_NONE", MATERIAL_NONE),
     ("MAX_PCF_RADIUS", MAX_PCF_RADIUS),
     ("LBVH_WG", LBVH_WG),
+    ("LBVH_BOUNDS_ITEMS", LBVH_BOUNDS_ITEMS),
     ("SORT_RADIX_BITS", SORT_RADIX_BITS),
     ("SORT_BINS", SORT_BINS),
     ("SORT_WG", SORT_WG),

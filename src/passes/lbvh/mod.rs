@@ -9,7 +9,7 @@ pub mod sort;
 use crate::cpu_ref::lbvh::{ordered_to_float, Aabb};
 use crate::error::{Error, Result};
 use crate::gpu_types::BvhNode;
-use crate::shader_defines::LBVH_WG;
+use crate::shader_defines::{LBVH_BOUNDS_ITEMS, LBVH_WG};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GpuTimer, Pipeline, Resource};
@@ -212,7 +212,7 @@ impl LbvhBuilder {
             ],
             bytemuck::bytes_of(&n),
         );
-        self.dispatch_1d(cmd, n);
+        unsafe { d.cmd_dispatch(cmd, n.div_ceil(LBVH_WG * LBVH_BOUNDS_ITEMS), 1, 1) };
         // RAW: Morton codes are quantized in the bounds just reduced.
         barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, COMPUTE_RW)], &[]);
     }

@@ -1,0 +1,279 @@
+//! `speculum bench lbvh`: GPU LBVH build and traversal on random soups and scenes.
+//!
+//! Per case: per-stage GPU medians over repeated builds, build throughput, refit time,
+//! memory per triangle, the SAH cost of the LBVH relative to a CPU binned-SAH BVH over
+//! the same triangles, and traversal throughput for coherent (pinhole camera) and
+//! incoherent (random) rays. Checked in the same run: the BVH invariants after the
+//! timed builds, and a sample of each ray set against the CPU SAH BVH's hits.
+
+use crate::cpu_ref::lbvh::{check_bvh, sah_cost_nodes, triangle};
+use crate::cpu_ref::trace::{intersect, CpuBvh};
+use crate::error::Result;
+use crate::gpu_types::{GpuVertex, Hit, Ray};
+use crate::passes::lbvh::{self, Bvh, Geometry, LbvhBuilder, MortonBits};
+use crate::passes::rt_trace::{TracePass, TraceScene, Traceable};
+use crate::shader_defines::BVH_INVALID;
+use crate::vk::timing::median;
+use crate::vk::{Buffer, Context, GpuTimer, Timings};
+use ash::vk;
+use glam::Vec3;
+use rand::{Rng, SeedableRng};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Timed repetitions of each build and trace (medians are reported).
+    pub repeats: u32,
+    /// Rays per ray set.
+    pub rays: u32,
+    /// Rays of each set checked against the CPU.
+    pub check_rays: u32,
+    pub bits: MortonBits,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct RaySetReport {
+    pub rays: u32,
+    /// Median GPU milliseconds of `rt.trace`.
+    pub trace_ms: f64,
+    pub mrays_per_s: f64,
+    /// Fraction of rays that hit a triangle.
+    pub hit_fraction: f64,
+    pub checked: u32,
+    /// Checked rays whose GPU hit differs from the CPU's (must be 0).
+    pub mismatches: u32,
+    /// Checked rays where two triangles tie at the same t and the sides picked
+    /// different ones (both genuine hits at equal t).
+    pub ties: u32,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseReport {
+    pub name: String,
+    pub triangles: u32,
+    pub morton_bits: u32,
+    /// Stage → median GPU milliseconds.
+    pub stages_ms: BTreeMap<String, f64>,
+    /// Median GPU milliseconds of a whole build.
+    pub build_ms: f64,
+    /// Million triangles built per second.
+    pub mtris_per_s: f64,
+    /// Median GPU milliseconds of a refit.
+    pub refit_ms: f64,
+    pub nodes_per_triangle: f64,
+    /// BVH bytes (nodes + parent links) per triangle.
+    pub bytes_per_triangle: f64,
+    /// Rebuild scratch (sort buffers, counters) per triangle.
+    pub scratch_bytes_per_triangle: f64,
+    /// SAH cost (unit traversal and triangle costs, relative to the root area).
+    pub sah_lbvh: f64,
+    pub sah_cpu_binned: f64,
+    /// `sah_lbvh / sah_cpu_binned`: 1.0 would match the CPU builder.
+    pub sah_ratio: f64,
+    /// CPU milliseconds of the reference binned-SAH build (for scale, not a contest).
+    pub cpu_sah_build_ms: f64,
+    pub coherent: RaySetReport,
+    pub incoherent: RaySetReport,
+    /// The BVH passed every invariant after the timed builds.
+    pub invariants_ok: bool,
+    pub invariant_error: Option<String>,
+    pub valid: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub device: String,
+    pub repeats: u32,
+    pub cases: Vec<CaseReport>,
+    /// Every case valid.
+    pub valid: bool,
+}
+
+/// Rays of a pinhole camera looking at the box from outside, one per pixel of a
+/// square image: neighbouring rays are nearly parallel (coherent).
+pub fn coherent_rays(lo: Vec3, hi: Vec3, count: u32) -> Vec<Ray> {
+    let side = (count as f64).sqrt().ceil() as u32;
+    let center = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-6);
+    let eye = center + Vec3::new(0.3, 0.4, 1.0).normalize() * radius * 2.2;
+    let forward = (center - eye).normalize();
+    let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+    let up = right.cross(forward);
+    let half = (30f32).to_radians().tan();
+    (0..count)
+        .map(|k| {
+            let (x, y) = (k % side, k / side);
+            let sx = ((x as f32 + 0.5) / side as f32 * 2.0 - 1.0) * half;
+            let sy = ((y as f32 + 0.5) / side as f32 * 2.0 - 1.0) * half;
+            let d = forward + right * sx - up * sy;
+            Ray {
+                origin: eye.to_array(),
+                tmin: 0.0,
+                dir: d.to_array(),
+                tmax: f32::MAX,
+            }
+        })
+        .collect()
+}
+
+/// Rays from random points in the box in uniformly random directions (incoherent).
+pub fn incoherent_rays(lo: Vec3, hi: Vec3, count: u32, seed: u64) -> Vec<Ray> {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    (0..count)
+        .map(|_| {
+            let o = lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random());
+            let d = loop {
+                let v = Vec3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                );
+                if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
+                    break v.normalize();
+                }
+            };
+            Ray {
+                origin: o.to_array(),
+                tmin: 0.0,
+                dir: d.to_array(),
+                tmax: f32::MAX,
+            }
+        })
+        .collect()
+}
+
+/// Checks `sample` evenly spaced rays against the CPU BVH: (mismatches, ties).
+fn check_hits(rays: &[Ray], gpu: &[Hit], cpu: &CpuBvh, v: &[GpuVertex], i: &[u32], sample: u32) -> (u32, u32) {
+    let step = (rays.len() / sample.max(1) as usize).max(1);
+    let (mut mismatches, mut ties) = (0, 0);
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
+    for k in (0..rays.len()).step_by(step).take(sample as usize) {
+        let (g, c) = (gpu[k], cpu.trace(&rays[k], v, i));
+        if g.prim == c.prim && (g.prim == BVH_INVALID || close(g.t, c.t)) {
+            continue;
+        }
+        let genuine_tie = g.prim != BVH_INVALID
+            && c.prim != BVH_INVALID
+            && close(g.t, c.t)
+            && intersect(&rays[k], &triangle(v, i, g.prim as usize)).is_some_and(|h| close(h.0, c.t));
+        if genuine_tie {
+            ties += 1;
+        } else {
+            mismatches += 1;
+        }
+    }
+    (mismatches, ties)
+}
+
+/// Benchmarks one triangle set.
+pub fn run_case(ctx: &Arc<Context>, name: &str, v: &[GpuVertex], i: &[u32], opts: &Options) -> Result<CaseReport> {
+    let n = (i.len() / 3) as u32;
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let vertices = Buffer::with_data(ctx, "bench.vertices", usage, bytemuck::cast_slice(v))?;
+    let indices = Buffer::with_data(ctx, "bench.indices", usage, bytemuck::cast_slice(i))?;
+    let geometry = Geometry {
+        vertices: &vertices,
+        indices: &indices,
+        tri_count: n,
+    };
+    let builder = LbvhBuilder::new(ctx)?;
+    let bvh = Bvh::new(ctx, n, opts.bits)?;
+
+    // Builds: one warm-up (pipeline JIT), then `repeats` timed.
+    let mut timer = GpuTimer::new(ctx, 8)?;
+    let mut stages = Timings::default();
+    let mut refits = Vec::new();
+    for rep in 0..=opts.repeats {
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "lbvh");
+            builder.record_build(cmd, &mut timer, geometry, &bvh);
+            timer.end(cmd, "lbvh");
+        })?;
+        if rep > 0 {
+            stages.add_frame(&timer.results()?);
+        }
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            builder.record_refit(cmd, &mut timer, geometry, &bvh);
+        })?;
+        if rep > 0 {
+            refits.push(timer.results()?.first().map_or(f64::NAN, |r| r.1));
+        }
+    }
+    let mut stages_ms: BTreeMap<String, f64> = stages.medians().into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+    let build_ms = stages_ms.remove("lbvh").unwrap_or(f64::NAN);
+
+    // Checks of the BVH as the timed builds (and refits) left it.
+    let nodes = bvh.read_nodes()?;
+    let invariants = check_bvh(&nodes, None, v, i);
+    let sah_lbvh = sah_cost_nodes(&nodes);
+    let t0 = std::time::Instant::now();
+    let cpu = CpuBvh::build(v, i);
+    let cpu_sah_build_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let sah_cpu = cpu.sah_cost();
+
+    let tracer = TracePass::new(ctx)?;
+    let scene = TraceScene {
+        static_bvh: Some(Traceable { bvh: &bvh, geometry }),
+        dynamic_bvh: None,
+    };
+    let (lo, hi) = {
+        let r = crate::cpu_ref::lbvh::bounds(v, i).1;
+        (r.lo, r.hi)
+    };
+    let ray_set = |rays: Vec<Ray>| -> Result<RaySetReport> {
+        let mut times = Vec::new();
+        let mut hits = Vec::new();
+        for rep in 0..=opts.repeats {
+            let (h, ms) = tracer.trace(&rays, scene, false)?;
+            if rep > 0 {
+                times.push(ms);
+            }
+            hits = h;
+        }
+        let trace_ms = median(&times);
+        let (mismatches, ties) = check_hits(&rays, &hits, &cpu, v, i, opts.check_rays);
+        Ok(RaySetReport {
+            rays: rays.len() as u32,
+            trace_ms,
+            mrays_per_s: rays.len() as f64 / (trace_ms * 1e3),
+            hit_fraction: hits.iter().filter(|h| h.prim != BVH_INVALID).count() as f64 / rays.len() as f64,
+            checked: opts.check_rays.min(rays.len() as u32),
+            mismatches,
+            ties,
+        })
+    };
+    let coherent = ray_set(coherent_rays(lo, hi, opts.rays))?;
+    let incoherent = ray_set(incoherent_rays(lo, hi, opts.rays, 7))?;
+
+    let invariants_ok = invariants.is_ok();
+    let valid = invariants_ok && coherent.mismatches == 0 && incoherent.mismatches == 0 && build_ms.is_finite();
+    Ok(CaseReport {
+        name: name.into(),
+        triangles: n,
+        morton_bits: if opts.bits == MortonBits::Bits30 { 30 } else { 63 },
+        stages_ms,
+        build_ms,
+        mtris_per_s: n as f64 / (build_ms * 1e3),
+        refit_ms: median(&refits),
+        nodes_per_triangle: (2 * n - 1) as f64 / n as f64,
+        bytes_per_triangle: bvh.bytes() as f64 / n as f64,
+        scratch_bytes_per_triangle: (bvh.sort.keys[0].size * 2 + bvh.sort.values[0].size * 2) as f64 / n as f64,
+        sah_lbvh,
+        sah_cpu_binned: sah_cpu,
+        sah_ratio: sah_lbvh / sah_cpu,
+        cpu_sah_build_ms,
+        coherent,
+        incoherent,
+        invariants_ok,
+        invariant_error: invariants.err(),
+        valid,
+    })
+}
+
+/// Stage names in build order, for tables.
+pub const STAGES: [&str; 5] = [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, lbvh::HIERARCHY, lbvh::FIT];

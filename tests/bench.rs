@@ -1,0 +1,38 @@
+//! The LBVH benchmark checks what it times: a small run is valid, and its figures are
+//! consistent with each other.
+
+mod common;
+
+use speculum::bench::lbvh::{run_case, Options, STAGES};
+use speculum::passes::lbvh::MortonBits;
+use speculum::scene::soup::{default_size, random_soup};
+
+#[test]
+fn small_lbvh_benchmark_is_valid_and_consistent() {
+    let ctx = common::context();
+    let (v, i) = random_soup(5000, 1.0, default_size(5000), 9);
+    let opts = Options {
+        repeats: 2,
+        rays: 4096,
+        check_rays: 500,
+        bits: MortonBits::Bits30,
+    };
+    let c = run_case(&ctx, "soup-5000", &v, &i, &opts).unwrap();
+    assert!(c.valid, "{c:?}");
+    assert_eq!(c.triangles, 5000);
+    for s in STAGES {
+        assert!(c.stages_ms[s] > 0.0, "stage {s} timed");
+    }
+    let sum: f64 = STAGES.iter().map(|s| c.stages_ms[*s]).sum();
+    assert!(
+        c.build_ms >= 0.9 * sum,
+        "the whole build ({}) covers its stages ({sum})",
+        c.build_ms
+    );
+    assert!(c.sah_ratio > 0.8 && c.sah_ratio < 2.0, "SAH ratio {}", c.sah_ratio);
+    assert!((c.nodes_per_triangle - 2.0).abs() < 1e-3);
+    assert_eq!(c.coherent.checked, 500);
+    assert!(c.coherent.hit_fraction > 0.05 && c.incoherent.hit_fraction > 0.05);
+    assert!(c.coherent.mrays_per_s > 0.0 && c.refit_ms > 0.0);
+    common::assert_no_validation_messages(&ctx);
+}

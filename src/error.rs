@@ -29,6 +29,9 @@ pub enum Error {
     /// A settings value is outside what the renderer or the device supports.
     #[error("invalid setting: {0}")]
     Settings(String),
+    /// Inputs that cannot be used together (e.g. images of different sizes).
+    #[error("{0}")]
+    Input(String),
     /// A scene name that no built-in scene has.
     #[error("unknown scene '{name}' (built-in scenes: {known}; or give a path to an .obj file)")]
     UnknownScene { name: String, known: String },

@@ -9,6 +9,7 @@ pub mod cpu_ref;
 pub mod error;
 pub mod gpu_types;
 pub mod headless;
+pub mod metrics;
 pub mod passes;
 pub mod renderer;
 pub mod scene;

@@ -24,6 +24,14 @@ enum Command {
     Render(RenderArgs),
     /// List the Vulkan devices, in the order --device INDEX counts them.
     Devices,
+    /// SSIM (on luma; Gaussian 11x11, sigma 1.5) and RMSE (RGB, [0, 1]) of two PNGs.
+    Compare {
+        a: PathBuf,
+        b: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// GPU timing benchmarks (each also checks what it times).
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -262,6 +270,19 @@ fn bench_lbvh(args: BenchLbvhArgs) -> Result<()> {
     Ok(())
 }
 
+fn compare(a: &std::path::Path, b: &std::path::Path, json: bool) -> Result<()> {
+    let c = speculum::metrics::compare_files(a, b)?;
+    if json {
+        println!("{}", serde_json::to_string(&c)?);
+    } else {
+        println!(
+            "SSIM {:.6} (luma, Gaussian 11x11, sigma 1.5)  RMSE {:.6} (RGB in [0, 1])",
+            c.ssim, c.rmse
+        );
+    }
+    Ok(())
+}
+
 fn devices() -> Result<()> {
     let list = list_devices()?;
     if list.is_empty() {
@@ -290,6 +311,7 @@ fn main() {
         None => render(RenderArgs::default()),
         Some(Command::Render(args)) => render(args),
         Some(Command::Devices) => devices(),
+        Some(Command::Compare { a, b, json }) => compare(&a, &b, json),
         Some(Command::Bench(BenchCommand::Lbvh(args))) => bench_lbvh(args),
     };
     if let Err(e) = result {

@@ -186,3 +186,48 @@ fn zero_frames() {
         "{stderr}"
     );
 }
+
+/// `compare`: a missing image, a corrupt one, and images of different sizes.
+#[test]
+fn compare_rejects_bad_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.png");
+    image::RgbaImage::from_pixel(32, 32, image::Rgba([10, 20, 30, 255]))
+        .save(&a)
+        .unwrap();
+    let small = dir.path().join("small.png");
+    image::RgbaImage::from_pixel(16, 32, image::Rgba([10, 20, 30, 255]))
+        .save(&small)
+        .unwrap();
+    write(dir.path(), "junk.png", "not an image");
+    let run = |b: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
+            .arg("compare")
+            .arg(&a)
+            .arg(dir.path().join(b))
+            .output()
+            .unwrap();
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+        )
+    };
+    let (ok, _, stdout) = run("a.png");
+    assert!(
+        ok && stdout.contains("SSIM 1.000000") && stdout.contains("RMSE 0.000000"),
+        "{stdout}"
+    );
+    for (b, needle) in [
+        ("missing.png", "cannot read image"),
+        ("junk.png", "invalid image"),
+        ("small.png", "sizes differ"),
+    ] {
+        let (ok, stderr, _) = run(b);
+        assert!(
+            !ok && stderr.contains(needle) && !stderr.contains("panicked"),
+            "{b}: {stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+}

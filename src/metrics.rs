@@ -1,0 +1,195 @@
+//! Image quality metrics for comparing a render with its reference.
+//!
+//! SSIM follows Wang, Bovik, Sheikh & Simoncelli 2004 ("Image Quality Assessment: From
+//! Error Visibility to Structural Similarity"): an 11x11 Gaussian window with
+//! sigma = 1.5, K1 = 0.01, K2 = 0.03, dynamic range 1, population (not sample)
+//! statistics, averaged over the pixels whose window lies inside the image. It is
+//! computed on luma (Rec. 709 weights of the sRGB-encoded values, as a grey
+//! conversion of the PNG would) — the same settings as scikit-image's
+//! `structural_similarity(gaussian_weights=True, sigma=1.5,
+//! use_sample_covariance=False, data_range=1)`, which the tests check against.
+//! RMSE is over the R, G and B channels in [0, 1].
+
+use crate::error::{Error, Result};
+
+/// Window radius: 11x11 window (scikit-image: truncate 3.5 x sigma 1.5, rounded).
+const RADIUS: usize = 5;
+const SIGMA: f64 = 1.5;
+
+fn gaussian_weights() -> [f64; 2 * RADIUS + 1] {
+    let mut w = [0.0; 2 * RADIUS + 1];
+    for (i, v) in w.iter_mut().enumerate() {
+        let x = i as f64 - RADIUS as f64;
+        *v = (-x * x / (2.0 * SIGMA * SIGMA)).exp();
+    }
+    let sum: f64 = w.iter().sum();
+    w.map(|v| v / sum)
+}
+
+/// Separable Gaussian filter, evaluated where the window fits: output is
+/// (w - 2R) x (h - 2R).
+fn filter(img: &[f64], w: usize, h: usize, k: &[f64; 2 * RADIUS + 1]) -> Vec<f64> {
+    let (ow, oh) = (w - 2 * RADIUS, h - 2 * RADIUS);
+    let mut rows = vec![0.0; ow * h];
+    for y in 0..h {
+        for x in 0..ow {
+            rows[y * ow + x] = (0..=2 * RADIUS).map(|i| k[i] * img[y * w + x + i]).sum();
+        }
+    }
+    let mut out = vec![0.0; ow * oh];
+    for y in 0..oh {
+        for x in 0..ow {
+            out[y * ow + x] = (0..=2 * RADIUS).map(|i| k[i] * rows[(y + i) * ow + x]).sum();
+        }
+    }
+    out
+}
+
+/// Mean SSIM of two single-channel images with values in [0, 1].
+pub fn ssim(a: &[f64], b: &[f64], w: usize, h: usize) -> Result<f64> {
+    if a.len() != w * h || b.len() != w * h {
+        return Err(Error::Input(format!("SSIM: images must both be {w}x{h}")));
+    }
+    if w <= 2 * RADIUS || h <= 2 * RADIUS {
+        return Err(Error::Input(format!(
+            "SSIM needs images larger than 11x11, got {w}x{h}"
+        )));
+    }
+    let k = gaussian_weights();
+    let prod = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).collect::<Vec<_>>();
+    let mu_a = filter(a, w, h, &k);
+    let mu_b = filter(b, w, h, &k);
+    let aa = filter(&prod(a, a), w, h, &k);
+    let bb = filter(&prod(b, b), w, h, &k);
+    let ab = filter(&prod(a, b), w, h, &k);
+    let (c1, c2) = ((0.01f64).powi(2), (0.03f64).powi(2));
+    let n = mu_a.len() as f64;
+    let sum: f64 = (0..mu_a.len())
+        .map(|i| {
+            let (ma, mb) = (mu_a[i], mu_b[i]);
+            let va = aa[i] - ma * ma;
+            let vb = bb[i] - mb * mb;
+            let cov = ab[i] - ma * mb;
+            ((2.0 * ma * mb + c1) * (2.0 * cov + c2)) / ((ma * ma + mb * mb + c1) * (va + vb + c2))
+        })
+        .sum();
+    Ok(sum / n)
+}
+
+/// Rec. 709 luma of tightly packed RGBA8 pixels, in [0, 1].
+pub fn luma(rgba: &[u8]) -> Vec<f64> {
+    rgba.chunks_exact(4)
+        .map(|p| (0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64) / 255.0)
+        .collect()
+}
+
+/// Root-mean-square difference over R, G and B, in [0, 1].
+pub fn rmse_rgb(a: &[u8], b: &[u8]) -> f64 {
+    let (sum, n) = a
+        .chunks_exact(4)
+        .zip(b.chunks_exact(4))
+        .fold((0.0f64, 0usize), |(s, n), (p, q)| {
+            let d: f64 = (0..3).map(|c| ((p[c] as f64 - q[c] as f64) / 255.0).powi(2)).sum();
+            (s + d, n + 3)
+        });
+    (sum / n.max(1) as f64).sqrt()
+}
+
+/// SSIM (on luma) and RMSE (RGB) of two RGBA8 images of equal size.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Comparison {
+    pub ssim: f64,
+    pub rmse: f64,
+}
+
+pub fn compare_rgba8(a: &[u8], b: &[u8], w: u32, h: u32) -> Result<Comparison> {
+    let (w, h) = (w as usize, h as usize);
+    Ok(Comparison {
+        ssim: ssim(&luma(a), &luma(b), w, h)?,
+        rmse: rmse_rgb(a, b),
+    })
+}
+
+/// Loads two PNGs and compares them.
+pub fn compare_files(a: &std::path::Path, b: &std::path::Path) -> Result<Comparison> {
+    let load = |p: &std::path::Path| -> Result<image::RgbaImage> {
+        let bytes = std::fs::read(p).map_err(|source| Error::Io {
+            what: "image",
+            path: p.into(),
+            source,
+        })?;
+        Ok(image::load_from_memory(&bytes)
+            .map_err(|e| Error::BadAsset {
+                what: "image",
+                path: p.into(),
+                detail: e.to_string(),
+            })?
+            .to_rgba8())
+    };
+    let (ia, ib) = (load(a)?, load(b)?);
+    if ia.dimensions() != ib.dimensions() {
+        return Err(Error::Input(format!(
+            "cannot compare '{}' ({}x{}) with '{}' ({}x{}): sizes differ",
+            a.display(),
+            ia.width(),
+            ia.height(),
+            b.display(),
+            ib.width(),
+            ib.height()
+        )));
+    }
+    compare_rgba8(ia.as_raw(), ib.as_raw(), ia.width(), ia.height())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The synthetic images of the scikit-image check (64x48, float64).
+    fn images() -> (Vec<f64>, Vec<Vec<f64>>) {
+        let (w, h) = (64, 48);
+        let mut a = vec![0.0; w * h];
+        let mut b = a.clone();
+        let mut c = a.clone();
+        let mut d = a.clone();
+        for y in 0..h {
+            for x in 0..w {
+                let (xf, yf) = (x as f64, y as f64);
+                let i = y * w + x;
+                a[i] = 0.5 + 0.4 * (0.3 * xf).sin() * (0.2 * yf).cos();
+                b[i] = (a[i] + 0.1 * (0.7 * xf + 0.5 * yf).sin()).clamp(0.0, 1.0);
+                c[i] = a[i] * 0.8 + 0.1;
+                d[i] = (xf * xf * 0.618 + yf * 0.377 + xf * yf * 0.013).rem_euclid(1.0);
+            }
+        }
+        (a, vec![b, c, d])
+    }
+
+    /// Values from scikit-image 0.26.0, `structural_similarity(a, x,
+    /// gaussian_weights=True, sigma=1.5, use_sample_covariance=False, data_range=1.0)`
+    /// on the same images.
+    #[test]
+    fn ssim_matches_scikit_image() {
+        let (a, others) = images();
+        let want = [0.7905129011299752, 0.9728302492100221, 0.014487803151716086];
+        for (x, w) in others.iter().zip(want) {
+            let got = ssim(&a, x, 64, 48).unwrap();
+            assert!((got - w).abs() < 1e-9, "got {got}, scikit-image {w}");
+        }
+        assert!((ssim(&a, &a, 64, 48).unwrap() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rmse_of_known_differences() {
+        let a = [0u8, 0, 0, 255, 255, 255, 255, 255];
+        let b = [255u8, 0, 0, 0, 255, 255, 255, 0];
+        // One of six channels differs by 1.0: sqrt(1/6). Alpha is ignored.
+        assert!((rmse_rgb(&a, &b) - (1.0f64 / 6.0).sqrt()).abs() < 1e-12);
+        assert_eq!(rmse_rgb(&a, &a), 0.0);
+    }
+
+    #[test]
+    fn tiny_images_are_an_error() {
+        assert!(ssim(&[0.5; 100], &[0.5; 100], 10, 10).is_err());
+    }
+}

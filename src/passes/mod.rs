@@ -8,6 +8,7 @@ pub mod lbvh;
 pub mod light_direct;
 pub mod rt_trace;
 pub mod shadow_map;
+pub mod ssr_compact;
 
 use ash::vk;
 

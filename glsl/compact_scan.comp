@@ -1,0 +1,34 @@
+#version 460
+// ssr.compact, step 2 of 3: exclusive scan of the tile counts (one workgroup), the
+// total, and the indirect dispatch arguments of the pass that consumes the list.
+#include "compact.glsl"
+#define WG_SCAN_SIZE SORT_WG
+#include "wg_scan.glsl"
+
+layout(local_size_x = SORT_WG) in;
+
+layout(binding = 0, std430) buffer TileCounts { uint tile_counts[]; };
+// x, y, z: VkDispatchIndirectCommand for LBVH_WG-wide workgroups; w: the count.
+layout(binding = 1, std430) writeonly buffer Indirect { uvec4 indirect; };
+
+void main() {
+    uint l = gl_LocalInvocationID.x;
+    uint m = pc.num_tiles;
+    uint per = (m + SORT_WG - 1u) / SORT_WG;
+    uint begin = min(l * per, m);
+    uint end = min(begin + per, m);
+    uint sum = 0u;
+    for (uint i = begin; i < end; ++i) {
+        sum += tile_counts[i];
+    }
+    uint total;
+    uint running = wg_exclusive_scan(sum, total);
+    for (uint i = begin; i < end; ++i) {
+        uint c = tile_counts[i];
+        tile_counts[i] = running;
+        running += c;
+    }
+    if (l == 0u) {
+        indirect = uvec4((total + LBVH_WG - 1u) / LBVH_WG, 1u, 1u, total);
+    }
+}

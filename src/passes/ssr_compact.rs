@@ -1,0 +1,171 @@
+//! `ssr.compact`: stream compaction of the fail mask into a list of pixels (row-major,
+//! deterministic) plus the indirect dispatch arguments of the ray-tracing pass.
+//! Count per tile → scan (one workgroup) → scatter: no workgroup waits on another.
+//! CPU reference: `cpu_ref::compact`.
+
+use crate::error::Result;
+use crate::shader_defines::{SORT_ITEMS, SORT_WG};
+use crate::shaders;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, Image, Pipeline, Resource};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+pub const NAME: &str = "ssr.compact";
+/// Pixels per tile of the count and scatter kernels.
+pub const TILE: u32 = SORT_WG * SORT_ITEMS;
+/// Format of the mask this pass reads: nonzero means "needs a ray".
+pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CompactPush {
+    size: [u32; 2],
+    num_tiles: u32,
+    _pad0: u32,
+}
+
+/// The compacted list and its size.
+pub struct CompactOutputs {
+    /// One `u32` per listed pixel: `x | y << 16`.
+    pub pixels: Buffer,
+    /// `[groups_x, 1, 1, count]`: a `VkDispatchIndirectCommand` for `LBVH_WG`-wide
+    /// workgroups, then the number of listed pixels.
+    pub indirect: Buffer,
+    tile_counts: Buffer,
+    extent: vk::Extent2D,
+}
+
+impl CompactOutputs {
+    fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        let n = extent.width as u64 * extent.height as u64;
+        let tiles = (n as u32).div_ceil(TILE).max(1) as u64;
+        Ok(Self {
+            pixels: Buffer::new(ctx, "compact.pixels", n * 4, usage, MemoryLocation::GpuOnly)?,
+            indirect: Buffer::new(
+                ctx,
+                "compact.indirect",
+                16,
+                usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?,
+            tile_counts: Buffer::new(ctx, "compact.tiles", tiles * 4, usage, MemoryLocation::GpuOnly)?,
+            extent,
+        })
+    }
+
+    /// Number of listed pixels of the last run (a readback: for stats and tests).
+    pub fn read_count(&self) -> Result<u32> {
+        let v: Vec<u32> = bytemuck::pod_collect_to_vec(&self.indirect.read()?);
+        Ok(v[3])
+    }
+
+    /// The listed pixels of the last run, as (x, y).
+    pub fn read_pixels(&self) -> Result<Vec<(u32, u32)>> {
+        let count = self.read_count()? as usize;
+        let all: Vec<u32> = bytemuck::pod_collect_to_vec(&self.pixels.read()?);
+        Ok(all[..count].iter().map(|p| (p & 0xffff, p >> 16)).collect())
+    }
+}
+
+pub struct CompactPass {
+    ctx: Arc<Context>,
+    count: Pipeline,
+    scan: Pipeline,
+    scatter: Pipeline,
+    pub out: CompactOutputs,
+}
+
+impl CompactPass {
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        let push = std::mem::size_of::<CompactPush>() as u32;
+        Ok(Self {
+            ctx: ctx.clone(),
+            count: Pipeline::compute(
+                ctx,
+                "ssr.compact.count",
+                ("compact_count.comp", shaders::COMPACT_COUNT_COMP),
+                push,
+            )?,
+            scan: Pipeline::compute(
+                ctx,
+                "ssr.compact.scan",
+                ("compact_scan.comp", shaders::COMPACT_SCAN_COMP),
+                push,
+            )?,
+            scatter: Pipeline::compute(
+                ctx,
+                "ssr.compact.scatter",
+                ("compact_scatter.comp", shaders::COMPACT_SCATTER_COMP),
+                push,
+            )?,
+            out: CompactOutputs::new(ctx, extent)?,
+        })
+    }
+
+    pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
+        self.out = CompactOutputs::new(&self.ctx, extent)?;
+        Ok(())
+    }
+
+    /// Records the compaction of `mask` (`GENERAL` layout, visible to compute reads).
+    /// The list and the indirect arguments end visible to compute reads and to
+    /// indirect dispatches.
+    pub fn record(&self, cmd: vk::CommandBuffer, mask: &Image) {
+        let d = &self.ctx.device;
+        let e = self.out.extent;
+        let num_tiles = (e.width * e.height).div_ceil(TILE);
+        let push = CompactPush {
+            size: [e.width, e.height],
+            num_tiles,
+            _pad0: 0,
+        };
+        let push = bytemuck::bytes_of(&push);
+        let rw = (
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_WRITE,
+        );
+        // WAR: the previous frame's readers of the list and arguments are done.
+        barrier::record(d, cmd, &[barrier::memory(access::ALL_READ_WRITE, rw)], &[]);
+        self.count.bind(
+            cmd,
+            &[Resource::StorageImage(mask), Resource::Buffer(&self.out.tile_counts)],
+            push,
+        );
+        unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
+        // RAW: the scan reads the tile counts.
+        barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, rw)], &[]);
+        self.scan.bind(
+            cmd,
+            &[
+                Resource::Buffer(&self.out.tile_counts),
+                Resource::Buffer(&self.out.indirect),
+            ],
+            push,
+        );
+        unsafe { d.cmd_dispatch(cmd, 1, 1, 1) };
+        // RAW: the scatter reads the tile offsets.
+        barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, rw)], &[]);
+        self.scatter.bind(
+            cmd,
+            &[
+                Resource::StorageImage(mask),
+                Resource::Buffer(&self.out.tile_counts),
+                Resource::Buffer(&self.out.pixels),
+            ],
+            push,
+        );
+        unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
+        // RAW: the ray-tracing pass reads the list and dispatches from the arguments.
+        let dst = (
+            vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::DRAW_INDIRECT,
+            vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::INDIRECT_COMMAND_READ,
+        );
+        barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, dst)], &[]);
+    }
+}

@@ -1,0 +1,62 @@
+//! `ssr.compact` against the CPU on random masks: the list (row-major) and its count
+//! exactly, and the indirect dispatch arguments.
+
+mod common;
+
+use ash::vk;
+use rand::Rng;
+use speculum::cpu_ref::compact::compact;
+use speculum::passes::ssr_compact::{CompactPass, MASK_FORMAT};
+use speculum::shader_defines::LBVH_WG;
+use speculum::vk::Image;
+
+#[test]
+fn compaction_matches_cpu_on_random_masks() {
+    let ctx = common::context();
+    let mut rng = common::rng(3);
+    for (w, h) in [(1u32, 1u32), (67, 45), (300, 7), (960, 540)] {
+        for density in [0.0, 0.003, 0.3, 0.97, 1.0] {
+            let extent = vk::Extent2D { width: w, height: h };
+            // Masks carry reason bits: any nonzero value means "needs a ray".
+            let mask: Vec<u32> = (0..w * h)
+                .map(|_| {
+                    if rng.random_bool(density) {
+                        rng.random_range(1..32)
+                    } else {
+                        0
+                    }
+                })
+                .collect();
+            let img = Image::new(
+                &ctx,
+                "test.mask",
+                extent,
+                MASK_FORMAT,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
+            )
+            .unwrap();
+            img.write(bytemuck::cast_slice(&mask), vk::ImageLayout::GENERAL)
+                .unwrap();
+            let pass = CompactPass::new(&ctx, extent).unwrap();
+            // Poison the outputs: stale values cannot pass.
+            pass.out
+                .pixels
+                .write(&vec![0xcdu8; pass.out.pixels.size as usize])
+                .unwrap();
+            pass.out.indirect.write(&[0xcdu8; 16]).unwrap();
+            ctx.one_shot(|cmd| pass.record(cmd, &img)).unwrap();
+            let want = compact(&mask, w);
+            let args: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.indirect.read().unwrap());
+            assert_eq!(
+                args,
+                [(want.len() as u32).div_ceil(LBVH_WG), 1, 1, want.len() as u32],
+                "{w}x{h} density {density}"
+            );
+            let got: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.pixels.read().unwrap());
+            assert_eq!(&got[..want.len()], &want[..], "{w}x{h} density {density}");
+            let pixels = pass.out.read_pixels().unwrap();
+            assert!(pixels.iter().all(|&(x, y)| mask[(y * w + x) as usize] != 0));
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}

@@ -6,11 +6,14 @@ layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
 
 layout(binding = 0, rgba32f) uniform readonly image2D hdr;
 layout(binding = 1, rgba8) uniform writeonly image2D ldr;
+// rgb: reflected radiance; a: source (SOURCE_*). Added weighted by reflectivity.
+layout(binding = 2, rgba32f) uniform readonly image2D reflection;
+layout(binding = 3) uniform sampler2D gb_normal; // w: reflectivity
 
 layout(push_constant) uniform ComposePush {
     uvec2 size;
     float exposure;
-    float _pad0;
+    uint mode; // COMPOSE_PLAIN, COMPOSE_REFLECT or COMPOSE_PROVENANCE
 } pc;
 
 vec3 aces(vec3 x) {
@@ -26,6 +29,19 @@ void main() {
     if (any(greaterThanEqual(p, ivec2(pc.size)))) {
         return;
     }
-    vec3 c = max(imageLoad(hdr, p).rgb, vec3(0.0)) * pc.exposure;
+    vec3 c = imageLoad(hdr, p).rgb;
+    if (pc.mode != COMPOSE_PLAIN) {
+        vec4 r = imageLoad(reflection, p);
+        uint source = uint(r.a);
+        if (pc.mode == COMPOSE_PROVENANCE) {
+            // The method's figures: pink = ray traced, blue = SSR, grey = no reflector.
+            vec3 tint = source == SOURCE_RT ? vec3(1.0, 0.25, 0.6) : (source == SOURCE_SSR ? vec3(0.15, 0.35, 1.0) : vec3(0.35));
+            float luma = dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
+            imageStore(ldr, p, vec4(tint * (0.55 + 0.45 * clamp(luma, 0.0, 1.0)), 1.0));
+            return;
+        }
+        c += texelFetch(gb_normal, p, 0).w * r.rgb;
+    }
+    c = max(c, vec3(0.0)) * pc.exposure;
     imageStore(ldr, p, vec4(srgb_encode(aces(c)), 1.0));
 }

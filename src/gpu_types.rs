@@ -31,7 +31,7 @@ pub struct GpuMaterial {
     pub _pad0: [f32; 3],
 }
 
-/// Per-frame constants (std140 uniform buffer, 304 bytes).
+/// Per-frame constants (std140 uniform buffer, 432 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct FrameUniforms {
@@ -40,6 +40,10 @@ pub struct FrameUniforms {
     pub inv_view_proj: Mat4,
     /// World → clip of the shadow-casting light.
     pub light_view_proj: Mat4,
+    /// World → view of the camera (right-handed, looking down -z).
+    pub view: Mat4,
+    /// View → clip of the camera.
+    pub proj: Mat4,
     /// xyz: camera position in world units; w unused.
     pub camera_pos: Vec4,
     /// xyz: unit vector from a surface towards the light; w unused.
@@ -67,7 +71,7 @@ pub struct FrameUniforms {
 
 const _: () = assert!(std::mem::size_of::<GpuVertex>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 32);
-const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 304);
+const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 432);
 
 /// A BVH node (std430, 32 bytes); layout documented in `glsl/shared/bvh.glsl`.
 /// Internal: `left`/`right` are child node indices. Leaf: `left` is

@@ -86,6 +86,10 @@ struct RenderArgs {
     /// Height in pixels.
     #[arg(long, default_value_t = Settings::default().height)]
     height: u32,
+    /// Reflection mode: raster, ssr, hybrid (default), rt (every reflective pixel
+    /// traced: the reference) or provenance (pixels coloured by reflection source).
+    #[arg(long)]
+    mode: Option<String>,
     /// Frames to measure (after the warm-up frames, which are not counted).
     #[arg(long, default_value_t = 10)]
     frames: u32,
@@ -135,6 +139,9 @@ fn render(args: RenderArgs) -> Result<()> {
     };
     settings.width = args.width;
     settings.height = args.height;
+    if let Some(mode) = &args.mode {
+        settings.mode = mode.parse()?;
+    }
     settings.validate()?;
     let scene = speculum::scene::load(&args.scene)?;
     let validation = args.validation || validation_from_env();

@@ -1,14 +1,23 @@
 //! Owns the passes and records one frame top to bottom: every pass under its timer
 //! scope, every barrier with the hazard it resolves.
 //!
-//! Frame (this subset of DESIGN.md's table):
-//! uniforms → `shadow.map` → `gbuffer` → `light.direct` → `compose`.
+//! Frame: uniforms → `shadow.map` → `gbuffer` → `light.direct` → (by mode)
+//! `ssr.trace` → `ssr.compact` → `rt.trace` → `reflect.merge` → `compose`.
+//! The static BVH is built once, when the renderer is created.
 
 use crate::error::{Error, Result, VkContext};
 use crate::gpu_types::{FrameUniforms, GpuMaterial};
+use crate::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
+use crate::passes::reflect_merge::{self, BlurParams, MergePass};
+use crate::passes::rt_reflect::{self, ReflectInputs, RtReflectPass};
+use crate::passes::rt_trace::{TraceScene, Traceable};
+use crate::passes::ssr_compact::{self, CompactPass};
+use crate::passes::ssr_trace::{self, SsrParams, SsrPass};
 use crate::passes::{compose, gbuffer, light_direct, shadow_map, SceneGeometry};
 use crate::scene::Scene;
+use crate::settings::Mode;
 use crate::settings::Settings;
+use crate::shader_defines::{COMPOSE_PLAIN, COMPOSE_PROVENANCE, COMPOSE_REFLECT};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GpuTimer, Image};
 use ash::vk;
@@ -37,7 +46,15 @@ pub struct Renderer {
     pub shadow: shadow_map::ShadowMapPass,
     pub gbuffer: gbuffer::GBufferPass,
     pub light: light_direct::LightDirectPass,
+    pub ssr: SsrPass,
+    pub compact: CompactPass,
+    pub rt: RtReflectPass,
+    pub merge: MergePass,
     pub compose: compose::ComposePass,
+    /// BVH over the scene's (static) triangles, built at creation.
+    pub static_bvh: Bvh,
+    /// GPU milliseconds per stage of the static BVH build.
+    pub static_bvh_build: Vec<(&'static str, f64)>,
     timer: GpuTimer,
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
@@ -63,6 +80,8 @@ pub fn frame_uniforms(scene: &Scene, settings: &Settings) -> FrameUniforms {
         view_proj,
         inv_view_proj: view_proj.inverse(),
         light_view_proj: light_view_proj(light.direction, lo, hi),
+        view: scene.camera.view(),
+        proj: scene.camera.projection(aspect),
         camera_pos: scene.camera.position.extend(1.0),
         light_dir: light.direction.normalize().extend(0.0),
         light_color: (light.color * light.intensity).extend(0.0),
@@ -114,6 +133,22 @@ impl Renderer {
             width: settings.width,
             height: settings.height,
         };
+        // The static BVH, once: the scene has no dynamic geometry yet.
+        let static_bvh = Bvh::new(ctx, scene_buffers.index_count / 3, MortonBits::Bits30)?;
+        let mut build_timer = GpuTimer::new(ctx, 8)?;
+        {
+            let builder = LbvhBuilder::new(ctx)?;
+            let geometry = Geometry {
+                vertices: &scene_buffers.vertices,
+                indices: &scene_buffers.indices,
+                tri_count: static_bvh.tri_count,
+            };
+            ctx.one_shot(|cmd| {
+                build_timer.reset(cmd);
+                builder.record_build(cmd, &mut build_timer, geometry, &static_bvh);
+            })?;
+        }
+        let static_bvh_build = build_timer.results()?;
         let cmd = ctx.allocate_command_buffer()?;
         let fence = unsafe { ctx.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
         let renderer = Self {
@@ -125,7 +160,13 @@ impl Renderer {
             shadow: shadow_map::ShadowMapPass::new(ctx, settings.shadow_map_size, settings.shadow_slope_bias)?,
             gbuffer: gbuffer::GBufferPass::new(ctx, extent)?,
             light: light_direct::LightDirectPass::new(ctx, extent)?,
+            ssr: SsrPass::new(ctx, extent)?,
+            compact: CompactPass::new(ctx, extent)?,
+            rt: RtReflectPass::new(ctx, extent)?,
+            merge: MergePass::new(ctx, extent)?,
             compose: compose::ComposePass::new(ctx, extent)?,
+            static_bvh,
+            static_bvh_build,
             timer: GpuTimer::new(ctx, 16)?,
             cmd,
             fence,
@@ -313,6 +354,111 @@ impl Renderer {
         barrier::record(d, cmd, &[], &[lit_out]);
         timer.end(cmd, light_direct::NAME);
 
+        let mode = self.settings.mode;
+        let reflections = mode != Mode::Raster;
+        let traced = matches!(mode, Mode::Hybrid | Mode::Rt | Mode::Provenance);
+        let st = &self.settings;
+        // WAR/WAW: the previous frame's reads and writes of the reflection images are
+        // done before this frame rewrites them (old contents discarded).
+        let reflection_images = [
+            &self.ssr.out.color,
+            &self.ssr.out.mask,
+            &self.rt.color,
+            &self.merge.reflection,
+            self.merge.scratch(),
+        ];
+        let into: Vec<_> = reflection_images
+            .iter()
+            .map(|i| {
+                barrier::image(
+                    i.raw,
+                    color,
+                    access::ALL_READ_WRITE,
+                    access::ALL_READ_WRITE,
+                    L::UNDEFINED,
+                    L::GENERAL,
+                )
+            })
+            .collect();
+        barrier::record(d, cmd, &[], &into);
+
+        if reflections {
+            timer.begin(cmd, ssr_trace::NAME);
+            let params = SsrParams {
+                max_steps: st.ssr_max_steps,
+                stride: st.ssr_stride,
+                thickness: st.ssr_thickness,
+                max_distance: st.ssr_max_distance,
+                edge_fade: st.ssr_edge_fade,
+                min_confidence: st.ssr_min_confidence,
+                reflective_min: st.reflective_min,
+                force_fail: (mode == Mode::Rt) as u32,
+            };
+            self.ssr
+                .record(cmd, &self.frame_ubo, &self.gbuffer.targets, &self.light.lit, &params);
+            // RAW: compaction and merge read the fail mask and SSR colour.
+            barrier::record(
+                d,
+                cmd,
+                &[barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_READ)],
+                &[],
+            );
+            timer.end(cmd, ssr_trace::NAME);
+        }
+        if traced {
+            timer.begin(cmd, ssr_compact::NAME);
+            self.compact.record(cmd, &self.ssr.out.mask);
+            timer.end(cmd, ssr_compact::NAME);
+
+            timer.begin(cmd, rt_reflect::NAME);
+            let geometry = Geometry {
+                vertices: &self.scene.vertices,
+                indices: &self.scene.indices,
+                tri_count: self.static_bvh.tri_count,
+            };
+            let inputs = ReflectInputs {
+                frame: &self.frame_ubo,
+                gbuffer: &self.gbuffer.targets,
+                materials: &self.scene.materials,
+                shadow_map: &self.shadow.map,
+                list: &self.compact.out,
+                scene: TraceScene {
+                    static_bvh: Some(Traceable {
+                        bvh: &self.static_bvh,
+                        geometry,
+                    }),
+                    dynamic_bvh: None,
+                },
+            };
+            self.rt.record(cmd, &inputs, st.max_bounces, st.shadow_rays);
+            // RAW: the merge reads the ray-traced colour.
+            barrier::record(
+                d,
+                cmd,
+                &[barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_READ)],
+                &[],
+            );
+            timer.end(cmd, rt_reflect::NAME);
+        }
+        if reflections {
+            timer.begin(cmd, reflect_merge::NAME);
+            self.merge.record(
+                cmd,
+                &self.frame_ubo,
+                &self.gbuffer.targets,
+                &self.ssr.out.mask,
+                &self.ssr.out.color,
+                &self.rt.color,
+                traced,
+                st.reflective_min,
+                BlurParams {
+                    radius: st.blur_radius,
+                    band: st.blur_band,
+                },
+            );
+            timer.end(cmd, reflect_merge::NAME);
+        }
+
         timer.begin(cmd, compose::NAME);
         // WAR: earlier reads of the LDR image (readback copies) finish before it is overwritten.
         let ldr_in = barrier::image(
@@ -324,7 +470,17 @@ impl Renderer {
             L::GENERAL,
         );
         barrier::record(d, cmd, &[], &[ldr_in]);
-        self.compose.record(cmd, &self.light.lit, self.settings.exposure);
+        let compose_mode = match mode {
+            Mode::Raster => COMPOSE_PLAIN,
+            Mode::Provenance => COMPOSE_PROVENANCE,
+            _ => COMPOSE_REFLECT,
+        };
+        let inputs = compose::ComposeInputs {
+            hdr: &self.light.lit,
+            reflection: &self.merge.reflection,
+            normal: &self.gbuffer.targets.normal,
+        };
+        self.compose.record(cmd, &inputs, self.settings.exposure, compose_mode);
         timer.end(cmd, compose::NAME);
 
         timer.end(cmd, FRAME);

@@ -8,6 +8,48 @@ use serde::{Deserialize, Serialize};
 /// 512 MiB, within a single allocation on lavapipe (2 GiB) and common GPUs.
 pub const MAX_SIDE: u32 = 8192;
 
+/// What the renderer computes for reflections.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// No reflections: direct lighting only.
+    Raster,
+    /// Screen-space reflections only; where SSR fails there is no reflection.
+    Ssr,
+    /// The method: SSR first, the failed pixels ray traced, merged, seams blurred.
+    Hybrid,
+    /// Every reflective pixel ray traced (the quality reference), same bounces.
+    Rt,
+    /// Hybrid, with each pixel painted by its reflection's source: pink = ray traced,
+    /// blue = SSR, grey = no reflective surface.
+    Provenance,
+}
+
+impl Mode {
+    pub const ALL: [Mode; 5] = [Mode::Raster, Mode::Ssr, Mode::Hybrid, Mode::Rt, Mode::Provenance];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Raster => "raster",
+            Mode::Ssr => "ssr",
+            Mode::Hybrid => "hybrid",
+            Mode::Rt => "rt",
+            Mode::Provenance => "provenance",
+        }
+    }
+}
+
+impl std::str::FromStr for Mode {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Mode::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
+            Error::Settings(format!(
+                "unknown mode '{s}' (modes: raster, ssr, hybrid, rt, provenance)"
+            ))
+        })
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Settings {
@@ -30,6 +72,38 @@ pub struct Settings {
     pub exposure: f32,
     /// Strength of the sky's hemispherical ambient light (no time cost).
     pub ambient: f32,
+    /// Reflection mode.
+    pub mode: Mode,
+    /// Reflectivity above which a pixel gets a reflection: lower reflects more surfaces
+    /// at more SSR and ray-tracing work.
+    pub reflective_min: f32,
+    /// Rays per reflection path in `rt.trace` (1 = a single reflection): more shows
+    /// mirrors within mirrors, each bounce costs another traversal for paths still on a
+    /// reflector.
+    pub max_bounces: u32,
+    /// SSR step budget per ray: more finds farther hits, at up to that many depth reads.
+    pub ssr_max_steps: u32,
+    /// SSR step length in pixels: longer reaches farther for the same budget but can
+    /// step over thin objects.
+    pub ssr_stride: f32,
+    /// Depth (view-space units) a surface is assumed to have: thicker finds hits behind
+    /// thin silhouettes but makes false hits behind objects.
+    pub ssr_thickness: f32,
+    /// Longest SSR ray in view-space units.
+    pub ssr_max_distance: f32,
+    /// Fraction of the screen's smaller side over which SSR confidence fades at the
+    /// edges: larger hides the edge seam but sends more pixels to the ray tracer.
+    pub ssr_edge_fade: f32,
+    /// SSR hits below this confidence fail (go to the ray tracer): higher is cleaner
+    /// and slower.
+    pub ssr_min_confidence: f32,
+    /// Seam blur radius in pixels (0: off): smoother SSR/RT transitions vs detail.
+    pub blur_radius: u32,
+    /// Half-width in pixels of the band around SSR/RT seams that the blur touches.
+    pub blur_band: u32,
+    /// Shadows at ray-traced hits from shadow rays (exact, one more traversal per hit)
+    /// instead of the shadow map (cheap, limited by its resolution).
+    pub shadow_rays: bool,
 }
 
 impl Default for Settings {
@@ -43,6 +117,18 @@ impl Default for Settings {
             shadow_slope_bias: 1.5,
             exposure: 1.0,
             ambient: 0.35,
+            mode: Mode::Hybrid,
+            reflective_min: 0.02,
+            max_bounces: 3,
+            ssr_max_steps: 160,
+            ssr_stride: 1.0,
+            ssr_thickness: 0.25,
+            ssr_max_distance: 40.0,
+            ssr_edge_fade: 0.05,
+            ssr_min_confidence: 0.3,
+            blur_radius: 3,
+            blur_band: 3,
+            shadow_rays: false,
         }
     }
 }
@@ -70,7 +156,36 @@ impl Settings {
                 crate::shader_defines::MAX_PCF_RADIUS
             )));
         }
+        if self.max_bounces == 0 || self.max_bounces > 16 {
+            return Err(Error::Settings(format!(
+                "max_bounces {} is outside 1..=16",
+                self.max_bounces
+            )));
+        }
+        if self.ssr_max_steps == 0 || self.ssr_max_steps > 4096 {
+            return Err(Error::Settings(format!(
+                "ssr_max_steps {} is outside 1..=4096",
+                self.ssr_max_steps
+            )));
+        }
+        if self.blur_radius > 16 || self.blur_band > 64 {
+            return Err(Error::Settings(format!(
+                "blur_radius {} / blur_band {} too large (16 / 64)",
+                self.blur_radius, self.blur_band
+            )));
+        }
+        if self.ssr_stride.is_nan() || self.ssr_stride < 0.5 {
+            return Err(Error::Settings(format!(
+                "ssr_stride {} must be at least 0.5 pixels",
+                self.ssr_stride
+            )));
+        }
         for (name, v) in [
+            ("reflective_min", self.reflective_min),
+            ("ssr_thickness", self.ssr_thickness),
+            ("ssr_max_distance", self.ssr_max_distance),
+            ("ssr_edge_fade", self.ssr_edge_fade),
+            ("ssr_min_confidence", self.ssr_min_confidence),
             ("shadow_bias", self.shadow_bias),
             ("shadow_slope_bias", self.shadow_slope_bias),
             ("exposure", self.exposure),

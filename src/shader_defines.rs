@@ -44,6 +44,33 @@ pub const BVH_INVALID: u32 = 0xffff_ffff;
 /// 30 + log2(N) levels deep (equal keys split by index); 64 covers 2^34 triangles.
 pub const TRACE_STACK: u32 = 64;
 
+/// Fail-mask reason bits written by `ssr.trace` (any nonzero value sends the pixel to
+/// the ray tracer): the march left the screen or crossed the near plane,
+pub const FAIL_LEFT_SCREEN: u32 = 1;
+/// ... it passed behind geometry thicker than the threshold and found no hit,
+pub const FAIL_BEHIND: u32 = 2;
+/// ... it ran out of steps,
+pub const FAIL_OUT_OF_STEPS: u32 = 4;
+/// ... it hit a surface facing away from it,
+pub const FAIL_BACK_FACE: u32 = 8;
+/// ... its confidence (screen-edge and toward-camera fades) was below the threshold,
+pub const FAIL_LOW_CONFIDENCE: u32 = 16;
+/// ... it hit a reflective surface (the screen holds no recursive reflection),
+pub const FAIL_HIT_REFLECTIVE: u32 = 32;
+/// ... or SSR was off (`rt` mode: every reflective pixel is traced).
+pub const FAIL_FORCED: u32 = 64;
+
+/// Provenance of a pixel's reflection, as `reflect.merge` labels it.
+pub const SOURCE_NONE: u32 = 0;
+pub const SOURCE_SSR: u32 = 1;
+pub const SOURCE_RT: u32 = 2;
+
+/// `compose` modes: tonemap the lit colour only, add the merged reflection weighted by
+/// reflectivity, or paint each pixel by the source of its reflection.
+pub const COMPOSE_PLAIN: u32 = 0;
+pub const COMPOSE_REFLECT: u32 = 1;
+pub const COMPOSE_PROVENANCE: u32 = 2;
+
 /// Every constant above, as `(name, value)`, in the form build.rs hands to shaderc.
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("WG_2D", WG_2D),
@@ -58,4 +85,17 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BVH_LEAF_BIT", BVH_LEAF_BIT),
     ("BVH_INVALID", BVH_INVALID),
     ("TRACE_STACK", TRACE_STACK),
+    ("FAIL_LEFT_SCREEN", FAIL_LEFT_SCREEN),
+    ("FAIL_BEHIND", FAIL_BEHIND),
+    ("FAIL_OUT_OF_STEPS", FAIL_OUT_OF_STEPS),
+    ("FAIL_BACK_FACE", FAIL_BACK_FACE),
+    ("FAIL_LOW_CONFIDENCE", FAIL_LOW_CONFIDENCE),
+    ("FAIL_HIT_REFLECTIVE", FAIL_HIT_REFLECTIVE),
+    ("FAIL_FORCED", FAIL_FORCED),
+    ("SOURCE_NONE", SOURCE_NONE),
+    ("SOURCE_SSR", SOURCE_SSR),
+    ("SOURCE_RT", SOURCE_RT),
+    ("COMPOSE_PLAIN", COMPOSE_PLAIN),
+    ("COMPOSE_REFLECT", COMPOSE_REFLECT),
+    ("COMPOSE_PROVENANCE", COMPOSE_PROVENANCE),
 ];

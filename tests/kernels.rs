@@ -53,8 +53,28 @@ fn compose_matches_cpu_reference() {
     // Poison the output so that unwritten texels cannot pass.
     let poison = vec![0x5au8; (extent.width * extent.height * 4) as usize];
     pass.ldr.write(&poison, vk::ImageLayout::GENERAL).unwrap();
+    // Reflection inputs are bound but unused in the plain mode tested here.
+    let normal = Image::new(
+        &ctx,
+        "test.normal",
+        extent,
+        vk::Format::R16G16B16A16_SFLOAT,
+        vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+    )
+    .unwrap();
+    normal
+        .write(
+            &vec![0u8; (extent.width * extent.height * 8) as usize],
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        )
+        .unwrap();
+    let inputs = speculum::passes::compose::ComposeInputs {
+        hdr: &hdr,
+        reflection: &hdr,
+        normal: &normal,
+    };
     ctx.one_shot(|cmd| {
-        pass.record(cmd, &hdr, exposure);
+        pass.record(cmd, &inputs, exposure, speculum::shader_defines::COMPOSE_PLAIN);
     })
     .unwrap();
     let gpu = pass.ldr.read(vk::ImageLayout::GENERAL).unwrap();

@@ -69,6 +69,8 @@ fn frame_uniforms_layout_matches_glsl() {
         view_proj,
         inv_view_proj,
         light_view_proj,
+        view,
+        proj,
         camera_pos,
         light_dir,
         light_color,
@@ -95,7 +97,7 @@ fn frame_uniforms_layout_matches_glsl() {
 #[test]
 fn compose_push_layout_matches_glsl() {
     let r = reflected("compose.comp", shaders::COMPOSE_COMP);
-    check(&r, "ComposePush", rust_layout!(ComposePush { size, exposure, _pad0 }));
+    check(&r, "ComposePush", rust_layout!(ComposePush { size, exposure, mode }));
 }
 
 /// The reflection itself: a layout mismatch is detected (the check can fail).

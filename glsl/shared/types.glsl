@@ -20,6 +20,8 @@ struct Material {
     mat4 view_proj;                                                                   \
     mat4 inv_view_proj;                                                               \
     mat4 light_view_proj;                                                             \
+    mat4 view;                                                                        \
+    mat4 proj;                                                                        \
     vec4 camera_pos;                                                                  \
     vec4 light_dir;                                                                   \
     vec4 light_color;                                                                 \

@@ -3,7 +3,7 @@
 
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{Context, Image, Pipeline, Resource};
+use crate::vk::{Context, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -18,12 +18,23 @@ pub const FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 pub struct ComposePush {
     pub size: [u32; 2],
     pub exposure: f32,
-    pub _pad0: f32,
+    /// `COMPOSE_PLAIN`, `COMPOSE_REFLECT` or `COMPOSE_PROVENANCE`.
+    pub mode: u32,
+}
+
+/// The reflection and the surface data compose weighs it with.
+pub struct ComposeInputs<'a> {
+    pub hdr: &'a Image,
+    /// Merged reflection (rgb, a: source); read unless the mode is `COMPOSE_PLAIN`.
+    pub reflection: &'a Image,
+    /// G-buffer normal + reflectivity.
+    pub normal: &'a Image,
 }
 
 pub struct ComposePass {
     ctx: Arc<Context>,
     pipeline: Pipeline,
+    sampler: Sampler,
     /// The tonemapped frame; `GENERAL` between frames.
     pub ldr: Image,
 }
@@ -49,6 +60,7 @@ impl ComposePass {
         Ok(Self {
             ctx: ctx.clone(),
             pipeline,
+            sampler: Sampler::nearest_clamp(ctx, "compose.sampler")?,
             ldr: ldr_image(ctx, extent)?,
         })
     }
@@ -58,17 +70,23 @@ impl ComposePass {
         Ok(())
     }
 
-    /// Records the tonemap. `hdr` and `ldr` must be in `GENERAL` and of equal size.
-    pub fn record(&self, cmd: vk::CommandBuffer, hdr: &Image, exposure: f32) {
+    /// Records the tonemap. `hdr`, `reflection` and `ldr` in `GENERAL`, `normal` in
+    /// `SHADER_READ_ONLY_OPTIMAL`, all of the render size.
+    pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ComposeInputs<'_>, exposure: f32, mode: u32) {
         let e = self.ldr.extent;
         let push = ComposePush {
             size: [e.width, e.height],
             exposure,
-            _pad0: 0.0,
+            mode,
         };
         self.pipeline.bind(
             cmd,
-            &[Resource::StorageImage(hdr), Resource::StorageImage(&self.ldr)],
+            &[
+                Resource::StorageImage(inputs.hdr),
+                Resource::StorageImage(&self.ldr),
+                Resource::StorageImage(inputs.reflection),
+                Resource::Sampled(inputs.normal, &self.sampler),
+            ],
             bytemuck::bytes_of(&push),
         );
         self.pipeline.dispatch_covering(cmd, [e.width, e.height, 1]);

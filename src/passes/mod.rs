@@ -6,9 +6,12 @@ pub mod compose;
 pub mod gbuffer;
 pub mod lbvh;
 pub mod light_direct;
+pub mod reflect_merge;
+pub mod rt_reflect;
 pub mod rt_trace;
 pub mod shadow_map;
 pub mod ssr_compact;
+pub mod ssr_trace;
 
 use ash::vk;
 

@@ -23,13 +23,13 @@ pub fn room() -> Result<Scene> {
     let mut b = SceneBuilder::new("room");
     let floor = b.material(Material::new("mirror floor", [0.32, 0.32, 0.36], 0.04, 0.7));
     let back = b.material(Material::new("glossy back wall", [0.78, 0.72, 0.62], 0.25, 0.35));
-    let red = b.material(Material::new("red wall", [0.72, 0.14, 0.12], 0.8, 0.05));
-    let green = b.material(Material::new("green wall", [0.14, 0.58, 0.2], 0.8, 0.05));
+    let red = b.material(Material::new("red wall", [0.72, 0.14, 0.12], 0.8, 0.0));
+    let green = b.material(Material::new("green wall", [0.14, 0.58, 0.2], 0.8, 0.0));
     let chrome = b.material(Material::new("chrome", [0.9, 0.9, 0.92], 0.02, 0.9));
     let blue = b.material(Material::new("blue plastic", [0.08, 0.22, 0.8], 0.3, 0.2));
     let gold = b.material(Material::new("gold", [0.95, 0.66, 0.2], 0.1, 0.6));
-    let orange = b.material(Material::new("orange box", [0.95, 0.42, 0.08], 0.6, 0.1));
-    let purple = b.material(Material::new("purple box", [0.5, 0.16, 0.7], 0.5, 0.1));
+    let orange = b.material(Material::new("orange box", [0.95, 0.42, 0.08], 0.6, 0.0));
+    let purple = b.material(Material::new("purple box", [0.5, 0.16, 0.7], 0.5, 0.0));
 
     let (half, height) = (5.0f32, 4.0f32);
     b.mesh(TriMesh::quad(2.0 * half, 2.0 * half), Mat4::IDENTITY, floor);

@@ -1,0 +1,83 @@
+#version 460
+// rt.trace (reflections): one invocation per pixel of the compacted list (indirect
+// dispatch). The reflected ray starts at the G-buffer position, walks the static and
+// dynamic BVHs, and the hit is shaded with the sun (shadow map lookup, or a shadow ray
+// when asked) and the sky ambient; while the hit is reflective the path continues,
+// up to max_bounces rays. A miss returns the sky.
+//
+// Self-intersection: each origin is pushed off its surface along the normal by a
+// distance that grows with its distance from the camera (depth-buffer and float
+// error both grow with it), and the hit must be beyond tmin.
+#include "shading.glsl"
+#define TRAVERSE_BINDING 8
+#include "traverse.glsl"
+
+layout(local_size_x = LBVH_WG) in;
+
+layout(binding = 1) uniform sampler2D gb_depth;
+layout(binding = 2) uniform sampler2D gb_normal;
+layout(binding = 3, std430) readonly buffer Materials { Material materials[]; };
+layout(binding = 4) uniform sampler2D shadow_map;
+layout(binding = 5, std430) readonly buffer Pixels { uint pixels[]; };
+layout(binding = 6, std430) readonly buffer Indirect { uvec4 indirect; }; // w: count
+layout(binding = 7, rgba32f) uniform writeonly image2D rt_out;
+
+layout(push_constant) uniform Push {
+    uint max_bounces;  // rays per path (1: a single reflection)
+    uint static_tris;
+    uint dynamic_tris;
+    uint shadow_rays;  // 1: shadow rays through the BVHs instead of the shadow map
+} pc;
+
+float offset_scale(vec3 pos) {
+    return 2e-4 * max(1.0, length(pos - frame.camera_pos.xyz));
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= indirect.w) {
+        return;
+    }
+    uint packed = pixels[i];
+    ivec2 p = ivec2(packed & 0xffffu, packed >> 16);
+    float depth = texelFetch(gb_depth, p, 0).r;
+    vec3 pos = world_from_depth(p, depth);
+    vec3 n = normalize(texelFetch(gb_normal, p, 0).xyz);
+    vec3 dir = reflect(normalize(pos - frame.camera_pos.xyz), n);
+    vec3 origin = pos + n * offset_scale(pos);
+
+    vec3 radiance = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    for (uint bounce = 0u; bounce < pc.max_bounces; ++bounce) {
+        Hit h = trace_ray(origin, dir, 0.0, 3.0e38, pc.static_tris, pc.dynamic_tris, false);
+        if (h.prim == BVH_INVALID) {
+            radiance += throughput * sky_radiance(dir);
+            break;
+        }
+        Vertex a = hit_vertex(h.prim, 0u);
+        Vertex b = hit_vertex(h.prim, 1u);
+        Vertex c = hit_vertex(h.prim, 2u);
+        Material m = materials[a.material];
+        vec3 hn = normalize((1.0 - h.u - h.v) * a.normal + h.u * b.normal + h.v * c.normal);
+        if (dot(hn, dir) > 0.0) {
+            hn = -hn; // double-sided: face the incoming ray
+        }
+        vec3 hp = origin + dir * h.t;
+        float vis;
+        if (pc.shadow_rays != 0u) {
+            vec3 so = hp + hn * offset_scale(hp);
+            Hit sh = trace_ray(so, frame.light_dir.xyz, 0.0, 3.0e38, pc.static_tris, pc.dynamic_tris, true);
+            vis = sh.prim == BVH_INVALID ? 1.0 : 0.0;
+        } else {
+            vis = shadow_visibility(shadow_map, hp);
+        }
+        radiance += throughput * shade_direct(m.albedo, m.roughness, m.reflectivity, hn, -dir, vis);
+        if (m.reflectivity <= 0.0) {
+            break;
+        }
+        throughput *= m.reflectivity;
+        dir = reflect(dir, hn);
+        origin = hp + hn * offset_scale(hp);
+    }
+    imageStore(rt_out, p, vec4(radiance, 1.0));
+}

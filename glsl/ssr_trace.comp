@@ -25,6 +25,7 @@ layout(push_constant) uniform Push {
     float min_confidence; // below: the pixel fails
     float reflective_min; // reflectivity above which a pixel reflects
     uint force_fail;      // 1: SSR off, every reflective pixel fails (rt mode)
+    float recursion_min;  // hits on surfaces more reflective than this fail
 } pc;
 
 // View-space z (negative in front of the camera) of G-buffer depth d.
@@ -138,7 +139,7 @@ void main() {
         vec3 world_dir = normalize((inverse(frame.view) * vec4(vdir, 0.0)).xyz);
         if (dot(hit_n, world_dir) > 0.0) {
             fail = FAIL_BACK_FACE;
-        } else if (texelFetch(gb_normal, hit_pixel, 0).w > pc.reflective_min) {
+        } else if (texelFetch(gb_normal, hit_pixel, 0).w > pc.recursion_min) {
             fail = FAIL_HIT_REFLECTIVE;
         } else {
             vec2 hp = vec2(hit_pixel) + 0.5;

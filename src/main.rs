@@ -93,6 +93,10 @@ struct RenderArgs {
     /// Frames to measure (after the warm-up frames, which are not counted).
     #[arg(long, default_value_t = 10)]
     frames: u32,
+    /// Also render the same frame in `rt` mode (the reference) and report SSIM and RMSE
+    /// against it; the reference image is written next to --out as *_rt.png.
+    #[arg(long)]
+    reference: bool,
     /// Uncounted warm-up frames (pipeline JIT, caches).
     #[arg(long, default_value_t = 2)]
     warmup: u32,
@@ -149,8 +153,23 @@ fn render(args: RenderArgs) -> Result<()> {
         validation,
         device: args.device.clone(),
     })?;
-    let rendered = headless::render(&ctx, &scene, &settings, args.warmup, args.frames)?;
+    let plan = headless::FramePlan {
+        warmup: args.warmup,
+        frames: args.frames,
+        reference: args.reference,
+    };
+    let rendered = headless::render(&ctx, &scene, &settings, plan)?;
     headless::save_png(&args.out, &rendered.rgba, settings.width, settings.height)?;
+    if let Some(reference) = &rendered.reference_rgba {
+        let stem = args
+            .out
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "frame".into());
+        let path = args.out.with_file_name(format!("{stem}_rt.png"));
+        headless::save_png(&path, reference, settings.width, settings.height)?;
+        println!("wrote {}", path.display());
+    }
 
     let r = &rendered.report;
     println!(
@@ -161,6 +180,18 @@ fn render(args: RenderArgs) -> Result<()> {
         println!("  {name:<14} {ms:8.3} ms");
     }
     println!("  {:<14} {:8.3} ms", "frame", r.frame_ms);
+    println!(
+        "  reflective pixels {}, ray traced {} ({:.1}%)",
+        r.reflective_pixels,
+        r.failed_pixels,
+        100.0 * r.rt_pixel_fraction
+    );
+    if let (Some(ssim), Some(rmse)) = (r.ssim, r.rmse) {
+        println!(
+            "  vs rt reference: SSIM {ssim:.4}, RMSE {rmse:.4}; reference frame {:.3} ms",
+            r.reference_frame_ms.unwrap_or(f64::NAN)
+        );
+    }
     if let Some(n) = r.validation_messages {
         println!("  validation messages: {n}");
     }

@@ -24,6 +24,28 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use std::sync::Arc;
 
+/// Pixel counts of a frame's reflections.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ReflectionStats {
+    /// Pixels whose surface reflects (reflectivity above `reflective_min`).
+    pub reflective_pixels: u64,
+    /// Reflective pixels SSR failed on (ray traced in hybrid; all of them in rt).
+    pub failed_pixels: u64,
+    /// Failed pixels by reason (a pixel may have one reason).
+    pub fail_reasons: std::collections::BTreeMap<&'static str, u64>,
+}
+
+/// Names of the fail-mask reason bits, for reports.
+pub const FAIL_REASONS: [(u32, &str); 7] = [
+    (crate::shader_defines::FAIL_LEFT_SCREEN, "left_screen"),
+    (crate::shader_defines::FAIL_BEHIND, "behind_geometry"),
+    (crate::shader_defines::FAIL_OUT_OF_STEPS, "out_of_steps"),
+    (crate::shader_defines::FAIL_BACK_FACE, "back_face"),
+    (crate::shader_defines::FAIL_LOW_CONFIDENCE, "low_confidence"),
+    (crate::shader_defines::FAIL_HIT_REFLECTIVE, "hit_reflective"),
+    (crate::shader_defines::FAIL_FORCED, "forced"),
+];
+
 /// Timer scope of the whole frame.
 pub const FRAME: &str = "frame";
 /// Timer scope of the per-frame uniform upload.
@@ -393,6 +415,7 @@ impl Renderer {
                 min_confidence: st.ssr_min_confidence,
                 reflective_min: st.reflective_min,
                 force_fail: (mode == Mode::Rt) as u32,
+                recursion_min: st.ssr_recursion_min.max(st.reflective_min),
             };
             self.ssr
                 .record(cmd, &self.frame_ubo, &self.gbuffer.targets, &self.light.lit, &params);
@@ -484,6 +507,46 @@ impl Renderer {
         timer.end(cmd, compose::NAME);
 
         timer.end(cmd, FRAME);
+    }
+
+    /// Switches the reflection mode for the next frames (for reference renders).
+    pub fn set_mode(&mut self, mode: Mode) {
+        self.settings.mode = mode;
+    }
+
+    /// Reflective pixels and failed (ray-traced) pixels of the last frame, counted from
+    /// the G-buffer and the fail mask (a readback: for stats and tests).
+    pub fn reflection_stats(&self) -> Result<ReflectionStats> {
+        let normal = crate::cpu_ref::rgba16f_to_f32(&self.read_target(&self.gbuffer.targets.normal)?);
+        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.targets.material)?);
+        let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ssr.out.mask.read(vk::ImageLayout::GENERAL)?);
+        let min = self.settings.reflective_min;
+        let reflective: Vec<bool> = normal
+            .iter()
+            .zip(&material)
+            .map(|(n, &m)| m != crate::shader_defines::MATERIAL_NONE && n[3] > min)
+            .collect();
+        let reflective_pixels = reflective.iter().filter(|r| **r).count() as u64;
+        let failed_pixels = if self.settings.mode == Mode::Raster {
+            0
+        } else {
+            mask.iter().zip(&reflective).filter(|(m, r)| **m != 0 && **r).count() as u64
+        };
+        let mut fail_reasons = std::collections::BTreeMap::new();
+        if self.settings.mode != Mode::Raster {
+            for (&m, _) in mask.iter().zip(&reflective).filter(|(m, r)| **m != 0 && **r) {
+                for (bit, name) in FAIL_REASONS {
+                    if m & bit != 0 {
+                        *fail_reasons.entry(name).or_insert(0) += 1;
+                    }
+                }
+            }
+        }
+        Ok(ReflectionStats {
+            reflective_pixels,
+            failed_pixels,
+            fail_reasons,
+        })
     }
 
     /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).

@@ -97,6 +97,11 @@ pub struct Settings {
     /// SSR hits below this confidence fail (go to the ray tracer): higher is cleaner
     /// and slower.
     pub ssr_min_confidence: f32,
+    /// SSR hits on surfaces more reflective than this fail and go to the ray tracer
+    /// (the screen holds no reflection of a reflection). Hits on weaker reflectors are
+    /// kept without their own reflection: a lower value is closer to the reference,
+    /// a higher one ray traces fewer pixels.
+    pub ssr_recursion_min: f32,
     /// Seam blur radius in pixels (0: off): smoother SSR/RT transitions vs detail.
     pub blur_radius: u32,
     /// Half-width in pixels of the band around SSR/RT seams that the blur touches.
@@ -120,12 +125,13 @@ impl Default for Settings {
             mode: Mode::Hybrid,
             reflective_min: 0.02,
             max_bounces: 3,
-            ssr_max_steps: 160,
-            ssr_stride: 1.0,
+            ssr_max_steps: 128,
+            ssr_stride: 4.0,
             ssr_thickness: 0.25,
             ssr_max_distance: 40.0,
             ssr_edge_fade: 0.05,
             ssr_min_confidence: 0.3,
+            ssr_recursion_min: 0.2,
             blur_radius: 3,
             blur_band: 3,
             shadow_rays: false,
@@ -186,6 +192,7 @@ impl Settings {
             ("ssr_max_distance", self.ssr_max_distance),
             ("ssr_edge_fade", self.ssr_edge_fade),
             ("ssr_min_confidence", self.ssr_min_confidence),
+            ("ssr_recursion_min", self.ssr_recursion_min),
             ("shadow_bias", self.shadow_bias),
             ("shadow_slope_bias", self.shadow_slope_bias),
             ("exposure", self.exposure),

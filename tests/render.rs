@@ -101,7 +101,12 @@ fn room_matches_golden_image() {
         height: 108,
         ..Default::default()
     };
-    let out = headless::render(&ctx, &scene, &settings, 0, 1).unwrap();
+    let plan = headless::FramePlan {
+        warmup: 0,
+        frames: 1,
+        reference: false,
+    };
+    let out = headless::render(&ctx, &scene, &settings, plan).unwrap();
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(GOLDEN);
     if std::env::var("SPECULUM_BLESS").is_ok_and(|v| v == "1") {
         headless::save_png(&path, &out.rgba, settings.width, settings.height).unwrap();

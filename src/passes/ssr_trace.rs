@@ -26,6 +26,8 @@ pub struct SsrParams {
     pub reflective_min: f32,
     /// 1: SSR off, every reflective pixel fails (`rt` mode).
     pub force_fail: u32,
+    /// Hits on surfaces more reflective than this fail (need the ray tracer's bounce).
+    pub recursion_min: f32,
 }
 
 pub struct SsrOutputs {

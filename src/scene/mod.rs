@@ -243,7 +243,7 @@ mod tests {
         let room = procedural::room().unwrap();
         assert!(room.triangle_count() > 1000);
         let (lo, hi) = room.bounds();
-        assert!(lo.y >= -1e-4 && hi.y <= 4.0 + 1e-4, "{lo} {hi}");
+        assert!(lo.y >= -1e-4 && hi.y <= 6.0 + 1e-4, "{lo} {hi}");
     }
 
     #[test]

@@ -111,8 +111,9 @@ void main() {
             ray_z_min = ray_z_max;
             ray_z_max = t;
         }
-        if (texelFetch(gb_material, ip, 0).r != MATERIAL_NONE) {
-            float scene_z_max = view_z(texelFetch(gb_depth, ip, 0).r);
+        float scene_depth = texelFetch(gb_depth, ip, 0).r;
+        if (scene_depth < 1.0) { // depth 1 is the cleared value: sky, nothing to hit
+            float scene_z_max = view_z(scene_depth);
             float scene_z_min = scene_z_max - pc.thickness;
             if (ray_z_max >= scene_z_min && ray_z_min <= scene_z_max) {
                 hit = true;

@@ -66,17 +66,11 @@ impl RtReflectPass {
     /// Records the indirect dispatch. `color` in `GENERAL`; the list and its arguments
     /// visible to compute reads and indirect dispatch.
     pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ReflectInputs<'_>, max_bounces: u32, shadow_rays: bool) {
-        let any = inputs
-            .scene
-            .static_bvh
-            .or(inputs.scene.dynamic_bvh)
-            .expect("reflections need a BVH");
-        let st = inputs.scene.static_bvh.unwrap_or(any);
-        let dy = inputs.scene.dynamic_bvh.unwrap_or(any);
+        let ([sn, sv, si, dn, dv, di], static_tris, dynamic_tris) = inputs.scene.bindings();
         let push = ReflectPush {
             max_bounces,
-            static_tris: inputs.scene.static_bvh.map_or(0, |b| b.geometry.tri_count),
-            dynamic_tris: inputs.scene.dynamic_bvh.map_or(0, |b| b.geometry.tri_count),
+            static_tris,
+            dynamic_tris,
             shadow_rays: shadow_rays as u32,
         };
         let s = &self.sampler;
@@ -91,12 +85,12 @@ impl RtReflectPass {
                 Resource::Buffer(&inputs.list.pixels),
                 Resource::Buffer(&inputs.list.indirect),
                 Resource::StorageImage(&self.color),
-                Resource::Buffer(&st.bvh.nodes),
-                Resource::Buffer(st.geometry.vertices),
-                Resource::Buffer(st.geometry.indices),
-                Resource::Buffer(&dy.bvh.nodes),
-                Resource::Buffer(dy.geometry.vertices),
-                Resource::Buffer(dy.geometry.indices),
+                sn,
+                sv,
+                si,
+                dn,
+                dv,
+                di,
             ],
             bytemuck::bytes_of(&push),
         );

@@ -38,6 +38,27 @@ pub struct TraceScene<'a> {
     pub dynamic_bvh: Option<Traceable<'a>>,
 }
 
+impl<'a> TraceScene<'a> {
+    /// The six traversal bindings of `glsl/shared/traverse.glsl` (static nodes,
+    /// vertices, indices, then dynamic) and the two triangle counts. A missing BVH is
+    /// bound to the other's buffers with a triangle count of 0.
+    pub fn bindings(&self) -> ([Resource<'a>; 6], u32, u32) {
+        let any = self.static_bvh.or(self.dynamic_bvh).expect("tracing needs a BVH");
+        let s = self.static_bvh.unwrap_or(any);
+        let d = self.dynamic_bvh.unwrap_or(any);
+        let resources = [
+            Resource::Buffer(&s.bvh.nodes),
+            Resource::Buffer(s.geometry.vertices),
+            Resource::Buffer(s.geometry.indices),
+            Resource::Buffer(&d.bvh.nodes),
+            Resource::Buffer(d.geometry.vertices),
+            Resource::Buffer(d.geometry.indices),
+        ];
+        let count = |b: Option<Traceable<'_>>| b.map_or(0, |b| b.geometry.tri_count);
+        (resources, count(self.static_bvh), count(self.dynamic_bvh))
+    }
+}
+
 /// Rays on the GPU and where their hits go.
 #[derive(Clone, Copy)]
 pub struct RayBatch<'a> {
@@ -65,14 +86,11 @@ impl TracePass {
     /// Records the traversal of a batch of rays. At least one BVH must be given; rays,
     /// nodes and geometry must be visible to compute reads.
     pub fn record(&self, cmd: vk::CommandBuffer, batch: RayBatch<'_>, scene: TraceScene<'_>) {
-        let any = scene.static_bvh.or(scene.dynamic_bvh).expect("rt.trace needs a BVH");
-        // A missing BVH is bound to the other's buffers with a triangle count of 0.
-        let s = scene.static_bvh.unwrap_or(any);
-        let dy = scene.dynamic_bvh.unwrap_or(any);
+        let ([sn, sv, si, dn, dv, di], static_tris, dynamic_tris) = scene.bindings();
         let push = TracePush {
             ray_count: batch.count,
-            static_tris: scene.static_bvh.map_or(0, |b| b.geometry.tri_count),
-            dynamic_tris: scene.dynamic_bvh.map_or(0, |b| b.geometry.tri_count),
+            static_tris,
+            dynamic_tris,
             any_hit: batch.any_hit as u32,
         };
         self.pipeline.bind(
@@ -80,12 +98,12 @@ impl TracePass {
             &[
                 Resource::Buffer(batch.rays),
                 Resource::Buffer(batch.hits),
-                Resource::Buffer(&s.bvh.nodes),
-                Resource::Buffer(s.geometry.vertices),
-                Resource::Buffer(s.geometry.indices),
-                Resource::Buffer(&dy.bvh.nodes),
-                Resource::Buffer(dy.geometry.vertices),
-                Resource::Buffer(dy.geometry.indices),
+                sn,
+                sv,
+                si,
+                dn,
+                dv,
+                di,
             ],
             bytemuck::bytes_of(&push),
         );

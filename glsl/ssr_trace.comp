@@ -128,6 +128,31 @@ void main() {
         q.z += dq.z;
         k += dk;
     }
+    // With strides of several pixels the hit is somewhere in the last step: binary
+    // search it (McGuire & Mara, section 3) for the first sample at or behind the
+    // surface. Everything interpolates linearly in screen space, so midpoints do too.
+    if (hit && pc.stride > 1.0) {
+        vec2 a_p = pp - dp, b_p = pp;
+        float a_qz = q.z - dq.z, b_qz = q.z;
+        float a_k = k - dk, b_k = k;
+        for (int r = 0; r < SSR_REFINE_STEPS; ++r) {
+            vec2 m_p = 0.5 * (a_p + b_p);
+            float m_qz = 0.5 * (a_qz + b_qz);
+            float m_k = 0.5 * (a_k + b_k);
+            ivec2 m_ip = clamp(ivec2(floor(permute ? m_p.yx : m_p)), ivec2(0), res - 1);
+            float d = texelFetch(gb_depth, m_ip, 0).r;
+            if (d < 1.0 && m_qz / m_k <= view_z(d)) {
+                b_p = m_p;
+                b_qz = m_qz;
+                b_k = m_k;
+            } else {
+                a_p = m_p;
+                a_qz = m_qz;
+                a_k = m_k;
+            }
+        }
+        hit_pixel = clamp(ivec2(floor(permute ? b_p.yx : b_p)), ivec2(0), res - 1);
+    }
 
     uint fail = 0u;
     float confidence = 0.0;

@@ -84,7 +84,8 @@ pub struct Settings {
     /// SSR step budget per ray: more finds farther hits, at up to that many depth reads.
     pub ssr_max_steps: u32,
     /// SSR step length in pixels: longer reaches farther for the same budget but can
-    /// step over thin objects.
+    /// step over objects thinner than a step (a hit is refined to the pixel by binary
+    /// search inside its step).
     pub ssr_stride: f32,
     /// Depth (view-space units) a surface is assumed to have: thicker finds hits behind
     /// thin silhouettes but makes false hits behind objects.
@@ -125,8 +126,8 @@ impl Default for Settings {
             mode: Mode::Hybrid,
             reflective_min: 0.02,
             max_bounces: 3,
-            ssr_max_steps: 128,
-            ssr_stride: 4.0,
+            ssr_max_steps: 64,
+            ssr_stride: 8.0,
             ssr_thickness: 0.25,
             ssr_max_distance: 40.0,
             ssr_edge_fade: 0.05,

@@ -44,6 +44,10 @@ pub const BVH_INVALID: u32 = 0xffff_ffff;
 /// 30 + log2(N) levels deep (equal keys split by index); 64 covers 2^34 triangles.
 pub const TRACE_STACK: u32 = 64;
 
+/// Binary-search steps that refine an SSR hit inside its last stride: log2 of the
+/// largest stride worth refining to one pixel (16 px).
+pub const SSR_REFINE_STEPS: u32 = 4;
+
 /// Fail-mask reason bits written by `ssr.trace` (any nonzero value sends the pixel to
 /// the ray tracer): the march left the screen or crossed the near plane,
 pub const FAIL_LEFT_SCREEN: u32 = 1;
@@ -85,6 +89,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BVH_LEAF_BIT", BVH_LEAF_BIT),
     ("BVH_INVALID", BVH_INVALID),
     ("TRACE_STACK", TRACE_STACK),
+    ("SSR_REFINE_STEPS", SSR_REFINE_STEPS),
     ("FAIL_LEFT_SCREEN", FAIL_LEFT_SCREEN),
     ("FAIL_BEHIND", FAIL_BEHIND),
     ("FAIL_OUT_OF_STEPS", FAIL_OUT_OF_STEPS),

@@ -352,7 +352,7 @@ impl Renderer {
         timer.end(cmd, gbuffer::NAME);
 
         timer.begin(cmd, light_direct::NAME);
-        // WAR: the previous frame's compose reads of `lit` finish before it is overwritten.
+        // WAR: the previous frame's ssr.trace and compose reads of `lit` finish before it is overwritten.
         let lit_in = barrier::image(
             self.light.lit.raw,
             color,
@@ -364,7 +364,7 @@ impl Renderer {
         barrier::record(d, cmd, &[], &[lit_in]);
         self.light
             .record(cmd, &self.frame_ubo, &self.gbuffer.targets, &self.shadow.map);
-        // RAW: compose reads the lit colour written above.
+        // RAW: ssr.trace and compose read the lit colour written above.
         let lit_out = barrier::image(
             self.light.lit.raw,
             color,

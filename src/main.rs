@@ -41,6 +41,28 @@ enum Command {
 enum BenchCommand {
     /// LBVH build (per stage), refit, SAH quality and traversal throughput.
     Lbvh(BenchLbvhArgs),
+    /// Time of ssr.trace, ssr.compact and rt.trace as the ray-traced share varies.
+    Reflect(BenchReflectArgs),
+}
+
+#[derive(Args)]
+struct BenchReflectArgs {
+    /// Built-in scene name or .obj path.
+    #[arg(long, default_value = "room")]
+    scene: String,
+    #[arg(long, default_value_t = Settings::default().width)]
+    width: u32,
+    #[arg(long, default_value_t = Settings::default().height)]
+    height: u32,
+    /// Measured frames per point (after one warm-up frame).
+    #[arg(long, default_value_t = 3)]
+    frames: u32,
+    /// Write the report as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Device by index or name substring (see `speculum devices`).
+    #[arg(long)]
+    device: Option<String>,
 }
 
 #[derive(Args)]
@@ -321,6 +343,53 @@ fn compare(a: &std::path::Path, b: &std::path::Path, json: bool) -> Result<()> {
     Ok(())
 }
 
+fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
+    let settings = Settings {
+        width: args.width,
+        height: args.height,
+        ..Settings::default()
+    };
+    settings.validate()?;
+    let scene = speculum::scene::load(&args.scene)?;
+    let ctx = Context::new(&ContextDesc {
+        validation: validation_from_env(),
+        device: args.device.clone(),
+    })?;
+    let plan = headless::FramePlan {
+        warmup: 1,
+        frames: args.frames.max(1),
+        reference: false,
+    };
+    let r = speculum::bench::reflect::run(&ctx, &scene, &settings, plan)?;
+    println!(
+        "{} on {}: {}x{}, {} reflective pixels; rt mode frame {:.1} ms",
+        r.scene, r.device, r.resolution[0], r.resolution[1], r.reflective_pixels, r.rt_frame_ms
+    );
+    println!("  min conf   traced   ssr.trace  ssr.compact   rt.trace   reflect.merge   frame (ms)");
+    for p in &r.points {
+        let ms = |k: &str| p.passes_ms.get(k).copied().unwrap_or(f64::NAN);
+        println!(
+            "  {:8.2} {:7.1}%  {:10.1} {:12.1} {:10.1} {:15.1} {:8.1}",
+            p.ssr_min_confidence,
+            100.0 * p.rt_pixel_fraction,
+            ms("ssr.trace"),
+            ms("ssr.compact"),
+            ms("rt.trace"),
+            ms("reflect.merge"),
+            p.frame_ms
+        );
+    }
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&r)? + "\n")
+            .with_context(|| format!("cannot write '{}'", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    if !r.valid {
+        anyhow::bail!("a benchmark check failed (see the report)");
+    }
+    Ok(())
+}
+
 fn devices() -> Result<()> {
     let list = list_devices()?;
     if list.is_empty() {
@@ -351,6 +420,7 @@ fn main() {
         Some(Command::Devices) => devices(),
         Some(Command::Compare { a, b, json }) => compare(&a, &b, json),
         Some(Command::Bench(BenchCommand::Lbvh(args))) => bench_lbvh(args),
+        Some(Command::Bench(BenchCommand::Reflect(args))) => bench_reflect(args),
     };
     if let Err(e) = result {
         // One line: the chain of causes, outermost first.

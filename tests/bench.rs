@@ -36,3 +36,30 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
     assert!(c.coherent.mrays_per_s > 0.0 && c.refit_ms > 0.0);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The reflection split benchmark's sweep is consistent: same reflective pixels at
+/// every point, a failed share that only grows, everything ray traced at the end.
+#[test]
+fn reflection_split_benchmark_is_valid() {
+    let ctx = common::context();
+    let scene = speculum::scene::procedural::room().unwrap();
+    let settings = speculum::Settings {
+        width: 160,
+        height: 90,
+        ..Default::default()
+    };
+    let plan = speculum::headless::FramePlan {
+        warmup: 0,
+        frames: 1,
+        reference: false,
+    };
+    let r = speculum::bench::reflect::run(&ctx, &scene, &settings, plan).unwrap();
+    assert!(r.valid, "{r:?}");
+    assert_eq!(r.points.len(), speculum::bench::reflect::THRESHOLDS.len());
+    assert!(r.points[0].rt_pixel_fraction < 0.9 && r.points.last().unwrap().rt_pixel_fraction == 1.0);
+    assert!(r
+        .points
+        .iter()
+        .all(|p| p.passes_ms.contains_key("rt.trace") && p.passes_ms.contains_key("ssr.trace")));
+    common::assert_no_validation_messages(&ctx);
+}

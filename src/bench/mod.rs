@@ -2,3 +2,4 @@
 //! JSON says whether all checks passed.
 
 pub mod lbvh;
+pub mod reflect;

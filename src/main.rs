@@ -60,9 +60,8 @@ struct BenchReflectArgs {
     /// Write the report as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Device by index or name substring (see `speculum devices`).
-    #[arg(long)]
-    device: Option<String>,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args)]
@@ -89,12 +88,8 @@ struct BenchLbvhArgs {
     /// Write the report as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Device by index or name substring (see `speculum devices`).
-    #[arg(long)]
-    device: Option<String>,
-    /// Enable Vulkan validation + synchronization validation.
-    #[arg(long)]
-    validation: bool,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args, Clone)]
@@ -131,12 +126,8 @@ struct RenderArgs {
     /// Settings file (JSON) with any fields of the settings struct; flags override it.
     #[arg(long)]
     settings: Option<PathBuf>,
-    /// Device by index or name substring (see `speculum devices`).
-    #[arg(long)]
-    device: Option<String>,
-    /// Enable Vulkan validation + synchronization validation (also SPECULUM_VALIDATION=1).
-    #[arg(long)]
-    validation: bool,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 impl Default for RenderArgs {
@@ -147,6 +138,35 @@ impl Default for RenderArgs {
             _ => unreachable!("`render` parses to Render"),
         }
     }
+}
+
+/// Device choice and validation, shared by every command that uses the GPU.
+#[derive(Args, Clone)]
+struct GpuArgs {
+    /// Device by index or name substring (see `speculum devices`).
+    #[arg(long)]
+    device: Option<String>,
+    /// Enable Vulkan validation + synchronization validation (also SPECULUM_VALIDATION=1).
+    #[arg(long)]
+    validation: bool,
+}
+
+impl GpuArgs {
+    fn context(&self) -> Result<std::sync::Arc<Context>> {
+        let validation = self.validation || validation_from_env();
+        Ok(Context::new(&ContextDesc {
+            validation,
+            device: self.device.clone(),
+        })?)
+    }
+}
+
+/// Fails when validation reported anything (0 when validation is off).
+fn check_validation(ctx: &Context) -> Result<()> {
+    if ctx.validation_messages() > 0 {
+        anyhow::bail!("{} validation message(s) reported", ctx.validation_messages());
+    }
+    Ok(())
 }
 
 fn validation_from_env() -> bool {
@@ -170,11 +190,7 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     settings.validate()?;
     let scene = speculum::scene::load(&args.scene)?;
-    let validation = args.validation || validation_from_env();
-    let ctx = Context::new(&ContextDesc {
-        validation,
-        device: args.device.clone(),
-    })?;
+    let ctx = args.gpu.context()?;
     let plan = headless::FramePlan {
         warmup: args.warmup,
         frames: args.frames,
@@ -223,9 +239,7 @@ fn render(args: RenderArgs) -> Result<()> {
         std::fs::write(path, json + "\n").with_context(|| format!("cannot write '{}'", path.display()))?;
         println!("wrote {}", path.display());
     }
-    if r.validation_messages.is_some_and(|n| n > 0) {
-        anyhow::bail!("{} validation message(s) reported", r.validation_messages.unwrap_or(0));
-    }
+    check_validation(&ctx)?;
     Ok(())
 }
 
@@ -265,11 +279,7 @@ fn bench_lbvh(args: BenchLbvhArgs) -> Result<()> {
         let scene = speculum::scene::load(name)?;
         inputs.push((scene.name.clone(), scene.vertices, scene.indices));
     }
-    let validation = args.validation || validation_from_env();
-    let ctx = Context::new(&ContextDesc {
-        validation,
-        device: args.device.clone(),
-    })?;
+    let ctx = args.gpu.context()?;
     println!(
         "LBVH on {} ({}-bit Morton, median of {} runs)",
         ctx.device_name, args.bits, opts.repeats
@@ -321,9 +331,7 @@ fn bench_lbvh(args: BenchLbvhArgs) -> Result<()> {
             .with_context(|| format!("cannot write '{}'", path.display()))?;
         println!("wrote {}", path.display());
     }
-    if validation && ctx.validation_messages() > 0 {
-        anyhow::bail!("{} validation message(s) reported", ctx.validation_messages());
-    }
+    check_validation(&ctx)?;
     if !valid {
         anyhow::bail!("a benchmark check failed (see the report)");
     }
@@ -351,10 +359,7 @@ fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
     };
     settings.validate()?;
     let scene = speculum::scene::load(&args.scene)?;
-    let ctx = Context::new(&ContextDesc {
-        validation: validation_from_env(),
-        device: args.device.clone(),
-    })?;
+    let ctx = args.gpu.context()?;
     let plan = headless::FramePlan {
         warmup: 1,
         frames: args.frames.max(1),
@@ -384,6 +389,7 @@ fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
             .with_context(|| format!("cannot write '{}'", path.display()))?;
         println!("wrote {}", path.display());
     }
+    check_validation(&ctx)?;
     if !r.valid {
         anyhow::bail!("a benchmark check failed (see the report)");
     }

@@ -4,7 +4,8 @@
 // reflective pixel: the reflected ray is marched in screen space with a thickness
 // test; a hit takes the lit colour there with a confidence that fades near the screen
 // edges and for rays heading back to the camera. Writes SSR colour + confidence and
-// the fail mask (reason bits, shader_defines.rs); nonzero sends the pixel to rt.trace.
+// the fail mask (reason bits, shader_defines.rs); nonzero sends the pixel to rt.trace
+// (FAIL_BLEND: a faded hit, kept and blended with the ray-traced colour by merge).
 #include "frame.glsl"
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
@@ -36,6 +37,17 @@ float view_z(float d) {
 // Pixel coordinates of a clip-space point.
 vec2 to_pixel(vec4 h) {
     return (h.xy / h.w * 0.5 + 0.5) * vec2(frame.resolution);
+}
+
+// The lit colour at sub-pixel position `x` (pixels; texel centres at +0.5), bilinear.
+vec3 lit_bilinear(vec2 x, ivec2 res) {
+    vec2 t = x - 0.5;
+    ivec2 i0 = ivec2(floor(t));
+    vec2 f = t - vec2(i0);
+    ivec2 lo = clamp(i0, ivec2(0), res - 1), hi = clamp(i0 + 1, ivec2(0), res - 1);
+    vec3 c00 = imageLoad(lit, lo).rgb, c10 = imageLoad(lit, ivec2(hi.x, lo.y)).rgb;
+    vec3 c01 = imageLoad(lit, ivec2(lo.x, hi.y)).rgb, c11 = imageLoad(lit, hi).rgb;
+    return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
 }
 
 void main() {
@@ -92,11 +104,15 @@ void main() {
     vec3 q = q0 + dq;
     float k = k0 + dk;
     float end = p1.x * step_dir;
-    float prev_z = origin.z;
+    // Sample k covers the ray between the half steps on either side of it, so the
+    // first interval starts half a stride out: starting at the origin would let a ray
+    // leaving a surface that nears the camera overlap that surface itself.
+    float prev_z = (q0.z + 0.5 * dq.z) / (k0 + 0.5 * dk);
     bool went_behind = false;
     bool hit = false;
     uint steps = 0u;
     ivec2 hit_pixel = ivec2(-1);
+    vec2 hit_pos = vec2(-1.0); // sub-pixel hit position in pixels
     for (; pp.x * step_dir <= end && steps < pc.max_steps; ++steps) {
         vec2 px = permute ? pp.yx : pp;
         ivec2 ip = ivec2(floor(px));
@@ -118,10 +134,15 @@ void main() {
             if (ray_z_max >= scene_z_min && ray_z_min <= scene_z_max) {
                 hit = true;
                 hit_pixel = ip;
+                hit_pos = px;
                 break;
             }
             if (ray_z_max < scene_z_min) {
+                // Behind a surface thicker than the threshold: the ray may hit that
+                // object's hidden side, which the screen does not hold. Any hit found
+                // beyond would be a guess (a reflection seen through the object).
                 went_behind = true;
+                break;
             }
         }
         pp += dp;
@@ -151,7 +172,17 @@ void main() {
                 a_k = m_k;
             }
         }
-        hit_pixel = clamp(ivec2(floor(permute ? b_p.yx : b_p)), ivec2(0), res - 1);
+        // The surface is crossed between a (in front) and b (behind): place the hit by
+        // the secant of the ray-to-surface distance, to a fraction of a pixel, so that a
+        // magnified reflection interpolates instead of repeating whole texels.
+        vec2 pa = permute ? a_p.yx : a_p, pb = permute ? b_p.yx : b_p;
+        float za = texelFetch(gb_depth, clamp(ivec2(floor(pa)), ivec2(0), res - 1), 0).r;
+        float zb = texelFetch(gb_depth, clamp(ivec2(floor(pb)), ivec2(0), res - 1), 0).r;
+        float gap_a = a_qz / a_k - view_z(za); // > 0: in front
+        float gap_b = b_qz / b_k - view_z(zb); // <= 0: at or behind
+        float f = za < 1.0 && gap_a > 0.0 ? clamp(gap_a / (gap_a - gap_b), 0.0, 1.0) : 1.0;
+        hit_pos = mix(pa, pb, f);
+        hit_pixel = clamp(ivec2(floor(hit_pos)), ivec2(0), res - 1);
     }
 
     uint fail = 0u;
@@ -162,7 +193,7 @@ void main() {
         fail = went_behind ? FAIL_BEHIND : (left ? FAIL_LEFT_SCREEN : FAIL_OUT_OF_STEPS);
     } else {
         vec3 hit_n = normalize(texelFetch(gb_normal, hit_pixel, 0).xyz);
-        vec3 world_dir = normalize((inverse(frame.view) * vec4(vdir, 0.0)).xyz);
+        vec3 world_dir = transpose(mat3(frame.view)) * vdir; // view is rigid
         if (dot(hit_n, world_dir) > 0.0) {
             fail = FAIL_BACK_FACE;
         } else if (texelFetch(gb_normal, hit_pixel, 0).w > pc.recursion_min) {
@@ -175,10 +206,13 @@ void main() {
             if (confidence < pc.min_confidence) {
                 fail = FAIL_LOW_CONFIDENCE;
             } else {
-                color = imageLoad(lit, hit_pixel).rgb;
+                color = lit_bilinear(hit_pos, res);
+                // A faded hit is kept, but traced too: merge blends the two by confidence.
+                fail = confidence < 1.0 ? FAIL_BLEND : 0u;
             }
         }
     }
-    imageStore(ssr_out, p, vec4(color, fail == 0u ? confidence : 0.0));
+    bool kept = fail == 0u || fail == FAIL_BLEND;
+    imageStore(ssr_out, p, vec4(color, kept ? confidence : 0.0));
     imageStore(fail_mask, p, uvec4(fail));
 }

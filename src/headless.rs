@@ -37,7 +37,8 @@ pub struct TimingsReport {
     /// failed / reflective pixels: the share of reflections the ray tracer produced.
     pub rt_pixel_fraction: f64,
     /// Failed pixels by reason (`left_screen`, `behind_geometry`, `out_of_steps`,
-    /// `back_face`, `low_confidence`, `hit_reflective`, `forced`).
+    /// `back_face`, `low_confidence`, `hit_reflective`, `forced`, and `ssr_blend`: SSR
+    /// hits blended with the ray tracer by their confidence, traced too).
     pub fail_reasons: BTreeMap<String, u64>,
     /// With `--reference`: SSIM and RMSE of this frame against the same frame in `rt`
     /// mode (see `metrics`), and the reference's median frame time.
@@ -59,6 +60,8 @@ pub struct Rendered {
     pub rgba: Vec<u8>,
     /// With a reference: the `rt` mode frame.
     pub reference_rgba: Option<Vec<u8>>,
+    /// The last frame's fail mask coloured by reason (`ReflectionMaps::fail_mask_rgba`).
+    pub fail_mask_rgba: Vec<u8>,
 }
 
 /// Frames to render and measure.
@@ -90,7 +93,8 @@ pub fn render(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, plan: Fram
     let mut renderer = Renderer::new(ctx, scene, settings)?;
     let timings = measure(&mut renderer, plan)?;
     let rgba = renderer.read_output()?;
-    let stats = renderer.reflection_stats()?;
+    let maps = renderer.reflection_maps()?;
+    let stats = maps.stats();
     let mut passes_ms: BTreeMap<String, f64> = timings.medians().into_iter().map(|(k, v)| (k.to_string(), v)).collect();
     let frame_ms = passes_ms.remove(FRAME).unwrap_or(f64::NAN);
     let (mut ssim, mut rmse, mut reference_frame_ms, mut reference_rgba) = (None, None, None, None);
@@ -126,6 +130,7 @@ pub fn render(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, plan: Fram
         report,
         rgba,
         reference_rgba,
+        fail_mask_rgba: maps.fail_mask_rgba(),
     })
 }
 

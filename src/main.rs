@@ -123,6 +123,9 @@ struct RenderArgs {
     /// Also write the timings as JSON to this file.
     #[arg(long)]
     timings: Option<PathBuf>,
+    /// Also write the SSR fail mask as a PNG, coloured by reason (see README).
+    #[arg(long)]
+    fail_mask: Option<PathBuf>,
     /// Settings file (JSON) with any fields of the settings struct; flags override it.
     #[arg(long)]
     settings: Option<PathBuf>,
@@ -206,6 +209,11 @@ fn render(args: RenderArgs) -> Result<()> {
             .unwrap_or_else(|| "frame".into());
         let path = args.out.with_file_name(format!("{stem}_rt.png"));
         headless::save_png(&path, reference, settings.width, settings.height)?;
+        println!("wrote {}", path.display());
+    }
+
+    if let Some(path) = &args.fail_mask {
+        headless::save_png(path, &rendered.fail_mask_rgba, settings.width, settings.height)?;
         println!("wrote {}", path.display());
     }
 

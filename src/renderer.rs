@@ -35,8 +35,70 @@ pub struct ReflectionStats {
     pub fail_reasons: std::collections::BTreeMap<&'static str, u64>,
 }
 
+/// Per-pixel reflection state of a frame, row-major.
+pub struct ReflectionMaps {
+    /// The pixel's surface reflects (reflectivity above `reflective_min`).
+    pub reflective: Vec<bool>,
+    /// `FAIL_*` bits written by `ssr.trace` (0: SSR succeeded or nothing to reflect).
+    pub mask: Vec<u32>,
+}
+
+impl ReflectionMaps {
+    pub fn stats(&self) -> ReflectionStats {
+        let failed = || self.mask.iter().zip(&self.reflective).filter(|(m, r)| **m != 0 && **r);
+        let mut fail_reasons = std::collections::BTreeMap::new();
+        for (&m, _) in failed() {
+            for (bit, name) in FAIL_REASONS {
+                if m & bit != 0 {
+                    *fail_reasons.entry(name).or_insert(0) += 1;
+                }
+            }
+        }
+        ReflectionStats {
+            reflective_pixels: self.reflective.iter().filter(|r| **r).count() as u64,
+            failed_pixels: failed().count() as u64,
+            fail_reasons,
+        }
+    }
+
+    /// The fail mask as tightly packed RGBA8, one colour per reason (the lowest set
+    /// bit wins; `FAIL_COLOURS`), SSR successes dark blue, non-reflective pixels black.
+    pub fn fail_mask_rgba(&self) -> Vec<u8> {
+        self.mask
+            .iter()
+            .zip(&self.reflective)
+            .flat_map(|(&m, &r)| {
+                let rgb = if !r {
+                    [0, 0, 0]
+                } else if m == 0 {
+                    SSR_OK_COLOUR
+                } else {
+                    FAIL_COLOURS[m.trailing_zeros() as usize % FAIL_COLOURS.len()]
+                };
+                [rgb[0], rgb[1], rgb[2], 255]
+            })
+            .collect()
+    }
+}
+
+/// Colour of a reflective pixel SSR answered, in `--fail-mask` images.
+pub const SSR_OK_COLOUR: [u8; 3] = [30, 50, 140];
+/// Colour of each fail reason in `--fail-mask` images, indexed by bit position (the
+/// order of `FAIL_REASONS`): yellow, orange, red, magenta, cyan, green, white, light
+/// blue (an SSR hit blended with the ray tracer's).
+pub const FAIL_COLOURS: [[u8; 3]; 8] = [
+    [240, 220, 40],
+    [250, 130, 20],
+    [220, 30, 30],
+    [230, 40, 230],
+    [40, 220, 230],
+    [40, 200, 60],
+    [255, 255, 255],
+    [120, 170, 255],
+];
+
 /// Names of the fail-mask reason bits, for reports.
-pub const FAIL_REASONS: [(u32, &str); 7] = [
+pub const FAIL_REASONS: [(u32, &str); 8] = [
     (crate::shader_defines::FAIL_LEFT_SCREEN, "left_screen"),
     (crate::shader_defines::FAIL_BEHIND, "behind_geometry"),
     (crate::shader_defines::FAIL_OUT_OF_STEPS, "out_of_steps"),
@@ -44,6 +106,7 @@ pub const FAIL_REASONS: [(u32, &str); 7] = [
     (crate::shader_defines::FAIL_LOW_CONFIDENCE, "low_confidence"),
     (crate::shader_defines::FAIL_HIT_REFLECTIVE, "hit_reflective"),
     (crate::shader_defines::FAIL_FORCED, "forced"),
+    (crate::shader_defines::FAIL_BLEND, "ssr_blend"),
 ];
 
 /// Timer scope of the whole frame.
@@ -379,6 +442,7 @@ impl Renderer {
         let mode = self.settings.mode;
         let reflections = mode != Mode::Raster;
         let traced = matches!(mode, Mode::Hybrid | Mode::Rt | Mode::Provenance);
+        let seams = matches!(mode, Mode::Hybrid | Mode::Provenance);
         let st = &self.settings;
         // WAR/WAW: the previous frame's reads and writes of the reflection images are
         // done before this frame rewrites them (old contents discarded).
@@ -386,7 +450,7 @@ impl Renderer {
             &self.ssr.out.color,
             &self.ssr.out.mask,
             &self.rt.color,
-            &self.merge.reflection,
+            self.merge.reflection(),
             self.merge.scratch(),
         ];
         let into: Vec<_> = reflection_images
@@ -475,7 +539,8 @@ impl Renderer {
                 traced,
                 st.reflective_min,
                 BlurParams {
-                    radius: st.blur_radius,
+                    // Seams exist only where both sources do.
+                    radius: if seams { st.blur_radius } else { 0 },
                     band: st.blur_band,
                 },
             );
@@ -500,7 +565,7 @@ impl Renderer {
         };
         let inputs = compose::ComposeInputs {
             hdr: &self.light.lit,
-            reflection: &self.merge.reflection,
+            reflection: self.merge.reflection(),
             normal: &self.gbuffer.targets.normal,
         };
         self.compose.record(cmd, &inputs, self.settings.exposure, compose_mode);
@@ -514,39 +579,29 @@ impl Renderer {
         self.settings.mode = mode;
     }
 
-    /// Reflective pixels and failed (ray-traced) pixels of the last frame, counted from
-    /// the G-buffer and the fail mask (a readback: for stats and tests).
-    pub fn reflection_stats(&self) -> Result<ReflectionStats> {
+    /// Per pixel of the last frame: whether it reflects, and its fail-mask bits (0 in
+    /// `raster` mode). A readback, for stats, debug images and tests.
+    pub fn reflection_maps(&self) -> Result<ReflectionMaps> {
         let normal = crate::cpu_ref::rgba16f_to_f32(&self.read_target(&self.gbuffer.targets.normal)?);
         let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.targets.material)?);
-        let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ssr.out.mask.read(vk::ImageLayout::GENERAL)?);
         let min = self.settings.reflective_min;
-        let reflective: Vec<bool> = normal
+        let reflective = normal
             .iter()
             .zip(&material)
             .map(|(n, &m)| m != crate::shader_defines::MATERIAL_NONE && n[3] > min)
             .collect();
-        let reflective_pixels = reflective.iter().filter(|r| **r).count() as u64;
-        let failed_pixels = if self.settings.mode == Mode::Raster {
-            0
+        let mask = if self.settings.mode == Mode::Raster {
+            vec![0; material.len()]
         } else {
-            mask.iter().zip(&reflective).filter(|(m, r)| **m != 0 && **r).count() as u64
+            bytemuck::pod_collect_to_vec(&self.ssr.out.mask.read(vk::ImageLayout::GENERAL)?)
         };
-        let mut fail_reasons = std::collections::BTreeMap::new();
-        if self.settings.mode != Mode::Raster {
-            for (&m, _) in mask.iter().zip(&reflective).filter(|(m, r)| **m != 0 && **r) {
-                for (bit, name) in FAIL_REASONS {
-                    if m & bit != 0 {
-                        *fail_reasons.entry(name).or_insert(0) += 1;
-                    }
-                }
-            }
-        }
-        Ok(ReflectionStats {
-            reflective_pixels,
-            failed_pixels,
-            fail_reasons,
-        })
+        Ok(ReflectionMaps { reflective, mask })
+    }
+
+    /// Reflective pixels and failed (ray-traced) pixels of the last frame, counted from
+    /// the G-buffer and the fail mask (a readback: for stats and tests).
+    pub fn reflection_stats(&self) -> Result<ReflectionStats> {
+        Ok(self.reflection_maps()?.stats())
     }
 
     /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).
@@ -574,5 +629,46 @@ impl Drop for Renderer {
             self.ctx.device.destroy_fence(self.fence, None);
         }
         self.ctx.free_command_buffer(self.cmd);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `FAIL_REASONS` lists the fail bits in bit order, so a reason's colour index in
+    /// `FAIL_COLOURS` is its bit position.
+    #[test]
+    fn fail_reasons_are_in_bit_order() {
+        for (i, (bit, _)) in FAIL_REASONS.iter().enumerate() {
+            assert_eq!(*bit, 1 << i);
+        }
+        assert_eq!(FAIL_REASONS.len(), FAIL_COLOURS.len());
+    }
+
+    /// Stats and the debug image agree with a hand-made mask.
+    #[test]
+    fn maps_count_and_colour_each_reason() {
+        let maps = ReflectionMaps {
+            reflective: vec![false, true, true, true, true],
+            mask: vec![
+                0,
+                0,
+                crate::shader_defines::FAIL_BACK_FACE,
+                crate::shader_defines::FAIL_LEFT_SCREEN | crate::shader_defines::FAIL_BEHIND,
+                crate::shader_defines::FAIL_FORCED,
+            ],
+        };
+        let s = maps.stats();
+        assert_eq!((s.reflective_pixels, s.failed_pixels), (4, 3));
+        assert_eq!(s.fail_reasons["back_face"], 1);
+        assert_eq!(s.fail_reasons["left_screen"], 1);
+        assert_eq!(s.fail_reasons["behind_geometry"], 1);
+        let rgba = maps.fail_mask_rgba();
+        assert_eq!(&rgba[0..4], &[0, 0, 0, 255]);
+        assert_eq!(&rgba[4..7], &SSR_OK_COLOUR);
+        assert_eq!(&rgba[8..11], &FAIL_COLOURS[3]);
+        assert_eq!(&rgba[12..15], &FAIL_COLOURS[0]);
+        assert_eq!(&rgba[16..19], &FAIL_COLOURS[6]);
     }
 }

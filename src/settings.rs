@@ -175,9 +175,10 @@ impl Settings {
                 self.ssr_max_steps
             )));
         }
-        if self.blur_radius > 16 || self.blur_band > 64 {
+        let most = crate::shader_defines::BLUR_MAX_EXTENT;
+        if self.blur_radius > 16 || self.blur_band > most {
             return Err(Error::Settings(format!(
-                "blur_radius {} / blur_band {} too large (16 / 64)",
+                "blur_radius {} / blur_band {} too large (16 / {most})",
                 self.blur_radius, self.blur_band
             )));
         }

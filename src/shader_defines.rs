@@ -48,10 +48,16 @@ pub const TRACE_STACK: u32 = 64;
 /// largest stride worth refining to one pixel (16 px).
 pub const SSR_REFINE_STEPS: u32 = 4;
 
+/// Pixels of one row (or column) segment that a `reflect.merge` blur workgroup owns.
+pub const BLUR_LINE: u32 = 64;
+/// Largest seam-blur radius and band (pixels): the shared-memory apron of a blur
+/// workgroup, so `BLUR_LINE + 2 * BLUR_MAX_EXTENT` texels (3 KiB) of shared memory.
+pub const BLUR_MAX_EXTENT: u32 = 64;
+
 /// Fail-mask reason bits written by `ssr.trace` (any nonzero value sends the pixel to
 /// the ray tracer): the march left the screen or crossed the near plane,
 pub const FAIL_LEFT_SCREEN: u32 = 1;
-/// ... it passed behind geometry thicker than the threshold and found no hit,
+/// ... it passed behind geometry thicker than the threshold (what lies beyond is a guess),
 pub const FAIL_BEHIND: u32 = 2;
 /// ... it ran out of steps,
 pub const FAIL_OUT_OF_STEPS: u32 = 4;
@@ -63,6 +69,10 @@ pub const FAIL_LOW_CONFIDENCE: u32 = 16;
 pub const FAIL_HIT_REFLECTIVE: u32 = 32;
 /// ... or SSR was off (`rt` mode: every reflective pixel is traced).
 pub const FAIL_FORCED: u32 = 64;
+/// Not a failure: SSR hit with a confidence in [min_confidence, 1). The pixel is ray
+/// traced too and `reflect.merge` blends confidence x SSR + (1 - confidence) x RT, so
+/// the screen-edge and toward-camera fades are smooth; alone in the mask.
+pub const FAIL_BLEND: u32 = 128;
 
 /// Provenance of a pixel's reflection, as `reflect.merge` labels it.
 pub const SOURCE_NONE: u32 = 0;
@@ -90,6 +100,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BVH_INVALID", BVH_INVALID),
     ("TRACE_STACK", TRACE_STACK),
     ("SSR_REFINE_STEPS", SSR_REFINE_STEPS),
+    ("BLUR_LINE", BLUR_LINE),
+    ("BLUR_MAX_EXTENT", BLUR_MAX_EXTENT),
     ("FAIL_LEFT_SCREEN", FAIL_LEFT_SCREEN),
     ("FAIL_BEHIND", FAIL_BEHIND),
     ("FAIL_OUT_OF_STEPS", FAIL_OUT_OF_STEPS),
@@ -97,6 +109,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("FAIL_LOW_CONFIDENCE", FAIL_LOW_CONFIDENCE),
     ("FAIL_HIT_REFLECTIVE", FAIL_HIT_REFLECTIVE),
     ("FAIL_FORCED", FAIL_FORCED),
+    ("FAIL_BLEND", FAIL_BLEND),
     ("SOURCE_NONE", SOURCE_NONE),
     ("SOURCE_SSR", SOURCE_SSR),
     ("SOURCE_RT", SOURCE_RT),

@@ -4,6 +4,7 @@
 pub mod compact;
 pub mod compose;
 pub mod lbvh;
+pub mod merge;
 pub mod shading;
 pub mod trace;
 

@@ -1,9 +1,11 @@
 //! `reflect.merge`: SSR where it succeeded, ray-traced reflections where it failed,
 //! labelled by source; then a separable Gaussian blur restricted to the band around
-//! SSR/RT seams (horizontal, then vertical).
+//! SSR/RT seams (horizontal, then vertical), run only on the 8x8 tiles a seam comes
+//! near (see `glsl/reflect_blur.comp`).
 
 use super::gbuffer::GBuffer;
 use crate::error::Result;
+use crate::shader_defines::WG_2D;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Image, Pipeline, Resource, Sampler};
@@ -33,10 +35,46 @@ struct BlurPush {
 /// Seam blur settings.
 #[derive(Clone, Copy, Debug)]
 pub struct BlurParams {
-    /// Blur radius in pixels (0: no blur).
+    /// Blur radius in pixels (0: no blur; where only one source exists, as in the `rt`
+    /// and `ssr` modes, there are no seams and the blur would copy every pixel).
     pub radius: u32,
     /// Half-width in pixels of the band around seams that is blurred.
     pub band: u32,
+}
+
+/// Images and per-tile buffers that depend on the resolution.
+struct Targets {
+    /// The merged (and seam-blurred) reflection; `GENERAL` between frames.
+    reflection: Image,
+    /// The horizontal blur's output (written for active tiles only).
+    scratch: Image,
+    /// Per WG_2D x WG_2D tile: bit `1 << SOURCE_*` for each source it holds.
+    tile_sources: Buffer,
+    /// Per tile: 1 when the blur works on it this frame.
+    tile_active: Buffer,
+}
+
+impl Targets {
+    fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        let usage =
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+        let tiles = (extent.width.div_ceil(WG_2D) * extent.height.div_ceil(WG_2D)) as u64;
+        let buffer = |name| {
+            Buffer::new(
+                ctx,
+                name,
+                tiles * 4,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )
+        };
+        Ok(Self {
+            reflection: Image::new(ctx, "reflect.merged", extent, FORMAT, usage)?,
+            scratch: Image::new(ctx, "reflect.scratch", extent, FORMAT, usage)?,
+            tile_sources: buffer("reflect.tile_sources")?,
+            tile_active: buffer("reflect.tile_active")?,
+        })
+    }
 }
 
 pub struct MergePass {
@@ -44,22 +82,19 @@ pub struct MergePass {
     merge: Pipeline,
     blur: Pipeline,
     sampler: Sampler,
-    /// The merged (and seam-blurred) reflection; `GENERAL` between frames.
-    pub reflection: Image,
-    scratch: Image,
+    targets: Targets,
 }
 
-fn images(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<(Image, Image)> {
-    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
-    Ok((
-        Image::new(ctx, "reflect.merged", extent, FORMAT, usage)?,
-        Image::new(ctx, "reflect.scratch", extent, FORMAT, usage)?,
-    ))
+/// Compute-shader reads and writes (atomics, read-modify-write images).
+fn rw_compute() -> (vk::PipelineStageFlags2, vk::AccessFlags2) {
+    (
+        vk::PipelineStageFlags2::COMPUTE_SHADER,
+        vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_WRITE,
+    )
 }
 
 impl MergePass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let (reflection, scratch) = images(ctx, extent)?;
         Ok(Self {
             ctx: ctx.clone(),
             merge: Pipeline::compute(ctx, NAME, ("reflect_merge.comp", shaders::REFLECT_MERGE_COMP), 8)?,
@@ -70,18 +105,22 @@ impl MergePass {
                 16,
             )?,
             sampler: Sampler::nearest_clamp(ctx, "reflect.sampler")?,
-            reflection,
-            scratch,
+            targets: Targets::new(ctx, extent)?,
         })
+    }
+
+    /// The merged, seam-blurred reflection (`GENERAL` between frames).
+    pub fn reflection(&self) -> &Image {
+        &self.targets.reflection
     }
 
     /// The blur's intermediate image (for layout transitions by the renderer).
     pub fn scratch(&self) -> &Image {
-        &self.scratch
+        &self.targets.scratch
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
-        (self.reflection, self.scratch) = images(&self.ctx, extent)?;
+        self.targets = Targets::new(&self.ctx, extent)?;
         Ok(())
     }
 
@@ -101,9 +140,20 @@ impl MergePass {
         blur: BlurParams,
     ) {
         let d = &self.ctx.device;
-        let e = self.reflection.extent;
+        let t = &self.targets;
+        let e = t.reflection.extent;
         let s = &self.sampler;
         // merge → reflection, blur H → scratch, blur V → reflection.
+        // WAR: the previous frame's blur reads of the tile bits finish before they are zeroed.
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::COMPUTE_READ, access::TRANSFER_WRITE)],
+            &[],
+        );
+        unsafe { d.cmd_fill_buffer(cmd, t.tile_sources.raw, 0, vk::WHOLE_SIZE, 0) };
+        // RAW/WAW: the merge's atomics see the zeroed tile bits.
+        barrier::record(d, cmd, &[barrier::memory(access::TRANSFER_WRITE, rw_compute())], &[]);
         self.merge.bind(
             cmd,
             &[
@@ -113,7 +163,8 @@ impl MergePass {
                 Resource::StorageImage(rt),
                 Resource::Sampled(&gbuffer.normal, s),
                 Resource::Sampled(&gbuffer.material, s),
-                Resource::StorageImage(&self.reflection),
+                Resource::StorageImage(&t.reflection),
+                Resource::Buffer(&t.tile_sources),
             ],
             bytemuck::bytes_of(&MergePush {
                 reflective_min,
@@ -131,16 +182,10 @@ impl MergePass {
             );
             return;
         }
-        let rw = (
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
-            vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_WRITE,
-        );
-        for (axis, src, dst) in [
-            ([1, 0], &self.reflection, &self.scratch),
-            ([0, 1], &self.scratch, &self.reflection),
-        ] {
-            // RAW: this blur pass reads what the previous step wrote; WAR: it overwrites
-            // the image the previous step read.
+        let rw = rw_compute();
+        for axis in [[1, 0], [0, 1]] {
+            // RAW: this blur pass reads what the previous step wrote (images and tile
+            // buffers); WAR: it overwrites what the previous step read.
             barrier::record(
                 d,
                 cmd,
@@ -159,11 +204,14 @@ impl MergePass {
                 cmd,
                 &[
                     Resource::Buffer(frame),
-                    Resource::StorageImage(src),
-                    Resource::StorageImage(dst),
+                    Resource::StorageImage(&t.reflection),
+                    Resource::StorageImage(&t.scratch),
+                    Resource::Buffer(&t.tile_sources),
+                    Resource::Buffer(&t.tile_active),
                 ],
                 bytemuck::bytes_of(&push),
             );
+            // The same tile grid as the merge, so tile indices agree.
             self.blur.dispatch_covering(cmd, [e.width, e.height, 1]);
         }
         // RAW: compose reads the blurred reflection.

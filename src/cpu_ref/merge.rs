@@ -1,0 +1,78 @@
+//! Reference of `glsl/reflect_merge.comp` and `glsl/reflect_blur.comp` (reflect.merge).
+
+use crate::shader_defines::{FAIL_BLEND, SOURCE_NONE, SOURCE_RT, SOURCE_SSR};
+
+/// One pixel of the merge: the reflection and its source (`SOURCE_*`, stored in alpha).
+/// `fail`: the fail mask; `ssr`: SSR colour (rgb) and confidence (a); `rt`: the
+/// ray-traced colour (rgb); `reflective`: the surface reflects; `rt_enabled`: failed
+/// pixels take the ray-traced colour.
+pub fn merge(fail: u32, ssr: [f32; 4], rt: [f32; 4], reflective: bool, rt_enabled: bool) -> [f32; 4] {
+    let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
+    if !reflective {
+        [0.0, 0.0, 0.0, SOURCE_NONE as f32]
+    } else if fail == 0 {
+        [ssr[0], ssr[1], ssr[2], SOURCE_SSR as f32]
+    } else if rt_enabled {
+        let c = if fail == FAIL_BLEND { ssr[3] } else { 0.0 };
+        [
+            mix(rt[0], ssr[0], c),
+            mix(rt[1], ssr[1], c),
+            mix(rt[2], ssr[2], c),
+            SOURCE_RT as f32,
+        ]
+    } else if fail == FAIL_BLEND {
+        [ssr[0] * ssr[3], ssr[1] * ssr[3], ssr[2] * ssr[3], SOURCE_SSR as f32]
+    } else {
+        [0.0, 0.0, 0.0, SOURCE_NONE as f32]
+    }
+}
+
+/// One direction of the seam blur over a `width` x `height` row-major image whose alpha
+/// is the source: `axis` (1, 0) or (0, 1); `radius` and `band` in pixels.
+pub fn seam_blur(
+    src: &[[f32; 4]],
+    width: usize,
+    height: usize,
+    axis: [i32; 2],
+    radius: i32,
+    band: i32,
+) -> Vec<[f32; 4]> {
+    let at = |x: i32, y: i32| -> [f32; 4] {
+        if x < 0 || y < 0 || x >= width as i32 || y >= height as i32 {
+            [0.0, 0.0, 0.0, SOURCE_NONE as f32]
+        } else {
+            src[y as usize * width + x as usize]
+        }
+    };
+    let mut out = src.to_vec();
+    for y in 0..height as i32 {
+        for x in 0..width as i32 {
+            let me = at(x, y);
+            let source = me[3] as u32;
+            let seam = source != SOURCE_NONE
+                && radius > 0
+                && (-band..=band).any(|k| {
+                    let s = at(x + axis[0] * k, y + axis[1] * k)[3] as u32;
+                    s != SOURCE_NONE && s != source
+                });
+            if !seam {
+                continue;
+            }
+            let sigma = (radius as f32 * 0.5).max(0.5);
+            let (mut sum, mut weight) = ([0.0f32; 3], 0.0f32);
+            for k in -radius..=radius {
+                let s = at(x + axis[0] * k, y + axis[1] * k);
+                if s[3] as u32 == SOURCE_NONE {
+                    continue;
+                }
+                let wk = (-((k * k) as f32) / (2.0 * sigma * sigma)).exp();
+                for c in 0..3 {
+                    sum[c] += s[c] * wk;
+                }
+                weight += wk;
+            }
+            out[y as usize * width + x as usize] = [sum[0] / weight, sum[1] / weight, sum[2] / weight, me[3]];
+        }
+    }
+    out
+}

@@ -1,0 +1,188 @@
+//! reflect.merge (source selection + seam-band blur) against its CPU reference on
+//! random inputs. Tolerance: the blur's Gaussian weights use GPU `exp`, which is not
+//! correctly rounded, so colours may differ by 1e-5 relative (+1e-6 absolute); the
+//! source labels in alpha must match exactly.
+
+mod common;
+
+use ash::vk;
+use rand::Rng;
+use speculum::cpu_ref::{self, merge};
+use speculum::passes::gbuffer::GBuffer;
+use speculum::passes::reflect_merge::{BlurParams, MergePass};
+use speculum::shader_defines::{FAIL_BLEND, MATERIAL_NONE, SOURCE_NONE};
+use speculum::vk::{barrier, Buffer, Image};
+
+const POISON: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
+
+/// Every pixel's source and (seam-blurred) colour equal the CPU's: SSR, RT, and faded
+/// SSR hits blended with RT by confidence; several radii and bands; skipped tiles left
+/// untouched; and the `ssr` mode (failed pixels get nothing, faded hits fade out).
+#[test]
+fn merge_and_seam_blur_match_cpu_reference() {
+    let ctx = common::context();
+    let mut rng = common::rng(41);
+    let (w, h) = (157usize, 83usize); // more than one BLUR_LINE segment on both axes
+    let n = w * h;
+    let extent = vk::Extent2D {
+        width: w as u32,
+        height: h as u32,
+    };
+    let settings = speculum::Settings {
+        width: w as u32,
+        height: h as u32,
+        ..Default::default()
+    };
+    let scene = speculum::scene::procedural::room().unwrap();
+    let frame = speculum::renderer::frame_uniforms(&scene, &settings);
+    let reflective_min = 0.3;
+
+    let normal: Vec<[f32; 4]> = (0..n).map(|_| [0.0, 1.0, 0.0, rng.random_range(0.0..1.0)]).collect();
+    let normal_bytes = cpu_ref::f32_to_rgba16f(&normal);
+    let normal = cpu_ref::rgba16f_to_f32(&normal_bytes); // what the GPU reads
+    let material: Vec<u32> = (0..n)
+        .map(|_| {
+            if rng.random_bool(0.1) {
+                MATERIAL_NONE
+            } else {
+                rng.random_range(0..5)
+            }
+        })
+        .collect();
+    // Failed pixels in blobs of varying density, so seams are both long and ragged,
+    // beside regions of one source only (SSR on the left, RT at the bottom) whose tiles
+    // the blur must skip without changing them.
+    let fail: Vec<u32> = (0..n)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let p = if x < 37 {
+                0.0
+            } else if y > 58 {
+                1.0
+            } else if (x / 23 + y / 17) % 2 == 0 {
+                0.15
+            } else {
+                0.85
+            };
+            // Any reason, FAIL_BLEND (a faded SSR hit, blended by confidence) included.
+            let reasons = [1u32, 2, 4, 8, 16, 32, FAIL_BLEND, FAIL_BLEND];
+            if rng.random_bool(p) {
+                reasons[rng.random_range(0..reasons.len())]
+            } else {
+                0
+            }
+        })
+        .collect();
+    let colour = |rng: &mut rand::rngs::StdRng| -> Vec<[f32; 4]> {
+        (0..n)
+            .map(|_| {
+                [
+                    rng.random_range(0.0..4.0),
+                    rng.random_range(0.0..1.0),
+                    rng.random_range(0.0..0.5),
+                    rng.random_range(0.3..1.0), // SSR confidence (unused in RT colour)
+                ]
+            })
+            .collect()
+    };
+    let (ssr, rt) = (colour(&mut rng), colour(&mut rng));
+
+    let gb = GBuffer::new(&ctx, extent).unwrap();
+    let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    let general = vk::ImageLayout::GENERAL;
+    gb.normal.write(&normal_bytes, ro).unwrap();
+    gb.material.write(bytemuck::cast_slice(&material), ro).unwrap();
+    let storage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
+    let image = |name: &str, format: vk::Format, data: &[u8]| {
+        let i = Image::new(&ctx, name, extent, format, storage).unwrap();
+        i.write(data, general).unwrap();
+        i
+    };
+    let mask_img = image("test.mask", vk::Format::R32_UINT, bytemuck::cast_slice(&fail));
+    let rgba = vk::Format::R32G32B32A32_SFLOAT;
+    let ssr_img = image("test.ssr", rgba, bytemuck::cast_slice(&ssr));
+    let rt_img = image("test.rt", rgba, bytemuck::cast_slice(&rt));
+    let ubo = Buffer::with_data(
+        &ctx,
+        "test.frame",
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        bytemuck::bytes_of(&frame),
+    )
+    .unwrap();
+    let pass = MergePass::new(&ctx, extent).unwrap();
+
+    for (radius, band, rt_enabled) in [
+        (3, 3, true),
+        (5, 2, true),
+        (1, 9, true),
+        (16, 64, true),
+        (0, 3, true),
+        (3, 3, false),
+    ] {
+        let poison = vec![POISON; n];
+        pass.reflection().write(bytemuck::cast_slice(&poison), general).unwrap();
+        pass.scratch().write(bytemuck::cast_slice(&poison), general).unwrap();
+        ctx.one_shot(|cmd| {
+            let blur = BlurParams { radius, band };
+            pass.record(
+                cmd,
+                &ubo,
+                &gb,
+                &mask_img,
+                &ssr_img,
+                &rt_img,
+                rt_enabled,
+                reflective_min,
+                blur,
+            );
+            // RAW: the readback copy sees the shader's writes.
+            let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
+            barrier::record(&ctx.device, cmd, &[b], &[]);
+        })
+        .unwrap();
+        let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&pass.reflection().read(general).unwrap());
+
+        let merged: Vec<[f32; 4]> = (0..n)
+            .map(|i| {
+                let reflective = material[i] != MATERIAL_NONE && normal[i][3] > reflective_min;
+                merge::merge(fail[i], ssr[i], rt[i], reflective, rt_enabled)
+            })
+            .collect();
+        let (r, b) = (radius as i32, band as i32);
+        let want = if radius == 0 {
+            merged.clone()
+        } else {
+            let horizontal = merge::seam_blur(&merged, w, h, [1, 0], r, b);
+            merge::seam_blur(&horizontal, w, h, [0, 1], r, b)
+        };
+        let mut blurred = 0;
+        for i in 0..n {
+            assert_eq!(
+                gpu[i][3], want[i][3],
+                "pixel {i}: source (radius {radius}, band {band})"
+            );
+            for c in 0..3 {
+                let tol = want[i][c].abs() * 1e-5 + 1e-6;
+                assert!(
+                    (gpu[i][c] - want[i][c]).abs() <= tol,
+                    "pixel ({}, {}) channel {c}: gpu {} cpu {} (radius {radius}, band {band}, rt {rt_enabled})",
+                    i % w,
+                    i / w,
+                    gpu[i][c],
+                    want[i][c]
+                );
+            }
+            blurred += (want[i] != merged[i]) as usize;
+        }
+        let none = want.iter().filter(|p| p[3] as u32 == SOURCE_NONE).count();
+        println!("radius {radius} band {band} rt {rt_enabled}: {blurred} pixels blurred, {none} without reflection");
+        // The inputs must exercise what is compared: seams where both sources exist.
+        assert!(none > n / 20, "some pixels have no reflection ({none})");
+        if radius > 0 && rt_enabled {
+            assert!(blurred > n / 10, "the blur should change many pixels ({blurred})");
+        } else {
+            assert_eq!(blurred, 0, "no seams, or no blur: nothing changes");
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}

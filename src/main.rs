@@ -43,6 +43,34 @@ enum BenchCommand {
     Lbvh(BenchLbvhArgs),
     /// Time of ssr.trace, ssr.compact and rt.trace as the ray-traced share varies.
     Reflect(BenchReflectArgs),
+    /// Every mode timed in the same run, interleaved: per-pass medians, frame time
+    /// against rt, SSIM/RMSE against rt, and whether ssr < hybrid < rt.
+    Modes(BenchModesArgs),
+}
+
+#[derive(Args)]
+struct BenchModesArgs {
+    /// Built-in scene names or .obj paths (each timed on its own).
+    #[arg(long, num_args = 1.., default_value = "room")]
+    scene: Vec<String>,
+    #[arg(long, default_value_t = Settings::default().width)]
+    width: u32,
+    #[arg(long, default_value_t = Settings::default().height)]
+    height: u32,
+    /// Measured rounds (one frame of every mode each).
+    #[arg(long, default_value_t = 7)]
+    rounds: u32,
+    /// Uncounted warm-up rounds.
+    #[arg(long, default_value_t = 1)]
+    warmup: u32,
+    /// Settings file (JSON) with any fields of the settings struct (the mode is ignored).
+    #[arg(long)]
+    settings: Option<PathBuf>,
+    /// Write the reports as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(Args)]
@@ -176,8 +204,9 @@ fn validation_from_env() -> bool {
     std::env::var("SPECULUM_VALIDATION").is_ok_and(|v| !v.is_empty() && v != "0")
 }
 
-fn render(args: RenderArgs) -> Result<()> {
-    let mut settings = match &args.settings {
+/// The settings file's values, or the defaults.
+fn load_settings(path: Option<&std::path::Path>) -> Result<Settings> {
+    Ok(match path {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read settings file '{}'", path.display()))?;
@@ -185,7 +214,11 @@ fn render(args: RenderArgs) -> Result<()> {
                 .with_context(|| format!("invalid settings file '{}'", path.display()))?
         }
         None => Settings::default(),
-    };
+    })
+}
+
+fn render(args: RenderArgs) -> Result<()> {
+    let mut settings = load_settings(args.settings.as_deref())?;
     settings.width = args.width;
     settings.height = args.height;
     if let Some(mode) = &args.mode {
@@ -404,6 +437,77 @@ fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
     Ok(())
 }
 
+fn bench_modes(args: BenchModesArgs) -> Result<()> {
+    let mut settings = load_settings(args.settings.as_deref())?;
+    settings.width = args.width;
+    settings.height = args.height;
+    settings.validate()?;
+    // Load every scene first: a bad one fails before any GPU work.
+    let scenes = args
+        .scene
+        .iter()
+        .map(|s| speculum::scene::load(s))
+        .collect::<speculum::Result<Vec<_>>>()?;
+    let ctx = args.gpu.context()?;
+    let mut reports = Vec::new();
+    for scene in &scenes {
+        let r = speculum::bench::modes::run(&ctx, scene, &settings, args.warmup, args.rounds)?;
+        println!(
+            "{} on {}: {}x{}, median of {} interleaved rounds",
+            r.scene, r.device, r.resolution[0], r.resolution[1], r.rounds
+        );
+        let passes: std::collections::BTreeSet<&String> = r.modes.iter().flat_map(|m| m.passes_ms.keys()).collect();
+        print!("  {:<14}", "pass (ms)");
+        for m in &r.modes {
+            print!(" {:>10}", m.mode);
+        }
+        println!();
+        for p in passes.iter().filter(|p| p.as_str() != "uniforms") {
+            print!("  {p:<14}");
+            for m in &r.modes {
+                match m.passes_ms.get(*p) {
+                    Some(ms) => print!(" {ms:>10.1}"),
+                    None => print!(" {:>10}", "-"),
+                }
+            }
+            println!();
+        }
+        let row = |name: &str, f: &dyn Fn(&speculum::bench::modes::ModeResult) -> String| {
+            print!("  {name:<14}");
+            for m in &r.modes {
+                print!(" {:>10}", f(m));
+            }
+            println!();
+        };
+        row("frame", &|m| format!("{:.1}", m.frame_ms));
+        row("frame / rt", &|m| format!("{:.3}", m.frame_over_rt));
+        row("traced %", &|m| {
+            format!(
+                "{:.1}",
+                100.0 * m.traced_pixels as f64 / m.reflective_pixels.max(1) as f64
+            )
+        });
+        row("SSIM vs rt", &|m| format!("{:.4}", m.ssim_vs_rt));
+        row("RMSE vs rt", &|m| format!("{:.4}", m.rmse_vs_rt));
+        println!(
+            "  ssr < hybrid < rt: {}; checks {}",
+            if r.ordered { "yes" } else { "NO" },
+            if r.valid { "valid" } else { "INVALID" }
+        );
+        reports.push(r);
+    }
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&reports)? + "\n")
+            .with_context(|| format!("cannot write '{}'", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    check_validation(&ctx)?;
+    if reports.iter().any(|r| !r.valid) {
+        anyhow::bail!("a benchmark check failed (see the report)");
+    }
+    Ok(())
+}
+
 fn devices() -> Result<()> {
     let list = list_devices()?;
     if list.is_empty() {
@@ -435,6 +539,7 @@ fn main() {
         Some(Command::Compare { a, b, json }) => compare(&a, &b, json),
         Some(Command::Bench(BenchCommand::Lbvh(args))) => bench_lbvh(args),
         Some(Command::Bench(BenchCommand::Reflect(args))) => bench_reflect(args),
+        Some(Command::Bench(BenchCommand::Modes(args))) => bench_modes(args),
     };
     if let Err(e) = result {
         // One line: the chain of causes, outermost first.

@@ -63,3 +63,28 @@ fn reflection_split_benchmark_is_valid() {
         .all(|p| p.passes_ms.contains_key("rt.trace") && p.passes_ms.contains_key("ssr.trace")));
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The modes benchmark measures every mode in one run and checks itself: same
+/// reflective pixels everywhere, rt traces them all and hybrid fewer, rt's SSIM against
+/// itself is 1, and only the reflecting modes have reflection passes.
+#[test]
+fn modes_benchmark_is_valid() {
+    let ctx = common::context();
+    let scene = speculum::scene::procedural::room().unwrap();
+    let settings = speculum::Settings {
+        width: 160,
+        height: 90,
+        ..Default::default()
+    };
+    let r = speculum::bench::modes::run(&ctx, &scene, &settings, 0, 2).unwrap();
+    assert!(r.valid, "{r:?}");
+    assert_eq!(r.modes.len(), speculum::settings::Mode::ALL.len());
+    let by = |name: &str| r.modes.iter().find(|m| m.mode == name).unwrap();
+    assert_eq!(by("rt").ssim_vs_rt, 1.0);
+    assert_eq!(by("rt").frame_over_rt, 1.0);
+    assert!(by("hybrid").traced_pixels > 0 && by("hybrid").traced_pixels < by("rt").traced_pixels);
+    assert!(by("hybrid").ssim_vs_rt > 0.9 && by("raster").ssim_vs_rt < by("hybrid").ssim_vs_rt);
+    assert!(!by("raster").passes_ms.contains_key("ssr.trace"));
+    assert!(by("hybrid").passes_ms.contains_key("rt.trace") && !by("ssr").passes_ms.contains_key("rt.trace"));
+    common::assert_no_validation_messages(&ctx);
+}

@@ -2,4 +2,5 @@
 //! JSON says whether all checks passed.
 
 pub mod lbvh;
+pub mod modes;
 pub mod reflect;

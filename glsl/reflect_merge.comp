@@ -3,9 +3,9 @@
 // reflect.merge, step 1: each reflective pixel takes its reflection from SSR (where
 // SSR succeeded) or from the ray tracer (where it failed), labelled by source; a faded
 // SSR hit (FAIL_BLEND) is blended with the ray-traced colour by its confidence and
-// labelled ray traced (it was traced). Each
-// 8x8 tile also records which sources it holds (bit 1 << SOURCE_*), so that the seam
-// blur can skip the tiles no seam comes near. Mirrored by cpu_ref::merge::merge.
+// labelled ray traced (it was traced). Each WG_2D x WG_2D tile also records which
+// sources it holds (bit 1 << SOURCE_*), so that the seam blur can skip the tiles no
+// seam comes near. Mirrored by cpu_ref::merge::merge.
 #include "frame.glsl"
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;

@@ -192,11 +192,12 @@ void main() {
         bool left = steps < pc.max_steps;
         fail = went_behind ? FAIL_BEHIND : (left ? FAIL_LEFT_SCREEN : FAIL_OUT_OF_STEPS);
     } else {
-        vec3 hit_n = normalize(texelFetch(gb_normal, hit_pixel, 0).xyz);
+        vec4 hit_nr = texelFetch(gb_normal, hit_pixel, 0); // xyz normal, w reflectivity
+        vec3 hit_n = normalize(hit_nr.xyz);
         vec3 world_dir = transpose(mat3(frame.view)) * vdir; // view is rigid
         if (dot(hit_n, world_dir) > 0.0) {
             fail = FAIL_BACK_FACE;
-        } else if (texelFetch(gb_normal, hit_pixel, 0).w > pc.recursion_min) {
+        } else if (hit_nr.w > pc.recursion_min) {
             fail = FAIL_HIT_REFLECTIVE;
         } else {
             vec2 hp = vec2(hit_pixel) + 0.5;

@@ -7,6 +7,16 @@ use speculum::bench::lbvh::{run_case, Options, STAGES};
 use speculum::passes::lbvh::MortonBits;
 use speculum::scene::soup::{default_size, random_soup};
 
+/// The `room` scene at 160x90: small enough for a quick benchmark run.
+fn small_room() -> (speculum::scene::Scene, speculum::Settings) {
+    let settings = speculum::Settings {
+        width: 160,
+        height: 90,
+        ..Default::default()
+    };
+    (speculum::scene::procedural::room().unwrap(), settings)
+}
+
 #[test]
 fn small_lbvh_benchmark_is_valid_and_consistent() {
     let ctx = common::context();
@@ -42,12 +52,7 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
 #[test]
 fn reflection_split_benchmark_is_valid() {
     let ctx = common::context();
-    let scene = speculum::scene::procedural::room().unwrap();
-    let settings = speculum::Settings {
-        width: 160,
-        height: 90,
-        ..Default::default()
-    };
+    let (scene, settings) = small_room();
     let plan = speculum::headless::FramePlan {
         warmup: 0,
         frames: 1,
@@ -70,12 +75,7 @@ fn reflection_split_benchmark_is_valid() {
 #[test]
 fn modes_benchmark_is_valid() {
     let ctx = common::context();
-    let scene = speculum::scene::procedural::room().unwrap();
-    let settings = speculum::Settings {
-        width: 160,
-        height: 90,
-        ..Default::default()
-    };
+    let (scene, settings) = small_room();
     let r = speculum::bench::modes::run(&ctx, &scene, &settings, 0, 2).unwrap();
     assert!(r.valid, "{r:?}");
     assert_eq!(r.modes.len(), speculum::settings::Mode::ALL.len());

@@ -134,15 +134,7 @@ fn light_direct_matches_cpu_reference() {
     let normal_bytes = cpu_ref::f32_to_rgba16f(&normal);
     let normal = cpu_ref::rgba16f_to_f32(&normal_bytes); // what the GPU will read
     let albedo: Vec<u8> = (0..n * 4).map(|_| rng.random()).collect();
-    let material: Vec<u32> = (0..n)
-        .map(|_| {
-            if rng.random_bool(0.15) {
-                MATERIAL_NONE
-            } else {
-                rng.random_range(0..4)
-            }
-        })
-        .collect();
+    let material = common::random_material_ids(&mut rng, n, 0.15, 4);
     let shadow: Vec<f32> = (0..64 * 64).map(|_| rng.random_range(0.0..1.0f32)).collect();
 
     let gb = GBuffer::new(&ctx, extent).unwrap();

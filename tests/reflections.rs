@@ -8,7 +8,7 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use speculum::scene::{Camera, Light, Material, SceneBuilder, TriMesh};
 use speculum::settings::Mode;
-use speculum::shader_defines::{MATERIAL_NONE, SOURCE_NONE, SOURCE_RT, SOURCE_SSR};
+use speculum::shader_defines::{SOURCE_NONE, SOURCE_RT, SOURCE_SSR};
 use speculum::{Renderer, Settings};
 
 fn render(
@@ -135,15 +135,13 @@ fn provenance_colours_match_the_fail_mask() {
     let scene = speculum::scene::procedural::room().unwrap();
     let r = render(&ctx, &scene, Mode::Provenance, 320, 180);
     let ldr = r.read_output().unwrap();
-    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.mask.read(vk::ImageLayout::GENERAL).unwrap());
-    let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&r.gbuffer.targets.normal).unwrap());
-    let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.targets.material).unwrap());
+    let maps = r.reflection_maps().unwrap();
+    let mask = &maps.mask;
     let (mut blue, mut pink, mut grey) = (0, 0, 0);
     for i in 0..mask.len() {
         let p = &ldr[4 * i..4 * i + 3];
         let (rr, g, b) = (p[0] as i32, p[1] as i32, p[2] as i32);
-        let reflective = material[i] != MATERIAL_NONE && normal[i][3] > Settings::default().reflective_min;
-        if !reflective {
+        if !maps.reflective[i] {
             assert!(
                 (rr - g).abs() <= 2 && (g - b).abs() <= 2,
                 "pixel {i}: grey expected, got {p:?}"
@@ -175,12 +173,10 @@ fn every_reflective_pixel_gets_a_reflection() {
             let r = render(&ctx, &scene, mode, 240, 135);
             let merged: Vec<[f32; 4]> =
                 bytemuck::pod_collect_to_vec(&r.merge.reflection().read(vk::ImageLayout::GENERAL).unwrap());
-            let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&r.gbuffer.targets.normal).unwrap());
-            let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.targets.material).unwrap());
+            let reflective = r.reflection_maps().unwrap().reflective;
             for i in 0..merged.len() {
-                let reflective = material[i] != MATERIAL_NONE && normal[i][3] > Settings::default().reflective_min;
                 let source = merged[i][3] as u32;
-                if reflective {
+                if reflective[i] {
                     assert!(allowed.contains(&source), "{name} {mode:?} pixel {i}: source {source}");
                     assert!(
                         merged[i][..3].iter().all(|c| c.is_finite() && *c >= 0.0),

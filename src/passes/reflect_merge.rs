@@ -85,14 +85,6 @@ pub struct MergePass {
     targets: Targets,
 }
 
-/// Compute-shader reads and writes (atomics, read-modify-write images).
-fn rw_compute() -> (vk::PipelineStageFlags2, vk::AccessFlags2) {
-    (
-        vk::PipelineStageFlags2::COMPUTE_SHADER,
-        vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_WRITE,
-    )
-}
-
 impl MergePass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         Ok(Self {
@@ -153,7 +145,12 @@ impl MergePass {
         );
         unsafe { d.cmd_fill_buffer(cmd, t.tile_sources.raw, 0, vk::WHOLE_SIZE, 0) };
         // RAW/WAW: the merge's atomics see the zeroed tile bits.
-        barrier::record(d, cmd, &[barrier::memory(access::TRANSFER_WRITE, rw_compute())], &[]);
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE)],
+            &[],
+        );
         self.merge.bind(
             cmd,
             &[
@@ -182,7 +179,7 @@ impl MergePass {
             );
             return;
         }
-        let rw = rw_compute();
+        let rw = access::COMPUTE_READ_WRITE;
         for axis in [[1, 0], [0, 1]] {
             // RAW: this blur pass reads what the previous step wrote (images and tile
             // buffers); WAR: it overwrites what the previous step read.

@@ -126,10 +126,7 @@ impl CompactPass {
             _pad0: 0,
         };
         let push = bytemuck::bytes_of(&push);
-        let rw = (
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
-            vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_WRITE,
-        );
+        let rw = access::COMPUTE_READ_WRITE;
         // WAR: the previous frame's readers of the list and arguments are done.
         barrier::record(d, cmd, &[barrier::memory(access::ALL_READ_WRITE, rw)], &[]);
         self.count.bind(

@@ -66,6 +66,11 @@ pub mod access {
     pub const HOST_READ: (S, A) = (S::HOST, A::HOST_READ);
     pub const COMPUTE_READ: (S, A) = (S::COMPUTE_SHADER, A::SHADER_READ);
     pub const COMPUTE_WRITE: (S, A) = (S::COMPUTE_SHADER, A::SHADER_WRITE);
+    /// Compute reads and writes of the same data: atomics, read-modify-write images.
+    pub const COMPUTE_READ_WRITE: (S, A) = (
+        S::COMPUTE_SHADER,
+        A::from_raw(A::SHADER_READ.as_raw() | A::SHADER_WRITE.as_raw()),
+    );
     pub const ANY_SHADER_READ: (S, A) = (
         S::from_raw(S::VERTEX_SHADER.as_raw() | S::FRAGMENT_SHADER.as_raw() | S::COMPUTE_SHADER.as_raw()),
         A::from_raw(A::SHADER_READ.as_raw() | A::UNIFORM_READ.as_raw()),

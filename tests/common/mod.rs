@@ -22,6 +22,20 @@ pub fn assert_no_validation_messages(ctx: &Context) {
     );
 }
 
+/// `n` random G-buffer material ids below `ids`, each `MATERIAL_NONE` (sky) with
+/// probability `p_none`.
+pub fn random_material_ids(rng: &mut impl rand::Rng, n: usize, p_none: f64, ids: u32) -> Vec<u32> {
+    (0..n)
+        .map(|_| {
+            if rng.random_bool(p_none) {
+                speculum::shader_defines::MATERIAL_NONE
+            } else {
+                rng.random_range(0..ids)
+            }
+        })
+        .collect()
+}
+
 /// A deterministic RNG per test, so a failure reproduces.
 pub fn rng(seed: u64) -> rand::rngs::StdRng {
     use rand::SeedableRng;

@@ -108,13 +108,7 @@ impl RadixSort {
         let num_tiles = n.div_ceil(TILE);
         let passes = 32 * b.key_words / SORT_RADIX_BITS;
         let step = |src: (vk::PipelineStageFlags2, vk::AccessFlags2)| {
-            [barrier::memory(
-                src,
-                (
-                    vk::PipelineStageFlags2::COMPUTE_SHADER,
-                    vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_WRITE,
-                ),
-            )]
+            [barrier::memory(src, barrier::access::COMPUTE_READ_WRITE)]
         };
         for pass in 0..passes {
             let (i, o) = ((pass % 2) as usize, ((pass + 1) % 2) as usize);

@@ -1,10 +1,10 @@
 #version 460
 // ssr.compact, step 1 of 3: failed pixels per tile.
-#include "compact.glsl"
-
 layout(local_size_x = SORT_WG) in;
 
 layout(binding = 0, r32ui) uniform readonly uimage2D mask; // nonzero: the pixel needs a ray
+#define COMPACT_MASK
+#include "compact.glsl"
 layout(binding = 1, std430) writeonly buffer TileCounts { uint tile_counts[]; };
 
 shared uint s_count;
@@ -15,12 +15,10 @@ void main() {
         s_count = 0u;
     }
     barrier();
-    uint pixels = pc.size.x * pc.size.y;
     uint base = gl_WorkGroupID.x * COMPACT_TILE + l * SORT_ITEMS;
     uint mine = 0u;
     for (uint k = 0u; k < SORT_ITEMS; ++k) {
-        uint i = base + k;
-        if (i < pixels && imageLoad(mask, ivec2(i % pc.size.x, i / pc.size.x)).r != 0u) {
+        if (slot_listed(base + k)) {
             mine += 1u;
         }
     }

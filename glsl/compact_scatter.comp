@@ -1,33 +1,30 @@
 #version 460
-// ssr.compact, step 3 of 3: every failed pixel to its slot, in row-major order.
-#include "compact.glsl"
+// ssr.compact, step 3 of 3: every failed pixel to its slot, in tile order (compact.glsl).
 #define WG_SCAN_SIZE SORT_WG
 #include "wg_scan.glsl"
 
 layout(local_size_x = SORT_WG) in;
 
 layout(binding = 0, r32ui) uniform readonly uimage2D mask;
+#define COMPACT_MASK
+#include "compact.glsl"
 layout(binding = 1, std430) readonly buffer TileOffsets { uint tile_offsets[]; };
 layout(binding = 2, std430) writeonly buffer Pixels { uint pixels_out[]; };
 
 void main() {
     uint l = gl_LocalInvocationID.x;
-    uint pixels = pc.size.x * pc.size.y;
     uint base = gl_WorkGroupID.x * COMPACT_TILE + l * SORT_ITEMS;
     uint mine = 0u;
     for (uint k = 0u; k < SORT_ITEMS; ++k) {
-        uint i = base + k;
-        if (i < pixels && imageLoad(mask, ivec2(i % pc.size.x, i / pc.size.x)).r != 0u) {
+        if (slot_listed(base + k)) {
             mine += 1u;
         }
     }
     uint total;
     uint slot = tile_offsets[gl_WorkGroupID.x] + wg_exclusive_scan(mine, total);
     for (uint k = 0u; k < SORT_ITEMS; ++k) {
-        uint i = base + k;
-        uvec2 p = uvec2(i % pc.size.x, i / pc.size.x);
-        if (i < pixels && imageLoad(mask, ivec2(p)).r != 0u) {
-            pixels_out[slot++] = pack_pixel(p);
+        if (slot_listed(base + k)) {
+            pixels_out[slot++] = pack_pixel(pixel_at(base + k));
         }
     }
 }

@@ -1,27 +1,25 @@
 #version 460
-// reflect.merge, step 2 (run twice: horizontal, then vertical): a Gaussian blur of the
+// reflect.merge, step 3 (run twice: horizontal, then vertical): a Gaussian blur of the
 // merged reflection restricted to the band around SSR/RT seams. A pixel is blurred only
 // when a pixel of the other source lies within `band` pixels along this direction;
 // only reflective neighbours contribute, so the blur never bleeds across the edge of a
 // reflector. Mirrored by cpu_ref::merge::seam_blur.
 //
-// Only tiles near a seam do any work. A tile is *active* when the tiles within
-// ceil(band / WG_2D) of it (merge's per-tile source bits) hold both SSR and RT pixels;
-// a pixel of an inactive tile has no other-source pixel within `band` on either axis,
-// so both blurs leave it as it is. The horizontal pass decides and records each
-// tile's activity and writes its active tiles to `scratch`; the vertical pass writes
-// the active tiles back into `reflection` in place, taking a neighbour's horizontally
-// blurred value from `scratch` when its tile is active and from `reflection` when not
-// (an inactive tile's scratch is never written). No texel is both read and written by
-// different workgroups of one pass.
+// One workgroup per active tile (reflect_tiles.comp lists them and sizes this indirect
+// dispatch); the other tiles have no seam within reach and are never touched. The
+// horizontal pass writes its active tiles to `scratch`; the vertical pass writes them
+// back into `reflection` in place, taking a neighbour's horizontally blurred value from
+// `scratch` when its tile is active and from `reflection` when not (an inactive tile's
+// scratch is never written, and its reflection never changes). No texel is both read
+// and written by different workgroups of one pass.
 #include "frame.glsl"
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
 
 layout(binding = 1, rgba32f) uniform image2D reflection;
 layout(binding = 2, rgba32f) uniform image2D scratch;
-layout(binding = 3, std430) readonly buffer TileSources { uint tile_sources[]; };
-layout(binding = 4, std430) buffer TileActive { uint tile_active[]; };
+layout(binding = 3, std430) readonly buffer TileActive { uint tile_active[]; };
+layout(binding = 4, std430) readonly buffer TileList { uint tile_list[]; };
 
 layout(push_constant) uniform Push {
     ivec2 axis;  // (1, 0): horizontal pass; (0, 1): vertical pass
@@ -29,15 +27,14 @@ layout(push_constant) uniform Push {
     int band;    // half-width of the seam band in pixels
 } pc;
 
-const uint BOTH = (1u << SOURCE_SSR) | (1u << SOURCE_RT);
-
-uint tile_index(ivec2 tile) {
-    return uint(tile.y) * gl_NumWorkGroups.x + uint(tile.x);
+int tiles_x() {
+    return (int(frame.resolution.x) + int(WG_2D) - 1) / int(WG_2D);
 }
 
 // The horizontally blurred value of pixel q (inside the image), for the vertical pass.
 vec4 horizontal_result(ivec2 q) {
-    return tile_active[tile_index(q / int(WG_2D))] != 0u ? imageLoad(scratch, q) : imageLoad(reflection, q);
+    ivec2 tile = q / int(WG_2D);
+    return tile_active[tile.y * tiles_x() + tile.x] != 0u ? imageLoad(scratch, q) : imageLoad(reflection, q);
 }
 
 vec4 source_at(ivec2 q) {
@@ -45,28 +42,10 @@ vec4 source_at(ivec2 q) {
 }
 
 void main() {
-    // Every invocation decides its tile's activity itself: no workgroup barrier.
-    ivec2 tile = ivec2(gl_WorkGroupID.xy);
-    bool tile_is_active;
-    if (pc.axis.x == 1) {
-        int k = (pc.band + int(WG_2D) - 1) / int(WG_2D);
-        ivec2 tiles = ivec2(gl_NumWorkGroups.xy);
-        uint bits = 0u;
-        for (int y = max(tile.y - k, 0); y <= min(tile.y + k, tiles.y - 1); ++y) {
-            for (int x = max(tile.x - k, 0); x <= min(tile.x + k, tiles.x - 1); ++x) {
-                bits |= tile_sources[tile_index(ivec2(x, y))];
-            }
-        }
-        tile_is_active = (bits & BOTH) == BOTH;
-        if (gl_LocalInvocationIndex == 0u) {
-            tile_active[tile_index(tile)] = tile_is_active ? 1u : 0u;
-        }
-    } else {
-        tile_is_active = tile_active[tile_index(tile)] != 0u;
-    }
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    int t = int(tile_list[gl_WorkGroupID.x]);
+    ivec2 p = ivec2(t % tiles_x(), t / tiles_x()) * int(WG_2D) + ivec2(gl_LocalInvocationID.xy);
     ivec2 res = ivec2(frame.resolution);
-    if (!tile_is_active || any(greaterThanEqual(p, res))) {
+    if (any(greaterThanEqual(p, res))) {
         return;
     }
     vec4 c = source_at(p);

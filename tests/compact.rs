@@ -1,4 +1,4 @@
-//! `ssr.compact` against the CPU on random masks: the list (row-major) and its count
+//! `ssr.compact` against the CPU on random masks: the list (in tile order) and its count
 //! exactly, and the indirect dispatch arguments.
 
 mod common;
@@ -45,7 +45,7 @@ fn compaction_matches_cpu_on_random_masks() {
                 .unwrap();
             pass.out.indirect.write(&[0xcdu8; 16]).unwrap();
             ctx.one_shot(|cmd| pass.record(cmd, &img)).unwrap();
-            let want = compact(&mask, w);
+            let want = compact(&mask, w, h);
             let args: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.indirect.read().unwrap());
             assert_eq!(
                 args,
@@ -59,4 +59,20 @@ fn compaction_matches_cpu_on_random_masks() {
         }
     }
     common::assert_no_validation_messages(&ctx);
+}
+
+/// The list's order visits every pixel exactly once, whole 8x8 blocks at a time.
+#[test]
+fn list_order_is_a_permutation_of_the_pixels() {
+    for (w, h) in [(1u32, 1u32), (67, 45), (8, 16), (300, 7)] {
+        let order: Vec<(u32, u32)> = speculum::cpu_ref::compact::order(w, h).collect();
+        let mut seen = vec![0u32; (w * h) as usize];
+        for &(x, y) in &order {
+            seen[(y * w + x) as usize] += 1;
+        }
+        assert!(seen.iter().all(|&c| c == 1), "{w}x{h}: a pixel listed other than once");
+        // The first block's pixels come first.
+        let first = (w.min(8) * h.min(8)) as usize;
+        assert!(order[..first].iter().all(|&(x, y)| x < 8 && y < 8), "{w}x{h}");
+    }
 }

@@ -114,6 +114,9 @@ fn merge_and_seam_blur_match_cpu_reference() {
         let poison = vec![POISON; n];
         pass.reflection().write(bytemuck::cast_slice(&poison), general).unwrap();
         pass.scratch().write(bytemuck::cast_slice(&poison), general).unwrap();
+        for b in pass.tile_buffers() {
+            b.write(&vec![0xcdu8; b.size as usize]).unwrap();
+        }
         ctx.one_shot(|cmd| {
             let blur = BlurParams { radius, band };
             pass.record(
@@ -165,6 +168,25 @@ fn merge_and_seam_blur_match_cpu_reference() {
                 );
             }
             blurred += (want[i] != merged[i]) as usize;
+        }
+        if radius > 0 {
+            // The tiles the blur works on: activity per tile and the list, exactly.
+            let (active, listed) = pass.read_tiles().unwrap();
+            let want_active = merge::active_tiles(&merged, w, h, band);
+            assert_eq!(active, want_active, "tile activity (band {band})");
+            let want_listed: Vec<u32> = (0..want_active.len() as u32)
+                .filter(|&t| want_active[t as usize])
+                .collect();
+            assert_eq!(listed, want_listed, "listed tiles (band {band})");
+            // Both kinds of tile must occur for the comparison to mean anything (a band
+            // of 64 reaches every tile of this image from a seam).
+            let (n_listed, n_tiles) = (listed.len(), active.len());
+            if rt_enabled {
+                assert!(n_listed > 0, "no tile active (band {band})");
+            }
+            if band < 16 {
+                assert!(n_listed < n_tiles, "every tile active (band {band})");
+            }
         }
         let none = want.iter().filter(|p| p[3] as u32 == SOURCE_NONE).count();
         println!("radius {radius} band {band} rt {rt_enabled}: {blurred} pixels blurred, {none} without reflection");

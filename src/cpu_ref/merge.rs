@@ -1,6 +1,7 @@
-//! Reference of `glsl/reflect_merge.comp` and `glsl/reflect_blur.comp` (reflect.merge).
+//! Reference of `glsl/reflect_merge.comp`, `glsl/reflect_tiles.comp` and
+//! `glsl/reflect_blur.comp` (reflect.merge).
 
-use crate::shader_defines::{FAIL_BLEND, SOURCE_NONE, SOURCE_RT, SOURCE_SSR};
+use crate::shader_defines::{FAIL_BLEND, SOURCE_NONE, SOURCE_RT, SOURCE_SSR, WG_2D};
 
 /// One pixel of the merge: the reflection and its source (`SOURCE_*`, stored in alpha).
 /// `fail`: the fail mask; `ssr`: SSR colour (rgb) and confidence (a); `rt`: the
@@ -75,4 +76,30 @@ pub fn seam_blur(
         }
     }
     out
+}
+
+/// The seam blur's tile activity (`glsl/reflect_tiles.comp`): per `WG_2D` x `WG_2D`
+/// tile of a `width` x `height` merged image (alpha: the source), row-major, whether the
+/// tiles within `ceil(band / WG_2D)` of it hold both SSR and RT pixels.
+pub fn active_tiles(merged: &[[f32; 4]], width: usize, height: usize, band: u32) -> Vec<bool> {
+    let wg = WG_2D as usize;
+    let (tx, ty) = (width.div_ceil(wg), height.div_ceil(wg));
+    let mut bits = vec![0u32; tx * ty];
+    for (i, p) in merged.iter().enumerate() {
+        bits[(i / width / wg) * tx + (i % width) / wg] |= 1 << (p[3] as u32);
+    }
+    let k = band.div_ceil(WG_2D) as usize;
+    let both = (1 << SOURCE_SSR) | (1 << SOURCE_RT);
+    (0..tx * ty)
+        .map(|t| {
+            let (x, y) = (t % tx, t / tx);
+            let mut b = 0;
+            for yy in y.saturating_sub(k)..=(y + k).min(ty - 1) {
+                for xx in x.saturating_sub(k)..=(x + k).min(tx - 1) {
+                    b |= bits[yy * tx + xx];
+                }
+            }
+            b & both == both
+        })
+        .collect()
 }

@@ -1,7 +1,10 @@
 //! `reflect.merge`: SSR where it succeeded, ray-traced reflections where it failed,
 //! labelled by source; then a separable Gaussian blur restricted to the band around
-//! SSR/RT seams (horizontal, then vertical), run only on the 8x8 tiles a seam comes
-//! near (see `glsl/reflect_blur.comp`).
+//! SSR/RT seams (horizontal, then vertical), dispatched indirectly over a list of the
+//! 8x8 tiles a seam comes near (`glsl/reflect_tiles.comp`, `glsl/reflect_blur.comp`).
+//! A full-screen dispatch costs lavapipe about as much for a pixel with nothing to do
+//! as for one with work (it runs both sides of every branch), so the blur must not be
+//! dispatched over tiles it leaves unchanged.
 
 use super::gbuffer::GBuffer;
 use crate::error::Result;
@@ -22,6 +25,12 @@ pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 struct MergePush {
     reflective_min: f32,
     rt_enabled: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TilesPush {
+    band: i32,
 }
 
 #[repr(C)]
@@ -52,6 +61,11 @@ struct Targets {
     tile_sources: Buffer,
     /// Per tile: 1 when the blur works on it this frame.
     tile_active: Buffer,
+    /// The active tiles' indices (row-major tile index), in no particular order.
+    tile_list: Buffer,
+    /// `[groups_x, 1, 1]`: the blur's indirect dispatch (one workgroup per listed tile).
+    blur_args: Buffer,
+    tiles: u32,
 }
 
 impl Targets {
@@ -59,20 +73,26 @@ impl Targets {
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
         let tiles = (extent.width.div_ceil(WG_2D) * extent.height.div_ceil(WG_2D)) as u64;
-        let buffer = |name| {
+        let buffer = |name, size| {
             Buffer::new(
                 ctx,
                 name,
-                tiles * 4,
-                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                size,
+                vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER,
                 gpu_allocator::MemoryLocation::GpuOnly,
             )
         };
         Ok(Self {
             reflection: Image::new(ctx, "reflect.merged", extent, FORMAT, usage)?,
             scratch: Image::new(ctx, "reflect.scratch", extent, FORMAT, usage)?,
-            tile_sources: buffer("reflect.tile_sources")?,
-            tile_active: buffer("reflect.tile_active")?,
+            tile_sources: buffer("reflect.tile_sources", tiles * 4)?,
+            tile_active: buffer("reflect.tile_active", tiles * 4)?,
+            tile_list: buffer("reflect.tile_list", tiles * 4)?,
+            blur_args: buffer("reflect.blur_args", 12)?,
+            tiles: tiles as u32,
         })
     }
 }
@@ -80,6 +100,7 @@ impl Targets {
 pub struct MergePass {
     ctx: Arc<Context>,
     merge: Pipeline,
+    tiles: Pipeline,
     blur: Pipeline,
     sampler: Sampler,
     targets: Targets,
@@ -90,6 +111,12 @@ impl MergePass {
         Ok(Self {
             ctx: ctx.clone(),
             merge: Pipeline::compute(ctx, NAME, ("reflect_merge.comp", shaders::REFLECT_MERGE_COMP), 8)?,
+            tiles: Pipeline::compute(
+                ctx,
+                "reflect.tiles",
+                ("reflect_tiles.comp", shaders::REFLECT_TILES_COMP),
+                4,
+            )?,
             blur: Pipeline::compute(
                 ctx,
                 "reflect.blur",
@@ -109,6 +136,25 @@ impl MergePass {
     /// The blur's intermediate image (for layout transitions by the renderer).
     pub fn scratch(&self) -> &Image {
         &self.targets.scratch
+    }
+
+    /// The seam blur's tiles of the last run (a readback, for tests): per tile whether
+    /// it was active, and the listed tiles, sorted.
+    pub fn read_tiles(&self) -> Result<(Vec<bool>, Vec<u32>)> {
+        let t = &self.targets;
+        let active: Vec<u32> = bytemuck::pod_collect_to_vec(&t.tile_active.read()?);
+        let args: Vec<u32> = bytemuck::pod_collect_to_vec(&t.blur_args.read()?);
+        let listed: Vec<u32> = bytemuck::pod_collect_to_vec(&t.tile_list.read()?);
+        let mut listed = listed[..(args[0] as usize).min(t.tiles as usize)].to_vec();
+        listed.sort_unstable();
+        Ok((active.iter().map(|&a| a != 0).collect(), listed))
+    }
+
+    /// The seam blur's per-tile buffers (activity, list, dispatch arguments), for tests
+    /// that poison them before a run.
+    pub fn tile_buffers(&self) -> [&Buffer; 3] {
+        let t = &self.targets;
+        [&t.tile_active, &t.tile_list, &t.blur_args]
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
@@ -179,15 +225,49 @@ impl MergePass {
             );
             return;
         }
+        // RAW: the tile pass reads the merge's tile bits, the blur its merged image;
+        // WAW: the tile pass rewrites the previous run's activity and list. WAR/WAW: the
+        // previous run's uses of the dispatch arguments finish before they are reset.
+        barrier::record(
+            d,
+            cmd,
+            &[
+                barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE),
+                barrier::memory(access::COMPUTE_ANY, access::TRANSFER_WRITE),
+            ],
+            &[],
+        );
+        let args: [u32; 3] = [0, 1, 1];
+        unsafe { d.cmd_update_buffer(cmd, t.blur_args.raw, 0, bytemuck::bytes_of(&args)) };
+        // RAW: the tile pass's atomics see the zeroed count.
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE)],
+            &[],
+        );
+        self.tiles.bind(
+            cmd,
+            &[
+                Resource::Buffer(frame),
+                Resource::Buffer(&t.tile_sources),
+                Resource::Buffer(&t.tile_active),
+                Resource::Buffer(&t.tile_list),
+                Resource::Buffer(&t.blur_args),
+            ],
+            bytemuck::bytes_of(&TilesPush { band: blur.band as i32 }),
+        );
+        self.tiles.dispatch_covering(cmd, [t.tiles, 1, 1]);
         let rw = access::COMPUTE_READ_WRITE;
         for axis in [[1, 0], [0, 1]] {
-            // RAW: this blur pass reads what the previous step wrote (images and tile
-            // buffers); WAR: it overwrites what the previous step read.
+            // RAW: this blur pass reads what the previous step wrote (images, tile list
+            // and activity) and dispatches from the tile count; WAR: it overwrites what
+            // the previous step read.
             barrier::record(
                 d,
                 cmd,
                 &[
-                    barrier::memory(access::COMPUTE_WRITE, rw),
+                    barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_READ_AND_INDIRECT),
                     barrier::memory(access::COMPUTE_READ, rw),
                 ],
                 &[],
@@ -203,13 +283,12 @@ impl MergePass {
                     Resource::Buffer(frame),
                     Resource::StorageImage(&t.reflection),
                     Resource::StorageImage(&t.scratch),
-                    Resource::Buffer(&t.tile_sources),
                     Resource::Buffer(&t.tile_active),
+                    Resource::Buffer(&t.tile_list),
                 ],
                 bytemuck::bytes_of(&push),
             );
-            // The same tile grid as the merge, so tile indices agree.
-            self.blur.dispatch_covering(cmd, [e.width, e.height, 1]);
+            unsafe { d.cmd_dispatch_indirect(cmd, t.blur_args.raw, 0) };
         }
         // RAW: compose reads the blurred reflection.
         barrier::record(

@@ -1,10 +1,10 @@
-//! `ssr.compact`: stream compaction of the fail mask into a list of pixels (row-major,
-//! deterministic) plus the indirect dispatch arguments of the ray-tracing pass.
+//! `ssr.compact`: stream compaction of the fail mask into a list of pixels (in tile
+//! order, see `glsl/shared/compact.glsl`; deterministic) plus the indirect dispatch arguments of the ray-tracing pass.
 //! Count per tile → scan (one workgroup) → scatter: no workgroup waits on another.
 //! CPU reference: `cpu_ref::compact`.
 
 use crate::error::Result;
-use crate::shader_defines::{SORT_ITEMS, SORT_WG};
+use crate::shader_defines::{SORT_ITEMS, SORT_WG, WG_2D};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Image, Pipeline, Resource};
@@ -14,8 +14,13 @@ use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub const NAME: &str = "ssr.compact";
-/// Pixels per tile of the count and scatter kernels.
+/// Slots per tile of the count and scatter kernels.
 pub const TILE: u32 = SORT_WG * SORT_ITEMS;
+
+/// Slots of the list's order for a mask of `extent`: whole `WG_2D` x `WG_2D` blocks.
+fn slots(extent: vk::Extent2D) -> u32 {
+    extent.width.div_ceil(WG_2D) * extent.height.div_ceil(WG_2D) * WG_2D * WG_2D
+}
 /// Format of the mask this pass reads: nonzero means "needs a ray".
 pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
 
@@ -24,7 +29,7 @@ pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
 struct CompactPush {
     size: [u32; 2],
     num_tiles: u32,
-    _pad0: u32,
+    slots: u32,
 }
 
 /// The compacted list and its size.
@@ -44,7 +49,7 @@ impl CompactOutputs {
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
         let n = extent.width as u64 * extent.height as u64;
-        let tiles = (n as u32).div_ceil(TILE).max(1) as u64;
+        let tiles = slots(extent).div_ceil(TILE).max(1) as u64;
         Ok(Self {
             pixels: Buffer::new(ctx, "compact.pixels", n * 4, usage, MemoryLocation::GpuOnly)?,
             indirect: Buffer::new(
@@ -119,11 +124,12 @@ impl CompactPass {
     pub fn record(&self, cmd: vk::CommandBuffer, mask: &Image) {
         let d = &self.ctx.device;
         let e = self.out.extent;
-        let num_tiles = (e.width * e.height).div_ceil(TILE);
+        let slots = slots(e);
+        let num_tiles = slots.div_ceil(TILE);
         let push = CompactPush {
             size: [e.width, e.height],
             num_tiles,
-            _pad0: 0,
+            slots,
         };
         let push = bytemuck::bytes_of(&push);
         let rw = access::COMPUTE_READ_WRITE;
@@ -159,10 +165,14 @@ impl CompactPass {
         );
         unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
         // RAW: the ray-tracing pass reads the list and dispatches from the arguments.
-        let dst = (
-            vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::DRAW_INDIRECT,
-            vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::INDIRECT_COMMAND_READ,
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(
+                access::COMPUTE_WRITE,
+                access::COMPUTE_READ_AND_INDIRECT,
+            )],
+            &[],
         );
-        barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, dst)], &[]);
     }
 }

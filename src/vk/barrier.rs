@@ -71,6 +71,18 @@ pub mod access {
         S::COMPUTE_SHADER,
         A::from_raw(A::SHADER_READ.as_raw() | A::SHADER_WRITE.as_raw()),
     );
+    /// What reads a list a compute pass wrote and dispatches over it: the shaders, and
+    /// `vkCmdDispatchIndirect` reading its arguments.
+    pub const COMPUTE_READ_AND_INDIRECT: (S, A) = (
+        S::from_raw(S::COMPUTE_SHADER.as_raw() | S::DRAW_INDIRECT.as_raw()),
+        A::from_raw(A::SHADER_READ.as_raw() | A::INDIRECT_COMMAND_READ.as_raw()),
+    );
+    /// Every compute access and indirect-argument read (the source of a WAR or WAW
+    /// barrier before data such passes used is rewritten).
+    pub const COMPUTE_ANY: (S, A) = (
+        S::from_raw(S::COMPUTE_SHADER.as_raw() | S::DRAW_INDIRECT.as_raw()),
+        A::from_raw(A::SHADER_READ.as_raw() | A::SHADER_WRITE.as_raw() | A::INDIRECT_COMMAND_READ.as_raw()),
+    );
     pub const ANY_SHADER_READ: (S, A) = (
         S::from_raw(S::VERTEX_SHADER.as_raw() | S::FRAGMENT_SHADER.as_raw() | S::COMPUTE_SHADER.as_raw()),
         A::from_raw(A::SHADER_READ.as_raw() | A::UNIFORM_READ.as_raw()),

@@ -17,6 +17,9 @@ layout(binding = 4, rgba32f) uniform readonly image2D lit;
 layout(binding = 5, rgba32f) uniform writeonly image2D ssr_out; // rgb colour, a confidence
 layout(binding = 6, r32ui) uniform writeonly uimage2D fail_mask;
 
+// The rt mode's variant: no SSR, every reflective pixel fails (FAIL_FORCED).
+layout(constant_id = 0) const bool MASK_ONLY = false;
+
 layout(push_constant) uniform Push {
     uint max_steps;
     float stride;         // pixels per step
@@ -25,7 +28,6 @@ layout(push_constant) uniform Push {
     float edge_fade;      // fraction of the screen's smaller side over which confidence fades
     float min_confidence; // below: the pixel fails
     float reflective_min; // reflectivity above which a pixel reflects
-    uint force_fail;      // 1: SSR off, every reflective pixel fails (rt mode)
     float recursion_min;  // hits on surfaces more reflective than this fail
 } pc;
 
@@ -63,7 +65,7 @@ void main() {
         imageStore(fail_mask, p, uvec4(0u));
         return;
     }
-    if (pc.force_fail != 0u) {
+    if (MASK_ONLY) {
         imageStore(ssr_out, p, vec4(0.0));
         imageStore(fail_mask, p, uvec4(FAIL_FORCED));
         return;
@@ -74,6 +76,14 @@ void main() {
     vec3 vpos = (frame.view * vec4(w, 1.0)).xyz;
     vec3 vn = normalize(mat3(frame.view) * n_world);
     vec3 vdir = normalize(reflect(normalize(vpos), vn));
+    // Confidence falls with the ray's heading back to the camera, 1 - vdir.z at best
+    // (no edge fade). Below the threshold every outcome fails, so the ray is not
+    // marched: the pixel fails as it would have, without the march.
+    if (1.0 - vdir.z < pc.min_confidence) {
+        imageStore(ssr_out, p, vec4(0.0));
+        imageStore(fail_mask, p, uvec4(FAIL_LOW_CONFIDENCE));
+        return;
+    }
     // Start a little off the surface so the first steps do not hit the pixel itself.
     vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
 

@@ -478,11 +478,16 @@ impl Renderer {
                 edge_fade: st.ssr_edge_fade,
                 min_confidence: st.ssr_min_confidence,
                 reflective_min: st.reflective_min,
-                force_fail: (mode == Mode::Rt) as u32,
                 recursion_min: st.ssr_recursion_min.max(st.reflective_min),
             };
-            self.ssr
-                .record(cmd, &self.frame_ubo, &self.gbuffer.targets, &self.light.lit, &params);
+            self.ssr.record(
+                cmd,
+                &self.frame_ubo,
+                &self.gbuffer.targets,
+                &self.light.lit,
+                &params,
+                mode == Mode::Rt,
+            );
             // RAW: compaction and merge read the fail mask and SSR colour.
             barrier::record(
                 d,

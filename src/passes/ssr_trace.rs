@@ -24,8 +24,6 @@ pub struct SsrParams {
     pub edge_fade: f32,
     pub min_confidence: f32,
     pub reflective_min: f32,
-    /// 1: SSR off, every reflective pixel fails (`rt` mode).
-    pub force_fail: u32,
     /// Hits on surfaces more reflective than this fail (need the ray tracer's bounce).
     pub recursion_min: f32,
 }
@@ -50,6 +48,8 @@ impl SsrOutputs {
 pub struct SsrPass {
     ctx: Arc<Context>,
     pipeline: Pipeline,
+    /// The `rt` mode's variant (`MASK_ONLY`): no SSR, every reflective pixel fails.
+    mask_only: Pipeline,
     sampler: Sampler,
     pub out: SsrOutputs,
 }
@@ -60,6 +60,13 @@ impl SsrPass {
         Ok(Self {
             ctx: ctx.clone(),
             pipeline: Pipeline::compute(ctx, NAME, ("ssr_trace.comp", shaders::SSR_TRACE_COMP), push)?,
+            mask_only: Pipeline::compute_specialized(
+                ctx,
+                "ssr.mask_only",
+                ("ssr_trace.comp", shaders::SSR_TRACE_COMP),
+                push,
+                &[1],
+            )?,
             sampler: Sampler::nearest_clamp(ctx, "ssr.sampler")?,
             out: SsrOutputs::new(ctx, extent)?,
         })
@@ -70,11 +77,21 @@ impl SsrPass {
         Ok(())
     }
 
-    /// Records the march. G-buffer in `SHADER_READ_ONLY_OPTIMAL`; `lit` and the outputs
-    /// in `GENERAL`.
-    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, lit: &Image, params: &SsrParams) {
+    /// Records the march, or with `mask_only` (the `rt` mode) only the fail mask, every
+    /// reflective pixel failed (`FAIL_FORCED`). G-buffer in `SHADER_READ_ONLY_OPTIMAL`;
+    /// `lit` and the outputs in `GENERAL`.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        frame: &Buffer,
+        gbuffer: &GBuffer,
+        lit: &Image,
+        params: &SsrParams,
+        mask_only: bool,
+    ) {
         let s = &self.sampler;
-        self.pipeline.bind(
+        let pipeline = if mask_only { &self.mask_only } else { &self.pipeline };
+        pipeline.bind(
             cmd,
             &[
                 Resource::Buffer(frame),
@@ -88,6 +105,6 @@ impl SsrPass {
             bytemuck::bytes_of(params),
         );
         let e = self.out.color.extent;
-        self.pipeline.dispatch_covering(cmd, [e.width, e.height, 1]);
+        pipeline.dispatch_covering(cmd, [e.width, e.height, 1]);
     }
 }

@@ -131,7 +131,32 @@ impl Pipeline {
 
     /// A compute pipeline from one module; `push_size` bytes of push constants.
     pub fn compute(ctx: &Arc<Context>, name: &'static str, shader: Shader, push_size: u32) -> Result<Self> {
+        Self::compute_specialized(ctx, name, shader, push_size, &[])
+    }
+
+    /// A compute pipeline whose specialization constants `constant_id = i` (32-bit:
+    /// uint, int, float bits, or bool as 0/1) take `constants[i]`. A variant selected
+    /// this way is compiled without the code it does not use; lavapipe, which runs
+    /// both sides of every branch, pays for any code left in, taken or not.
+    pub fn compute_specialized(
+        ctx: &Arc<Context>,
+        name: &'static str,
+        shader: Shader,
+        push_size: u32,
+        constants: &[u32],
+    ) -> Result<Self> {
         let m = module(ctx, shader)?;
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|i| {
+                vk::SpecializationMapEntry::default()
+                    .constant_id(i)
+                    .offset(4 * i)
+                    .size(4)
+            })
+            .collect();
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(constants));
         let stage = vk::ShaderStageFlags::COMPUTE;
         let bindings = merge(name, &[(stage, &m.reflection)])?;
         let result = Self::layouts(ctx, name, &bindings, stage, push_size).and_then(|(set_layout, layout)| {
@@ -140,7 +165,8 @@ impl Pipeline {
                     vk::PipelineShaderStageCreateInfo::default()
                         .stage(stage)
                         .module(m.raw)
-                        .name(c"main"),
+                        .name(c"main")
+                        .specialization_info(&spec),
                 )
                 .layout(layout);
             let raw = unsafe {

@@ -60,8 +60,14 @@ fn reflection_split_benchmark_is_valid() {
     };
     let r = speculum::bench::reflect::run(&ctx, &scene, &settings, plan).unwrap();
     assert!(r.valid, "{r:?}");
-    assert_eq!(r.points.len(), speculum::bench::reflect::THRESHOLDS.len());
+    assert_eq!(r.points.len(), speculum::bench::reflect::sweep(&settings).len());
     assert!(r.points[0].rt_pixel_fraction < 0.9 && r.points.last().unwrap().rt_pixel_fraction == 1.0);
+    // The share must actually vary along the step budgets, not only at the last point.
+    let budgets = &r.points[..r.points.len() - 1];
+    assert!(
+        budgets.last().unwrap().rt_pixel_fraction > budgets[0].rt_pixel_fraction + 0.05,
+        "{r:?}"
+    );
     assert!(r
         .points
         .iter()

@@ -1,8 +1,12 @@
 //! `speculum bench reflect`: how the reflection passes' time splits as the share of
-//! SSR-failed (ray-traced) pixels varies. The share is swept by raising the SSR
-//! confidence threshold (everything else fixed), from SSR's own failures up to every
-//! reflective pixel. Checked in the same run: the reflective pixel count is the same at
-//! every step and the failed share never decreases as the threshold rises.
+//! SSR-failed (ray-traced) pixels varies. The share is swept by halving SSR's step
+//! budget from the settings' value down to one step (a ray whose hit lies beyond the
+//! budget fails; everything else fixed), then by rejecting every SSR hit (a confidence
+//! threshold above 1), which traces every reflective pixel with SSR still run.
+//! (The confidence threshold alone no longer moves the share: hits below confidence 1
+//! are traced either way, to be blended.) Checked in the same run: the reflective pixel
+//! count is the same at every point, the failed share never decreases along the sweep,
+//! and the last point traces every reflective pixel.
 
 use crate::error::Result;
 use crate::headless::{self, FramePlan};
@@ -15,6 +19,7 @@ use std::sync::Arc;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct SplitPoint {
+    pub ssr_max_steps: u32,
     pub ssr_min_confidence: f32,
     pub rt_pixel_fraction: f64,
     pub failed_pixels: u64,
@@ -35,15 +40,26 @@ pub struct SplitReport {
     pub valid: bool,
 }
 
-/// Confidence thresholds of the sweep; above 1 every SSR hit fails.
-pub const THRESHOLDS: [f32; 5] = [0.0, 0.3, 0.6, 0.9, 1.01];
+/// A confidence threshold above any confidence: every SSR hit fails.
+const REJECT_ALL: f32 = 1.01;
+
+/// The sweep's (step budget, confidence threshold) points for `base`: the budget
+/// halved down to 1, then every hit rejected.
+pub fn sweep(base: &Settings) -> Vec<(u32, f32)> {
+    let mut points: Vec<(u32, f32)> = std::iter::successors(Some(base.ssr_max_steps), |&s| (s > 1).then_some(s / 2))
+        .map(|s| (s, base.ssr_min_confidence))
+        .collect();
+    points.push((base.ssr_max_steps, REJECT_ALL));
+    points
+}
 
 pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, plan: FramePlan) -> Result<SplitReport> {
     let mut points = Vec::new();
     let mut reflective = Vec::new();
-    for &t in &THRESHOLDS {
+    for (steps, t) in sweep(base) {
         let settings = Settings {
             mode: Mode::Hybrid,
+            ssr_max_steps: steps,
             ssr_min_confidence: t,
             ..base.clone()
         };
@@ -59,6 +75,7 @@ pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, plan: FramePlan) 
         .report;
         reflective.push(r.reflective_pixels);
         points.push(SplitPoint {
+            ssr_max_steps: steps,
             ssr_min_confidence: t,
             rt_pixel_fraction: r.rt_pixel_fraction,
             failed_pixels: r.failed_pixels,

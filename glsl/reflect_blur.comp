@@ -27,14 +27,10 @@ layout(push_constant) uniform Push {
     int band;    // half-width of the seam band in pixels
 } pc;
 
-int tiles_x() {
-    return (int(frame.resolution.x) + int(WG_2D) - 1) / int(WG_2D);
-}
-
 // The horizontally blurred value of pixel q (inside the image), for the vertical pass.
 vec4 horizontal_result(ivec2 q) {
     ivec2 tile = q / int(WG_2D);
-    return tile_active[tile.y * tiles_x() + tile.x] != 0u ? imageLoad(scratch, q) : imageLoad(reflection, q);
+    return tile_active[tile.y * tile_grid().x + tile.x] != 0u ? imageLoad(scratch, q) : imageLoad(reflection, q);
 }
 
 vec4 source_at(ivec2 q) {
@@ -43,7 +39,8 @@ vec4 source_at(ivec2 q) {
 
 void main() {
     int t = int(tile_list[gl_WorkGroupID.x]);
-    ivec2 p = ivec2(t % tiles_x(), t / tiles_x()) * int(WG_2D) + ivec2(gl_LocalInvocationID.xy);
+    int tiles_x = tile_grid().x;
+    ivec2 p = ivec2(t % tiles_x, t / tiles_x) * int(WG_2D) + ivec2(gl_LocalInvocationID.xy);
     ivec2 res = ivec2(frame.resolution);
     if (any(greaterThanEqual(p, res))) {
         return;

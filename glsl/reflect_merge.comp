@@ -50,6 +50,6 @@ void main() {
     // workgroups without switching between its SIMD chunks).
     bits = subgroupOr(bits);
     if (subgroupElect()) {
-        atomicOr(tile_sources[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x], bits);
+        atomicOr(tile_sources[gl_WorkGroupID.y * uint(tile_grid().x) + gl_WorkGroupID.x], bits);
     }
 }

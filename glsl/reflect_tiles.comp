@@ -24,7 +24,7 @@ layout(push_constant) uniform Push {
 const uint BOTH = (1u << SOURCE_SSR) | (1u << SOURCE_RT);
 
 void main() {
-    ivec2 tiles = (ivec2(frame.resolution) + int(WG_2D) - 1) / int(WG_2D);
+    ivec2 tiles = tile_grid();
     uint t = gl_GlobalInvocationID.x;
     bool is_active = false;
     if (t < uint(tiles.x * tiles.y)) {

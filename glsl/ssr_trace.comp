@@ -36,6 +36,12 @@ float view_z(float d) {
     return -frame.proj[3][2] / (d + frame.proj[2][2]);
 }
 
+// The confidence factor of a ray's heading (view space, unit): 1 for rays away from
+// the camera, falling to 0 for rays straight back at it, which the screen rarely holds.
+float heading_confidence(vec3 vdir) {
+    return clamp(1.0 - vdir.z, 0.0, 1.0);
+}
+
 // Pixel coordinates of a clip-space point.
 vec2 to_pixel(vec4 h) {
     return (h.xy / h.w * 0.5 + 0.5) * vec2(frame.resolution);
@@ -76,10 +82,10 @@ void main() {
     vec3 vpos = (frame.view * vec4(w, 1.0)).xyz;
     vec3 vn = normalize(mat3(frame.view) * n_world);
     vec3 vdir = normalize(reflect(normalize(vpos), vn));
-    // Confidence falls with the ray's heading back to the camera, 1 - vdir.z at best
-    // (no edge fade). Below the threshold every outcome fails, so the ray is not
-    // marched: the pixel fails as it would have, without the march.
-    if (1.0 - vdir.z < pc.min_confidence) {
+    // A hit's confidence is at most its heading's (no edge fade). Below the threshold
+    // every outcome fails, so the ray is not marched: the pixel fails as it would have,
+    // without the march.
+    if (heading_confidence(vdir) < pc.min_confidence) {
         imageStore(ssr_out, p, vec4(0.0));
         imageStore(fail_mask, p, uvec4(FAIL_LOW_CONFIDENCE));
         return;
@@ -213,7 +219,7 @@ void main() {
             vec2 hp = vec2(hit_pixel) + 0.5;
             float edge = min(min(hp.x, float(res.x) - hp.x), min(hp.y, float(res.y) - hp.y));
             float fade_px = max(pc.edge_fade * float(min(res.x, res.y)), 1.0);
-            confidence = clamp(edge / fade_px, 0.0, 1.0) * clamp(1.0 - vdir.z, 0.0, 1.0);
+            confidence = clamp(edge / fade_px, 0.0, 1.0) * heading_confidence(vdir);
             if (confidence < pc.min_confidence) {
                 fail = FAIL_LOW_CONFIDENCE;
             } else {

@@ -16,7 +16,7 @@ use speculum::passes::compose::ComposePass;
 use speculum::passes::gbuffer::GBuffer;
 use speculum::passes::light_direct::LightDirectPass;
 use speculum::shader_defines::MATERIAL_NONE;
-use speculum::vk::{barrier, Buffer, Image};
+use speculum::vk::{barrier, Image};
 
 const POISON_F32: f32 = -12345.0;
 
@@ -152,13 +152,7 @@ fn light_direct_matches_cpu_reference() {
     )
     .unwrap();
     shadow_map.write(bytemuck::cast_slice(&shadow), ro).unwrap();
-    let ubo = Buffer::with_data(
-        &ctx,
-        "test.frame",
-        vk::BufferUsageFlags::UNIFORM_BUFFER,
-        bytemuck::bytes_of(&frame),
-    )
-    .unwrap();
+    let ubo = common::frame_ubo(&ctx, &frame);
     let pass = LightDirectPass::new(&ctx, extent).unwrap();
     pass.lit
         .write(

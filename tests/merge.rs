@@ -11,7 +11,7 @@ use speculum::cpu_ref::{self, merge};
 use speculum::passes::gbuffer::GBuffer;
 use speculum::passes::reflect_merge::{BlurParams, MergePass};
 use speculum::shader_defines::{FAIL_BLEND, MATERIAL_NONE, SOURCE_NONE};
-use speculum::vk::{barrier, Buffer, Image};
+use speculum::vk::{barrier, Image};
 
 const POISON: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
 
@@ -94,13 +94,7 @@ fn merge_and_seam_blur_match_cpu_reference() {
     let rgba = vk::Format::R32G32B32A32_SFLOAT;
     let ssr_img = image("test.ssr", rgba, bytemuck::cast_slice(&ssr));
     let rt_img = image("test.rt", rgba, bytemuck::cast_slice(&rt));
-    let ubo = Buffer::with_data(
-        &ctx,
-        "test.frame",
-        vk::BufferUsageFlags::UNIFORM_BUFFER,
-        bytemuck::bytes_of(&frame),
-    )
-    .unwrap();
+    let ubo = common::frame_ubo(&ctx, &frame);
     let pass = MergePass::new(&ctx, extent).unwrap();
 
     for (radius, band, rt_enabled) in [

@@ -21,4 +21,10 @@ vec3 world_from_depth(ivec2 p, float depth) {
     vec4 w = frame.inv_view_proj * vec4(ndc, depth, 1.0);
     return w.xyz / w.w;
 }
+
+// Tiles of WG_2D x WG_2D pixels covering the frame (the grid of every 2D kernel's
+// workgroups); tile (x, y) has index y * tile_grid().x + x.
+ivec2 tile_grid() {
+    return (ivec2(frame.resolution) + int(WG_2D) - 1) / int(WG_2D);
+}
 #endif

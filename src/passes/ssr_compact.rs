@@ -1,5 +1,6 @@
-//! `ssr.compact`: stream compaction of the fail mask into a list of pixels (in tile
-//! order, see `glsl/shared/compact.glsl`; deterministic) plus the indirect dispatch arguments of the ray-tracing pass.
+//! `ssr.compact`: stream compaction of the fail mask into a list of pixels (in 8x8
+//! block order, see `glsl/shared/compact.glsl`; deterministic) plus the indirect
+//! dispatch arguments of the ray-tracing pass.
 //! Count per tile → scan (one workgroup) → scatter: no workgroup waits on another.
 //! CPU reference: `cpu_ref::compact`.
 

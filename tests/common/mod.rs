@@ -36,6 +36,17 @@ pub fn random_material_ids(rng: &mut impl rand::Rng, n: usize, p_none: f64, ids:
         .collect()
 }
 
+/// The frame uniform buffer (binding 0 of the screen-space kernels) holding `frame`.
+pub fn frame_ubo(ctx: &Arc<Context>, frame: &speculum::gpu_types::FrameUniforms) -> speculum::vk::Buffer {
+    speculum::vk::Buffer::with_data(
+        ctx,
+        "test.frame",
+        ash::vk::BufferUsageFlags::UNIFORM_BUFFER,
+        bytemuck::bytes_of(frame),
+    )
+    .unwrap()
+}
+
 /// A deterministic RNG per test, so a failure reproduces.
 pub fn rng(seed: u64) -> rand::rngs::StdRng {
     use rand::SeedableRng;

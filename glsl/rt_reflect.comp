@@ -11,6 +11,7 @@
 #include "shading.glsl"
 #define TRAVERSE_BINDING 8
 #include "traverse.glsl"
+#include "pixel_list.glsl"
 
 layout(local_size_x = LBVH_WG) in;
 
@@ -38,8 +39,7 @@ void main() {
     if (i >= indirect.w) {
         return;
     }
-    uint packed = pixels[i];
-    ivec2 p = ivec2(packed & 0xffffu, packed >> 16);
+    ivec2 p = unpack_pixel(pixels[i]);
     float depth = texelFetch(gb_depth, p, 0).r;
     vec3 pos = world_from_depth(p, depth);
     vec3 n = normalize(texelFetch(gb_normal, p, 0).xyz);

@@ -1,24 +1,24 @@
 #version 460
 // ssr.trace: screen-space reflections by perspective-correct DDA over the depth buffer
-// (McGuire & Mara 2014, "Efficient GPU Screen-Space Ray Tracing", JCGT 3(4)). For each
-// reflective pixel: the reflected ray is marched in screen space with a thickness
-// test; a hit takes the lit colour there with a confidence that fades near the screen
-// edges and for rays heading back to the camera. Writes SSR colour + confidence and
-// the fail mask (reason bits, shader_defines.rs); nonzero sends the pixel to rt.trace
+// (McGuire & Mara 2014, "Efficient GPU Screen-Space Ray Tracing", JCGT 3(4)), one
+// invocation per pixel of ssr.classify's march list (indirect dispatch). The reflected
+// ray is marched in screen space with a thickness test; a hit takes the lit colour
+// there with a confidence that fades near the screen edges and for rays heading back
+// to the camera. Writes SSR colour + confidence and the fail mask (reason bits,
+// shader_defines.rs) of the listed pixels; nonzero sends the pixel to rt.trace
 // (FAIL_BLEND: a faded hit, kept and blended with the ray-traced colour by merge).
-#include "frame.glsl"
+#include "ssr.glsl"
+#include "pixel_list.glsl"
 
-layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
+layout(local_size_x = SSR_LIST_WG) in;
 
 layout(binding = 1) uniform sampler2D gb_depth;
 layout(binding = 2) uniform sampler2D gb_normal;
-layout(binding = 3) uniform usampler2D gb_material;
-layout(binding = 4, rgba32f) uniform readonly image2D lit;
-layout(binding = 5, rgba32f) uniform writeonly image2D ssr_out; // rgb colour, a confidence
-layout(binding = 6, r32ui) uniform writeonly uimage2D fail_mask;
-
-// The rt mode's variant: no SSR, every reflective pixel fails (FAIL_FORCED).
-layout(constant_id = 0) const bool MASK_ONLY = false;
+layout(binding = 3, rgba32f) uniform readonly image2D lit;
+layout(binding = 4, rgba32f) uniform writeonly image2D ssr_out; // rgb colour, a confidence
+layout(binding = 5, r32ui) uniform writeonly uimage2D fail_mask;
+layout(binding = 6, std430) readonly buffer MarchList { uint march_list[]; };
+layout(binding = 7, std430) readonly buffer MarchArgs { uvec4 march_args; }; // w: length
 
 layout(push_constant) uniform Push {
     uint max_steps;
@@ -27,19 +27,12 @@ layout(push_constant) uniform Push {
     float max_distance;   // view-space length of the ray
     float edge_fade;      // fraction of the screen's smaller side over which confidence fades
     float min_confidence; // below: the pixel fails
-    float reflective_min; // reflectivity above which a pixel reflects
     float recursion_min;  // hits on surfaces more reflective than this fail
 } pc;
 
 // View-space z (negative in front of the camera) of G-buffer depth d.
 float view_z(float d) {
     return -frame.proj[3][2] / (d + frame.proj[2][2]);
-}
-
-// The confidence factor of a ray's heading (view space, unit): 1 for rays away from
-// the camera, falling to 0 for rays straight back at it, which the screen rarely holds.
-float heading_confidence(vec3 vdir) {
-    return clamp(1.0 - vdir.z, 0.0, 1.0);
 }
 
 // Pixel coordinates of a clip-space point.
@@ -59,37 +52,14 @@ vec3 lit_bilinear(vec2 x, ivec2 res) {
 }
 
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= march_args.w) {
+        return;
+    }
+    ivec2 p = unpack_pixel(march_list[i]);
     ivec2 res = ivec2(frame.resolution);
-    if (any(greaterThanEqual(p, res))) {
-        return;
-    }
-    uint material = texelFetch(gb_material, p, 0).r;
-    vec4 nr = texelFetch(gb_normal, p, 0);
-    if (material == MATERIAL_NONE || nr.w <= pc.reflective_min) {
-        imageStore(ssr_out, p, vec4(0.0));
-        imageStore(fail_mask, p, uvec4(0u));
-        return;
-    }
-    if (MASK_ONLY) {
-        imageStore(ssr_out, p, vec4(0.0));
-        imageStore(fail_mask, p, uvec4(FAIL_FORCED));
-        return;
-    }
-    float depth = texelFetch(gb_depth, p, 0).r;
-    vec3 w = world_from_depth(p, depth);
-    vec3 n_world = normalize(nr.xyz);
-    vec3 vpos = (frame.view * vec4(w, 1.0)).xyz;
-    vec3 vn = normalize(mat3(frame.view) * n_world);
-    vec3 vdir = normalize(reflect(normalize(vpos), vn));
-    // A hit's confidence is at most its heading's (no edge fade). Below the threshold
-    // every outcome fails, so the ray is not marched: the pixel fails as it would have,
-    // without the march.
-    if (heading_confidence(vdir) < pc.min_confidence) {
-        imageStore(ssr_out, p, vec4(0.0));
-        imageStore(fail_mask, p, uvec4(FAIL_LOW_CONFIDENCE));
-        return;
-    }
+    SsrRay ray = ssr_ray(p, texelFetch(gb_depth, p, 0).r, texelFetch(gb_normal, p, 0).xyz);
+    vec3 vpos = ray.vpos, vn = ray.vn, vdir = ray.vdir;
     // Start a little off the surface so the first steps do not hit the pixel itself.
     vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
 

@@ -411,14 +411,17 @@ fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
         "{} on {}: {}x{}, {} reflective pixels; rt mode frame {:.1} ms",
         r.scene, r.device, r.resolution[0], r.resolution[1], r.reflective_pixels, r.rt_frame_ms
     );
-    println!("  steps  min conf   traced   ssr.trace  ssr.compact   rt.trace   reflect.merge   frame (ms)");
+    println!(
+        "  steps  min conf   traced   ssr.classify  ssr.trace  ssr.compact   rt.trace   reflect.merge   frame (ms)"
+    );
     for p in &r.points {
         let ms = |k: &str| p.passes_ms.get(k).copied().unwrap_or(f64::NAN);
         println!(
-            "  {:5} {:9.2} {:7.1}%  {:10.1} {:12.1} {:10.1} {:15.1} {:8.1}",
+            "  {:5} {:9.2} {:7.1}%  {:12.1} {:10.1} {:12.1} {:10.1} {:15.1} {:8.1}",
             p.ssr_max_steps,
             p.ssr_min_confidence,
             100.0 * p.rt_pixel_fraction,
+            ms("ssr.classify"),
             ms("ssr.trace"),
             ms("ssr.compact"),
             ms("rt.trace"),

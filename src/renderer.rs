@@ -2,7 +2,8 @@
 //! scope, every barrier with the hazard it resolves.
 //!
 //! Frame: uniforms → `shadow.map` → `gbuffer` → `light.direct` → (by mode)
-//! `ssr.trace` → `ssr.compact` → `rt.trace` → `reflect.merge` → `compose`.
+//! `ssr.classify` → `ssr.trace` → `ssr.compact` → `rt.trace` → `reflect.merge` →
+//! `compose` (the `rt` mode has no `ssr.trace`: it marches nothing).
 //! The static BVH is built once, when the renderer is created.
 
 use crate::error::{Error, Result, VkContext};
@@ -39,7 +40,8 @@ pub struct ReflectionStats {
 pub struct ReflectionMaps {
     /// The pixel's surface reflects (reflectivity above `reflective_min`).
     pub reflective: Vec<bool>,
-    /// `FAIL_*` bits written by `ssr.trace` (0: SSR succeeded or nothing to reflect).
+    /// `FAIL_*` bits written by `ssr.classify` and `ssr.trace` (0: SSR succeeded or
+    /// nothing to reflect).
     pub mask: Vec<u32>,
 }
 
@@ -469,7 +471,6 @@ impl Renderer {
         barrier::record(d, cmd, &[], &into);
 
         if reflections {
-            timer.begin(cmd, ssr_trace::NAME);
             let params = SsrParams {
                 max_steps: st.ssr_max_steps,
                 stride: st.ssr_stride,
@@ -480,14 +481,18 @@ impl Renderer {
                 reflective_min: st.reflective_min,
                 recursion_min: st.ssr_recursion_min.max(st.reflective_min),
             };
-            self.ssr.record(
-                cmd,
-                &self.frame_ubo,
-                &self.gbuffer.targets,
-                &self.light.lit,
-                &params,
-                mode == Mode::Rt,
-            );
+            timer.begin(cmd, ssr_trace::CLASSIFY_NAME);
+            let mask_only = mode == Mode::Rt;
+            self.ssr
+                .classify(cmd, &self.frame_ubo, &self.gbuffer.targets, &params, mask_only);
+            timer.end(cmd, ssr_trace::CLASSIFY_NAME);
+            // The rt mode has nothing to march: its list is empty.
+            if !mask_only {
+                timer.begin(cmd, ssr_trace::NAME);
+                self.ssr
+                    .trace(cmd, &self.frame_ubo, &self.gbuffer.targets, &self.light.lit, &params);
+                timer.end(cmd, ssr_trace::NAME);
+            }
             // RAW: compaction and merge read the fail mask and SSR colour.
             barrier::record(
                 d,
@@ -495,7 +500,6 @@ impl Renderer {
                 &[barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_READ)],
                 &[],
             );
-            timer.end(cmd, ssr_trace::NAME);
         }
         if traced {
             timer.begin(cmd, ssr_compact::NAME);

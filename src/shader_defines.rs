@@ -48,14 +48,18 @@ pub const TRACE_STACK: u32 = 64;
 /// largest stride worth refining to one pixel (16 px).
 pub const SSR_REFINE_STEPS: u32 = 4;
 
+/// Invocations per workgroup of the kernels that run over a pixel list (ssr.trace):
+/// eight rows of a lavapipe SIMD group.
+pub const SSR_LIST_WG: u32 = 64;
+
 /// Pixels of one row (or column) segment that a `reflect.merge` blur workgroup owns.
 pub const BLUR_LINE: u32 = 64;
 /// Largest seam-blur radius and band (pixels): the shared-memory apron of a blur
 /// workgroup, so `BLUR_LINE + 2 * BLUR_MAX_EXTENT` texels (3 KiB) of shared memory.
 pub const BLUR_MAX_EXTENT: u32 = 64;
 
-/// Fail-mask reason bits written by `ssr.trace` (any nonzero value sends the pixel to
-/// the ray tracer): the march left the screen or crossed the near plane,
+/// Fail-mask reason bits written by `ssr.classify` and `ssr.trace` (any nonzero value
+/// sends the pixel to the ray tracer): the march left the screen or crossed the near plane,
 pub const FAIL_LEFT_SCREEN: u32 = 1;
 /// ... it passed behind geometry thicker than the threshold (what lies beyond is a guess),
 pub const FAIL_BEHIND: u32 = 2;
@@ -100,6 +104,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BVH_INVALID", BVH_INVALID),
     ("TRACE_STACK", TRACE_STACK),
     ("SSR_REFINE_STEPS", SSR_REFINE_STEPS),
+    ("SSR_LIST_WG", SSR_LIST_WG),
     ("BLUR_LINE", BLUR_LINE),
     ("BLUR_MAX_EXTENT", BLUR_MAX_EXTENT),
     ("FAIL_LEFT_SCREEN", FAIL_LEFT_SCREEN),

@@ -119,22 +119,13 @@ fn light_direct_matches_cpu_reference() {
     };
     let n = (extent.width * extent.height) as usize;
 
-    let depth: Vec<f32> = (0..n).map(|_| rng.random_range(0.90..0.9995f32)).collect();
-    let normal: Vec<[f32; 4]> = (0..n)
-        .map(|_| {
-            let v = Vec3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-            )
-            .normalize_or(Vec3::Y);
-            [v.x, v.y, v.z, rng.random_range(0.0..1.0)]
-        })
-        .collect();
-    let normal_bytes = cpu_ref::f32_to_rgba16f(&normal);
-    let normal = cpu_ref::rgba16f_to_f32(&normal_bytes); // what the GPU will read
+    let common::RandomGBuffer {
+        depth,
+        normal,
+        normal_bytes,
+        material,
+    } = common::random_gbuffer(&mut rng, n);
     let albedo: Vec<u8> = (0..n * 4).map(|_| rng.random()).collect();
-    let material = common::random_material_ids(&mut rng, n, 0.15, 4);
     let shadow: Vec<f32> = (0..64 * 64).map(|_| rng.random_range(0.0..1.0f32)).collect();
 
     let gb = GBuffer::new(&ctx, extent).unwrap();

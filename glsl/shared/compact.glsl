@@ -4,6 +4,7 @@
 // cpu_ref::compact.
 #ifndef COMPACT_GLSL
 #define COMPACT_GLSL
+#include "pixel_list.glsl"
 
 #define COMPACT_TILE (SORT_WG * SORT_ITEMS)
 
@@ -33,9 +34,4 @@ bool slot_listed(uint i) {
     return i < pc.slots && all(lessThan(p, pc.size)) && imageLoad(mask, ivec2(p)).r != 0u;
 }
 #endif
-
-// Packs a pixel into one ray-list entry: x in the low 16 bits, y in the high 16.
-uint pack_pixel(uvec2 p) {
-    return p.x | (p.y << 16);
-}
 #endif

@@ -6,6 +6,7 @@ pub mod compose;
 pub mod lbvh;
 pub mod merge;
 pub mod shading;
+pub mod ssr;
 pub mod trace;
 
 /// Decodes tightly packed RGBA16F texels.

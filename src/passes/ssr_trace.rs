@@ -1,21 +1,25 @@
-//! `ssr.trace`: screen-space reflections (McGuire & Mara 2014 DDA) and the fail mask.
+//! `ssr.classify` and `ssr.trace`: screen-space reflections (McGuire & Mara 2014 DDA)
+//! and the fail mask. The classification lists the pixels worth a march and fails or
+//! clears the rest; the march runs over that list by an indirect dispatch (the shape
+//! of FidelityFX SSSR), so pixels with nothing to march cost it nothing.
 
 use super::gbuffer::GBuffer;
 use super::ssr_compact::MASK_FORMAT;
 use crate::error::Result;
 use crate::shaders;
+use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
 pub const NAME: &str = "ssr.trace";
+pub const CLASSIFY_NAME: &str = "ssr.classify";
 /// rgb: reflected colour found on screen; a: confidence (0 where SSR failed).
 pub const COLOR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
-/// Push constants of `ssr_trace.comp` (see `Settings` for what each trades).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+/// SSR settings (see `Settings` for what each trades).
+#[derive(Clone, Copy, Debug)]
 pub struct SsrParams {
     pub max_steps: u32,
     pub stride: f32,
@@ -28,44 +32,85 @@ pub struct SsrParams {
     pub recursion_min: f32,
 }
 
+/// Push constants of `ssr_classify.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ClassifyPush {
+    min_confidence: f32,
+    reflective_min: f32,
+}
+
+/// Push constants of `ssr_trace.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TracePush {
+    max_steps: u32,
+    stride: f32,
+    thickness: f32,
+    max_distance: f32,
+    edge_fade: f32,
+    min_confidence: f32,
+    recursion_min: f32,
+}
+
 pub struct SsrOutputs {
     pub color: Image,
     /// Fail reasons per pixel (`FAIL_*` bits); nonzero sends the pixel to rt.trace.
     pub mask: Image,
+    /// The pixels to march (packed x | y << 16), in no particular order.
+    pub march_list: Buffer,
+    /// `[groups_x, 1, 1, length]`: ssr.trace's indirect dispatch and the list's length.
+    pub march_args: Buffer,
 }
 
 impl SsrOutputs {
     fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+        let buffer = |name, size| {
+            Buffer::new(
+                ctx,
+                name,
+                size,
+                vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC
+                    | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )
+        };
         Ok(Self {
             color: Image::new(ctx, "ssr.color", extent, COLOR_FORMAT, usage)?,
             mask: Image::new(ctx, "ssr.fail_mask", extent, MASK_FORMAT, usage)?,
+            march_list: buffer("ssr.march_list", extent.width as u64 * extent.height as u64 * 4)?,
+            march_args: buffer("ssr.march_args", 16)?,
         })
     }
 }
 
 pub struct SsrPass {
     ctx: Arc<Context>,
-    pipeline: Pipeline,
-    /// The `rt` mode's variant (`MASK_ONLY`): no SSR, every reflective pixel fails.
+    classify: Pipeline,
+    /// The `rt` mode's classification (`MASK_ONLY`): every reflective pixel fails.
     mask_only: Pipeline,
+    trace: Pipeline,
     sampler: Sampler,
     pub out: SsrOutputs,
 }
 
 impl SsrPass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let push = std::mem::size_of::<SsrParams>() as u32;
+        let classify = ("ssr_classify.comp", shaders::SSR_CLASSIFY_COMP);
+        let classify_push = std::mem::size_of::<ClassifyPush>() as u32;
         Ok(Self {
             ctx: ctx.clone(),
-            pipeline: Pipeline::compute(ctx, NAME, ("ssr_trace.comp", shaders::SSR_TRACE_COMP), push)?,
-            mask_only: Pipeline::compute_specialized(
+            classify: Pipeline::compute(ctx, CLASSIFY_NAME, classify, classify_push)?,
+            mask_only: Pipeline::compute_specialized(ctx, "ssr.mask_only", classify, classify_push, &[1])?,
+            trace: Pipeline::compute(
                 ctx,
-                "ssr.mask_only",
+                NAME,
                 ("ssr_trace.comp", shaders::SSR_TRACE_COMP),
-                push,
-                &[1],
+                std::mem::size_of::<TracePush>() as u32,
             )?,
             sampler: Sampler::nearest_clamp(ctx, "ssr.sampler")?,
             out: SsrOutputs::new(ctx, extent)?,
@@ -77,20 +122,40 @@ impl SsrPass {
         Ok(())
     }
 
-    /// Records the march, or with `mask_only` (the `rt` mode) only the fail mask, every
-    /// reflective pixel failed (`FAIL_FORCED`). G-buffer in `SHADER_READ_ONLY_OPTIMAL`;
-    /// `lit` and the outputs in `GENERAL`.
-    pub fn record(
+    /// Records the classification: the fail mask and SSR colour of every pixel not to
+    /// be marched, and the march list; with `mask_only` (the `rt` mode) every
+    /// reflective pixel fails (`FAIL_FORCED`) and the list stays empty. G-buffer in
+    /// `SHADER_READ_ONLY_OPTIMAL`, outputs in `GENERAL`; ends with the list and its
+    /// dispatch arguments visible to `trace`.
+    pub fn classify(
         &self,
         cmd: vk::CommandBuffer,
         frame: &Buffer,
         gbuffer: &GBuffer,
-        lit: &Image,
         params: &SsrParams,
         mask_only: bool,
     ) {
+        let d = &self.ctx.device;
+        let out = &self.out;
+        // WAR/WAW: the previous frame's march (list and argument reads, the indirect
+        // dispatch) and classification (atomics) are done before the arguments reset.
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::COMPUTE_ANY, access::TRANSFER_WRITE)],
+            &[],
+        );
+        let args: [u32; 4] = [0, 1, 1, 0];
+        unsafe { d.cmd_update_buffer(cmd, out.march_args.raw, 0, bytemuck::bytes_of(&args)) };
+        // RAW: the classification's atomics see the reset arguments.
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE)],
+            &[],
+        );
         let s = &self.sampler;
-        let pipeline = if mask_only { &self.mask_only } else { &self.pipeline };
+        let pipeline = if mask_only { &self.mask_only } else { &self.classify };
         pipeline.bind(
             cmd,
             &[
@@ -98,13 +163,56 @@ impl SsrPass {
                 Resource::Sampled(&gbuffer.depth, s),
                 Resource::Sampled(&gbuffer.normal, s),
                 Resource::Sampled(&gbuffer.material, s),
-                Resource::StorageImage(lit),
-                Resource::StorageImage(&self.out.color),
-                Resource::StorageImage(&self.out.mask),
+                Resource::StorageImage(&out.color),
+                Resource::StorageImage(&out.mask),
+                Resource::Buffer(&out.march_list),
+                Resource::Buffer(&out.march_args),
             ],
-            bytemuck::bytes_of(params),
+            bytemuck::bytes_of(&ClassifyPush {
+                min_confidence: params.min_confidence,
+                reflective_min: params.reflective_min,
+            }),
         );
-        let e = self.out.color.extent;
+        let e = out.color.extent;
         pipeline.dispatch_covering(cmd, [e.width, e.height, 1]);
+        // RAW: the march reads the list and dispatches from its arguments. WAW: it
+        // writes the SSR colour and fail mask of pixels beside those written here
+        // (disjoint pixels, but the images are the same resources).
+        barrier::record(
+            d,
+            cmd,
+            &[barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_ANY)],
+            &[],
+        );
+    }
+
+    /// Records the march over the classification's list: SSR colour + confidence and
+    /// the fail mask of the listed pixels. `lit` in `GENERAL`.
+    pub fn trace(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, lit: &Image, params: &SsrParams) {
+        let out = &self.out;
+        let s = &self.sampler;
+        self.trace.bind(
+            cmd,
+            &[
+                Resource::Buffer(frame),
+                Resource::Sampled(&gbuffer.depth, s),
+                Resource::Sampled(&gbuffer.normal, s),
+                Resource::StorageImage(lit),
+                Resource::StorageImage(&out.color),
+                Resource::StorageImage(&out.mask),
+                Resource::Buffer(&out.march_list),
+                Resource::Buffer(&out.march_args),
+            ],
+            bytemuck::bytes_of(&TracePush {
+                max_steps: params.max_steps,
+                stride: params.stride,
+                thickness: params.thickness,
+                max_distance: params.max_distance,
+                edge_fade: params.edge_fade,
+                min_confidence: params.min_confidence,
+                recursion_min: params.recursion_min,
+            }),
+        );
+        unsafe { self.ctx.device.cmd_dispatch_indirect(cmd, out.march_args.raw, 0) };
     }
 }

@@ -36,6 +36,42 @@ pub fn random_material_ids(rng: &mut impl rand::Rng, n: usize, p_none: f64, ids:
         .collect()
 }
 
+/// A random G-buffer of `n` pixels: depths across the view range, unit normals in every
+/// direction (facing away included) with random reflectivity in w, and material ids
+/// (15% sky).
+pub struct RandomGBuffer {
+    pub depth: Vec<f32>,
+    /// The normals as the GPU reads them (rounded through RGBA16F).
+    pub normal: Vec<[f32; 4]>,
+    /// The RGBA16F texels to upload.
+    pub normal_bytes: Vec<u8>,
+    pub material: Vec<u32>,
+}
+
+pub fn random_gbuffer(rng: &mut impl rand::Rng, n: usize) -> RandomGBuffer {
+    let depth: Vec<f32> = (0..n).map(|_| rng.random_range(0.90..0.9995f32)).collect();
+    let normal: Vec<[f32; 4]> = (0..n)
+        .map(|_| {
+            let v = glam::Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+            .normalize_or(glam::Vec3::Y);
+            [v.x, v.y, v.z, rng.random_range(0.0..1.0)]
+        })
+        .collect();
+    let normal_bytes = speculum::cpu_ref::f32_to_rgba16f(&normal);
+    let normal = speculum::cpu_ref::rgba16f_to_f32(&normal_bytes);
+    let material = random_material_ids(rng, n, 0.15, 4);
+    RandomGBuffer {
+        depth,
+        normal,
+        normal_bytes,
+        material,
+    }
+}
+
 /// The frame uniform buffer (binding 0 of the screen-space kernels) holding `frame`.
 pub fn frame_ubo(ctx: &Arc<Context>, frame: &speculum::gpu_types::FrameUniforms) -> speculum::vk::Buffer {
     speculum::vk::Buffer::with_data(

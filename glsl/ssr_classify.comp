@@ -1,0 +1,69 @@
+#version 460
+#extension GL_KHR_shader_subgroup_ballot : require
+// ssr.classify: which pixels ssr.trace marches (after FidelityFX SSSR's classification).
+// A pixel with no reflective surface gets no reflection (fail mask 0); a reflective
+// pixel whose heading alone keeps its confidence below the threshold fails
+// (FAIL_LOW_CONFIDENCE) without a march, as every outcome of the march would; the rest
+// are appended to the march list, whose length sets ssr.trace's indirect dispatch. So
+// the march and everything around it run only where they can give a reflection:
+// lavapipe pays a full-screen kernel's whole straight-line code on every pixel, taken
+// branch or not. Pixels listed here get their SSR colour and fail mask from ssr.trace;
+// the rest get them here. Mirrored by cpu_ref::ssr::classify.
+#include "ssr.glsl"
+#include "pixel_list.glsl"
+
+layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
+
+layout(binding = 1) uniform sampler2D gb_depth;
+layout(binding = 2) uniform sampler2D gb_normal;
+layout(binding = 3) uniform usampler2D gb_material;
+layout(binding = 4, rgba32f) uniform writeonly image2D ssr_out; // rgb colour, a confidence
+layout(binding = 5, r32ui) uniform writeonly uimage2D fail_mask;
+layout(binding = 6, std430) writeonly buffer MarchList { uint march_list[]; };
+// VkDispatchIndirectCommand of ssr.trace (x) and the list's length (w); x and w are
+// zeroed before, y and z are 1.
+layout(binding = 7, std430) buffer MarchArgs { uvec4 march_args; };
+
+// The rt mode's variant: no SSR, every reflective pixel fails (FAIL_FORCED).
+layout(constant_id = 0) const bool MASK_ONLY = false;
+
+layout(push_constant) uniform Push {
+    float min_confidence; // below: the pixel fails
+    float reflective_min; // reflectivity above which a pixel reflects
+} pc;
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 res = ivec2(frame.resolution);
+    bool inside = all(lessThan(p, res));
+    uint fail = 0u;
+    bool march = false;
+    if (inside) {
+        uint material = texelFetch(gb_material, p, 0).r;
+        vec4 nr = texelFetch(gb_normal, p, 0);
+        bool reflective = material != MATERIAL_NONE && nr.w > pc.reflective_min;
+        if (MASK_ONLY) {
+            fail = reflective ? FAIL_FORCED : 0u;
+        } else if (reflective) {
+            SsrRay r = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz);
+            march = heading_confidence(r.vdir) >= pc.min_confidence;
+            fail = march ? 0u : FAIL_LOW_CONFIDENCE;
+        }
+        if (!march) {
+            imageStore(ssr_out, p, vec4(0.0));
+            imageStore(fail_mask, p, uvec4(fail));
+        }
+    }
+    // One atomic per subgroup for its listed pixels; the dispatch covers the list.
+    uvec4 ballot = subgroupBallot(march);
+    uint n = subgroupBallotBitCount(ballot);
+    uint base = 0u;
+    if (subgroupElect() && n > 0u) {
+        base = atomicAdd(march_args.w, n);
+        atomicMax(march_args.x, (base + n + SSR_LIST_WG - 1u) / SSR_LIST_WG);
+    }
+    base = subgroupBroadcastFirst(base);
+    if (march) {
+        march_list[base + subgroupBallotExclusiveBitCount(ballot)] = pack_pixel(uvec2(p));
+    }
+}

@@ -35,7 +35,7 @@ float offset_scale(vec3 pos) {
 }
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = list_entry(indirect.w, LBVH_WG);
     if (i >= indirect.w) {
         return;
     }

@@ -52,7 +52,7 @@ vec3 lit_bilinear(vec2 x, ivec2 res) {
 }
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = list_entry(march_args.w, SSR_LIST_WG);
     if (i >= march_args.w) {
         return;
     }

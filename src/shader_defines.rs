@@ -52,6 +52,11 @@ pub const SSR_REFINE_STEPS: u32 = 4;
 /// eight rows of a lavapipe SIMD group.
 pub const SSR_LIST_WG: u32 = 64;
 
+/// Stripes of a pixel list that its workgroups interleave (`list_entry` in
+/// `glsl/shared/pixel_list.glsl`), so that each lavapipe thread's contiguous range of
+/// workgroups gets an even share of the list.
+pub const LIST_STRIPES: u32 = 16;
+
 /// Pixels of one row (or column) segment that a `reflect.merge` blur workgroup owns.
 pub const BLUR_LINE: u32 = 64;
 /// Largest seam-blur radius and band (pixels): the shared-memory apron of a blur
@@ -105,6 +110,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TRACE_STACK", TRACE_STACK),
     ("SSR_REFINE_STEPS", SSR_REFINE_STEPS),
     ("SSR_LIST_WG", SSR_LIST_WG),
+    ("LIST_STRIPES", LIST_STRIPES),
     ("BLUR_LINE", BLUR_LINE),
     ("BLUR_MAX_EXTENT", BLUR_MAX_EXTENT),
     ("FAIL_LEFT_SCREEN", FAIL_LEFT_SCREEN),

@@ -13,7 +13,7 @@ use rand::Rng;
 use speculum::cpu_ref::ssr::{self, Class};
 use speculum::passes::gbuffer::GBuffer;
 use speculum::passes::ssr_trace::{SsrParams, SsrPass};
-use speculum::shader_defines::{FAIL_LOW_CONFIDENCE, SSR_LIST_WG};
+use speculum::shader_defines::{FAIL_LOW_CONFIDENCE, LIST_STRIPES, SSR_LIST_WG};
 use speculum::vk::{barrier, Image};
 
 const POISON_MASK: u32 = 0xdead_beef;
@@ -23,7 +23,9 @@ const POISON_COLOR: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
 /// heading (FAIL_LOW_CONFIDENCE) or listed for the march, each exactly once; listed
 /// pixels are left to the march (their poison stays); the dispatch arguments cover the
 /// list. The `rt` variant fails every reflective pixel and lists none. Then the march
-/// over the list writes every listed pixel.
+/// over the list writes every listed pixel, the list being long enough to span several
+/// stripes of `list_entry` with a remainder (a chunk taken twice or never leaves
+/// poison).
 #[test]
 fn classify_matches_cpu_and_the_march_covers_its_list() {
     let ctx = common::context();
@@ -164,6 +166,12 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
         } else {
             assert!(counts.iter().all(|&c| c > n / 50), "{counts:?}");
             assert!(mask.contains(&FAIL_LOW_CONFIDENCE));
+            // The march list spans every stripe of list_entry, and not evenly.
+            let groups = len.div_ceil(SSR_LIST_WG as usize);
+            assert!(
+                groups > 2 * LIST_STRIPES as usize && !groups.is_multiple_of(LIST_STRIPES as usize),
+                "{groups} workgroups"
+            );
         }
     }
     common::assert_no_validation_messages(&ctx);

@@ -10,4 +10,23 @@ ivec2 unpack_pixel(uint packed) {
     return ivec2(packed & 0xffffu, packed >> 16);
 }
 
+
+// The list entry of this invocation, for kernels dispatched with one invocation per
+// entry (1D workgroups of `wg_size`; `gl_WorkGroupSize` is not yet known where this is
+// included), covering the list's `length` entries. lavapipe hands each of its threads
+// one contiguous range of a dispatch's workgroups (llvmpipe's lp_cs_tpool), and a list
+// in screen order costs very differently from one end to the other (on `room` the back
+// wall's rays come first and are cheap, the floor's come last and are dear), so one
+// thread would be left with most of the work. Workgroups therefore take the list's
+// workgroup-sized chunks in a striped order: of LIST_STRIPES equal stripes, workgroup
+// w takes chunk w / LIST_STRIPES of stripe w % LIST_STRIPES, so any contiguous range of
+// workgroups holds an even share of every stripe. Chunks past the last whole stripe
+// keep their place; entries within a chunk stay consecutive (coherent SIMD groups).
+// GPUs schedule workgroups dynamically and lose nothing by it.
+uint list_entry(uint length, uint wg_size) {
+    uint n = (length + wg_size - 1u) / wg_size, w = gl_WorkGroupID.x;
+    uint per_stripe = n / LIST_STRIPES;
+    uint chunk = w < per_stripe * LIST_STRIPES ? (w % LIST_STRIPES) * per_stripe + w / LIST_STRIPES : w;
+    return chunk * wg_size + gl_LocalInvocationID.x;
+}
 #endif

@@ -41,7 +41,8 @@ enum Command {
 enum BenchCommand {
     /// LBVH build (per stage), refit, SAH quality and traversal throughput.
     Lbvh(BenchLbvhArgs),
-    /// Time of ssr.trace, ssr.compact and rt.trace as the ray-traced share varies.
+    /// Time of ssr.classify, ssr.trace, ssr.compact and rt.trace as the ray-traced share
+    /// varies (every point and rt interleaved in one run).
     Reflect(BenchReflectArgs),
     /// Every mode timed in the same run, interleaved: per-pass medians, frame time
     /// against rt, SSIM/RMSE against rt, and whether ssr < hybrid < rt.
@@ -82,7 +83,7 @@ struct BenchReflectArgs {
     width: u32,
     #[arg(long, default_value_t = Settings::default().height)]
     height: u32,
-    /// Measured frames per point (after one warm-up frame).
+    /// Measured rounds: one frame of every point and of rt each (after one warm-up round).
     #[arg(long, default_value_t = 3)]
     frames: u32,
     /// Write the report as JSON to this file.
@@ -401,23 +402,18 @@ fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
     settings.validate()?;
     let scene = speculum::scene::load(&args.scene)?;
     let ctx = args.gpu.context()?;
-    let plan = headless::FramePlan {
-        warmup: 1,
-        frames: args.frames.max(1),
-        reference: false,
-    };
-    let r = speculum::bench::reflect::run(&ctx, &scene, &settings, plan)?;
+    let r = speculum::bench::reflect::run(&ctx, &scene, &settings, 1, args.frames.max(1))?;
     println!(
         "{} on {}: {}x{}, {} reflective pixels; rt mode frame {:.1} ms",
         r.scene, r.device, r.resolution[0], r.resolution[1], r.reflective_pixels, r.rt_frame_ms
     );
     println!(
-        "  steps  min conf   traced   ssr.classify  ssr.trace  ssr.compact   rt.trace   reflect.merge   frame (ms)"
+        "  steps  min conf   traced   ssr.classify  ssr.trace  ssr.compact   rt.trace   reflect.merge   frame (ms)  / rt"
     );
     for p in &r.points {
         let ms = |k: &str| p.passes_ms.get(k).copied().unwrap_or(f64::NAN);
         println!(
-            "  {:5} {:9.2} {:7.1}%  {:12.1} {:10.1} {:12.1} {:10.1} {:15.1} {:8.1}",
+            "  {:5} {:9.2} {:7.1}%  {:12.1} {:10.1} {:12.1} {:10.1} {:15.1} {:10.1} {:6.3}",
             p.ssr_max_steps,
             p.ssr_min_confidence,
             100.0 * p.rt_pixel_fraction,
@@ -426,7 +422,8 @@ fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
             ms("ssr.compact"),
             ms("rt.trace"),
             ms("reflect.merge"),
-            p.frame_ms
+            p.frame_ms,
+            p.frame_over_rt
         );
     }
     if let Some(path) = &args.json {

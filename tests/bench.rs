@@ -53,12 +53,7 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
 fn reflection_split_benchmark_is_valid() {
     let ctx = common::context();
     let (scene, settings) = small_room();
-    let plan = speculum::headless::FramePlan {
-        warmup: 0,
-        frames: 1,
-        reference: false,
-    };
-    let r = speculum::bench::reflect::run(&ctx, &scene, &settings, plan).unwrap();
+    let r = speculum::bench::reflect::run(&ctx, &scene, &settings, 0, 2).unwrap();
     assert!(r.valid, "{r:?}");
     assert_eq!(r.points.len(), speculum::bench::reflect::sweep(&settings).len());
     assert!(r.points[0].rt_pixel_fraction < 0.9 && r.points.last().unwrap().rt_pixel_fraction == 1.0);
@@ -72,6 +67,7 @@ fn reflection_split_benchmark_is_valid() {
         .points
         .iter()
         .all(|p| p.passes_ms.contains_key("rt.trace") && p.passes_ms.contains_key("ssr.trace")));
+    assert!(r.points.iter().all(|p| p.frame_over_rt > 0.0 && p.frame_ms > 0.0) && r.rt_frame_ms > 0.0);
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -4,3 +4,31 @@
 pub mod lbvh;
 pub mod modes;
 pub mod reflect;
+
+use crate::error::Result;
+use crate::renderer::{Renderer, FRAME};
+use crate::vk::Timings;
+
+/// Per-renderer timings of an interleaved run: every scope, and the frame times in
+/// round order (to form per-round ratios, which cancel drift between rounds).
+pub struct Interleaved {
+    pub timings: Vec<Timings>,
+    pub frames: Vec<Vec<f64>>,
+}
+
+/// Renders one frame of each renderer in turn, `warmup` uncounted rounds and then
+/// `rounds` measured ones, so drift in the machine's speed falls on all of them alike.
+pub fn interleave(renderers: &mut [Renderer], warmup: u32, rounds: u32) -> Result<Interleaved> {
+    let mut timings = vec![Timings::default(); renderers.len()];
+    let mut frames: Vec<Vec<f64>> = vec![Vec::new(); renderers.len()];
+    for round in 0..warmup + rounds {
+        for (i, r) in renderers.iter_mut().enumerate() {
+            let t = r.render_frame()?;
+            if round >= warmup {
+                frames[i].push(t.iter().find(|(k, _)| *k == FRAME).map_or(f64::NAN, |s| s.1));
+                timings[i].add_frame(&t);
+            }
+        }
+    }
+    Ok(Interleaved { timings, frames })
+}

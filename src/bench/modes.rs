@@ -11,7 +11,7 @@ use crate::metrics::compare_rgba8;
 use crate::renderer::{Renderer, FRAME};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
-use crate::vk::{median, Context, Timings};
+use crate::vk::{median, Context};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -54,17 +54,7 @@ pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, roun
         .iter()
         .map(|&mode| Renderer::new(ctx, scene, &Settings { mode, ..base.clone() }))
         .collect::<Result<Vec<_>>>()?;
-    let mut timings: Vec<Timings> = vec![Timings::default(); renderers.len()];
-    let mut frames: Vec<Vec<f64>> = vec![Vec::new(); renderers.len()];
-    for round in 0..warmup + rounds {
-        for (i, r) in renderers.iter_mut().enumerate() {
-            let t = r.render_frame()?;
-            if round >= warmup {
-                frames[i].push(t.iter().find(|(k, _)| *k == FRAME).map_or(f64::NAN, |s| s.1));
-                timings[i].add_frame(&t);
-            }
-        }
-    }
+    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds)?;
     let rt = Mode::ALL.iter().position(|&m| m == Mode::Rt).expect("rt is a mode");
     let rt_image = renderers[rt].read_output()?;
     let mut modes = Vec::new();

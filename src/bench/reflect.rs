@@ -2,17 +2,20 @@
 //! SSR-failed (ray-traced) pixels varies. The share is swept by halving SSR's step
 //! budget from the settings' value down to one step (a ray whose hit lies beyond the
 //! budget fails; everything else fixed), then by rejecting every SSR hit (a confidence
-//! threshold above 1), which traces every reflective pixel with SSR still run.
-//! (The confidence threshold alone no longer moves the share: hits below confidence 1
-//! are traced either way, to be blended.) Checked in the same run: the reflective pixel
+//! threshold above 1, which `ssr.classify` applies before any march), which traces
+//! every reflective pixel. (The confidence threshold alone no longer moves the share:
+//! hits below confidence 1 are traced either way, to be blended.) Every point and the
+//! `rt` mode are rendered in the same run, one frame of each in turn, so drift in the
+//! machine's speed spreads over all of them; each point's frame is also given against
+//! `rt` as the median of per-round ratios. Checked in the same run: the reflective pixel
 //! count is the same at every point, the failed share never decreases along the sweep,
 //! and the last point traces every reflective pixel.
 
-use crate::error::Result;
-use crate::headless::{self, FramePlan};
+use crate::error::{Error, Result};
+use crate::renderer::{Renderer, FRAME};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
-use crate::vk::Context;
+use crate::vk::{median, Context};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -26,6 +29,8 @@ pub struct SplitPoint {
     /// Pass → median GPU milliseconds.
     pub passes_ms: BTreeMap<String, f64>,
     pub frame_ms: f64,
+    /// Median over rounds of this point's frame time / the `rt` frame's.
+    pub frame_over_rt: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -43,6 +48,12 @@ pub struct SplitReport {
 /// A confidence threshold above any confidence: every SSR hit fails.
 const REJECT_ALL: f32 = 1.01;
 
+/// What the checks and the report need of the `rt` frame.
+struct RtPoint {
+    reflective_pixels: u64,
+    frame_ms: f64,
+}
+
 /// The sweep's (step budget, confidence threshold) points for `base`: the budget
 /// halved down to 1, then every hit rejected.
 pub fn sweep(base: &Settings) -> Vec<(u32, f32)> {
@@ -53,49 +64,56 @@ pub fn sweep(base: &Settings) -> Vec<(u32, f32)> {
     points
 }
 
-pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, plan: FramePlan) -> Result<SplitReport> {
-    let mut points = Vec::new();
-    let mut reflective = Vec::new();
-    for (steps, t) in sweep(base) {
-        let settings = Settings {
+pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, rounds: u32) -> Result<SplitReport> {
+    if rounds == 0 {
+        return Err(Error::Settings("bench reflect needs at least one frame".into()));
+    }
+    let sweep = sweep(base);
+    // The sweep's renderers, then rt's last.
+    let mut renderers = sweep
+        .iter()
+        .map(|&(steps, t)| Settings {
             mode: Mode::Hybrid,
             ssr_max_steps: steps,
             ssr_min_confidence: t,
             ..base.clone()
-        };
-        let r = headless::render(
-            ctx,
-            scene,
-            &settings,
-            FramePlan {
-                reference: false,
-                ..plan
-            },
-        )?
-        .report;
-        reflective.push(r.reflective_pixels);
+        })
+        .chain(std::iter::once(Settings {
+            mode: Mode::Rt,
+            ..base.clone()
+        }))
+        .map(|settings| Renderer::new(ctx, scene, &settings))
+        .collect::<Result<Vec<_>>>()?;
+    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds)?;
+    let rt_index = sweep.len();
+    let rt_stats = renderers[rt_index].reflection_stats()?;
+    let rt_frame_ms = median(&frames[rt_index]);
+    let mut points = Vec::new();
+    let mut reflective = Vec::new();
+    for (i, &(steps, t)) in sweep.iter().enumerate() {
+        let stats = renderers[i].reflection_stats()?;
+        reflective.push(stats.reflective_pixels);
+        let mut passes_ms: BTreeMap<String, f64> = timings[i]
+            .medians()
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect();
+        passes_ms.remove(FRAME);
+        let ratios: Vec<f64> = frames[i].iter().zip(&frames[rt_index]).map(|(a, b)| a / b).collect();
         points.push(SplitPoint {
             ssr_max_steps: steps,
             ssr_min_confidence: t,
-            rt_pixel_fraction: r.rt_pixel_fraction,
-            failed_pixels: r.failed_pixels,
-            passes_ms: r.passes_ms,
-            frame_ms: r.frame_ms,
+            rt_pixel_fraction: stats.failed_pixels as f64 / stats.reflective_pixels.max(1) as f64,
+            failed_pixels: stats.failed_pixels,
+            passes_ms,
+            frame_ms: median(&frames[i]),
+            frame_over_rt: median(&ratios),
         });
     }
-    let rt = headless::render(
-        ctx,
-        scene,
-        &Settings {
-            mode: Mode::Rt,
-            ..base.clone()
-        },
-        FramePlan {
-            reference: false,
-            ..plan
-        },
-    )?
-    .report;
+    let rt = RtPoint {
+        reflective_pixels: rt_stats.reflective_pixels,
+        frame_ms: rt_frame_ms,
+    };
     let same_reflective = reflective.iter().all(|&r| r == rt.reflective_pixels);
     let monotonic = points.windows(2).all(|w| w[1].failed_pixels >= w[0].failed_pixels);
     let all_at_end = points.last().is_some_and(|p| p.failed_pixels == rt.reflective_pixels);

@@ -48,8 +48,8 @@ pub const TRACE_STACK: u32 = 64;
 /// largest stride worth refining to one pixel (16 px).
 pub const SSR_REFINE_STEPS: u32 = 4;
 
-/// Invocations per workgroup of the kernels that run over a pixel list (ssr.trace):
-/// eight rows of a lavapipe SIMD group.
+/// Invocations per workgroup of ssr.trace, which runs over a pixel list: eight of
+/// lavapipe's 8-lane SIMD groups.
 pub const SSR_LIST_WG: u32 = 64;
 
 /// Stripes of a pixel list that its workgroups interleave (`list_entry` in

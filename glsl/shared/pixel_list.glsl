@@ -10,7 +10,6 @@ ivec2 unpack_pixel(uint packed) {
     return ivec2(packed & 0xffffu, packed >> 16);
 }
 
-
 // The list entry of this invocation, for kernels dispatched with one invocation per
 // entry (1D workgroups of `wg_size`; `gl_WorkGroupSize` is not yet known where this is
 // included), covering the list's `length` entries. lavapipe hands each of its threads

@@ -5,6 +5,7 @@ pub mod compact;
 pub mod compose;
 pub mod lbvh;
 pub mod merge;
+pub mod reflect;
 pub mod shading;
 pub mod ssr;
 pub mod trace;

@@ -1,0 +1,87 @@
+//! Reference of `glsl/rt_reflect.comp` (rt.trace for reflections): one pixel's
+//! reflected path through the scene, shaded as the kernel shades it.
+
+use super::shading::{self, ShadowMap};
+use super::trace::CpuBvh;
+use crate::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex, Ray};
+use crate::shader_defines::BVH_INVALID;
+use glam::{IVec2, Vec3, Vec4Swizzles};
+
+/// What the path sees: the scene's triangles (one static BVH over them), materials,
+/// and the shadow map (unless shadows come from rays).
+pub struct PathScene<'a> {
+    pub frame: &'a FrameUniforms,
+    pub bvh: &'a CpuBvh,
+    pub vertices: &'a [GpuVertex],
+    pub indices: &'a [u32],
+    pub materials: &'a [GpuMaterial],
+    pub shadow_map: &'a ShadowMap<'a>,
+    pub shadow_rays: bool,
+}
+
+fn offset_scale(frame: &FrameUniforms, pos: Vec3) -> f32 {
+    2e-4 * (pos - frame.camera_pos.xyz()).length().max(1.0)
+}
+
+fn reflect(i: Vec3, n: Vec3) -> Vec3 {
+    i - 2.0 * n.dot(i) * n
+}
+
+/// The radiance the reflected path from pixel `p` (G-buffer depth, world normal as
+/// stored) gathers in up to `max_bounces` rays, and the number of rays it traced.
+pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3, max_bounces: u32) -> (Vec3, u32) {
+    let frame = s.frame;
+    let trace = |origin: Vec3, dir: Vec3| {
+        let ray = Ray {
+            origin: origin.into(),
+            tmin: 0.0,
+            dir: dir.into(),
+            tmax: 3.0e38,
+        };
+        s.bvh.trace(&ray, s.vertices, s.indices)
+    };
+    let pos = shading::world_from_depth(frame, p, depth);
+    let n = normal.normalize();
+    let mut dir = reflect((pos - frame.camera_pos.xyz()).normalize(), n);
+    let mut origin = pos + n * offset_scale(frame, pos);
+    let mut radiance = Vec3::ZERO;
+    let mut throughput = Vec3::ONE;
+    let mut rays = 0;
+    for _ in 0..max_bounces {
+        rays += 1;
+        let h = trace(origin, dir);
+        if h.prim == BVH_INVALID {
+            radiance += throughput * shading::sky(frame, dir);
+            break;
+        }
+        let corner = |k: usize| &s.vertices[s.indices[3 * h.prim as usize + k] as usize];
+        let (a, b, c) = (corner(0), corner(1), corner(2));
+        let m = &s.materials[a.material as usize];
+        let mut hn =
+            ((1.0 - h.u - h.v) * Vec3::from(a.normal) + h.u * Vec3::from(b.normal) + h.v * Vec3::from(c.normal))
+                .normalize();
+        if hn.dot(dir) > 0.0 {
+            hn = -hn;
+        }
+        let hp = origin + dir * h.t;
+        let vis = if s.shadow_rays {
+            let so = hp + hn * offset_scale(frame, hp);
+            if trace(so, frame.light_dir.xyz()).prim == BVH_INVALID {
+                1.0
+            } else {
+                0.0
+            }
+        } else {
+            shading::shadow_visibility(frame, s.shadow_map, hp)
+        };
+        radiance +=
+            throughput * shading::shade_direct(frame, Vec3::from(m.albedo), m.roughness, m.reflectivity, hn, -dir, vis);
+        if m.reflectivity <= 0.0 {
+            break;
+        }
+        throughput *= m.reflectivity;
+        dir = reflect(dir, hn);
+        origin = hp + hn * offset_scale(frame, hp);
+    }
+    (radiance, rays)
+}

@@ -119,7 +119,7 @@ pub fn render(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, plan: Fram
         mode: settings.mode.name().to_string(),
         reflective_pixels: stats.reflective_pixels,
         failed_pixels: stats.failed_pixels,
-        rt_pixel_fraction: stats.failed_pixels as f64 / stats.reflective_pixels.max(1) as f64,
+        rt_pixel_fraction: stats.rt_pixel_fraction(),
         fail_reasons: stats.fail_reasons.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
         ssim,
         rmse,

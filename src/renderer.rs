@@ -36,6 +36,13 @@ pub struct ReflectionStats {
     pub fail_reasons: std::collections::BTreeMap<&'static str, u64>,
 }
 
+impl ReflectionStats {
+    /// failed / reflective pixels: the share of reflections the ray tracer produced.
+    pub fn rt_pixel_fraction(&self) -> f64 {
+        self.failed_pixels as f64 / self.reflective_pixels.max(1) as f64
+    }
+}
+
 /// Per-pixel reflection state of a frame, row-major.
 pub struct ReflectionMaps {
     /// The pixel's surface reflects (reflectivity above `reflective_min`).
@@ -471,16 +478,7 @@ impl Renderer {
         barrier::record(d, cmd, &[], &into);
 
         if reflections {
-            let params = SsrParams {
-                max_steps: st.ssr_max_steps,
-                stride: st.ssr_stride,
-                thickness: st.ssr_thickness,
-                max_distance: st.ssr_max_distance,
-                edge_fade: st.ssr_edge_fade,
-                min_confidence: st.ssr_min_confidence,
-                reflective_min: st.reflective_min,
-                recursion_min: st.ssr_recursion_min.max(st.reflective_min),
-            };
+            let params = SsrParams::from_settings(st);
             timer.begin(cmd, ssr_trace::CLASSIFY_NAME);
             let mask_only = mode == Mode::Rt;
             self.ssr

@@ -64,17 +64,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
     lit.write(bytemuck::cast_slice(&lit_texels), general).unwrap();
     let ubo = common::frame_ubo(&ctx, &frame);
     let pass = SsrPass::new(&ctx, extent).unwrap();
-    let st = &settings;
-    let params = SsrParams {
-        max_steps: st.ssr_max_steps,
-        stride: st.ssr_stride,
-        thickness: st.ssr_thickness,
-        max_distance: st.ssr_max_distance,
-        edge_fade: st.ssr_edge_fade,
-        min_confidence: st.ssr_min_confidence,
-        reflective_min: st.reflective_min,
-        recursion_min: st.ssr_recursion_min.max(st.reflective_min),
-    };
+    let params = SsrParams::from_settings(&settings);
 
     for (mask_only, march) in [(false, false), (true, false), (false, true)] {
         let out = &pass.out;

@@ -48,12 +48,6 @@ pub struct SplitReport {
 /// A confidence threshold above any confidence: every SSR hit fails.
 const REJECT_ALL: f32 = 1.01;
 
-/// What the checks and the report need of the `rt` frame.
-struct RtPoint {
-    reflective_pixels: u64,
-    frame_ms: f64,
-}
-
 /// The sweep's (step budget, confidence threshold) points for `base`: the budget
 /// halved down to 1, then every hit rejected.
 pub fn sweep(base: &Settings) -> Vec<(u32, f32)> {
@@ -86,7 +80,7 @@ pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, roun
         .collect::<Result<Vec<_>>>()?;
     let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds)?;
     let rt_index = sweep.len();
-    let rt_stats = renderers[rt_index].reflection_stats()?;
+    let rt_reflective = renderers[rt_index].reflection_stats()?.reflective_pixels;
     let rt_frame_ms = median(&frames[rt_index]);
     let mut points = Vec::new();
     let mut reflective = Vec::new();
@@ -103,26 +97,22 @@ pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, roun
         points.push(SplitPoint {
             ssr_max_steps: steps,
             ssr_min_confidence: t,
-            rt_pixel_fraction: stats.failed_pixels as f64 / stats.reflective_pixels.max(1) as f64,
+            rt_pixel_fraction: stats.rt_pixel_fraction(),
             failed_pixels: stats.failed_pixels,
             passes_ms,
             frame_ms: median(&frames[i]),
             frame_over_rt: median(&ratios),
         });
     }
-    let rt = RtPoint {
-        reflective_pixels: rt_stats.reflective_pixels,
-        frame_ms: rt_frame_ms,
-    };
-    let same_reflective = reflective.iter().all(|&r| r == rt.reflective_pixels);
+    let same_reflective = reflective.iter().all(|&r| r == rt_reflective);
     let monotonic = points.windows(2).all(|w| w[1].failed_pixels >= w[0].failed_pixels);
-    let all_at_end = points.last().is_some_and(|p| p.failed_pixels == rt.reflective_pixels);
+    let all_at_end = points.last().is_some_and(|p| p.failed_pixels == rt_reflective);
     Ok(SplitReport {
         device: ctx.device_name.clone(),
         scene: scene.name.clone(),
         resolution: [base.width, base.height],
-        reflective_pixels: rt.reflective_pixels,
-        rt_frame_ms: rt.frame_ms,
+        reflective_pixels: rt_reflective,
+        rt_frame_ms,
         points,
         valid: same_reflective && monotonic && all_at_end,
     })

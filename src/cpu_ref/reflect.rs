@@ -23,10 +23,6 @@ fn offset_scale(frame: &FrameUniforms, pos: Vec3) -> f32 {
     2e-4 * (pos - frame.camera_pos.xyz()).length().max(1.0)
 }
 
-fn reflect(i: Vec3, n: Vec3) -> Vec3 {
-    i - 2.0 * n.dot(i) * n
-}
-
 /// The radiance the reflected path from pixel `p` (G-buffer depth, world normal as
 /// stored) gathers in up to `max_bounces` rays, and the number of rays it traced.
 pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3, max_bounces: u32) -> (Vec3, u32) {
@@ -42,7 +38,7 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
     };
     let pos = shading::world_from_depth(frame, p, depth);
     let n = normal.normalize();
-    let mut dir = reflect((pos - frame.camera_pos.xyz()).normalize(), n);
+    let mut dir = (pos - frame.camera_pos.xyz()).normalize().reflect(n);
     let mut origin = pos + n * offset_scale(frame, pos);
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
@@ -80,7 +76,7 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
             break;
         }
         throughput *= m.reflectivity;
-        dir = reflect(dir, hn);
+        dir = dir.reflect(hn);
         origin = hp + hn * offset_scale(frame, hp);
     }
     (radiance, rays)

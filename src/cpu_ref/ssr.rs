@@ -14,15 +14,11 @@ pub struct SsrRay {
     pub vdir: Vec3,
 }
 
-fn reflect(i: Vec3, n: Vec3) -> Vec3 {
-    i - 2.0 * n.dot(i) * n
-}
-
 /// `ssr_ray`: pixel `p`'s surface point, normal and reflected direction in view space.
 pub fn ssr_ray(frame: &FrameUniforms, p: IVec2, depth: f32, n_world: Vec3) -> SsrRay {
     let vpos = (frame.view * world_from_depth(frame, p, depth).extend(1.0)).xyz();
     let vn = (Mat3::from_mat4(frame.view) * n_world.normalize()).normalize();
-    let vdir = reflect(vpos.normalize(), vn).normalize();
+    let vdir = vpos.normalize().reflect(vn).normalize();
     SsrRay { vpos, vn, vdir }
 }
 

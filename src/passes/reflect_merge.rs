@@ -73,18 +73,7 @@ impl Targets {
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
         let tiles = (extent.width.div_ceil(WG_2D) * extent.height.div_ceil(WG_2D)) as u64;
-        let buffer = |name, size| {
-            Buffer::new(
-                ctx,
-                name,
-                size,
-                vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_DST
-                    | vk::BufferUsageFlags::TRANSFER_SRC
-                    | vk::BufferUsageFlags::INDIRECT_BUFFER,
-                gpu_allocator::MemoryLocation::GpuOnly,
-            )
-        };
+        let buffer = |name, size| Buffer::device_list(ctx, name, size);
         Ok(Self {
             reflection: Image::new(ctx, "reflect.merged", extent, FORMAT, usage)?,
             scratch: Image::new(ctx, "reflect.scratch", extent, FORMAT, usage)?,

@@ -53,13 +53,7 @@ impl CompactOutputs {
         let tiles = slots(extent).div_ceil(TILE).max(1) as u64;
         Ok(Self {
             pixels: Buffer::new(ctx, "compact.pixels", n * 4, usage, MemoryLocation::GpuOnly)?,
-            indirect: Buffer::new(
-                ctx,
-                "compact.indirect",
-                16,
-                usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
-                MemoryLocation::GpuOnly,
-            )?,
+            indirect: Buffer::device_list(ctx, "compact.indirect", 16)?,
             tile_counts: Buffer::new(ctx, "compact.tiles", tiles * 4, usage, MemoryLocation::GpuOnly)?,
             extent,
         })

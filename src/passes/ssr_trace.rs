@@ -6,6 +6,7 @@
 use super::gbuffer::GBuffer;
 use super::ssr_compact::MASK_FORMAT;
 use crate::error::Result;
+use crate::settings::Settings;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Image, Pipeline, Resource, Sampler};
@@ -30,6 +31,22 @@ pub struct SsrParams {
     pub reflective_min: f32,
     /// Hits on surfaces more reflective than this fail (need the ray tracer's bounce).
     pub recursion_min: f32,
+}
+
+impl SsrParams {
+    /// The SSR fields of the frame's settings.
+    pub fn from_settings(st: &Settings) -> Self {
+        Self {
+            max_steps: st.ssr_max_steps,
+            stride: st.ssr_stride,
+            thickness: st.ssr_thickness,
+            max_distance: st.ssr_max_distance,
+            edge_fade: st.ssr_edge_fade,
+            min_confidence: st.ssr_min_confidence,
+            reflective_min: st.reflective_min,
+            recursion_min: st.ssr_recursion_min.max(st.reflective_min),
+        }
+    }
 }
 
 /// Push constants of `ssr_classify.comp`.
@@ -67,23 +84,11 @@ impl SsrOutputs {
     fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
-        let buffer = |name, size| {
-            Buffer::new(
-                ctx,
-                name,
-                size,
-                vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_DST
-                    | vk::BufferUsageFlags::TRANSFER_SRC
-                    | vk::BufferUsageFlags::INDIRECT_BUFFER,
-                gpu_allocator::MemoryLocation::GpuOnly,
-            )
-        };
         Ok(Self {
             color: Image::new(ctx, "ssr.color", extent, COLOR_FORMAT, usage)?,
             mask: Image::new(ctx, "ssr.fail_mask", extent, MASK_FORMAT, usage)?,
-            march_list: buffer("ssr.march_list", extent.width as u64 * extent.height as u64 * 4)?,
-            march_args: buffer("ssr.march_args", 16)?,
+            march_list: Buffer::device_list(ctx, "ssr.march_list", extent.width as u64 * extent.height as u64 * 4)?,
+            march_args: Buffer::device_list(ctx, "ssr.march_args", 16)?,
         })
     }
 }

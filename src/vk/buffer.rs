@@ -59,6 +59,22 @@ impl Buffer {
         Ok(buffer)
     }
 
+    /// A device-local buffer that compute passes write and read, that indirect
+    /// dispatches read their arguments from, and that tests fill and read back: pixel
+    /// and tile lists, per-tile data, dispatch arguments.
+    pub fn device_list(ctx: &Arc<Context>, name: &str, size: u64) -> Result<Self> {
+        Self::new(
+            ctx,
+            name,
+            size,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            MemoryLocation::GpuOnly,
+        )
+    }
+
     /// A device-local buffer filled with `data` through a staging copy.
     pub fn with_data(ctx: &Arc<Context>, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> Result<Self> {
         let buffer = Self::new(

@@ -1,6 +1,6 @@
 #version 460
 // ssr.compact, step 1 of 3: failed pixels per tile.
-layout(local_size_x = SORT_WG) in;
+layout(local_size_x = COMPACT_WG) in;
 
 layout(binding = 0, r32ui) uniform readonly uimage2D mask; // nonzero: the pixel needs a ray
 #define COMPACT_MASK
@@ -15,9 +15,9 @@ void main() {
         s_count = 0u;
     }
     barrier();
-    uint base = gl_WorkGroupID.x * COMPACT_TILE + l * SORT_ITEMS;
+    uint base = gl_WorkGroupID.x * COMPACT_TILE + l * COMPACT_ITEMS;
     uint mine = 0u;
-    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+    for (uint k = 0u; k < COMPACT_ITEMS; ++k) {
         if (slot_listed(base + k)) {
             mine += 1u;
         }

@@ -2,19 +2,19 @@
 // ssr.compact, step 2 of 3: exclusive scan of the tile counts (one workgroup), the
 // total, and the indirect dispatch arguments of the pass that consumes the list.
 #include "compact.glsl"
-#define WG_SCAN_SIZE SORT_WG
+#define WG_SCAN_SIZE COMPACT_WG
 #include "wg_scan.glsl"
 
-layout(local_size_x = SORT_WG) in;
+layout(local_size_x = COMPACT_WG) in;
 
 layout(binding = 0, std430) buffer TileCounts { uint tile_counts[]; };
-// x, y, z: VkDispatchIndirectCommand for LBVH_WG-wide workgroups; w: the count.
+// x, y, z: VkDispatchIndirectCommand for RT_LIST_WG-wide workgroups; w: the count.
 layout(binding = 1, std430) writeonly buffer Indirect { uvec4 indirect; };
 
 void main() {
     uint l = gl_LocalInvocationID.x;
     uint m = pc.num_tiles;
-    uint per = (m + SORT_WG - 1u) / SORT_WG;
+    uint per = (m + COMPACT_WG - 1u) / COMPACT_WG;
     uint begin = min(l * per, m);
     uint end = min(begin + per, m);
     uint sum = 0u;
@@ -29,6 +29,6 @@ void main() {
         running += c;
     }
     if (l == 0u) {
-        indirect = uvec4((total + LBVH_WG - 1u) / LBVH_WG, 1u, 1u, total);
+        indirect = uvec4((total + RT_LIST_WG - 1u) / RT_LIST_WG, 1u, 1u, total);
     }
 }

@@ -13,7 +13,7 @@
 #include "traverse.glsl"
 #include "pixel_list.glsl"
 
-layout(local_size_x = LBVH_WG) in;
+layout(local_size_x = RT_LIST_WG) in;
 
 layout(binding = 1) uniform sampler2D gb_depth;
 layout(binding = 2) uniform sampler2D gb_normal;
@@ -35,7 +35,7 @@ float offset_scale(vec3 pos) {
 }
 
 void main() {
-    uint i = list_entry(indirect.w, LBVH_WG);
+    uint i = list_entry(indirect.w, RT_LIST_WG);
     if (i >= indirect.w) {
         return;
     }

@@ -26,9 +26,26 @@ pub enum Error {
         #[source]
         source: gpu_allocator::AllocationError,
     },
-    /// A settings value is outside what the renderer or the device supports.
+    /// A settings value is outside what the renderer supports.
     #[error("invalid setting: {0}")]
     Settings(String),
+    /// Something the device cannot hold or run: a buffer beyond a range limit, a
+    /// dispatch beyond the workgroup-count limit, an image beyond the image limit.
+    #[error("{what} needs {size} {unit}, beyond {limit_name} = {limit} on {device}")]
+    DeviceLimit {
+        what: String,
+        size: u64,
+        unit: &'static str,
+        limit: u64,
+        limit_name: &'static str,
+        device: String,
+    },
+    /// A pipeline whose shaders and Rust side disagree (push constants, bindings).
+    #[error("{0}")]
+    Pipeline(String),
+    /// A BVH that cannot be built or traced as asked (no triangles, too many, no BVH).
+    #[error("BVH: {0}")]
+    Bvh(String),
     /// Inputs that cannot be used together (e.g. images of different sizes).
     #[error("{0}")]
     Input(String),

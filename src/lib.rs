@@ -4,13 +4,16 @@
 //! records a frame top to bottom; `scene` loads and builds scenes; `cpu_ref` mirrors
 //! every GPU kernel on the CPU for tests. See DESIGN.md in the shared folder.
 
+pub mod aabb;
 pub mod bench;
 pub mod cpu_ref;
 pub mod error;
 pub mod gpu_types;
 pub mod headless;
+pub mod limits;
 pub mod metrics;
 pub mod passes;
+pub mod reflection_maps;
 pub mod renderer;
 pub mod scene;
 pub mod settings;

@@ -41,7 +41,7 @@ enum Command {
 enum BenchCommand {
     /// LBVH build (per stage), refit, SAH quality and traversal throughput.
     Lbvh(BenchLbvhArgs),
-    /// Time of ssr.classify, ssr.trace, ssr.compact and rt.trace as the ray-traced share
+    /// Time of ssr.classify, ssr.trace, ssr.compact and rt.reflect as the ray-traced share
     /// varies (every point and rt interleaved in one run).
     Reflect(BenchReflectArgs),
     /// Every mode timed in the same run, interleaved: per-pass medians, frame time
@@ -408,7 +408,7 @@ fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
         r.scene, r.device, r.resolution[0], r.resolution[1], r.reflective_pixels, r.rt_frame_ms
     );
     println!(
-        "  steps  min conf   traced   ssr.classify  ssr.trace  ssr.compact   rt.trace   reflect.merge   frame (ms)  / rt"
+        "  steps  min conf   traced   ssr.classify  ssr.trace  ssr.compact  rt.reflect  reflect.merge   frame (ms)  / rt"
     );
     for p in &r.points {
         let ms = |k: &str| p.passes_ms.get(k).copied().unwrap_or(f64::NAN);
@@ -420,7 +420,7 @@ fn bench_reflect(args: BenchReflectArgs) -> Result<()> {
             ms("ssr.classify"),
             ms("ssr.trace"),
             ms("ssr.compact"),
-            ms("rt.trace"),
+            ms("rt.reflect"),
             ms("reflect.merge"),
             p.frame_ms,
             p.frame_over_rt

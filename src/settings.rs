@@ -28,6 +28,26 @@ pub enum Mode {
 impl Mode {
     pub const ALL: [Mode; 5] = [Mode::Raster, Mode::Ssr, Mode::Hybrid, Mode::Rt, Mode::Provenance];
 
+    /// Whether the frame has reflections at all (every mode but `raster`).
+    pub fn reflects(self) -> bool {
+        self != Mode::Raster
+    }
+
+    /// Whether SSR marches (`ssr.trace` runs): `rt` classifies only, to fail every pixel.
+    pub fn marches(self) -> bool {
+        matches!(self, Mode::Ssr | Mode::Hybrid | Mode::Provenance)
+    }
+
+    /// Whether failed pixels are ray traced (`ssr.compact` and `rt.reflect` run).
+    pub fn traces(self) -> bool {
+        matches!(self, Mode::Hybrid | Mode::Rt | Mode::Provenance)
+    }
+
+    /// Whether SSR and ray-traced reflections meet in one image (the seam blur runs).
+    pub fn has_seams(self) -> bool {
+        matches!(self, Mode::Hybrid | Mode::Provenance)
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Mode::Raster => "raster",

@@ -17,7 +17,8 @@ pub const MATERIAL_NONE: u32 = 0xffff_ffff;
 /// (2r+1)^2 taps bound the cost of the shadow lookup per pixel.
 pub const MAX_PCF_RADIUS: u32 = 4;
 
-/// Workgroup size of the 1D LBVH kernels (bounds, morton, hierarchy, fit, trace):
+/// Workgroup size of the 1D LBVH kernels (bounds, morton, hierarchy, fit) and of
+/// `rt.trace` over a ray buffer:
 /// 256 = 32 subgroups on lavapipe, 8 on NVIDIA; enough to hide latency on GPUs.
 pub const LBVH_WG: u32 = 256;
 
@@ -36,6 +37,18 @@ pub const SORT_WG: u32 = 256;
 /// Keys each sort thread owns, consecutively: a tile is SORT_WG x SORT_ITEMS keys.
 pub const SORT_ITEMS: u32 = 16;
 
+/// Threads per workgroup of the `ssr.compact` count, scan and scatter kernels (each
+/// thread owns COMPACT_ITEMS consecutive slots of the 8x8-block order): the scan of the
+/// per-tile counts runs in one workgroup of COMPACT_WG threads.
+pub const COMPACT_WG: u32 = 256;
+/// Slots each compaction thread owns: a tile is COMPACT_WG x COMPACT_ITEMS slots.
+pub const COMPACT_ITEMS: u32 = 16;
+
+/// Invocations per workgroup of `rt.reflect`, which runs over the compacted ray list
+/// (`ssr.compact` writes its indirect arguments in these units): 32 of lavapipe's
+/// 8-lane SIMD groups, 8 NVIDIA warps.
+pub const RT_LIST_WG: u32 = 256;
+
 /// Marks a BVH node's `left` field as a leaf; the low 31 bits are the primitive id.
 pub const BVH_LEAF_BIT: u32 = 0x8000_0000;
 /// "No node / no primitive" (parent of the root, the primitive of a miss).
@@ -48,7 +61,7 @@ pub const TRACE_STACK: u32 = 64;
 /// largest stride worth refining to one pixel (16 px).
 pub const SSR_REFINE_STEPS: u32 = 4;
 
-/// Invocations per workgroup of ssr.trace, which runs over a pixel list: eight of
+/// Invocations per workgroup of ssr.trace, which runs over the march list: eight of
 /// lavapipe's 8-lane SIMD groups.
 pub const SSR_LIST_WG: u32 = 64;
 
@@ -105,6 +118,9 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("SORT_BINS", SORT_BINS),
     ("SORT_WG", SORT_WG),
     ("SORT_ITEMS", SORT_ITEMS),
+    ("COMPACT_WG", COMPACT_WG),
+    ("COMPACT_ITEMS", COMPACT_ITEMS),
+    ("RT_LIST_WG", RT_LIST_WG),
     ("BVH_LEAF_BIT", BVH_LEAF_BIT),
     ("BVH_INVALID", BVH_INVALID),
     ("TRACE_STACK", TRACE_STACK),

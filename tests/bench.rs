@@ -66,7 +66,7 @@ fn reflection_split_benchmark_is_valid() {
     assert!(r
         .points
         .iter()
-        .all(|p| p.passes_ms.contains_key("rt.trace") && p.passes_ms.contains_key("ssr.trace")));
+        .all(|p| p.passes_ms.contains_key("rt.reflect") && p.passes_ms.contains_key("ssr.trace")));
     assert!(r.points.iter().all(|p| p.frame_over_rt > 0.0 && p.frame_ms > 0.0) && r.rt_frame_ms > 0.0);
     common::assert_no_validation_messages(&ctx);
 }
@@ -87,6 +87,6 @@ fn modes_benchmark_is_valid() {
     assert!(by("hybrid").traced_pixels > 0 && by("hybrid").traced_pixels < by("rt").traced_pixels);
     assert!(by("hybrid").ssim_vs_rt > 0.9 && by("raster").ssim_vs_rt < by("hybrid").ssim_vs_rt);
     assert!(!by("raster").passes_ms.contains_key("ssr.trace"));
-    assert!(by("hybrid").passes_ms.contains_key("rt.trace") && !by("ssr").passes_ms.contains_key("rt.trace"));
+    assert!(by("hybrid").passes_ms.contains_key("rt.reflect") && !by("ssr").passes_ms.contains_key("rt.reflect"));
     common::assert_no_validation_messages(&ctx);
 }

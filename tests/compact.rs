@@ -6,8 +6,9 @@ mod common;
 use ash::vk;
 use rand::Rng;
 use speculum::cpu_ref::compact::compact;
-use speculum::passes::ssr_compact::{CompactPass, MASK_FORMAT};
-use speculum::shader_defines::LBVH_WG;
+use speculum::passes::ssr_compact::CompactPass;
+use speculum::passes::ssr_trace::MASK_FORMAT;
+use speculum::shader_defines::RT_LIST_WG;
 use speculum::vk::Image;
 
 #[test]
@@ -49,7 +50,7 @@ fn compaction_matches_cpu_on_random_masks() {
             let args: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.indirect.read().unwrap());
             assert_eq!(
                 args,
-                [(want.len() as u32).div_ceil(LBVH_WG), 1, 1, want.len() as u32],
+                [(want.len() as u32).div_ceil(RT_LIST_WG), 1, 1, want.len() as u32],
                 "{w}x{h} density {density}"
             );
             let got: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.pixels.read().unwrap());

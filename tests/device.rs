@@ -87,3 +87,33 @@ fn timer_scopes_report_by_name() {
     assert_eq!(dst.read().unwrap(), data, "the copy itself ran");
     common::assert_no_validation_messages(&ctx);
 }
+
+/// A pipeline created for push constants other than the shader's block is refused with
+/// an error naming both sizes; the right type is accepted.
+#[test]
+fn pipeline_push_type_must_match_the_shader() {
+    use speculum::vk::Pipeline;
+    let ctx = common::context();
+    let shader = speculum::shaders::COMPOSE_COMP;
+    let err = Pipeline::compute::<[u32; 2]>(&ctx, "test.compose", shader)
+        .err()
+        .expect("8 B of push constants for a 16 B block must be refused");
+    let msg = err.to_string();
+    assert!(msg.contains("16 B") && msg.contains("8 B"), "{msg}");
+    assert!(Pipeline::compute::<speculum::passes::compose::ComposePush>(&ctx, "test.compose", shader).is_ok());
+    assert!(Pipeline::compute::<()>(&ctx, "test.light", speculum::shaders::LIGHT_DIRECT_COMP).is_ok());
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The device limits the renderer checks against, printed for the record.
+#[test]
+fn device_limits_are_reported() {
+    let ctx = common::context();
+    let l = &ctx.limits;
+    println!(
+        "{}: maxComputeWorkGroupCount {:?}, maxStorageBufferRange {}, maxImageDimension2D {}",
+        ctx.device_name, l.max_compute_work_group_count, l.max_storage_buffer_range, l.max_image_dimension2_d
+    );
+    assert!(l.max_compute_work_group_count[0] >= 65535, "Vulkan guarantees 65535");
+    assert!(l.max_storage_buffer_range >= 1 << 27);
+}

@@ -74,7 +74,7 @@ fn compose_matches_cpu_reference() {
         normal: &normal,
     };
     ctx.one_shot(|cmd| {
-        pass.record(cmd, &inputs, exposure, speculum::shader_defines::COMPOSE_PLAIN);
+        pass.record(cmd, &inputs, exposure, speculum::passes::compose::ComposeMode::Plain);
     })
     .unwrap();
     let gpu = pass.ldr.read(vk::ImageLayout::GENERAL).unwrap();

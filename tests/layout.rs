@@ -5,9 +5,10 @@ use speculum::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex};
 use speculum::passes::compose::ComposePush;
 use speculum::shaders;
 use speculum::vk::spirv::{reflect, words, Reflection};
+use speculum::vk::Shader;
 use std::mem::{offset_of, size_of};
 
-fn reflected(name: &'static str, spv: &[u8]) -> Reflection {
+fn reflected((name, spv): Shader) -> Reflection {
     reflect(name, &words(name, spv).unwrap()).unwrap()
 }
 
@@ -31,7 +32,7 @@ fn check(r: &Reflection, glsl_name: &str, rust: Vec<(String, u32)>) {
 /// `Vertex` (std430 storage buffer): offsets and array stride.
 #[test]
 fn vertex_layout_matches_glsl() {
-    let r = reflected("gbuffer.vert", shaders::GBUFFER_VERT);
+    let r = reflected(shaders::GBUFFER_VERT);
     check(
         &r,
         "Vertex",
@@ -48,7 +49,7 @@ fn vertex_layout_matches_glsl() {
 /// `Material` (std430 storage buffer): offsets and array stride.
 #[test]
 fn material_layout_matches_glsl() {
-    let r = reflected("gbuffer.frag", shaders::GBUFFER_FRAG);
+    let r = reflected(shaders::GBUFFER_FRAG);
     check(
         &r,
         "Material",
@@ -84,26 +85,44 @@ fn frame_uniforms_layout_matches_glsl() {
         ambient,
         _pad0,
     });
-    for (name, spv) in [
-        ("gbuffer.vert", shaders::GBUFFER_VERT),
-        ("light_direct.comp", shaders::LIGHT_DIRECT_COMP),
-        ("shadow_map.vert", shaders::SHADOW_MAP_VERT),
+    for shader in [
+        shaders::GBUFFER_VERT,
+        shaders::LIGHT_DIRECT_COMP,
+        shaders::SHADOW_MAP_VERT,
     ] {
-        check(&reflected(name, spv), "FrameUniforms", rust.clone());
+        check(&reflected(shader), "FrameUniforms", rust.clone());
     }
 }
 
 /// `ComposePush` (push constants).
 #[test]
 fn compose_push_layout_matches_glsl() {
-    let r = reflected("compose.comp", shaders::COMPOSE_COMP);
+    let r = reflected(shaders::COMPOSE_COMP);
     check(&r, "ComposePush", rust_layout!(ComposePush { size, exposure, mode }));
+}
+
+/// The push-constant block's size is reflected (pipelines check their push type
+/// against it): 16 B for compose, 4 B for the fit's triangle count, none for
+/// light.direct.
+#[test]
+fn push_block_sizes_are_reflected() {
+    assert_eq!(
+        reflected(shaders::COMPOSE_COMP).push_size as usize,
+        size_of::<ComposePush>()
+    );
+    assert_eq!(reflected(shaders::LBVH_FIT_COMP).push_size, 4);
+    assert_eq!(
+        reflected(shaders::REFLECT_BLUR_COMP).push_size,
+        16,
+        "ivec2 axis, int radius, int band"
+    );
+    assert_eq!(reflected(shaders::LIGHT_DIRECT_COMP).push_size, 0);
 }
 
 /// The reflection itself: a layout mismatch is detected (the check can fail).
 #[test]
 fn layout_check_detects_a_mismatch() {
-    let r = reflected("gbuffer.frag", shaders::GBUFFER_FRAG);
+    let r = reflected(shaders::GBUFFER_FRAG);
     let wrong = vec![("albedo".to_string(), 0), ("roughness".to_string(), 16)];
     let result = std::panic::catch_unwind(|| check(&r, "Material", wrong));
     assert!(result.is_err());
@@ -113,7 +132,7 @@ fn layout_check_detects_a_mismatch() {
 #[test]
 fn light_direct_bindings_are_reflected() {
     use ash::vk::DescriptorType as D;
-    let r = reflected("light_direct.comp", shaders::LIGHT_DIRECT_COMP);
+    let r = reflected(shaders::LIGHT_DIRECT_COMP);
     let kinds: Vec<_> = r.bindings.iter().map(|b| b.1).collect();
     assert_eq!(
         kinds,

@@ -1,12 +1,12 @@
 // Stream compaction of a per-pixel mask into a list of pixels, in tile order:
 // count per tile → scan (one workgroup) → scatter. Tiles are COMPACT_TILE consecutive
-// slots of that order (SORT_WG invocations x SORT_ITEMS slots each). Mirrored by
+// slots of that order (COMPACT_WG invocations x COMPACT_ITEMS slots each). Mirrored by
 // cpu_ref::compact.
 #ifndef COMPACT_GLSL
 #define COMPACT_GLSL
 #include "pixel_list.glsl"
 
-#define COMPACT_TILE (SORT_WG * SORT_ITEMS)
+#define COMPACT_TILE (COMPACT_WG * COMPACT_ITEMS)
 
 layout(push_constant) uniform Push {
     uvec2 size;     // mask size in pixels

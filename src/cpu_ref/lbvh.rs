@@ -1,6 +1,7 @@
 //! References of the LBVH kernels (`glsl/lbvh_*.comp`, `glsl/radix_*.comp`) and the
 //! checks every built BVH must pass.
 
+pub use crate::aabb::{ordered_to_float, Aabb};
 use crate::gpu_types::{BvhNode, GpuVertex};
 use crate::shader_defines::{BVH_INVALID, BVH_LEAF_BIT};
 use glam::{UVec3, Vec3};
@@ -15,64 +16,12 @@ pub fn centroid(tri: &[Vec3; 3]) -> Vec3 {
     (tri[0] + tri[1] + tri[2]) * (1.0 / 3.0)
 }
 
-/// An axis-aligned box.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Aabb {
-    pub lo: Vec3,
-    pub hi: Vec3,
-}
-
-impl Aabb {
-    pub const EMPTY: Aabb = Aabb {
-        lo: Vec3::splat(f32::MAX),
-        hi: Vec3::splat(f32::MIN),
-    };
-
-    pub fn of_triangle(tri: &[Vec3; 3]) -> Self {
-        Self {
-            lo: tri[0].min(tri[1]).min(tri[2]),
-            hi: tri[0].max(tri[1]).max(tri[2]),
-        }
-    }
-    pub fn union(self, o: Self) -> Self {
-        Self {
-            lo: self.lo.min(o.lo),
-            hi: self.hi.max(o.hi),
-        }
-    }
-    pub fn grow(self, p: Vec3) -> Self {
-        Self {
-            lo: self.lo.min(p),
-            hi: self.hi.max(p),
-        }
-    }
-    pub fn contains(&self, o: &Self) -> bool {
-        self.lo.cmple(o.lo).all() && self.hi.cmpge(o.hi).all()
-    }
-    /// Surface area (0 for empty or flat-in-two-axes boxes).
-    pub fn area(&self) -> f32 {
-        let d = (self.hi - self.lo).max(Vec3::ZERO);
-        2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
-    }
-    pub fn of_node(n: &BvhNode) -> Self {
-        Self {
-            lo: Vec3::from(n.lo),
-            hi: Vec3::from(n.hi),
-        }
-    }
-}
-
 /// `lbvh.bounds`: (centroid bounds, scene bounds).
 pub fn bounds(vertices: &[GpuVertex], indices: &[u32]) -> (Aabb, Aabb) {
     (0..indices.len() / 3).fold((Aabb::EMPTY, Aabb::EMPTY), |(c, s), t| {
         let tri = triangle(vertices, indices, t);
         (c.grow(centroid(&tri)), s.union(Aabb::of_triangle(&tri)))
     })
-}
-
-/// Inverse of the kernels' order-preserving float → uint mapping (`bvh.glsl`).
-pub fn ordered_to_float(u: u32) -> f32 {
-    f32::from_bits(if u & 0x8000_0000 != 0 { u & 0x7fff_ffff } else { !u })
 }
 
 /// Spreads the low 10 bits of x to every third bit (see `expand_bits10` in GLSL).

@@ -2,8 +2,10 @@
 //! image that is presented or saved. CPU reference: `cpu_ref::compose`.
 
 use crate::error::Result;
+use crate::shader_defines::{COMPOSE_PLAIN, COMPOSE_PROVENANCE, COMPOSE_REFLECT};
 use crate::shaders;
-use crate::vk::{Context, Image, Pipeline, Resource, Sampler};
+use crate::vk::barrier::{self, access};
+use crate::vk::{Context, Groups, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -12,7 +14,29 @@ pub const NAME: &str = "compose";
 /// sRGB-encoded values in a UNORM image (storage images cannot be SRGB).
 pub const FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 
-/// Push constants of `compose.comp`.
+/// What `compose` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ComposeMode {
+    /// The lit colour alone (the `raster` mode).
+    Plain,
+    /// The lit colour plus the merged reflection weighted by reflectivity.
+    Reflect,
+    /// Each pixel painted by the source of its reflection.
+    Provenance,
+}
+
+impl ComposeMode {
+    /// The shader's `COMPOSE_*` value.
+    fn code(self) -> u32 {
+        match self {
+            ComposeMode::Plain => COMPOSE_PLAIN,
+            ComposeMode::Reflect => COMPOSE_REFLECT,
+            ComposeMode::Provenance => COMPOSE_PROVENANCE,
+        }
+    }
+}
+
+/// Push constants of `compose.comp` (public for the layout test).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct ComposePush {
@@ -25,7 +49,7 @@ pub struct ComposePush {
 /// The reflection and the surface data compose weighs it with.
 pub struct ComposeInputs<'a> {
     pub hdr: &'a Image,
-    /// Merged reflection (rgb, a: source); read unless the mode is `COMPOSE_PLAIN`.
+    /// Merged reflection (rgb, a: source); read unless the mode is `Plain`.
     pub reflection: &'a Image,
     /// G-buffer normal + reflectivity.
     pub normal: &'a Image,
@@ -35,51 +59,39 @@ pub struct ComposePass {
     ctx: Arc<Context>,
     pipeline: Pipeline,
     sampler: Sampler,
-    /// The tonemapped frame; `GENERAL` between frames.
+    /// The tonemapped frame; always `GENERAL`.
     pub ldr: Image,
-}
-
-fn ldr_image(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Image> {
-    Image::new(
-        ctx,
-        "compose.ldr",
-        extent,
-        FORMAT,
-        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST,
-    )
 }
 
 impl ComposePass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let pipeline = Pipeline::compute(
-            ctx,
-            NAME,
-            ("compose.comp", shaders::COMPOSE_COMP),
-            std::mem::size_of::<ComposePush>() as u32,
-        )?;
         Ok(Self {
             ctx: ctx.clone(),
-            pipeline,
+            pipeline: Pipeline::compute::<ComposePush>(ctx, NAME, shaders::COMPOSE_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "compose.sampler")?,
-            ldr: ldr_image(ctx, extent)?,
+            ldr: Image::storage(ctx, "compose.ldr", extent, FORMAT)?,
         })
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
-        self.ldr = ldr_image(&self.ctx, extent)?;
+        self.ldr = Image::storage(&self.ctx, "compose.ldr", extent, FORMAT)?;
         Ok(())
     }
 
-    /// Records the tonemap. `hdr`, `reflection` and `ldr` in `GENERAL`, `normal` in
-    /// `SHADER_READ_ONLY_OPTIMAL`, all of the render size.
-    pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ComposeInputs<'_>, exposure: f32, mode: u32) {
+    /// Records the tonemap. `hdr` and `reflection` in `GENERAL`, `normal` in
+    /// `SHADER_READ_ONLY_OPTIMAL`, all of the render size. `ldr` ends visible to its
+    /// readers: copies out of it (readbacks, a blit to a window).
+    pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ComposeInputs<'_>, exposure: f32, mode: ComposeMode) {
+        let d = &self.ctx.device;
         let e = self.ldr.extent;
         let push = ComposePush {
             size: [e.width, e.height],
             exposure,
-            mode,
+            mode: mode.code(),
         };
-        self.pipeline.bind(
+        // WAR: earlier copies out of the LDR image finish before it is overwritten.
+        barrier::global(d, cmd, access::TRANSFER_READ, access::COMPUTE_WRITE);
+        self.pipeline.dispatch(
             cmd,
             &[
                 Resource::StorageImage(inputs.hdr),
@@ -87,8 +99,10 @@ impl ComposePass {
                 Resource::StorageImage(inputs.reflection),
                 Resource::Sampled(inputs.normal, &self.sampler),
             ],
-            bytemuck::bytes_of(&push),
+            &push,
+            Groups::Cover([e.width, e.height, 1]),
         );
-        self.pipeline.dispatch_covering(cmd, [e.width, e.height, 1]);
+        // RAW: copies read the finished frame.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::TRANSFER_READ);
     }
 }

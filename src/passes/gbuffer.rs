@@ -5,6 +5,7 @@ use super::{set_viewport, SceneGeometry};
 use crate::error::Result;
 use crate::shader_defines::MATERIAL_NONE;
 use crate::shaders;
+use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GraphicsDesc, Image, Pipeline, Resource};
 use ash::vk;
 use std::sync::Arc;
@@ -54,16 +55,15 @@ pub struct GBufferPass {
 
 impl GBufferPass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let pipeline = Pipeline::graphics(
+        let pipeline = Pipeline::graphics::<()>(
             ctx,
             NAME,
             &GraphicsDesc {
-                vertex: ("gbuffer.vert", shaders::GBUFFER_VERT),
-                fragment: Some(("gbuffer.frag", shaders::GBUFFER_FRAG)),
+                vertex: shaders::GBUFFER_VERT,
+                fragment: Some(shaders::GBUFFER_FRAG),
                 color_formats: &[NORMAL_FORMAT, ALBEDO_FORMAT, MATERIAL_FORMAT],
                 depth_format: DEPTH_FORMAT,
                 depth_bias: None,
-                push_size: 0,
             },
         )?;
         Ok(Self {
@@ -79,10 +79,28 @@ impl GBufferPass {
         Ok(())
     }
 
-    /// Records the raster. Colour targets must be in `COLOR_ATTACHMENT_OPTIMAL`, depth
-    /// in `DEPTH_ATTACHMENT_OPTIMAL`.
+    /// Records the raster. The targets end in `SHADER_READ_ONLY_OPTIMAL`, visible to
+    /// their readers: every later pass of the frame (compute).
     pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, materials: &Buffer, geometry: &SceneGeometry<'_>) {
+        use vk::ImageLayout as L;
         let device = &self.ctx.device;
+        let [normal, albedo, material] = self.targets.colors();
+        let depth_target = [&self.targets.depth];
+        // WAR: the previous frame's compute reads finish before the targets are cleared.
+        barrier::transition(
+            device,
+            cmd,
+            &[normal, albedo, material],
+            (access::COMPUTE_READ, access::COLOR_WRITE),
+            (L::UNDEFINED, L::COLOR_ATTACHMENT_OPTIMAL),
+        );
+        barrier::transition(
+            device,
+            cmd,
+            &depth_target,
+            (access::COMPUTE_READ, access::DEPTH_WRITE),
+            (L::UNDEFINED, L::DEPTH_ATTACHMENT_OPTIMAL),
+        );
         let clear_float = vk::ClearValue {
             color: vk::ClearColorValue { float32: [0.0; 4] },
         };
@@ -131,12 +149,27 @@ impl GBufferPass {
                 Resource::Buffer(geometry.vertices),
                 Resource::Buffer(materials),
             ],
-            &[],
+            &(),
         );
         unsafe {
             device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
             device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
             device.cmd_end_rendering(cmd);
         }
+        // RAW: the compute passes read the G-buffer written above.
+        barrier::transition(
+            device,
+            cmd,
+            &[normal, albedo, material],
+            (access::COLOR_WRITE, access::COMPUTE_READ),
+            (L::COLOR_ATTACHMENT_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
+        );
+        barrier::transition(
+            device,
+            cmd,
+            &depth_target,
+            (access::DEPTH_WRITE, access::COMPUTE_READ),
+            (L::DEPTH_ATTACHMENT_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
+        );
     }
 }

@@ -4,7 +4,8 @@
 use super::gbuffer::GBuffer;
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{Buffer, Context, Image, Pipeline, Resource, Sampler};
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use std::sync::Arc;
 
@@ -18,40 +19,35 @@ pub struct LightDirectPass {
     ctx: Arc<Context>,
     pipeline: Pipeline,
     sampler: Sampler,
-    /// Lit HDR colour (linear, rgba16f); `GENERAL` between frames.
+    /// Lit HDR colour (linear, `FORMAT`); always `GENERAL`.
     pub lit: Image,
-}
-
-fn lit_image(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Image> {
-    Image::new(
-        ctx,
-        "light.lit",
-        extent,
-        FORMAT,
-        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST,
-    )
 }
 
 impl LightDirectPass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         Ok(Self {
             ctx: ctx.clone(),
-            pipeline: Pipeline::compute(ctx, NAME, ("light_direct.comp", shaders::LIGHT_DIRECT_COMP), 0)?,
+            pipeline: Pipeline::compute::<()>(ctx, NAME, shaders::LIGHT_DIRECT_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "light.sampler")?,
-            lit: lit_image(ctx, extent)?,
+            lit: Image::storage(ctx, "light.lit", extent, FORMAT)?,
         })
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
-        self.lit = lit_image(&self.ctx, extent)?;
+        self.lit = Image::storage(&self.ctx, "light.lit", extent, FORMAT)?;
         Ok(())
     }
 
-    /// Records the shading dispatch. G-buffer and shadow map must be in
-    /// `SHADER_READ_ONLY_OPTIMAL`, `lit` in `GENERAL`.
+    /// Records the shading dispatch. G-buffer and shadow map in
+    /// `SHADER_READ_ONLY_OPTIMAL`. `lit` ends visible to its readers, `ssr.trace` and
+    /// `compose` (compute).
     pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, shadow_map: &Image) {
+        let d = &self.ctx.device;
         let s = &self.sampler;
-        self.pipeline.bind(
+        // WAR: the previous frame's reads of `lit` finish before it is overwritten.
+        barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
+        let e = self.lit.extent;
+        self.pipeline.dispatch(
             cmd,
             &[
                 Resource::Buffer(frame),
@@ -62,9 +58,10 @@ impl LightDirectPass {
                 Resource::Sampled(shadow_map, s),
                 Resource::StorageImage(&self.lit),
             ],
-            &[],
+            &(),
+            Groups::Cover([e.width, e.height, 1]),
         );
-        let e = self.lit.extent;
-        self.pipeline.dispatch_covering(cmd, [e.width, e.height, 1]);
+        // RAW: ssr.trace and compose read the lit colour.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
     }
 }

@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::shader_defines::WG_2D;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Image, Pipeline, Resource, Sampler};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -53,7 +53,7 @@ pub struct BlurParams {
 
 /// Images and per-tile buffers that depend on the resolution.
 struct Targets {
-    /// The merged (and seam-blurred) reflection; `GENERAL` between frames.
+    /// The merged (and seam-blurred) reflection; always `GENERAL`.
     reflection: Image,
     /// The horizontal blur's output (written for active tiles only).
     scratch: Image,
@@ -70,13 +70,11 @@ struct Targets {
 
 impl Targets {
     fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let usage =
-            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
         let tiles = (extent.width.div_ceil(WG_2D) * extent.height.div_ceil(WG_2D)) as u64;
         let buffer = |name, size| Buffer::device_list(ctx, name, size);
         Ok(Self {
-            reflection: Image::new(ctx, "reflect.merged", extent, FORMAT, usage)?,
-            scratch: Image::new(ctx, "reflect.scratch", extent, FORMAT, usage)?,
+            reflection: Image::storage(ctx, "reflect.merged", extent, FORMAT)?,
+            scratch: Image::storage(ctx, "reflect.scratch", extent, FORMAT)?,
             tile_sources: buffer("reflect.tile_sources", tiles * 4)?,
             tile_active: buffer("reflect.tile_active", tiles * 4)?,
             tile_list: buffer("reflect.tile_list", tiles * 4)?,
@@ -99,30 +97,20 @@ impl MergePass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         Ok(Self {
             ctx: ctx.clone(),
-            merge: Pipeline::compute(ctx, NAME, ("reflect_merge.comp", shaders::REFLECT_MERGE_COMP), 8)?,
-            tiles: Pipeline::compute(
-                ctx,
-                "reflect.tiles",
-                ("reflect_tiles.comp", shaders::REFLECT_TILES_COMP),
-                4,
-            )?,
-            blur: Pipeline::compute(
-                ctx,
-                "reflect.blur",
-                ("reflect_blur.comp", shaders::REFLECT_BLUR_COMP),
-                16,
-            )?,
+            merge: Pipeline::compute::<MergePush>(ctx, NAME, shaders::REFLECT_MERGE_COMP)?,
+            tiles: Pipeline::compute::<TilesPush>(ctx, "reflect.tiles", shaders::REFLECT_TILES_COMP)?,
+            blur: Pipeline::compute::<BlurPush>(ctx, "reflect.blur", shaders::REFLECT_BLUR_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "reflect.sampler")?,
             targets: Targets::new(ctx, extent)?,
         })
     }
 
-    /// The merged, seam-blurred reflection (`GENERAL` between frames).
+    /// The merged, seam-blurred reflection (always `GENERAL`).
     pub fn reflection(&self) -> &Image {
         &self.targets.reflection
     }
 
-    /// The blur's intermediate image (for layout transitions by the renderer).
+    /// The blur's intermediate image, for tests that poison it before a run.
     pub fn scratch(&self) -> &Image {
         &self.targets.scratch
     }
@@ -151,8 +139,8 @@ impl MergePass {
         Ok(())
     }
 
-    /// Records merge + blur. Inputs and outputs in `GENERAL` (G-buffer read-only);
-    /// `reflection` ends visible to compute reads.
+    /// Records merge + blur. Inputs in `GENERAL` (G-buffer read-only); `reflection`
+    /// ends visible to its reader, `compose`.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -171,22 +159,22 @@ impl MergePass {
         let e = t.reflection.extent;
         let s = &self.sampler;
         // merge → reflection, blur H → scratch, blur V → reflection.
-        // WAR: the previous frame's blur reads of the tile bits finish before they are zeroed.
+        // WAR: the previous frame's tile pass reads of the tile bits finish before they
+        // are zeroed; WAR/WAW: its compose reads and blur writes of the images finish
+        // before this frame rewrites them.
         barrier::record(
             d,
             cmd,
-            &[barrier::memory(access::COMPUTE_READ, access::TRANSFER_WRITE)],
+            &[
+                barrier::memory(access::COMPUTE_READ, access::TRANSFER_WRITE),
+                barrier::memory(access::COMPUTE_ANY, access::COMPUTE_WRITE),
+            ],
             &[],
         );
         unsafe { d.cmd_fill_buffer(cmd, t.tile_sources.raw, 0, vk::WHOLE_SIZE, 0) };
         // RAW/WAW: the merge's atomics see the zeroed tile bits.
-        barrier::record(
-            d,
-            cmd,
-            &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE)],
-            &[],
-        );
-        self.merge.bind(
+        barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
+        self.merge.dispatch(
             cmd,
             &[
                 Resource::Buffer(frame),
@@ -198,20 +186,15 @@ impl MergePass {
                 Resource::StorageImage(&t.reflection),
                 Resource::Buffer(&t.tile_sources),
             ],
-            bytemuck::bytes_of(&MergePush {
+            &MergePush {
                 reflective_min,
                 rt_enabled: rt_enabled as u32,
-            }),
+            },
+            Groups::Cover([e.width, e.height, 1]),
         );
-        self.merge.dispatch_covering(cmd, [e.width, e.height, 1]);
         if blur.radius == 0 {
             // RAW: compose reads the merged reflection.
-            barrier::record(
-                d,
-                cmd,
-                &[barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_READ)],
-                &[],
-            );
+            barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
             return;
         }
         // RAW: the tile pass reads the merge's tile bits, the blur its merged image;
@@ -229,13 +212,8 @@ impl MergePass {
         let args: [u32; 3] = [0, 1, 1];
         unsafe { d.cmd_update_buffer(cmd, t.blur_args.raw, 0, bytemuck::bytes_of(&args)) };
         // RAW: the tile pass's atomics see the zeroed count.
-        barrier::record(
-            d,
-            cmd,
-            &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE)],
-            &[],
-        );
-        self.tiles.bind(
+        barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
+        self.tiles.dispatch(
             cmd,
             &[
                 Resource::Buffer(frame),
@@ -244,9 +222,9 @@ impl MergePass {
                 Resource::Buffer(&t.tile_list),
                 Resource::Buffer(&t.blur_args),
             ],
-            bytemuck::bytes_of(&TilesPush { band: blur.band as i32 }),
+            &TilesPush { band: blur.band as i32 },
+            Groups::Cover([t.tiles, 1, 1]),
         );
-        self.tiles.dispatch_covering(cmd, [t.tiles, 1, 1]);
         let rw = access::COMPUTE_READ_WRITE;
         for axis in [[1, 0], [0, 1]] {
             // RAW: this blur pass reads what the previous step wrote (images, tile list
@@ -266,7 +244,7 @@ impl MergePass {
                 radius: blur.radius as i32,
                 band: blur.band as i32,
             };
-            self.blur.bind(
+            self.blur.dispatch(
                 cmd,
                 &[
                     Resource::Buffer(frame),
@@ -275,16 +253,11 @@ impl MergePass {
                     Resource::Buffer(&t.tile_active),
                     Resource::Buffer(&t.tile_list),
                 ],
-                bytemuck::bytes_of(&push),
+                &push,
+                Groups::Indirect(&t.blur_args),
             );
-            unsafe { d.cmd_dispatch_indirect(cmd, t.blur_args.raw, 0) };
         }
         // RAW: compose reads the blurred reflection.
-        barrier::record(
-            d,
-            cmd,
-            &[barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_READ)],
-            &[],
-        );
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
     }
 }

@@ -1,4 +1,4 @@
-//! `rt.trace` for reflections: the compacted pixels' reflection rays through the static
+//! `rt.reflect`: the compacted pixels' reflection rays through the static
 //! and dynamic BVHs, shaded, with recursive bounces; an indirect dispatch sized by
 //! `ssr.compact`.
 
@@ -7,12 +7,13 @@ use super::rt_trace::TraceScene;
 use super::ssr_compact::CompactOutputs;
 use crate::error::Result;
 use crate::shaders;
-use crate::vk::{Buffer, Context, Image, Pipeline, Resource, Sampler};
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
-pub const NAME: &str = "rt.trace";
+pub const NAME: &str = "rt.reflect";
 pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 #[repr(C)]
@@ -28,13 +29,9 @@ pub struct RtReflectPass {
     ctx: Arc<Context>,
     pipeline: Pipeline,
     sampler: Sampler,
-    /// Reflected radiance of the listed pixels (others are left as they were).
+    /// Reflected radiance of the listed pixels (others are left as they were); always
+    /// `GENERAL`.
     pub color: Image,
-}
-
-fn color_image(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Image> {
-    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
-    Image::new(ctx, "rt.color", extent, FORMAT, usage)
 }
 
 /// What the reflection tracer needs besides the G-buffer.
@@ -49,22 +46,21 @@ pub struct ReflectInputs<'a> {
 
 impl RtReflectPass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let push = std::mem::size_of::<ReflectPush>() as u32;
         Ok(Self {
             ctx: ctx.clone(),
-            pipeline: Pipeline::compute(ctx, NAME, ("rt_reflect.comp", shaders::RT_REFLECT_COMP), push)?,
+            pipeline: Pipeline::compute::<ReflectPush>(ctx, NAME, shaders::RT_REFLECT_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "rt.sampler")?,
-            color: color_image(ctx, extent)?,
+            color: Image::storage(ctx, "rt.color", extent, FORMAT)?,
         })
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
-        self.color = color_image(&self.ctx, extent)?;
+        self.color = Image::storage(&self.ctx, "rt.color", extent, FORMAT)?;
         Ok(())
     }
 
-    /// Records the indirect dispatch. `color` in `GENERAL`; the list and its arguments
-    /// visible to compute reads and indirect dispatch.
+    /// Records the indirect dispatch over the list (visible to compute reads and
+    /// indirect dispatch). `color` ends visible to its reader, `reflect.merge`.
     pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ReflectInputs<'_>, max_bounces: u32, shadow_rays: bool) {
         let ([sn, sv, si, dn, dv, di], static_tris, dynamic_tris) = inputs.scene.bindings();
         let push = ReflectPush {
@@ -74,7 +70,10 @@ impl RtReflectPass {
             shadow_rays: shadow_rays as u32,
         };
         let s = &self.sampler;
-        self.pipeline.bind(
+        let d = &self.ctx.device;
+        // WAR/WAW: the previous frame's merge reads and tracer writes of the colour are done.
+        barrier::global(d, cmd, access::COMPUTE_ANY, access::COMPUTE_WRITE);
+        self.pipeline.dispatch(
             cmd,
             &[
                 Resource::Buffer(inputs.frame),
@@ -92,8 +91,10 @@ impl RtReflectPass {
                 dv,
                 di,
             ],
-            bytemuck::bytes_of(&push),
+            &push,
+            Groups::Indirect(&inputs.list.indirect),
         );
-        unsafe { self.ctx.device.cmd_dispatch_indirect(cmd, inputs.list.indirect.raw, 0) };
+        // RAW: the merge reads the ray-traced colour.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
     }
 }

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::gpu_types::{Hit, Ray};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, GpuTimer, Pipeline, Resource};
+use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -76,10 +76,9 @@ pub struct TracePass {
 
 impl TracePass {
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
-        let push = std::mem::size_of::<TracePush>() as u32;
         Ok(Self {
             ctx: ctx.clone(),
-            pipeline: Pipeline::compute(ctx, NAME, ("rt_trace.comp", shaders::RT_TRACE_COMP), push)?,
+            pipeline: Pipeline::compute::<TracePush>(ctx, NAME, shaders::RT_TRACE_COMP)?,
         })
     }
 
@@ -93,7 +92,7 @@ impl TracePass {
             dynamic_tris,
             any_hit: batch.any_hit as u32,
         };
-        self.pipeline.bind(
+        self.pipeline.dispatch(
             cmd,
             &[
                 Resource::Buffer(batch.rays),
@@ -105,9 +104,9 @@ impl TracePass {
                 dv,
                 di,
             ],
-            bytemuck::bytes_of(&push),
+            &push,
+            Groups::Cover([batch.count, 1, 1]),
         );
-        self.pipeline.dispatch_covering(cmd, [batch.count, 1, 1]);
     }
 
     /// Uploads `rays`, traces them, and returns the hits and the GPU time of the
@@ -117,7 +116,7 @@ impl TracePass {
             return Ok((Vec::new(), 0.0));
         }
         if scene.static_bvh.is_none() && scene.dynamic_bvh.is_none() {
-            return Err(Error::Settings("tracing needs at least one BVH".into()));
+            return Err(Error::Bvh("tracing needs at least one BVH".into()));
         }
         let ctx = &self.ctx;
         let rays_buf = Buffer::with_data(

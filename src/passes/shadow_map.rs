@@ -4,6 +4,7 @@
 use super::{set_viewport, SceneGeometry};
 use crate::error::Result;
 use crate::shaders;
+use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GraphicsDesc, Image, Pipeline, Resource};
 use ash::vk;
 use std::sync::Arc;
@@ -21,16 +22,15 @@ pub struct ShadowMapPass {
 impl ShadowMapPass {
     /// `size`: map edge in texels; `slope_bias`: raster slope-scaled depth bias.
     pub fn new(ctx: &Arc<Context>, size: u32, slope_bias: f32) -> Result<Self> {
-        let pipeline = Pipeline::graphics(
+        let pipeline = Pipeline::graphics::<()>(
             ctx,
             NAME,
             &GraphicsDesc {
-                vertex: ("shadow_map.vert", shaders::SHADOW_MAP_VERT),
+                vertex: shaders::SHADOW_MAP_VERT,
                 fragment: None,
                 color_formats: &[],
                 depth_format: FORMAT,
                 depth_bias: Some((0.0, slope_bias)),
-                push_size: 0,
             },
         )?;
         let map = Image::new(
@@ -53,9 +53,20 @@ impl ShadowMapPass {
         })
     }
 
-    /// Records the depth pass. The map must be in `DEPTH_ATTACHMENT_OPTIMAL`.
+    /// Records the depth pass. The map ends in `SHADER_READ_ONLY_OPTIMAL`, visible to
+    /// its readers: `light.direct` and `rt.reflect` (compute).
     pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, geometry: &SceneGeometry<'_>) {
+        use vk::ImageLayout as L;
         let device = &self.ctx.device;
+        // WAR: the previous frame's compute reads finish before the map is cleared (old
+        // contents discarded).
+        barrier::transition(
+            device,
+            cmd,
+            &[&self.map],
+            (access::COMPUTE_READ, access::DEPTH_WRITE),
+            (L::UNDEFINED, L::DEPTH_ATTACHMENT_OPTIMAL),
+        );
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(self.map.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -76,12 +87,20 @@ impl ShadowMapPass {
         self.pipeline.bind(
             cmd,
             &[Resource::Buffer(frame), Resource::Buffer(geometry.vertices)],
-            &[],
+            &(),
         );
         unsafe {
             device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
             device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
             device.cmd_end_rendering(cmd);
         }
+        // RAW: the compute passes sample the depth written above.
+        barrier::transition(
+            device,
+            cmd,
+            &[&self.map],
+            (access::DEPTH_WRITE, access::COMPUTE_READ),
+            (L::DEPTH_ATTACHMENT_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
+        );
     }
 }

@@ -5,10 +5,10 @@
 //! CPU reference: `cpu_ref::compact`.
 
 use crate::error::Result;
-use crate::shader_defines::{SORT_ITEMS, SORT_WG, WG_2D};
+use crate::shader_defines::{COMPACT_ITEMS, COMPACT_WG, WG_2D};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Image, Pipeline, Resource};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -16,14 +16,12 @@ use std::sync::Arc;
 
 pub const NAME: &str = "ssr.compact";
 /// Slots per tile of the count and scatter kernels.
-pub const TILE: u32 = SORT_WG * SORT_ITEMS;
+pub const TILE: u32 = COMPACT_WG * COMPACT_ITEMS;
 
 /// Slots of the list's order for a mask of `extent`: whole `WG_2D` x `WG_2D` blocks.
 fn slots(extent: vk::Extent2D) -> u32 {
     extent.width.div_ceil(WG_2D) * extent.height.div_ceil(WG_2D) * WG_2D * WG_2D
 }
-/// Format of the mask this pass reads: nonzero means "needs a ray".
-pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -37,7 +35,7 @@ struct CompactPush {
 pub struct CompactOutputs {
     /// One `u32` per listed pixel: `x | y << 16`.
     pub pixels: Buffer,
-    /// `[groups_x, 1, 1, count]`: a `VkDispatchIndirectCommand` for `LBVH_WG`-wide
+    /// `[groups_x, 1, 1, count]`: a `VkDispatchIndirectCommand` for `RT_LIST_WG`-wide
     /// workgroups, then the number of listed pixels.
     pub indirect: Buffer,
     tile_counts: Buffer,
@@ -83,27 +81,11 @@ pub struct CompactPass {
 
 impl CompactPass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let push = std::mem::size_of::<CompactPush>() as u32;
         Ok(Self {
             ctx: ctx.clone(),
-            count: Pipeline::compute(
-                ctx,
-                "ssr.compact.count",
-                ("compact_count.comp", shaders::COMPACT_COUNT_COMP),
-                push,
-            )?,
-            scan: Pipeline::compute(
-                ctx,
-                "ssr.compact.scan",
-                ("compact_scan.comp", shaders::COMPACT_SCAN_COMP),
-                push,
-            )?,
-            scatter: Pipeline::compute(
-                ctx,
-                "ssr.compact.scatter",
-                ("compact_scatter.comp", shaders::COMPACT_SCATTER_COMP),
-                push,
-            )?,
+            count: Pipeline::compute::<CompactPush>(ctx, "ssr.compact.count", shaders::COMPACT_COUNT_COMP)?,
+            scan: Pipeline::compute::<CompactPush>(ctx, "ssr.compact.scan", shaders::COMPACT_SCAN_COMP)?,
+            scatter: Pipeline::compute::<CompactPush>(ctx, "ssr.compact.scatter", shaders::COMPACT_SCATTER_COMP)?,
             out: CompactOutputs::new(ctx, extent)?,
         })
     }
@@ -126,48 +108,27 @@ impl CompactPass {
             num_tiles,
             slots,
         };
-        let push = bytemuck::bytes_of(&push);
         let rw = access::COMPUTE_READ_WRITE;
+        let tiles = Groups::Exact([num_tiles, 1, 1]);
+        let out = &self.out;
         // WAR: the previous frame's readers of the list and arguments are done.
-        barrier::record(d, cmd, &[barrier::memory(access::ALL_READ_WRITE, rw)], &[]);
-        self.count.bind(
-            cmd,
-            &[Resource::StorageImage(mask), Resource::Buffer(&self.out.tile_counts)],
-            push,
-        );
-        unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
+        barrier::global(d, cmd, access::ALL_READ_WRITE, rw);
+        let counts = Resource::Buffer(&out.tile_counts);
+        self.count
+            .dispatch(cmd, &[Resource::StorageImage(mask), counts], &push, tiles);
         // RAW: the scan reads the tile counts.
-        barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, rw)], &[]);
-        self.scan.bind(
-            cmd,
-            &[
-                Resource::Buffer(&self.out.tile_counts),
-                Resource::Buffer(&self.out.indirect),
-            ],
-            push,
-        );
-        unsafe { d.cmd_dispatch(cmd, 1, 1, 1) };
+        barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+        let scan = [Resource::Buffer(&out.tile_counts), Resource::Buffer(&out.indirect)];
+        self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
         // RAW: the scatter reads the tile offsets.
-        barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, rw)], &[]);
-        self.scatter.bind(
-            cmd,
-            &[
-                Resource::StorageImage(mask),
-                Resource::Buffer(&self.out.tile_counts),
-                Resource::Buffer(&self.out.pixels),
-            ],
-            push,
-        );
-        unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
+        barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+        let scatter = [
+            Resource::StorageImage(mask),
+            Resource::Buffer(&out.tile_counts),
+            Resource::Buffer(&out.pixels),
+        ];
+        self.scatter.dispatch(cmd, &scatter, &push, tiles);
         // RAW: the ray-tracing pass reads the list and dispatches from the arguments.
-        barrier::record(
-            d,
-            cmd,
-            &[barrier::memory(
-                access::COMPUTE_WRITE,
-                access::COMPUTE_READ_AND_INDIRECT,
-            )],
-            &[],
-        );
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_AND_INDIRECT);
     }
 }

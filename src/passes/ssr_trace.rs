@@ -4,12 +4,11 @@
 //! of FidelityFX SSSR), so pixels with nothing to march cost it nothing.
 
 use super::gbuffer::GBuffer;
-use super::ssr_compact::MASK_FORMAT;
 use crate::error::Result;
 use crate::settings::Settings;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Image, Pipeline, Resource, Sampler};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -18,6 +17,8 @@ pub const NAME: &str = "ssr.trace";
 pub const CLASSIFY_NAME: &str = "ssr.classify";
 /// rgb: reflected colour found on screen; a: confidence (0 where SSR failed).
 pub const COLOR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// The fail mask: `FAIL_*` bits per pixel, nonzero means "needs a ray".
+pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
 
 /// SSR settings (see `Settings` for what each trades).
 #[derive(Clone, Copy, Debug)]
@@ -82,11 +83,9 @@ pub struct SsrOutputs {
 
 impl SsrOutputs {
     fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let usage =
-            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
         Ok(Self {
-            color: Image::new(ctx, "ssr.color", extent, COLOR_FORMAT, usage)?,
-            mask: Image::new(ctx, "ssr.fail_mask", extent, MASK_FORMAT, usage)?,
+            color: Image::storage(ctx, "ssr.color", extent, COLOR_FORMAT)?,
+            mask: Image::storage(ctx, "ssr.fail_mask", extent, MASK_FORMAT)?,
             march_list: Buffer::device_list(ctx, "ssr.march_list", extent.width as u64 * extent.height as u64 * 4)?,
             march_args: Buffer::device_list(ctx, "ssr.march_args", 16)?,
         })
@@ -105,18 +104,12 @@ pub struct SsrPass {
 
 impl SsrPass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
-        let classify = ("ssr_classify.comp", shaders::SSR_CLASSIFY_COMP);
-        let classify_push = std::mem::size_of::<ClassifyPush>() as u32;
+        let classify = shaders::SSR_CLASSIFY_COMP;
         Ok(Self {
             ctx: ctx.clone(),
-            classify: Pipeline::compute(ctx, CLASSIFY_NAME, classify, classify_push)?,
-            mask_only: Pipeline::compute_specialized(ctx, "ssr.mask_only", classify, classify_push, &[1])?,
-            trace: Pipeline::compute(
-                ctx,
-                NAME,
-                ("ssr_trace.comp", shaders::SSR_TRACE_COMP),
-                std::mem::size_of::<TracePush>() as u32,
-            )?,
+            classify: Pipeline::compute::<ClassifyPush>(ctx, CLASSIFY_NAME, classify)?,
+            mask_only: Pipeline::compute_specialized::<ClassifyPush>(ctx, "ssr.mask_only", classify, &[1])?,
+            trace: Pipeline::compute::<TracePush>(ctx, NAME, shaders::SSR_TRACE_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "ssr.sampler")?,
             out: SsrOutputs::new(ctx, extent)?,
         })
@@ -130,8 +123,9 @@ impl SsrPass {
     /// Records the classification: the fail mask and SSR colour of every pixel not to
     /// be marched, and the march list; with `mask_only` (the `rt` mode) every
     /// reflective pixel fails (`FAIL_FORCED`) and the list stays empty. G-buffer in
-    /// `SHADER_READ_ONLY_OPTIMAL`, outputs in `GENERAL`; ends with the list and its
-    /// dispatch arguments visible to `trace`.
+    /// `SHADER_READ_ONLY_OPTIMAL`. Ends with the list and its dispatch arguments visible
+    /// to `trace`, the mask and colour to `trace` and to the mask's readers
+    /// (`ssr.compact`, `reflect.merge`).
     pub fn classify(
         &self,
         cmd: vk::CommandBuffer,
@@ -143,25 +137,25 @@ impl SsrPass {
         let d = &self.ctx.device;
         let out = &self.out;
         // WAR/WAW: the previous frame's march (list and argument reads, the indirect
-        // dispatch) and classification (atomics) are done before the arguments reset.
+        // dispatch) and classification (atomics) are done before the arguments reset;
+        // its readers of the mask and colour (compaction, merge) before they change.
         barrier::record(
             d,
             cmd,
-            &[barrier::memory(access::COMPUTE_ANY, access::TRANSFER_WRITE)],
+            &[
+                barrier::memory(access::COMPUTE_ANY, access::TRANSFER_WRITE),
+                barrier::memory(access::COMPUTE_ANY, access::COMPUTE_WRITE),
+            ],
             &[],
         );
         let args: [u32; 4] = [0, 1, 1, 0];
         unsafe { d.cmd_update_buffer(cmd, out.march_args.raw, 0, bytemuck::bytes_of(&args)) };
         // RAW: the classification's atomics see the reset arguments.
-        barrier::record(
-            d,
-            cmd,
-            &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE)],
-            &[],
-        );
+        barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
         let s = &self.sampler;
         let pipeline = if mask_only { &self.mask_only } else { &self.classify };
-        pipeline.bind(
+        let e = out.color.extent;
+        pipeline.dispatch(
             cmd,
             &[
                 Resource::Buffer(frame),
@@ -173,30 +167,26 @@ impl SsrPass {
                 Resource::Buffer(&out.march_list),
                 Resource::Buffer(&out.march_args),
             ],
-            bytemuck::bytes_of(&ClassifyPush {
+            &ClassifyPush {
                 min_confidence: params.min_confidence,
                 reflective_min: params.reflective_min,
-            }),
+            },
+            Groups::Cover([e.width, e.height, 1]),
         );
-        let e = out.color.extent;
-        pipeline.dispatch_covering(cmd, [e.width, e.height, 1]);
-        // RAW: the march reads the list and dispatches from its arguments. WAW: it
-        // writes the SSR colour and fail mask of pixels beside those written here
-        // (disjoint pixels, but the images are the same resources).
-        barrier::record(
-            d,
-            cmd,
-            &[barrier::memory(access::COMPUTE_WRITE, access::COMPUTE_ANY)],
-            &[],
-        );
+        // RAW: the march reads the list and dispatches from its arguments; compaction
+        // and merge read the mask and colour. WAW: the march writes the SSR colour and
+        // fail mask of pixels beside those written here (disjoint pixels, but the
+        // images are the same resources).
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_ANY);
     }
 
     /// Records the march over the classification's list: SSR colour + confidence and
-    /// the fail mask of the listed pixels. `lit` in `GENERAL`.
+    /// the fail mask of the listed pixels, visible at the end to their readers
+    /// (`ssr.compact`, `reflect.merge`). `lit` in `GENERAL`.
     pub fn trace(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, lit: &Image, params: &SsrParams) {
         let out = &self.out;
         let s = &self.sampler;
-        self.trace.bind(
+        self.trace.dispatch(
             cmd,
             &[
                 Resource::Buffer(frame),
@@ -208,7 +198,7 @@ impl SsrPass {
                 Resource::Buffer(&out.march_list),
                 Resource::Buffer(&out.march_args),
             ],
-            bytemuck::bytes_of(&TracePush {
+            &TracePush {
                 max_steps: params.max_steps,
                 stride: params.stride,
                 thickness: params.thickness,
@@ -216,8 +206,10 @@ impl SsrPass {
                 edge_fade: params.edge_fade,
                 min_confidence: params.min_confidence,
                 recursion_min: params.recursion_min,
-            }),
+            },
+            Groups::Indirect(&out.march_args),
         );
-        unsafe { self.ctx.device.cmd_dispatch_indirect(cmd, out.march_args.raw, 0) };
+        // RAW: compaction and merge read the fail mask and SSR colour.
+        barrier::global(&self.ctx.device, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
     }
 }

@@ -1,7 +1,37 @@
 //! Thin synchronization2 helpers (after zeux/niagara's `stageBarrier`/`imageBarrier`).
 //! Callers put a one-line comment naming the hazard next to each use.
+//!
+//! `global` (one memory barrier) and `transition` (layout changes of whole images, the
+//! aspect taken from each image) are what passes use; `image`/`memory`/`record` build
+//! barriers one by one for `vk/` itself.
 
+use super::image::Image;
 use ash::vk;
+
+/// (stage, access) of one side of a barrier.
+pub type Scope = (vk::PipelineStageFlags2, vk::AccessFlags2);
+
+/// Records one global memory barrier: `src` accesses of every resource finish and are
+/// made visible before `dst` accesses start.
+pub fn global(device: &ash::Device, cmd: vk::CommandBuffer, src: Scope, dst: Scope) {
+    record(device, cmd, &[memory(src, dst)], &[]);
+}
+
+/// Records the layout transition `old` → `new` of every image in `images` (all mips and
+/// layers of each image's aspect), ordering `src` accesses before `dst` accesses.
+pub fn transition(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    images: &[&Image],
+    (src, dst): (Scope, Scope),
+    (old, new): (vk::ImageLayout, vk::ImageLayout),
+) {
+    let barriers: Vec<_> = images
+        .iter()
+        .map(|i| image(i.raw, i.aspect, src, dst, old, new))
+        .collect();
+    record(device, cmd, &[], &barriers);
+}
 
 /// An image barrier over the whole image (all mips and layers of `aspect`).
 pub fn image(

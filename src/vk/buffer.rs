@@ -28,6 +28,17 @@ impl Buffer {
         location: MemoryLocation,
     ) -> Result<Self> {
         let size = size.max(4);
+        // Every buffer is bound whole (`info()`), so its size must fit the range limit of
+        // each descriptor kind it may be bound as.
+        let what = || format!("buffer '{name}'");
+        if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) {
+            let limit = ctx.limits.max_storage_buffer_range as u64;
+            ctx.check_limit(what, size, "bytes", "maxStorageBufferRange", limit)?;
+        }
+        if usage.contains(vk::BufferUsageFlags::UNIFORM_BUFFER) {
+            let limit = ctx.limits.max_uniform_buffer_range as u64;
+            ctx.check_limit(what, size, "bytes", "maxUniformBufferRange", limit)?;
+        }
         let info = vk::BufferCreateInfo::default().size(size).usage(usage);
         let raw = unsafe { ctx.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };

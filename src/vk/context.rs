@@ -421,6 +421,29 @@ impl Context {
         self.validation
     }
 
+    /// Fails with `Error::DeviceLimit` when `size` (in `unit`) exceeds the device limit
+    /// `limit_name` = `limit`.
+    pub fn check_limit(
+        &self,
+        what: impl FnOnce() -> String,
+        size: u64,
+        unit: &'static str,
+        limit_name: &'static str,
+        limit: u64,
+    ) -> Result<()> {
+        if size <= limit {
+            return Ok(());
+        }
+        Err(Error::DeviceLimit {
+            what: what(),
+            size,
+            unit,
+            limit,
+            limit_name,
+            device: self.device_name.clone(),
+        })
+    }
+
     /// The memory allocator, shared by buffers and images.
     pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())

@@ -40,13 +40,19 @@ impl Image {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
     ) -> Result<Self> {
-        let max = ctx.limits.max_image_dimension2_d;
-        if extent.width == 0 || extent.height == 0 || extent.width > max || extent.height > max {
+        if extent.width == 0 || extent.height == 0 {
             return Err(Error::Settings(format!(
-                "image '{name}' of {}x{} is outside 1..={max} texels per side on this device",
+                "image '{name}' of {}x{} has no texels",
                 extent.width, extent.height
             )));
         }
+        ctx.check_limit(
+            || format!("image '{name}' of {}x{}", extent.width, extent.height),
+            extent.width.max(extent.height) as u64,
+            "texels per side",
+            "maxImageDimension2D",
+            ctx.limits.max_image_dimension2_d as u64,
+        )?;
         let aspect = if format == vk::Format::D32_SFLOAT {
             vk::ImageAspectFlags::DEPTH
         } else {
@@ -108,6 +114,26 @@ impl Image {
         image.view = unsafe { ctx.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
         ctx.set_name(raw, name);
         ctx.set_name(image.view, name);
+        Ok(image)
+    }
+
+    /// A device-local storage image that compute passes write and read, tests fill and
+    /// read back. It is moved to `GENERAL` once, here, and stays there for its whole
+    /// life: a frame orders its uses with memory barriers alone.
+    pub fn storage(ctx: &Arc<Context>, name: &str, extent: vk::Extent2D, format: vk::Format) -> Result<Self> {
+        let usage =
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+        let image = Self::new(ctx, name, extent, format, usage)?;
+        ctx.one_shot(|cmd| {
+            // Layout: GENERAL before any use (nothing has touched the image yet).
+            barrier::transition(
+                &ctx.device,
+                cmd,
+                &[&image],
+                (access::NONE, access::ALL_READ_WRITE),
+                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+            )
+        })?;
         Ok(image)
     }
 

@@ -11,5 +11,5 @@ pub mod timing;
 pub use buffer::Buffer;
 pub use context::{list_devices, Context, ContextDesc, DeviceInfo};
 pub use image::{Image, Sampler};
-pub use pipeline::{GraphicsDesc, Pipeline, Resource};
+pub use pipeline::{GraphicsDesc, Groups, Pipeline, Resource, Shader};
 pub use timing::{median, GpuTimer, Timings};

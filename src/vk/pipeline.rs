@@ -1,6 +1,9 @@
 //! Compute and graphics pipelines with push descriptors; the set layout is reflected
 //! from SPIR-V (niagara-style): a resource's binding is its position in the array
-//! passed to `bind`, and its kind is checked against the shader.
+//! passed to `bind`, and its kind is checked against the shader. A pipeline is typed by
+//! its push-constant struct `P`: the block size reflected from SPIR-V must equal
+//! `size_of::<P>()` when it is created, and `dispatch`/`bind` accept only a `P`.
+//! `dispatch` is the one entry point of a compute pass: bind, push, dispatch.
 
 use super::buffer::Buffer;
 use super::context::Context;
@@ -8,7 +11,21 @@ use super::image::{Image, Sampler};
 use super::spirv::{self, Reflection};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
+use bytemuck::Pod;
+use std::any::TypeId;
 use std::sync::Arc;
+
+/// How many workgroups a dispatch runs.
+#[derive(Clone, Copy)]
+pub enum Groups<'a> {
+    /// Exactly these workgroup counts.
+    Exact([u32; 3]),
+    /// Enough workgroups to cover this many invocations per axis (the shader
+    /// bounds-checks the rest).
+    Cover([u32; 3]),
+    /// A `VkDispatchIndirectCommand` at the start of this buffer, written on the GPU.
+    Indirect(&'a Buffer),
+}
 
 /// One resource to bind, in binding order.
 pub enum Resource<'a> {
@@ -33,8 +50,6 @@ pub struct GraphicsDesc<'a> {
     pub depth_format: vk::Format,
     /// (constant, slope) depth bias, for shadow maps.
     pub depth_bias: Option<(f32, f32)>,
-    /// Bytes of push constants (0 for none).
-    pub push_size: u32,
 }
 
 /// A pipeline, its layout and its push-descriptor set layout; freed on drop.
@@ -46,6 +61,8 @@ pub struct Pipeline {
     bindings: Vec<(u32, vk::DescriptorType)>,
     bind_point: vk::PipelineBindPoint,
     stages: vk::ShaderStageFlags,
+    /// The push-constant struct the pipeline was created for.
+    push_type: TypeId,
     push_size: u32,
     /// Workgroup size of a compute pipeline.
     pub local_size: [u32; 3],
@@ -75,7 +92,7 @@ fn merge(
             match all.iter_mut().find(|e| e.0 == b) {
                 Some(e) if e.1 == ty => e.2 |= *stage,
                 Some(e) => {
-                    return Err(Error::Settings(format!(
+                    return Err(Error::Pipeline(format!(
                         "pipeline {name}: binding {b} is {:?} in one stage and {ty:?} in another",
                         e.1
                     )))
@@ -88,6 +105,26 @@ fn merge(
     Ok(all)
 }
 
+/// Checks that the push-constant struct `P` is what the shaders declare and that the
+/// device allows it; returns its size.
+fn push_size<P: Pod>(ctx: &Context, name: &str, reflections: &[&Reflection]) -> Result<u32> {
+    let declared = reflections.iter().map(|r| r.push_size).max().unwrap_or(0);
+    let size = std::mem::size_of::<P>() as u32;
+    if size != declared {
+        return Err(Error::Pipeline(format!(
+            "pipeline {name}: the shader's push-constant block is {declared} B but {} is {size} B",
+            std::any::type_name::<P>()
+        )));
+    }
+    if size > ctx.limits.max_push_constants_size {
+        return Err(Error::Pipeline(format!(
+            "pipeline {name}: {size} B of push constants exceed this device's maxPushConstantsSize {}",
+            ctx.limits.max_push_constants_size
+        )));
+    }
+    Ok(size)
+}
+
 impl Pipeline {
     fn layouts(
         ctx: &Context,
@@ -96,11 +133,6 @@ impl Pipeline {
         push_stages: vk::ShaderStageFlags,
         push_size: u32,
     ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
-        if push_size > ctx.limits.max_push_constants_size || !push_size.is_multiple_of(4) {
-            return Err(Error::Settings(format!(
-                "pipeline {name}: {push_size} B of push constants is not allowed"
-            )));
-        }
         let vk_bindings: Vec<_> = bindings
             .iter()
             .map(|&(b, ty, st)| {
@@ -129,23 +161,29 @@ impl Pipeline {
         Ok((set_layout, layout))
     }
 
-    /// A compute pipeline from one module; `push_size` bytes of push constants.
-    pub fn compute(ctx: &Arc<Context>, name: &'static str, shader: Shader, push_size: u32) -> Result<Self> {
-        Self::compute_specialized(ctx, name, shader, push_size, &[])
+    /// A compute pipeline from one module, pushed constants of type `P` (`()`: none).
+    pub fn compute<P: Pod>(ctx: &Arc<Context>, name: &'static str, shader: Shader) -> Result<Self> {
+        Self::compute_specialized::<P>(ctx, name, shader, &[])
     }
 
     /// A compute pipeline whose specialization constants `constant_id = i` (32-bit:
     /// uint, int, float bits, or bool as 0/1) take `constants[i]`. A variant selected
     /// this way is compiled without the code it does not use; lavapipe, which runs
     /// both sides of every branch, pays for any code left in, taken or not.
-    pub fn compute_specialized(
+    pub fn compute_specialized<P: Pod>(
         ctx: &Arc<Context>,
         name: &'static str,
         shader: Shader,
-        push_size: u32,
         constants: &[u32],
     ) -> Result<Self> {
         let m = module(ctx, shader)?;
+        let push_size = match push_size::<P>(ctx, name, &[&m.reflection]) {
+            Ok(size) => size,
+            Err(e) => {
+                unsafe { ctx.device.destroy_shader_module(m.raw, None) };
+                return Err(e);
+            }
+        };
         let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
             .map(|i| {
                 vk::SpecializationMapEntry::default()
@@ -184,6 +222,7 @@ impl Pipeline {
                 bindings: bindings.iter().map(|b| (b.0, b.1)).collect(),
                 bind_point: vk::PipelineBindPoint::COMPUTE,
                 stages: stage,
+                push_type: TypeId::of::<P>(),
                 push_size,
                 local_size: m.reflection.local_size.unwrap_or([1, 1, 1]),
             })
@@ -194,7 +233,7 @@ impl Pipeline {
 
     /// A graphics pipeline for dynamic rendering: triangle lists, no culling (scenes
     /// may mix windings; shaders make normals face the viewer), depth test LESS.
-    pub fn graphics(ctx: &Arc<Context>, name: &'static str, desc: &GraphicsDesc<'_>) -> Result<Self> {
+    pub fn graphics<P: Pod>(ctx: &Arc<Context>, name: &'static str, desc: &GraphicsDesc<'_>) -> Result<Self> {
         let vs = module(ctx, desc.vertex)?;
         let fs = match desc.fragment.map(|f| module(ctx, f)).transpose() {
             Ok(fs) => fs,
@@ -220,7 +259,9 @@ impl Pipeline {
             push_stages |= vk::ShaderStageFlags::FRAGMENT;
         }
         let result = merge(name, &reflections).and_then(|bindings| {
-            let (set_layout, layout) = Self::layouts(ctx, name, &bindings, push_stages, desc.push_size)?;
+            let stage_reflections: Vec<&Reflection> = reflections.iter().map(|r| r.1).collect();
+            let push_size = push_size::<P>(ctx, name, &stage_reflections)?;
+            let (set_layout, layout) = Self::layouts(ctx, name, &bindings, push_stages, push_size)?;
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
             let assembly =
                 vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
@@ -282,7 +323,8 @@ impl Pipeline {
                 bindings: bindings.iter().map(|b| (b.0, b.1)).collect(),
                 bind_point: vk::PipelineBindPoint::GRAPHICS,
                 stages: push_stages,
-                push_size: desc.push_size,
+                push_type: TypeId::of::<P>(),
+                push_size,
                 local_size: [1, 1, 1],
             })
         });
@@ -296,13 +338,16 @@ impl Pipeline {
     }
 
     /// Binds the pipeline, pushes its descriptors (`resources[i]` is binding `i`;
-    /// bindings the compiler removed as unused are skipped) and its push constants.
-    pub fn bind(&self, cmd: vk::CommandBuffer, resources: &[Resource<'_>], push: &[u8]) {
-        assert_eq!(
-            push.len() as u32,
-            self.push_size,
-            "push constant size does not match the pipeline"
+    /// bindings the compiler removed as unused are skipped) and its push constants `P`
+    /// (the type the pipeline was created with). Graphics passes draw after it.
+    pub fn bind<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Resource<'_>], push: &P) {
+        assert!(
+            TypeId::of::<P>() == self.push_type,
+            "pipeline created for other push constants than {}",
+            std::any::type_name::<P>()
         );
+        let push = bytemuck::bytes_of(push);
+        debug_assert_eq!(push.len() as u32, self.push_size);
         enum Info {
             Buffer(vk::DescriptorBufferInfo),
             Image(vk::DescriptorImageInfo),
@@ -363,10 +408,33 @@ impl Pipeline {
         }
     }
 
-    /// Dispatches enough workgroups to cover `size` invocations per axis.
-    pub fn dispatch_covering(&self, cmd: vk::CommandBuffer, size: [u32; 3]) {
-        let g = |i: usize| size[i].div_ceil(self.local_size[i]);
-        unsafe { self.ctx.device.cmd_dispatch(cmd, g(0), g(1), g(2)) };
+    /// Workgroups that cover `size` invocations per axis.
+    pub fn groups_covering(&self, size: [u32; 3]) -> [u32; 3] {
+        [0, 1, 2].map(|i| size[i].div_ceil(self.local_size[i]))
+    }
+
+    /// Binds, pushes and dispatches: the one way a compute pass runs a kernel. Direct
+    /// counts must be within the device's `maxComputeWorkGroupCount` (the renderer
+    /// checks its sizes against it when it is created).
+    pub fn dispatch<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Resource<'_>], push: &P, groups: Groups<'_>) {
+        self.bind(cmd, resources, push);
+        let device = &self.ctx.device;
+        let direct = match groups {
+            Groups::Exact(g) => g,
+            Groups::Cover(size) => self.groups_covering(size),
+            Groups::Indirect(args) => {
+                // SAFETY: `cmd` is recording; `args` holds a VkDispatchIndirectCommand.
+                unsafe { device.cmd_dispatch_indirect(cmd, args.raw, 0) };
+                return;
+            }
+        };
+        let max = self.ctx.limits.max_compute_work_group_count;
+        assert!(
+            (0..3).all(|i| direct[i] <= max[i]),
+            "dispatch of {direct:?} workgroups exceeds maxComputeWorkGroupCount {max:?}"
+        );
+        // SAFETY: `cmd` is recording with this pipeline bound.
+        unsafe { device.cmd_dispatch(cmd, direct[0], direct[1], direct[2]) };
     }
 }
 

@@ -1,5 +1,5 @@
 //! Just enough SPIR-V reflection for push-descriptor layouts and layout tests:
-//! descriptor bindings (set 0), push-constant use, workgroup size, and the member
+//! descriptor bindings (set 0), the push-constant block's size, workgroup size, and the member
 //! offsets of named structs. Opcodes and enums from the SPIR-V 1.6 specification.
 
 use crate::error::{Error, Result};
@@ -10,6 +10,11 @@ const MAGIC: u32 = 0x0723_0203;
 const OP_NAME: u32 = 5;
 const OP_MEMBER_NAME: u32 = 6;
 const OP_EXECUTION_MODE: u32 = 16;
+const OP_TYPE_BOOL: u32 = 20;
+const OP_TYPE_INT: u32 = 21;
+const OP_TYPE_FLOAT: u32 = 22;
+const OP_TYPE_VECTOR: u32 = 23;
+const OP_TYPE_MATRIX: u32 = 24;
 const OP_TYPE_IMAGE: u32 = 25;
 const OP_TYPE_SAMPLER: u32 = 26;
 const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
@@ -37,8 +42,9 @@ const SC_STORAGE_BUFFER: u32 = 12;
 pub struct Reflection {
     /// (binding, type) of every descriptor in set 0, sorted by binding.
     pub bindings: Vec<(u32, vk::DescriptorType)>,
-    /// Whether the module reads push constants.
-    pub push_constants: bool,
+    /// Bytes of the push-constant block (0: the module uses none): the end of its last
+    /// member.
+    pub push_size: u32,
     /// `local_size` of a compute module.
     pub local_size: Option<[u32; 3]>,
     /// Named structs: name → [(member name, byte offset)], in declaration order.
@@ -108,7 +114,12 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
             OP_MEMBER_DECORATE if args.len() >= 4 && args[2] == DEC_OFFSET => {
                 member_offsets.insert((args[0], args[1]), args[3]);
             }
-            OP_TYPE_IMAGE
+            OP_TYPE_BOOL
+            | OP_TYPE_INT
+            | OP_TYPE_FLOAT
+            | OP_TYPE_VECTOR
+            | OP_TYPE_MATRIX
+            | OP_TYPE_IMAGE
             | OP_TYPE_SAMPLER
             | OP_TYPE_SAMPLED_IMAGE
             | OP_TYPE_ARRAY
@@ -134,7 +145,19 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
     };
     for (id, ptr, class) in variables {
         if class == SC_PUSH_CONSTANT {
-            out.push_constants = true;
+            let block = match types.get(&ptr) {
+                Some((OP_TYPE_POINTER, ops)) if ops.len() >= 2 => ops[1],
+                _ => return Err(Error::Spirv(name, "push constants are not a pointer".into())),
+            };
+            let Some((OP_TYPE_STRUCT, members)) = types.get(&block) else {
+                return Err(Error::Spirv(name, "push constants are not a block".into()));
+            };
+            for (m, &ty) in members.iter().enumerate() {
+                let offset = member_offsets.get(&(block, m as u32)).copied().unwrap_or(0);
+                let size = scalar_size(&types, ty)
+                    .ok_or_else(|| Error::Spirv(name, format!("push constant member {m} has an unsupported type")))?;
+                out.push_size = out.push_size.max(offset + size);
+            }
             continue;
         }
         let Some(&binding) = decorations.get(&(id, DEC_BINDING)) else {
@@ -192,6 +215,16 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
         }
     }
     Ok(out)
+}
+
+/// Bytes of a scalar, vector or matrix type (the types push constants hold here).
+fn scalar_size(types: &HashMap<u32, (u32, Vec<u32>)>, ty: u32) -> Option<u32> {
+    match types.get(&ty)? {
+        (OP_TYPE_BOOL, _) => Some(4),
+        (OP_TYPE_INT | OP_TYPE_FLOAT, ops) => Some(ops.first()? / 8),
+        (OP_TYPE_VECTOR | OP_TYPE_MATRIX, ops) => Some(scalar_size(types, *ops.first()?)? * ops.get(1)?),
+        _ => None,
+    }
 }
 
 #[cfg(test)]

@@ -82,6 +82,14 @@ impl GpuTimer {
         }
     }
 
+    /// Records `record` inside scope `name`.
+    pub fn scope<R>(&mut self, cmd: vk::CommandBuffer, name: &'static str, record: impl FnOnce() -> R) -> R {
+        self.begin(cmd, name);
+        let r = record();
+        self.end(cmd, name);
+        r
+    }
+
     /// Milliseconds of every scope of the last frame; call after its fence signalled.
     pub fn results(&self) -> Result<Vec<(&'static str, f64)>> {
         let n = self.scopes.len() * 2;

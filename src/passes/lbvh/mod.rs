@@ -6,13 +6,13 @@
 
 pub mod sort;
 
-use crate::cpu_ref::lbvh::{ordered_to_float, Aabb};
+use crate::aabb::{ordered_to_float, Aabb};
 use crate::error::{Error, Result};
 use crate::gpu_types::BvhNode;
 use crate::shader_defines::{LBVH_BOUNDS_ITEMS, LBVH_WG};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, GpuTimer, Pipeline, Resource};
+use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -75,10 +75,10 @@ impl Bvh {
     /// Memory for a BVH over `tri_count` triangles.
     pub fn new(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits) -> Result<Self> {
         if tri_count == 0 {
-            return Err(Error::Settings("a BVH needs at least one triangle".into()));
+            return Err(Error::Bvh("a BVH needs at least one triangle".into()));
         }
         if tri_count > MAX_TRIANGLES {
-            return Err(Error::Settings(format!(
+            return Err(Error::Bvh(format!(
                 "{tri_count} triangles exceed the LBVH limit of {MAX_TRIANGLES}"
             )));
         }
@@ -122,11 +122,14 @@ impl Bvh {
     }
 }
 
+/// Push constants of `lbvh_morton.comp` and `lbvh_hierarchy.comp` (`lbvh.bounds` and
+/// `lbvh.fit` push the triangle count alone, as a `u32`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct Push2 {
-    a: u32,
-    b: u32,
+struct KeyPush {
+    tri_count: u32,
+    /// 1: 30-bit Morton codes, 2: 63-bit.
+    key_words: u32,
 }
 
 /// The LBVH kernels.
@@ -139,33 +142,16 @@ pub struct LbvhBuilder {
     fit: Pipeline,
 }
 
-/// Compute reads and writes, the destination of most barriers here.
-const COMPUTE_RW: (vk::PipelineStageFlags2, vk::AccessFlags2) = (
-    vk::PipelineStageFlags2::COMPUTE_SHADER,
-    vk::AccessFlags2::from_raw(vk::AccessFlags2::SHADER_READ.as_raw() | vk::AccessFlags2::SHADER_WRITE.as_raw()),
-);
-
 impl LbvhBuilder {
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
-        let p4 = 4;
-        let p8 = 8;
         Ok(Self {
             ctx: ctx.clone(),
-            bounds: Pipeline::compute(ctx, BOUNDS, ("lbvh_bounds.comp", shaders::LBVH_BOUNDS_COMP), p4)?,
-            morton: Pipeline::compute(ctx, MORTON, ("lbvh_morton.comp", shaders::LBVH_MORTON_COMP), p8)?,
+            bounds: Pipeline::compute::<u32>(ctx, BOUNDS, shaders::LBVH_BOUNDS_COMP)?,
+            morton: Pipeline::compute::<KeyPush>(ctx, MORTON, shaders::LBVH_MORTON_COMP)?,
             sort: RadixSort::new(ctx)?,
-            hierarchy: Pipeline::compute(
-                ctx,
-                HIERARCHY,
-                ("lbvh_hierarchy.comp", shaders::LBVH_HIERARCHY_COMP),
-                p8,
-            )?,
-            fit: Pipeline::compute(ctx, FIT, ("lbvh_fit.comp", shaders::LBVH_FIT_COMP), p4)?,
+            hierarchy: Pipeline::compute::<KeyPush>(ctx, HIERARCHY, shaders::LBVH_HIERARCHY_COMP)?,
+            fit: Pipeline::compute::<u32>(ctx, FIT, shaders::LBVH_FIT_COMP)?,
         })
-    }
-
-    fn dispatch_1d(&self, cmd: vk::CommandBuffer, n: u32) {
-        unsafe { self.ctx.device.cmd_dispatch(cmd, n.div_ceil(LBVH_WG), 1, 1) };
     }
 
     /// Records a full build of `bvh` over `geom`, each stage under its timer scope. The
@@ -202,25 +188,25 @@ impl LbvhBuilder {
             d.cmd_fill_buffer(cmd, bvh.bounds.raw, 36, 12, 0);
         }
         // RAW: the bounds kernel's atomics read the reset values.
-        barrier::record(d, cmd, &[barrier::memory(access::TRANSFER_WRITE, COMPUTE_RW)], &[]);
-        self.bounds.bind(
+        barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
+        self.bounds.dispatch(
             cmd,
             &[
                 Resource::Buffer(geom.vertices),
                 Resource::Buffer(geom.indices),
                 Resource::Buffer(&bvh.bounds),
             ],
-            bytemuck::bytes_of(&n),
+            &n,
+            Groups::Exact([n.div_ceil(LBVH_WG * LBVH_BOUNDS_ITEMS), 1, 1]),
         );
-        unsafe { d.cmd_dispatch(cmd, n.div_ceil(LBVH_WG * LBVH_BOUNDS_ITEMS), 1, 1) };
         // RAW: Morton codes are quantized in the bounds just reduced.
-        barrier::record(d, cmd, &[barrier::memory(access::COMPUTE_WRITE, COMPUTE_RW)], &[]);
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
     }
 
     /// `lbvh.morton`: keys and triangle ids into `bvh.sort.keys[0]` / `values[0]`.
     pub fn record_morton(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh) {
         let n = geom.tri_count;
-        self.morton.bind(
+        self.morton.dispatch(
             cmd,
             &[
                 Resource::Buffer(geom.vertices),
@@ -229,25 +215,20 @@ impl LbvhBuilder {
                 Resource::Buffer(&bvh.sort.keys[0]),
                 Resource::Buffer(&bvh.sort.values[0]),
             ],
-            bytemuck::bytes_of(&Push2 {
-                a: n,
-                b: bvh.bits.key_words(),
-            }),
+            &KeyPush {
+                tri_count: n,
+                key_words: bvh.bits.key_words(),
+            },
+            Groups::Cover([n, 1, 1]),
         );
-        self.dispatch_1d(cmd, n);
         // RAW: the sort reads the codes and ids.
-        barrier::record(
-            &self.ctx.device,
-            cmd,
-            &[barrier::memory(access::COMPUTE_WRITE, COMPUTE_RW)],
-            &[],
-        );
+        barrier::global(&self.ctx.device, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
     }
 
     /// `lbvh.hierarchy`: node links and parents from the sorted keys.
     pub fn record_hierarchy(&self, cmd: vk::CommandBuffer, bvh: &Bvh) {
         let n = bvh.tri_count;
-        self.hierarchy.bind(
+        self.hierarchy.dispatch(
             cmd,
             &[
                 Resource::Buffer(&bvh.sort.keys[0]),
@@ -255,19 +236,14 @@ impl LbvhBuilder {
                 Resource::Buffer(&bvh.nodes),
                 Resource::Buffer(&bvh.parents),
             ],
-            bytemuck::bytes_of(&Push2 {
-                a: n,
-                b: bvh.bits.key_words(),
-            }),
+            &KeyPush {
+                tri_count: n,
+                key_words: bvh.bits.key_words(),
+            },
+            Groups::Cover([n, 1, 1]),
         );
-        self.dispatch_1d(cmd, n);
         // RAW: the fit reads the links and parents.
-        barrier::record(
-            &self.ctx.device,
-            cmd,
-            &[barrier::memory(access::COMPUTE_WRITE, COMPUTE_RW)],
-            &[],
-        );
+        barrier::global(&self.ctx.device, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
     }
 
     /// Records a refit: new boxes for the same tree after the vertices moved.
@@ -288,12 +264,12 @@ impl LbvhBuilder {
             d,
             cmd,
             &[
-                barrier::memory(access::TRANSFER_WRITE, COMPUTE_RW),
+                barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE),
                 barrier::memory(access::COMPUTE_READ, access::COMPUTE_WRITE),
             ],
             &[],
         );
-        self.fit.bind(
+        self.fit.dispatch(
             cmd,
             &[
                 Resource::Buffer(geom.vertices),
@@ -302,15 +278,10 @@ impl LbvhBuilder {
                 Resource::Buffer(&bvh.parents),
                 Resource::Buffer(&bvh.visits),
             ],
-            bytemuck::bytes_of(&geom.tri_count),
+            &geom.tri_count,
+            Groups::Cover([geom.tri_count, 1, 1]),
         );
-        self.dispatch_1d(cmd, geom.tri_count);
         // RAW: traversal (or a readback) reads the finished boxes.
-        barrier::record(
-            d,
-            cmd,
-            &[barrier::memory(access::COMPUTE_WRITE, access::ALL_READ_WRITE)],
-            &[],
-        );
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::ALL_READ_WRITE);
     }
 }

@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::shader_defines::{SORT_BINS, SORT_ITEMS, SORT_RADIX_BITS, SORT_WG};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Pipeline, Resource};
+use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -39,7 +39,7 @@ pub struct SortBuffers {
 impl SortBuffers {
     pub fn new(ctx: &Arc<Context>, capacity: u32, key_words: u32) -> Result<Self> {
         if capacity > MAX_KEYS {
-            return Err(Error::Settings(format!(
+            return Err(Error::Bvh(format!(
                 "{capacity} keys exceed the radix sort's limit of {MAX_KEYS}"
             )));
         }
@@ -72,27 +72,11 @@ pub struct RadixSort {
 
 impl RadixSort {
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
-        let push = std::mem::size_of::<SortPush>() as u32;
         Ok(Self {
             ctx: ctx.clone(),
-            count: Pipeline::compute(
-                ctx,
-                "lbvh.sort.count",
-                ("radix_count.comp", shaders::RADIX_COUNT_COMP),
-                push,
-            )?,
-            scan: Pipeline::compute(
-                ctx,
-                "lbvh.sort.scan",
-                ("radix_scan.comp", shaders::RADIX_SCAN_COMP),
-                push,
-            )?,
-            scatter: Pipeline::compute(
-                ctx,
-                "lbvh.sort.scatter",
-                ("radix_scatter.comp", shaders::RADIX_SCATTER_COMP),
-                push,
-            )?,
+            count: Pipeline::compute::<SortPush>(ctx, "lbvh.sort.count", shaders::RADIX_COUNT_COMP)?,
+            scan: Pipeline::compute::<SortPush>(ctx, "lbvh.sort.scan", shaders::RADIX_SCAN_COMP)?,
+            scatter: Pipeline::compute::<SortPush>(ctx, "lbvh.sort.scatter", shaders::RADIX_SCATTER_COMP)?,
         })
     }
 
@@ -107,9 +91,8 @@ impl RadixSort {
         let d = &self.ctx.device;
         let num_tiles = n.div_ceil(TILE);
         let passes = 32 * b.key_words / SORT_RADIX_BITS;
-        let step = |src: (vk::PipelineStageFlags2, vk::AccessFlags2)| {
-            [barrier::memory(src, barrier::access::COMPUTE_READ_WRITE)]
-        };
+        let rw = access::COMPUTE_READ_WRITE;
+        let tiles = Groups::Exact([num_tiles, 1, 1]);
         for pass in 0..passes {
             let (i, o) = ((pass % 2) as usize, ((pass + 1) % 2) as usize);
             let push = SortPush {
@@ -118,31 +101,25 @@ impl RadixSort {
                 key_words: b.key_words,
                 num_tiles,
             };
-            let push = bytemuck::bytes_of(&push);
-            self.count
-                .bind(cmd, &[Resource::Buffer(&b.keys[i]), Resource::Buffer(&b.counts)], push);
-            unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
+            let count = [Resource::Buffer(&b.keys[i]), Resource::Buffer(&b.counts)];
+            self.count.dispatch(cmd, &count, &push, tiles);
             // RAW: the scan reads the histograms just written.
-            barrier::record(d, cmd, &step(access::COMPUTE_WRITE), &[]);
-            self.scan.bind(cmd, &[Resource::Buffer(&b.counts)], push);
-            unsafe { d.cmd_dispatch(cmd, 1, 1, 1) };
+            barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+            let scan = [Resource::Buffer(&b.counts)];
+            self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
             // RAW: the scatter reads the scanned offsets.
-            barrier::record(d, cmd, &step(access::COMPUTE_WRITE), &[]);
-            self.scatter.bind(
-                cmd,
-                &[
-                    Resource::Buffer(&b.keys[i]),
-                    Resource::Buffer(&b.values[i]),
-                    Resource::Buffer(&b.keys[o]),
-                    Resource::Buffer(&b.values[o]),
-                    Resource::Buffer(&b.counts),
-                ],
-                push,
-            );
-            unsafe { d.cmd_dispatch(cmd, num_tiles, 1, 1) };
+            barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+            let scatter = [
+                Resource::Buffer(&b.keys[i]),
+                Resource::Buffer(&b.values[i]),
+                Resource::Buffer(&b.keys[o]),
+                Resource::Buffer(&b.values[o]),
+                Resource::Buffer(&b.counts),
+            ];
+            self.scatter.dispatch(cmd, &scatter, &push, tiles);
             // RAW: the next pass (or the caller) reads the scattered pairs; WAR: the
             // next pass's count overwrites the offsets the scatter read.
-            barrier::record(d, cmd, &step(access::COMPUTE_WRITE), &[]);
+            barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
         }
     }
 }

@@ -12,6 +12,36 @@ use std::path::{Path, PathBuf};
 
 include!("src/shader_defines.rs");
 
+/// Sets `SPECULUM_GIT_COMMIT` (reports record it) to the checkout's HEAD, or
+/// "unknown" outside a git checkout; reruns when HEAD moves.
+fn git_commit(root: &Path) {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .current_dir(root)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=SPECULUM_GIT_COMMIT={commit}");
+    // Only paths that exist: cargo reruns on every build for a missing one.
+    if let Some(dir) = git(&["rev-parse", "--git-dir"]) {
+        let dir = root.join(dir);
+        let head = dir.join("HEAD");
+        if head.exists() {
+            println!("cargo:rerun-if-changed={}", head.display());
+        }
+        if let Some(branch) = git(&["symbolic-ref", "-q", "HEAD"]) {
+            let reference = dir.join(branch);
+            if reference.exists() {
+                println!("cargo:rerun-if-changed={}", reference.display());
+            }
+        }
+    }
+}
+
 fn main() {
     let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
@@ -19,6 +49,7 @@ fn main() {
     let shared = glsl.join("shared");
     println!("cargo:rerun-if-changed=glsl");
     println!("cargo:rerun-if-changed=src/shader_defines.rs");
+    git_commit(&root);
 
     let compiler = shaderc::Compiler::new().expect("shaderc compiler could not be created");
     let mut options = shaderc::CompileOptions::new().expect("shaderc options");

@@ -16,6 +16,10 @@ layout(push_constant) uniform ComposePush {
     uint mode; // COMPOSE_PLAIN, COMPOSE_REFLECT or COMPOSE_PROVENANCE
 } pc;
 
+// Beyond 7.24 the ACES fit is flat at 1, and clamping its input here keeps x * x far
+// from f32 overflow (near 1.8e19, where inf / inf would give NaN): e.g. exposure 1e20.
+const float ACES_MAX = 1.0e4;
+
 vec3 aces(vec3 x) {
     return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
 }
@@ -43,5 +47,7 @@ void main() {
         c += texelFetch(gb_normal, p, 0).w * r.rgb;
     }
     c = max(c, vec3(0.0)) * pc.exposure;
+    // NaN-safe: a NaN (e.g. 0 x inf) is black, anything larger than ACES_MAX is ACES_MAX.
+    c = clamp(mix(c, vec3(0.0), isnan(c)), 0.0, ACES_MAX);
     imageStore(ldr, p, vec4(srgb_encode(aces(c)), 1.0));
 }

@@ -1,56 +1,55 @@
-//! Headless rendering: warm-up frames, measured frames, per-scope medians, and the
-//! timings report whose field names later tools rely on.
+//! Headless rendering: warm-up frames, measured frames, per-scope statistics, and the
+//! `render --timings` report (schema: `report`).
 
+use crate::bench::Tick;
 use crate::error::{Error, Result};
 use crate::metrics::compare_rgba8;
 use crate::renderer::{Renderer, FRAME};
+use crate::report::{Header, PassTimes, Stat};
 use crate::scene::Scene;
-use crate::settings::Mode;
-use crate::settings::Settings;
+use crate::settings::{Mode, Settings};
 use crate::vk::{Context, Timings};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-/// The timings JSON. Keep these names: later tools read them.
+/// Most frames (measured, or warm-up) one run renders: enough for any measurement,
+/// and a typo like `--frames 4294967295` fails at once instead of running for days.
+pub const MAX_FRAMES: u32 = 100_000;
+
+/// The `render --timings` report.
 #[derive(Clone, Debug, Serialize)]
 pub struct TimingsReport {
-    /// Device name.
-    pub device: String,
+    #[serde(flatten)]
+    pub header: Header,
     pub scene: String,
     /// [width, height] in pixels.
     pub resolution: [u32; 2],
+    /// Reflection mode of the measured frames.
+    pub mode: String,
     /// Frames measured (warm-up frames excluded).
     pub frames: u32,
     pub warmup_frames: u32,
-    /// Timer scope → median GPU milliseconds.
-    pub passes_ms: BTreeMap<String, f64>,
-    /// Median GPU milliseconds of the whole frame.
-    pub frame_ms: f64,
-    /// Reflection mode of the measured frames.
-    pub mode: String,
+    /// Every timer scope in frame order → GPU milliseconds (`null`: not run).
+    pub passes_ms: PassTimes,
+    /// GPU milliseconds of the whole frame (scope `frame`).
+    pub frame_ms: Stat,
     /// Pixels with a reflective surface.
     pub reflective_pixels: u64,
     /// Reflective pixels SSR failed on.
-    pub failed_pixels: u64,
-    /// failed / reflective pixels: the share of reflections the ray tracer produced.
+    pub ssr_failed_pixels: u64,
+    /// Reflective pixels the ray tracer produced (0 in `raster` and `ssr` modes).
+    pub traced_pixels: u64,
+    /// traced / reflective pixels.
     pub rt_pixel_fraction: f64,
-    /// Failed pixels by reason (`left_screen`, `behind_geometry`, `out_of_steps`,
-    /// `back_face`, `low_confidence`, `hit_reflective`, `forced`, and `ssr_blend`: SSR
-    /// hits blended with the ray tracer by their confidence, traced too).
+    /// Failed pixels by reason, every reason present (see `reflection_maps`).
     pub fail_reasons: BTreeMap<String, u64>,
-    /// With `--reference`: SSIM and RMSE of this frame against the same frame in `rt`
-    /// mode (see `metrics`), and the reference's median frame time.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub ssim: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rmse: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub reference_frame_ms: Option<f64>,
-    /// Validation warnings and errors so far; present when validation is on.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_messages: Option<u32>,
+    /// With `--reference`: SSIM and RMSE of the last frame against the same frame in
+    /// `rt` mode, and the reference's frame time; `null` without.
+    pub ssim_vs_rt: Option<f64>,
+    pub rmse_vs_rt: Option<f64>,
+    pub rt_frame_ms: Option<Stat>,
 }
 
 /// A finished headless render.
@@ -73,58 +72,92 @@ pub struct FramePlan {
     pub reference: bool,
 }
 
-fn measure(renderer: &mut Renderer, plan: FramePlan) -> Result<Timings> {
+impl FramePlan {
+    /// Frames `render` draws in all, for a progress bar.
+    pub fn total_frames(&self) -> u64 {
+        (self.warmup as u64 + self.frames as u64) * if self.reference { 2 } else { 1 }
+    }
+
+    /// Checks what can be known before any GPU work: frame counts, and an image large
+    /// enough for SSIM when a reference is asked for.
+    pub fn validate(&self, settings: &Settings) -> Result<()> {
+        if self.frames == 0 || self.frames > MAX_FRAMES {
+            return Err(Error::Settings(format!(
+                "--frames {} is outside 1..={MAX_FRAMES}",
+                self.frames
+            )));
+        }
+        if self.warmup > MAX_FRAMES {
+            return Err(Error::Settings(format!(
+                "--warmup {} is outside 0..={MAX_FRAMES}",
+                self.warmup
+            )));
+        }
+        if self.reference {
+            crate::metrics::check_size(settings.width, settings.height)
+                .map_err(|e| Error::Input(format!("--reference: {e}")))?;
+        }
+        Ok(())
+    }
+}
+
+fn measure(renderer: &mut Renderer, plan: FramePlan, tick: Tick<'_>) -> Result<Timings> {
     for _ in 0..plan.warmup {
         renderer.render_frame()?;
+        tick();
     }
     let mut timings = Timings::default();
     for _ in 0..plan.frames {
         timings.add_frame(&renderer.render_frame()?);
+        tick();
     }
     Ok(timings)
 }
 
 /// Renders `plan.warmup` uncounted frames, then `plan.frames` measured ones (and the
-/// `rt` reference when asked).
-pub fn render(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, plan: FramePlan) -> Result<Rendered> {
-    if plan.frames == 0 {
-        return Err(Error::Settings("--frames must be at least 1".into()));
-    }
+/// `rt` reference when asked); `tick` is called after every frame.
+pub fn render(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    settings: &Settings,
+    plan: FramePlan,
+    tick: Tick<'_>,
+) -> Result<Rendered> {
+    plan.validate(settings)?;
     let mut renderer = Renderer::new(ctx, scene, settings)?;
-    let timings = measure(&mut renderer, plan)?;
+    let timings = measure(&mut renderer, plan, tick)?;
     let rgba = renderer.read_output()?;
     let maps = renderer.reflection_maps()?;
     let stats = maps.stats();
-    let mut passes_ms: BTreeMap<String, f64> = timings.medians().into_iter().map(|(k, v)| (k.to_string(), v)).collect();
-    let frame_ms = passes_ms.remove(FRAME).unwrap_or(f64::NAN);
-    let (mut ssim, mut rmse, mut reference_frame_ms, mut reference_rgba) = (None, None, None, None);
+    let frame_stat = |t: &Timings| t.samples(FRAME).and_then(Stat::of).expect("every frame is timed");
+    let (mut ssim, mut rmse, mut rt_frame_ms, mut reference_rgba) = (None, None, None, None);
     if plan.reference {
         renderer.set_mode(Mode::Rt);
-        let ref_timings = measure(&mut renderer, plan)?;
+        let ref_timings = measure(&mut renderer, plan, tick)?;
         let reference = renderer.read_output()?;
         let c = compare_rgba8(&rgba, &reference, settings.width, settings.height)?;
         ssim = Some(c.ssim);
         rmse = Some(c.rmse);
-        reference_frame_ms = ref_timings.medians().get(FRAME).copied();
+        rt_frame_ms = Some(frame_stat(&ref_timings));
         reference_rgba = Some(reference);
     }
     let report = TimingsReport {
-        device: ctx.device_name.clone(),
+        header: Header::new("render", Some(ctx), Some(settings)),
         scene: scene.name.clone(),
         resolution: [settings.width, settings.height],
+        mode: settings.mode.name().to_string(),
         frames: plan.frames,
         warmup_frames: plan.warmup,
-        passes_ms,
-        frame_ms,
-        mode: settings.mode.name().to_string(),
+        passes_ms: PassTimes::of(&timings),
+        frame_ms: frame_stat(&timings),
         reflective_pixels: stats.reflective_pixels,
-        failed_pixels: stats.failed_pixels,
+        ssr_failed_pixels: stats.ssr_failed_pixels,
+        traced_pixels: stats.traced_pixels,
         rt_pixel_fraction: stats.rt_pixel_fraction(),
         fail_reasons: stats.fail_reasons.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        ssim,
-        rmse,
-        reference_frame_ms,
-        validation_messages: ctx.validation_enabled().then(|| ctx.validation_messages()),
+        ssim_vs_rt: ssim,
+        rmse_vs_rt: rmse,
+        rt_frame_ms,
     };
     Ok(Rendered {
         report,
@@ -134,10 +167,22 @@ pub fn render(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, plan: Fram
     })
 }
 
-/// Writes tightly packed RGBA8 as a PNG.
+/// Tightly packed RGBA8 encoded as a PNG.
+pub fn png_bytes(rgba: &[u8], width: u32, height: u32) -> Result<Vec<u8>> {
+    let mut png = Vec::new();
+    image::write_buffer_with_format(
+        &mut std::io::Cursor::new(&mut png),
+        rgba,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| Error::Input(format!("PNG encoding failed: {e}")))?;
+    Ok(png)
+}
+
+/// Writes tightly packed RGBA8 as a PNG, atomically (see `output::write_atomic`).
 pub fn save_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {
-    image::save_buffer(path, rgba, width, height, image::ExtendedColorType::Rgba8).map_err(|e| Error::Output {
-        path: path.into(),
-        detail: e.to_string(),
-    })
+    crate::output::write_atomic(path, &png_bytes(rgba, width, height)?)
 }

@@ -45,16 +45,26 @@ fn filter(img: &[f64], w: usize, h: usize, k: &[f64; 2 * RADIUS + 1]) -> Vec<f64
     out
 }
 
+/// Smallest side of an image SSIM can be computed on: the 11x11 window must fit.
+pub const MIN_SIDE: u32 = 2 * RADIUS as u32 + 1;
+
+/// Fails unless a `w` x `h` image is large enough for SSIM (checked before rendering
+/// an image that will be compared).
+pub fn check_size(w: u32, h: u32) -> Result<()> {
+    if w < MIN_SIDE || h < MIN_SIDE {
+        return Err(Error::Input(format!(
+            "SSIM needs images of at least {MIN_SIDE}x{MIN_SIDE} (its 11x11 window), got {w}x{h}"
+        )));
+    }
+    Ok(())
+}
+
 /// Mean SSIM of two single-channel images with values in [0, 1].
 pub fn ssim(a: &[f64], b: &[f64], w: usize, h: usize) -> Result<f64> {
     if a.len() != w * h || b.len() != w * h {
         return Err(Error::Input(format!("SSIM: images must both be {w}x{h}")));
     }
-    if w <= 2 * RADIUS || h <= 2 * RADIUS {
-        return Err(Error::Input(format!(
-            "SSIM needs images larger than 11x11, got {w}x{h}"
-        )));
-    }
+    check_size(w as u32, h as u32)?;
     let k = gaussian_weights();
     let prod = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).collect::<Vec<_>>();
     let mu_a = filter(a, w, h, &k);
@@ -110,23 +120,60 @@ pub fn compare_rgba8(a: &[u8], b: &[u8], w: u32, h: u32) -> Result<Comparison> {
     })
 }
 
-/// Loads two PNGs and compares them.
-pub fn compare_files(a: &std::path::Path, b: &std::path::Path) -> Result<Comparison> {
-    let load = |p: &std::path::Path| -> Result<image::RgbaImage> {
-        let bytes = std::fs::read(p).map_err(|source| Error::Io {
+/// Loads an image file as RGBA8.
+pub fn load_rgba(p: &std::path::Path) -> Result<image::RgbaImage> {
+    let bytes = std::fs::read(p).map_err(|source| Error::Io {
+        what: "image",
+        path: p.into(),
+        source,
+    })?;
+    Ok(image::load_from_memory(&bytes)
+        .map_err(|e| Error::BadAsset {
             what: "image",
             path: p.into(),
-            source,
-        })?;
-        Ok(image::load_from_memory(&bytes)
-            .map_err(|e| Error::BadAsset {
-                what: "image",
-                path: p.into(),
-                detail: e.to_string(),
-            })?
-            .to_rgba8())
-    };
-    let (ia, ib) = (load(a)?, load(b)?);
+            detail: e.to_string(),
+        })?
+        .to_rgba8())
+}
+
+/// Per-pixel error at which `error_heatmap` saturates: an RMS difference over R, G and
+/// B of 0.25 (in [0, 1]) is drawn white, so errors of a few percent stay visible.
+pub const HEATMAP_FULL_SCALE: f64 = 0.25;
+
+/// A heat map of the per-pixel error of two RGBA8 images of equal size, as RGBA8:
+/// the RMS difference over R, G and B, scaled by `HEATMAP_FULL_SCALE`, through a
+/// black → purple → orange → white ramp (0 is black).
+pub fn error_heatmap(a: &[u8], b: &[u8]) -> Vec<u8> {
+    const RAMP: [[f64; 3]; 4] = [[0.0, 0.0, 0.0], [0.45, 0.05, 0.55], [0.95, 0.45, 0.1], [1.0, 1.0, 1.0]];
+    a.chunks_exact(4)
+        .zip(b.chunks_exact(4))
+        .flat_map(|(p, q)| {
+            let e2: f64 = (0..3)
+                .map(|c| ((p[c] as f64 - q[c] as f64) / 255.0).powi(2))
+                .sum::<f64>()
+                / 3.0;
+            let t = (e2.sqrt() / HEATMAP_FULL_SCALE).clamp(0.0, 1.0) * 3.0;
+            let (i, f) = ((t.floor() as usize).min(2), t - (t.floor()).min(2.0));
+            let rgb = [0, 1, 2].map(|c| ((RAMP[i][c] + (RAMP[i + 1][c] - RAMP[i][c]) * f) * 255.0).round() as u8);
+            [rgb[0], rgb[1], rgb[2], 255]
+        })
+        .collect()
+}
+
+/// Loads two PNGs and compares them.
+pub fn compare_files(a: &std::path::Path, b: &std::path::Path) -> Result<Comparison> {
+    let (ia, ib) = (load_rgba(a)?, load_rgba(b)?);
+    check_same_size(a, &ia, b, &ib)?;
+    compare_rgba8(ia.as_raw(), ib.as_raw(), ia.width(), ia.height())
+}
+
+/// Fails unless two loaded images have the same size.
+pub fn check_same_size(
+    a: &std::path::Path,
+    ia: &image::RgbaImage,
+    b: &std::path::Path,
+    ib: &image::RgbaImage,
+) -> Result<()> {
     if ia.dimensions() != ib.dimensions() {
         return Err(Error::Input(format!(
             "cannot compare '{}' ({}x{}) with '{}' ({}x{}): sizes differ",
@@ -138,12 +185,23 @@ pub fn compare_files(a: &std::path::Path, b: &std::path::Path) -> Result<Compari
             ib.height()
         )));
     }
-    compare_rgba8(ia.as_raw(), ib.as_raw(), ia.width(), ia.height())
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn heatmap_is_black_where_equal_and_white_at_full_scale() {
+        let a = [10, 20, 30, 255, 0, 0, 0, 255, 0, 0, 0, 255];
+        let b = [10, 20, 30, 255, 255, 255, 255, 255, 32, 32, 32, 255];
+        let h = error_heatmap(&a, &b);
+        assert_eq!(&h[0..4], &[0, 0, 0, 255]);
+        assert_eq!(&h[4..8], &[255, 255, 255, 255]);
+        // 32/255 = 0.125 = half scale: between purple and orange.
+        assert!(h[8] > 115 && h[8] < 242 && h[10] < 140, "{:?}", &h[8..12]);
+    }
 
     /// The synthetic images of the scikit-image check (64x48, float64).
     fn images() -> (Vec<f64>, Vec<Vec<f64>>) {

@@ -12,26 +12,32 @@ use std::collections::BTreeMap;
 pub struct ReflectionStats {
     /// Pixels whose surface reflects (reflectivity above `reflective_min`).
     pub reflective_pixels: u64,
-    /// Reflective pixels SSR failed on (ray traced in hybrid; all of them in rt).
-    pub failed_pixels: u64,
+    /// Reflective pixels SSR failed on (all of them in `rt` mode, as `forced`).
+    pub ssr_failed_pixels: u64,
+    /// Reflective pixels the ray tracer produced: the failed ones in the modes that
+    /// trace (`hybrid`, `rt`, `provenance`), none in `ssr` and `raster`.
+    pub traced_pixels: u64,
     /// Failed pixels by reason, every reason present (0 when none failed for it).
     pub fail_reasons: BTreeMap<&'static str, u64>,
 }
 
 impl ReflectionStats {
-    /// failed / reflective pixels: the share of reflections the ray tracer produced.
+    /// traced / reflective pixels: the share of reflections the ray tracer produced.
     pub fn rt_pixel_fraction(&self) -> f64 {
-        self.failed_pixels as f64 / self.reflective_pixels.max(1) as f64
+        self.traced_pixels as f64 / self.reflective_pixels.max(1) as f64
     }
 }
 
 /// Per-pixel reflection state of a frame, row-major.
+#[derive(Clone, Debug)]
 pub struct ReflectionMaps {
     /// The pixel's surface reflects (reflectivity above `reflective_min`).
     pub reflective: Vec<bool>,
     /// `FAIL_*` bits written by `ssr.classify` and `ssr.trace` (0: SSR succeeded or
     /// nothing to reflect).
     pub mask: Vec<u32>,
+    /// Whether the frame's mode ray traced the failed pixels.
+    pub traced: bool,
 }
 
 impl ReflectionMaps {
@@ -46,9 +52,11 @@ impl ReflectionMaps {
                 }
             }
         }
+        let failed = failed().count() as u64;
         ReflectionStats {
             reflective_pixels: self.reflective.iter().filter(|r| **r).count() as u64,
-            failed_pixels: failed().count() as u64,
+            ssr_failed_pixels: failed,
+            traced_pixels: if self.traced { failed } else { 0 },
             fail_reasons,
         }
     }
@@ -121,9 +129,15 @@ mod tests {
         let maps = ReflectionMaps {
             reflective: vec![false, true, true, true, true],
             mask: vec![0, 0, FAIL_BACK_FACE, FAIL_LEFT_SCREEN | FAIL_BEHIND, FAIL_FORCED],
+            traced: true,
         };
         let s = maps.stats();
-        assert_eq!((s.reflective_pixels, s.failed_pixels), (4, 3));
+        assert_eq!((s.reflective_pixels, s.ssr_failed_pixels, s.traced_pixels), (4, 3, 3));
+        let untraced = ReflectionMaps {
+            traced: false,
+            ..maps.clone()
+        };
+        assert_eq!(untraced.stats().traced_pixels, 0, "ssr mode traces nothing");
         assert_eq!(s.fail_reasons["back_face"], 1);
         assert_eq!(s.fail_reasons["left_screen"], 1);
         assert_eq!(s.fail_reasons["behind_geometry"], 1);

@@ -384,7 +384,11 @@ impl Renderer {
         } else {
             bytemuck::pod_collect_to_vec(&self.ssr.out.mask.read(vk::ImageLayout::GENERAL)?)
         };
-        Ok(ReflectionMaps { reflective, mask })
+        Ok(ReflectionMaps {
+            reflective,
+            mask,
+            traced: self.settings.mode.traces(),
+        })
     }
 
     /// Reflective pixels and failed (ray-traced) pixels of the last frame, counted from

@@ -9,8 +9,9 @@ use serde::{Deserialize, Serialize};
 pub const MAX_SIDE: u32 = 8192;
 
 /// What the renderer computes for reflections.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
+#[value(rename_all = "lowercase")]
 pub enum Mode {
     /// No reflections: direct lighting only.
     Raster,
@@ -161,6 +162,28 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// Settings from a JSON object: any subset of the fields, the rest defaults. An
+    /// array or any other JSON value is refused, as is an unknown field (serde names it,
+    /// with its line and column).
+    pub fn from_json(text: &str) -> Result<Self> {
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| Error::Settings(format!("not JSON: {e}")))?;
+        if !value.is_object() {
+            let kind = match value {
+                serde_json::Value::Array(_) => "an array",
+                serde_json::Value::String(_) => "a string",
+                serde_json::Value::Number(_) => "a number",
+                serde_json::Value::Bool(_) => "a boolean",
+                _ => "null",
+            };
+            return Err(Error::Settings(format!(
+                "settings must be a JSON object {{\"field\": value, ...}}, not {kind}"
+            )));
+        }
+        // Parsed from the text again (not the value) so errors keep their line and column.
+        serde_json::from_str(text).map_err(|e| Error::Settings(e.to_string()))
+    }
+
     /// Checks the values that do not depend on the device.
     pub fn validate(&self) -> Result<()> {
         let side = |what: &str, v: u32| -> Result<()> {
@@ -268,6 +291,24 @@ mod tests {
         for s in bad {
             assert!(s.validate().is_err(), "{s:?}");
         }
+    }
+
+    #[test]
+    fn settings_json_must_be_an_object() {
+        for bad in [
+            "[1, 2, 3]",
+            "42",
+            "\"hybrid\"",
+            "null",
+            "{\"widht\": 320}",
+            "{\"width\": \"wide\"}",
+        ] {
+            assert!(Settings::from_json(bad).is_err(), "{bad}");
+        }
+        let e = Settings::from_json("[960, 540]").unwrap_err().to_string();
+        assert!(e.contains("JSON object") && e.contains("array"), "{e}");
+        let s = Settings::from_json("{\"height\": 100}").unwrap();
+        assert_eq!((s.width, s.height), (Settings::default().width, 100));
     }
 
     #[test]

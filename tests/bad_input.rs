@@ -168,23 +168,265 @@ fn zero_and_absurd_resolutions() {
         assert!(!out.status.success());
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert!(stderr.contains(&format!("resolution {w}x{h}")), "{stderr}");
+        assert!(!dir.path().join("frame.png").exists());
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
     }
 }
 
+/// Frame counts are bounded: 0 frames, or 4294967295 (which would run for days), fail
+/// at once with the bound; nothing is written.
 #[test]
-fn zero_frames() {
+fn frame_counts_out_of_bounds() {
     let dir = tempfile::tempdir().unwrap();
+    for (flag, v) in [
+        ("--frames", "0"),
+        ("--frames", "4294967295"),
+        ("--warmup", "4294967295"),
+    ] {
+        let started = std::time::Instant::now();
+        let args = ["render", flag, v, "--width", "32", "--height", "32"];
+        let (ok, stderr) = run_raw(&args, dir.path());
+        assert!(!ok && stderr.contains(&format!("{flag} {v} is outside")), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(started.elapsed().as_secs() < 30, "refused at once");
+        assert!(!dir.path().join("frame.png").exists());
+    }
+    let (ok, stderr) = run_raw(&["bench", "modes", "--rounds", "4294967295"], dir.path());
+    assert!(!ok && stderr.contains("--rounds 4294967295 is outside"), "{stderr}");
+}
+
+/// Runs the binary with exactly `args` in `dir`; returns (success, stderr).
+fn run_raw(args: &[&str], dir: &Path) -> (bool, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(["render", "--frames", "0", "--width", "32", "--height", "32"])
-        .current_dir(dir.path())
+        .args(args)
+        .env("SPECULUM_VALIDATION", "1")
+        .current_dir(dir)
         .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+        .expect("run speculum");
+    (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// Device limits are checked before any buffer is bound: a 6000x6000 frame (its pixel
+/// lists exceed lavapipe's 65535 workgroups and 128 MiB storage range) and a 1.5M
+/// triangle soup (its vertex buffer exceeds 128 MiB) are refused with one line naming
+/// the limit and the device, and no validation message.
+#[test]
+fn sizes_beyond_device_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ok, stderr) = run_raw(
+        &[
+            "render",
+            "--width",
+            "6000",
+            "--height",
+            "6000",
+            "--frames",
+            "1",
+            "--validation",
+        ],
+        dir.path(),
+    );
+    assert!(!ok, "{stderr}");
+    assert!(!stderr.contains("[vulkan") && !stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(
-        !out.status.success() && stderr.contains("--frames must be at least 1"),
+        stderr.contains("a 6000x6000 frame") && stderr.contains("beyond max"),
         "{stderr}"
     );
+    assert!(!dir.path().join("frame.png").exists());
+    let (ok, stderr) = run_raw(
+        &["bench", "lbvh", "--tris", "1500000", "--repeats", "1", "--validation"],
+        dir.path(),
+    );
+    assert!(!ok, "{stderr}");
+    assert!(!stderr.contains("[vulkan") && !stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("maxStorageBufferRange"), "{stderr}");
+}
+
+/// Outputs are checked before rendering: a `.jpg` output, a missing folder for the
+/// timings or the fail mask fail at once and leave no file (not even the PNG).
+#[test]
+fn bad_output_paths_fail_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&[&str], &str); 3] = [
+        (&["--out", "o.jpg"], "o.jpg"),
+        (&["--timings", "no/such/dir/t.json"], "does not exist"),
+        (&["--fail-mask", "no/such/dir/m.png"], "does not exist"),
+    ];
+    for (args, needle) in cases {
+        let mut all = vec![
+            "render", "--frames", "1", "--warmup", "0", "--width", "32", "--height", "32",
+        ];
+        all.extend_from_slice(args);
+        let (ok, stderr) = run_raw(&all, dir.path());
+        assert!(!ok && stderr.contains(needle), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        let left: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert!(left.is_empty(), "{args:?} left {left:?}");
+    }
+}
+
+/// An exposure so large that ACES's x * x overflows f32 renders white, not NaN black.
+#[test]
+fn absurd_exposure_renders_white() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = write(dir.path(), "s.json", r#"{"exposure": 1e20}"#);
+    let (ok, stderr) = run(&["--settings", &settings, "--mode", "raster"], dir.path());
+    assert!(ok, "{stderr}");
+    let img = image::open(dir.path().join("out.png")).unwrap().to_rgba8();
+    let lit = img
+        .pixels()
+        .filter(|p| p[0] == 255 && p[1] == 255 && p[2] == 255)
+        .count();
+    let black = img.pixels().filter(|p| p[0] == 0 && p[1] == 0 && p[2] == 0).count();
+    let n = (img.width() * img.height()) as usize;
+    assert!(lit > n / 2 && black < n / 4, "{lit} white and {black} black of {n}");
+}
+
+/// A settings file must be a JSON object: an array is not read as width, height, ...
+#[test]
+fn settings_file_must_be_an_object() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = write(dir.path(), "s.json", "[1, 2, 3]");
+    assert_fails(
+        &["--settings", &settings],
+        dir.path(),
+        &["s.json", "JSON object", "array"],
+    );
+}
+
+/// The settings file's width and height hold unless a flag is given.
+#[test]
+fn settings_file_resolution_is_not_overridden_by_defaults() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = write(dir.path(), "s.json", r#"{"width": 40, "height": 24}"#);
+    let out = dir.path().join("a.png");
+    let base = [
+        "render",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--settings",
+        &settings,
+        "--out",
+    ];
+    let (ok, stderr) = run_raw(&[&base[..], &[out.to_str().unwrap()]].concat(), dir.path());
+    assert!(ok, "{stderr}");
+    assert_eq!(image::image_dimensions(&out).unwrap(), (40, 24));
+    let (ok, stderr) = run_raw(
+        &[&base[..], &[out.to_str().unwrap(), "--width", "56"]].concat(),
+        dir.path(),
+    );
+    assert!(ok, "{stderr}");
+    assert_eq!(
+        image::image_dimensions(&out).unwrap(),
+        (56, 24),
+        "a flag given overrides the file"
+    );
+}
+
+/// `--reference` and `bench modes` below SSIM's 11x11 window fail before rendering.
+#[test]
+fn reference_below_ssim_window_fails_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ok, stderr) = run_raw(&["render", "--reference", "--width", "8", "--height", "64"], dir.path());
+    assert!(
+        !ok && stderr.contains("SSIM needs images of at least 11x11"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("frame.png").exists());
+    let (ok, stderr) = run_raw(&["bench", "modes", "--width", "10", "--height", "10"], dir.path());
+    assert!(
+        !ok && stderr.contains("SSIM needs images of at least 11x11"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+}
+
+/// Out-of-range MTL values are clamped with one warning per material naming the MTL
+/// file; the render succeeds.
+#[test]
+fn out_of_range_mtl_values_warn_once_per_material() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "w.mtl",
+        "newmtl hot\nKd 7 7 7\nNs -5\nnewmtl fine\nKd 0.5 0.5 0.5\n",
+    );
+    let obj = write(dir.path(), "w.obj", &format!("mtllib w.mtl\nusemtl hot\n{CUBE_FACES}"));
+    let (ok, stderr) = run(&["--scene", &obj], dir.path());
+    assert!(ok, "{stderr}");
+    let warnings: Vec<&str> = stderr.lines().filter(|l| l.starts_with("warning: ")).collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(
+        warnings[0].contains("'hot'")
+            && warnings[0].contains("w.mtl")
+            && warnings[0].contains("Kd 7 7 7")
+            && warnings[0].contains("Ns -5"),
+        "{stderr}"
+    );
+}
+
+/// A material that cannot be used names its MTL file, not a path made from the material.
+#[test]
+fn bad_material_names_its_mtl_file() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "n.mtl", "newmtl broken\nKd nan 0.5 0.5\n");
+    let obj = write(
+        dir.path(),
+        "n.obj",
+        &format!("mtllib n.mtl\nusemtl broken\n{CUBE_FACES}"),
+    );
+    assert_fails(&["--scene", &obj], dir.path(), &["n.mtl", "'broken'", "non-finite"]);
+}
+
+/// A file-read error says the OS message once.
+#[test]
+fn os_messages_are_said_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ok, stderr) = run(&["--scene", "missing.obj"], dir.path());
+    assert!(!ok);
+    assert_eq!(stderr.matches("os error 2").count(), 1, "{stderr}");
+}
+
+/// Argument errors keep clap's usage text, and the first line says what is wrong.
+#[test]
+fn argument_errors_say_what_is_wrong_first() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, needle) in [
+        (&["render", "--widht", "5"][..], "--widht"),
+        (&["render", "--mode", "fast"][..], "fast"),
+        (&["render", "--width", "wide"][..], "wide"),
+    ] {
+        let (ok, stderr) = run_raw(args, dir.path());
+        let first = stderr.lines().next().unwrap_or_default();
+        assert!(
+            !ok && first.starts_with("error: ") && first.contains(needle),
+            "{args:?}: {stderr}"
+        );
+    }
+    // The mode's values are listed in the help.
+    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
+        .args(["render", "--help"])
+        .output()
+        .unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    for word in [
+        "raster",
+        "hybrid",
+        "provenance",
+        "room",
+        "offscreen",
+        "mirrors",
+        "spheres",
+    ] {
+        assert!(help.contains(word), "render --help lacks {word}: {help}");
+    }
 }
 
 /// `compare`: a missing image, a corrupt one, and images of different sizes.

@@ -20,8 +20,9 @@ use speculum::vk::{barrier, Image};
 
 const POISON_F32: f32 = -12345.0;
 
-/// compose: random HDR texels (including negatives, zeros and values far above 1)
-/// tonemap to exactly the CPU reference, within 1 LSB.
+/// compose: random HDR texels (including negatives, zeros, values far above 1, and
+/// NaN, infinities and values whose square overflows f32) tonemap to exactly the CPU
+/// reference, within 1 LSB: NaN black, the overflowing ones white.
 #[test]
 fn compose_matches_cpu_reference() {
     let ctx = common::context();
@@ -30,6 +31,11 @@ fn compose_matches_cpu_reference() {
     let exposure = 1.7;
     let texels: Vec<[f32; 4]> = (0..extent.width * extent.height)
         .map(|_| {
+            if rng.random_bool(0.05) {
+                let special = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, 3e19, f32::MAX];
+                let pick = |rng: &mut rand::rngs::StdRng| special[rng.random_range(0..special.len())];
+                return [pick(&mut rng), pick(&mut rng), rng.random_range(0.0..1.0), 1.0];
+            }
             let scale = if rng.random_bool(0.1) { 40.0 } else { 2.0 };
             [
                 rng.random_range(-0.1..1.0) * scale,

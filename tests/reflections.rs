@@ -107,7 +107,7 @@ fn ssr_succeeds_when_the_reflected_object_is_on_screen() {
     let r = render(&ctx, &scene, Mode::Hybrid, 320, 180);
     let stats = r.reflection_stats().unwrap();
     assert!(stats.reflective_pixels > 2000, "{stats:?}");
-    let failed = stats.failed_pixels as f64 / stats.reflective_pixels as f64;
+    let failed = stats.ssr_failed_pixels as f64 / stats.reflective_pixels as f64;
     assert!(
         failed < 0.03,
         "SSR failed on {:.1}% of the mirror: {stats:?}",
@@ -117,7 +117,7 @@ fn ssr_succeeds_when_the_reflected_object_is_on_screen() {
     let merged: Vec<[f32; 4]> =
         bytemuck::pod_collect_to_vec(&r.merge.reflection().read(vk::ImageLayout::GENERAL).unwrap());
     let ssr_pixels: Vec<&[f32; 4]> = merged.iter().filter(|m| m[3] as u32 == SOURCE_SSR).collect();
-    assert!(ssr_pixels.len() as u64 >= stats.reflective_pixels - stats.failed_pixels);
+    assert!(ssr_pixels.len() as u64 >= stats.reflective_pixels - stats.ssr_failed_pixels);
     let bluish = ssr_pixels.iter().filter(|m| m[2] > m[0] * 1.5 && m[2] > m[1]).count();
     assert!(
         bluish as f64 > 0.95 * ssr_pixels.len() as f64,

@@ -12,18 +12,17 @@ use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::lbvh::{self, Bvh, Geometry, LbvhBuilder, MortonBits};
 use crate::passes::rt_trace::{TracePass, TraceScene, Traceable};
+use crate::report::{Header, PassTimes, Stat};
 use crate::shader_defines::BVH_INVALID;
-use crate::vk::timing::median;
 use crate::vk::{Buffer, Context, GpuTimer, Timings};
 use ash::vk;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
-use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// What to measure.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize)]
 pub struct Options {
     /// Timed repetitions of each build and trace (medians are reported).
     pub repeats: u32,
@@ -37,8 +36,8 @@ pub struct Options {
 #[derive(Clone, Debug, Serialize)]
 pub struct RaySetReport {
     pub rays: u32,
-    /// Median GPU milliseconds of `rt.trace`.
-    pub trace_ms: f64,
+    /// GPU milliseconds of `rt.trace` over the repeats.
+    pub trace_ms: Stat,
     pub mrays_per_s: f64,
     /// Fraction of rays that hit a triangle.
     pub hit_fraction: f64,
@@ -55,14 +54,14 @@ pub struct CaseReport {
     pub name: String,
     pub triangles: u32,
     pub morton_bits: u32,
-    /// Stage → median GPU milliseconds.
-    pub stages_ms: BTreeMap<String, f64>,
-    /// Median GPU milliseconds of a whole build.
-    pub build_ms: f64,
-    /// Million triangles built per second.
+    /// Stage → GPU milliseconds, in build order.
+    pub stages_ms: PassTimes,
+    /// GPU milliseconds of a whole build.
+    pub build_ms: Stat,
+    /// Million triangles built per second (at the median build time).
     pub mtris_per_s: f64,
-    /// Median GPU milliseconds of a refit.
-    pub refit_ms: f64,
+    /// GPU milliseconds of a refit.
+    pub refit_ms: Stat,
     pub nodes_per_triangle: f64,
     /// BVH bytes (nodes + parent links) per triangle.
     pub bytes_per_triangle: f64,
@@ -83,10 +82,12 @@ pub struct CaseReport {
     pub valid: bool,
 }
 
+/// The `bench lbvh` report.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
-    pub device: String,
-    pub repeats: u32,
+    #[serde(flatten)]
+    pub header: Header,
+    pub options: Options,
     pub cases: Vec<CaseReport>,
     /// Every case valid.
     pub valid: bool,
@@ -169,7 +170,14 @@ fn check_hits(rays: &[Ray], gpu: &[Hit], cpu: &CpuBvh, v: &[GpuVertex], i: &[u32
 }
 
 /// Benchmarks one triangle set.
-pub fn run_case(ctx: &Arc<Context>, name: &str, v: &[GpuVertex], i: &[u32], opts: &Options) -> Result<CaseReport> {
+pub fn run_case(
+    ctx: &Arc<Context>,
+    name: &str,
+    v: &[GpuVertex],
+    i: &[u32],
+    opts: &Options,
+    tick: super::Tick<'_>,
+) -> Result<CaseReport> {
     let n = (i.len() / 3) as u32;
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
     let vertices = Buffer::with_data(ctx, "bench.vertices", usage, bytemuck::cast_slice(v))?;
@@ -189,9 +197,9 @@ pub fn run_case(ctx: &Arc<Context>, name: &str, v: &[GpuVertex], i: &[u32], opts
     for rep in 0..=opts.repeats {
         ctx.one_shot(|cmd| {
             timer.reset(cmd);
-            timer.begin(cmd, "lbvh");
+            timer.begin(cmd, BUILD);
             builder.record_build(cmd, &mut timer, geometry, &bvh);
-            timer.end(cmd, "lbvh");
+            timer.end(cmd, BUILD);
         })?;
         if rep > 0 {
             stages.add_frame(&timer.results()?);
@@ -203,9 +211,10 @@ pub fn run_case(ctx: &Arc<Context>, name: &str, v: &[GpuVertex], i: &[u32], opts
         if rep > 0 {
             refits.push(timer.results()?.first().map_or(f64::NAN, |r| r.1));
         }
+        tick();
     }
-    let mut stages_ms: BTreeMap<String, f64> = stages.medians().into_iter().map(|(k, v)| (k.to_string(), v)).collect();
-    let build_ms = stages_ms.remove("lbvh").unwrap_or(f64::NAN);
+    let stages_ms = PassTimes::of_scopes(&stages, &STAGES);
+    let build_ms = stages.samples(BUILD).and_then(Stat::of).expect("repeats > 0");
 
     // Checks of the BVH as the timed builds (and refits) left it.
     let nodes = bvh.read_nodes()?;
@@ -235,12 +244,12 @@ pub fn run_case(ctx: &Arc<Context>, name: &str, v: &[GpuVertex], i: &[u32], opts
             }
             hits = h;
         }
-        let trace_ms = median(&times);
+        let trace_ms = Stat::of(&times).expect("repeats > 0");
         let (mismatches, ties) = check_hits(&rays, &hits, &cpu, v, i, opts.check_rays);
         Ok(RaySetReport {
             rays: rays.len() as u32,
             trace_ms,
-            mrays_per_s: rays.len() as f64 / (trace_ms * 1e3),
+            mrays_per_s: rays.len() as f64 / (trace_ms.median * 1e3),
             hit_fraction: hits.iter().filter(|h| h.prim != BVH_INVALID).count() as f64 / rays.len() as f64,
             checked: opts.check_rays.min(rays.len() as u32),
             mismatches,
@@ -251,15 +260,15 @@ pub fn run_case(ctx: &Arc<Context>, name: &str, v: &[GpuVertex], i: &[u32], opts
     let incoherent = ray_set(incoherent_rays(lo, hi, opts.rays, 7))?;
 
     let invariants_ok = invariants.is_ok();
-    let valid = invariants_ok && coherent.mismatches == 0 && incoherent.mismatches == 0 && build_ms.is_finite();
+    let valid = invariants_ok && coherent.mismatches == 0 && incoherent.mismatches == 0 && build_ms.median.is_finite();
     Ok(CaseReport {
         name: name.into(),
         triangles: n,
         morton_bits: if opts.bits == MortonBits::Bits30 { 30 } else { 63 },
         stages_ms,
         build_ms,
-        mtris_per_s: n as f64 / (build_ms * 1e3),
-        refit_ms: median(&refits),
+        mtris_per_s: n as f64 / (build_ms.median * 1e3),
+        refit_ms: Stat::of(&refits).expect("repeats > 0"),
         nodes_per_triangle: (2 * n - 1) as f64 / n as f64,
         bytes_per_triangle: bvh.bytes() as f64 / n as f64,
         scratch_bytes_per_triangle: (bvh.sort.keys[0].size * 2 + bvh.sort.values[0].size * 2) as f64 / n as f64,
@@ -274,6 +283,9 @@ pub fn run_case(ctx: &Arc<Context>, name: &str, v: &[GpuVertex], i: &[u32], opts
         valid,
     })
 }
+
+/// Timer scope of a whole build.
+pub const BUILD: &str = "lbvh";
 
 /// Stage names in build order, for tables.
 pub const STAGES: [&str; 5] = [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, lbvh::HIERARCHY, lbvh::FIT];

@@ -16,14 +16,18 @@ pub struct Interleaved {
     pub frames: Vec<Vec<f64>>,
 }
 
+/// Called after every frame a long run renders (for a progress bar).
+pub type Tick<'a> = &'a mut dyn FnMut();
+
 /// Renders one frame of each renderer in turn, `warmup` uncounted rounds and then
 /// `rounds` measured ones, so drift in the machine's speed falls on all of them alike.
-pub fn interleave(renderers: &mut [Renderer], warmup: u32, rounds: u32) -> Result<Interleaved> {
+pub fn interleave(renderers: &mut [Renderer], warmup: u32, rounds: u32, tick: Tick<'_>) -> Result<Interleaved> {
     let mut timings = vec![Timings::default(); renderers.len()];
     let mut frames: Vec<Vec<f64>> = vec![Vec::new(); renderers.len()];
     for round in 0..warmup + rounds {
         for (i, r) in renderers.iter_mut().enumerate() {
             let t = r.render_frame()?;
+            tick();
             if round >= warmup {
                 frames[i].push(t.iter().find(|(k, _)| *k == FRAME).map_or(f64::NAN, |s| s.1));
                 timings[i].add_frame(&t);

@@ -8,45 +8,65 @@
 
 use crate::error::{Error, Result};
 use crate::metrics::compare_rgba8;
-use crate::renderer::{Renderer, FRAME};
+use crate::report::{Header, PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
-use crate::vk::{median, Context};
+use crate::vk::Context;
+use crate::Renderer;
 use serde::Serialize;
-use std::collections::BTreeMap;
 use std::sync::Arc;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ModeResult {
     pub mode: String,
-    /// Pass → median GPU milliseconds.
-    pub passes_ms: BTreeMap<String, f64>,
-    pub frame_ms: f64,
-    /// Median over rounds of this mode's frame time / the `rt` frame time.
-    pub frame_over_rt: f64,
+    /// Every timer scope in frame order → GPU milliseconds (`null`: not run).
+    pub passes_ms: PassTimes,
+    pub frame_ms: Stat,
+    /// This mode's frame time / the `rt` frame time of the same round, over rounds.
+    pub frame_over_rt: Stat,
     pub reflective_pixels: u64,
-    /// Pixels sent to the ray tracer.
+    /// Reflective pixels the ray tracer produced.
     pub traced_pixels: u64,
+    /// traced / reflective pixels.
+    pub rt_pixel_fraction: f64,
     /// Against the `rt` image of the same run.
     pub ssim_vs_rt: f64,
     pub rmse_vs_rt: f64,
 }
 
+/// Every mode of one scene.
 #[derive(Clone, Debug, Serialize)]
-pub struct ModesReport {
-    pub device: String,
+pub struct SceneModes {
     pub scene: String,
     pub resolution: [u32; 2],
-    /// Measured rounds (one frame of every mode each), after the warm-up rounds.
-    pub rounds: u32,
     pub modes: Vec<ModeResult>,
     /// ssr < hybrid < rt by frame time, judged by the per-round ratios to rt.
     pub ordered: bool,
     pub valid: bool,
 }
 
+/// The `bench modes` report.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModesReport {
+    #[serde(flatten)]
+    pub header: Header,
+    /// Measured rounds (one frame of every mode each), after `warmup_rounds`.
+    pub rounds: u32,
+    pub warmup_rounds: u32,
+    pub scenes: Vec<SceneModes>,
+    /// Every scene's checks passed.
+    pub valid: bool,
+}
+
 /// Times every mode of `scene` in `rounds` interleaved rounds after `warmup` rounds.
-pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, rounds: u32) -> Result<ModesReport> {
+pub fn run(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    base: &Settings,
+    warmup: u32,
+    rounds: u32,
+    tick: super::Tick<'_>,
+) -> Result<SceneModes> {
     if rounds == 0 {
         return Err(Error::Settings("bench modes needs at least one round".into()));
     }
@@ -54,7 +74,7 @@ pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, roun
         .iter()
         .map(|&mode| Renderer::new(ctx, scene, &Settings { mode, ..base.clone() }))
         .collect::<Result<Vec<_>>>()?;
-    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds)?;
+    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds, tick)?;
     let rt = Mode::ALL.iter().position(|&m| m == Mode::Rt).expect("rt is a mode");
     let rt_image = renderers[rt].read_output()?;
     let mut modes = Vec::new();
@@ -62,40 +82,33 @@ pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, roun
         let stats = r.reflection_stats()?;
         let quality = compare_rgba8(&r.read_output()?, &rt_image, base.width, base.height)?;
         let ratios: Vec<f64> = frames[i].iter().zip(&frames[rt]).map(|(a, b)| a / b).collect();
-        let mut passes_ms: BTreeMap<String, f64> = timings[i]
-            .medians()
-            .into_iter()
-            .map(|(k, v)| (k.to_string(), v))
-            .collect();
-        let frame_ms = passes_ms.remove(FRAME).unwrap_or(f64::NAN);
         modes.push(ModeResult {
             mode: Mode::ALL[i].name().to_string(),
-            passes_ms,
-            frame_ms,
-            frame_over_rt: median(&ratios),
+            passes_ms: PassTimes::of(&timings[i]),
+            frame_ms: Stat::of(&frames[i]).expect("rounds > 0"),
+            frame_over_rt: Stat::of(&ratios).expect("rounds > 0"),
             reflective_pixels: stats.reflective_pixels,
-            traced_pixels: match Mode::ALL[i] {
-                Mode::Raster | Mode::Ssr => 0,
-                _ => stats.failed_pixels,
-            },
+            traced_pixels: stats.traced_pixels,
+            rt_pixel_fraction: stats.rt_pixel_fraction(),
             ssim_vs_rt: quality.ssim,
             rmse_vs_rt: quality.rmse,
         });
     }
     let by = |m: Mode| &modes[Mode::ALL.iter().position(|&x| x == m).expect("every mode is measured")];
     let reflective = by(Mode::Rt).reflective_pixels;
-    let valid = modes.iter().all(|m| m.frame_ms.is_finite() && m.frame_ms > 0.0)
+    let valid = modes
+        .iter()
+        .all(|m| m.frame_ms.median.is_finite() && m.frame_ms.median > 0.0)
         && modes.iter().all(|m| m.reflective_pixels == reflective)
         && by(Mode::Rt).traced_pixels == reflective
         && by(Mode::Hybrid).traced_pixels <= reflective
         && by(Mode::Hybrid).traced_pixels == by(Mode::Provenance).traced_pixels;
     // By the per-round ratios to rt, which cancel drift between rounds.
-    let ordered = by(Mode::Ssr).frame_over_rt < by(Mode::Hybrid).frame_over_rt && by(Mode::Hybrid).frame_over_rt < 1.0;
-    Ok(ModesReport {
-        device: ctx.device_name.clone(),
+    let ratio = |m: Mode| by(m).frame_over_rt.median;
+    let ordered = ratio(Mode::Ssr) < ratio(Mode::Hybrid) && ratio(Mode::Hybrid) < 1.0;
+    Ok(SceneModes {
         scene: scene.name.clone(),
         resolution: [base.width, base.height],
-        rounds,
         modes,
         ordered,
         valid,

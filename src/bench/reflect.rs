@@ -12,35 +12,41 @@
 //! and the last point traces every reflective pixel.
 
 use crate::error::{Error, Result};
-use crate::renderer::{Renderer, FRAME};
+use crate::renderer::Renderer;
+use crate::report::{Header, PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
-use crate::vk::{median, Context};
+use crate::vk::Context;
 use serde::Serialize;
-use std::collections::BTreeMap;
 use std::sync::Arc;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct SplitPoint {
     pub ssr_max_steps: u32,
     pub ssr_min_confidence: f32,
+    /// Reflective pixels the ray tracer produced, and their share.
+    pub traced_pixels: u64,
     pub rt_pixel_fraction: f64,
-    pub failed_pixels: u64,
-    /// Pass → median GPU milliseconds.
-    pub passes_ms: BTreeMap<String, f64>,
-    pub frame_ms: f64,
-    /// Median over rounds of this point's frame time / the `rt` frame's.
-    pub frame_over_rt: f64,
+    /// Every timer scope in frame order → GPU milliseconds (`null`: not run).
+    pub passes_ms: PassTimes,
+    pub frame_ms: Stat,
+    /// This point's frame time / the `rt` frame's of the same round, over rounds.
+    pub frame_over_rt: Stat,
 }
 
+/// The `bench reflect` report.
 #[derive(Clone, Debug, Serialize)]
 pub struct SplitReport {
-    pub device: String,
+    #[serde(flatten)]
+    pub header: Header,
     pub scene: String,
     pub resolution: [u32; 2],
+    /// Measured rounds (one frame of every point and of `rt` each), after `warmup_rounds`.
+    pub rounds: u32,
+    pub warmup_rounds: u32,
     pub reflective_pixels: u64,
     /// The `rt` mode frame for comparison.
-    pub rt_frame_ms: f64,
+    pub rt_frame_ms: Stat,
     pub points: Vec<SplitPoint>,
     pub valid: bool,
 }
@@ -58,7 +64,14 @@ pub fn sweep(base: &Settings) -> Vec<(u32, f32)> {
     points
 }
 
-pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, rounds: u32) -> Result<SplitReport> {
+pub fn run(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    base: &Settings,
+    warmup: u32,
+    rounds: u32,
+    tick: super::Tick<'_>,
+) -> Result<SplitReport> {
     if rounds == 0 {
         return Err(Error::Settings("bench reflect needs at least one frame".into()));
     }
@@ -78,39 +91,35 @@ pub fn run(ctx: &Arc<Context>, scene: &Scene, base: &Settings, warmup: u32, roun
         }))
         .map(|settings| Renderer::new(ctx, scene, &settings))
         .collect::<Result<Vec<_>>>()?;
-    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds)?;
+    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds, tick)?;
     let rt_index = sweep.len();
     let rt_reflective = renderers[rt_index].reflection_stats()?.reflective_pixels;
-    let rt_frame_ms = median(&frames[rt_index]);
+    let rt_frame_ms = Stat::of(&frames[rt_index]).expect("rounds > 0");
     let mut points = Vec::new();
     let mut reflective = Vec::new();
     for (i, &(steps, t)) in sweep.iter().enumerate() {
         let stats = renderers[i].reflection_stats()?;
         reflective.push(stats.reflective_pixels);
-        let mut passes_ms: BTreeMap<String, f64> = timings[i]
-            .medians()
-            .into_iter()
-            .map(|(k, v)| (k.to_string(), v))
-            .collect();
-        passes_ms.remove(FRAME);
         let ratios: Vec<f64> = frames[i].iter().zip(&frames[rt_index]).map(|(a, b)| a / b).collect();
         points.push(SplitPoint {
             ssr_max_steps: steps,
             ssr_min_confidence: t,
+            traced_pixels: stats.traced_pixels,
             rt_pixel_fraction: stats.rt_pixel_fraction(),
-            failed_pixels: stats.failed_pixels,
-            passes_ms,
-            frame_ms: median(&frames[i]),
-            frame_over_rt: median(&ratios),
+            passes_ms: PassTimes::of(&timings[i]),
+            frame_ms: Stat::of(&frames[i]).expect("rounds > 0"),
+            frame_over_rt: Stat::of(&ratios).expect("rounds > 0"),
         });
     }
     let same_reflective = reflective.iter().all(|&r| r == rt_reflective);
-    let monotonic = points.windows(2).all(|w| w[1].failed_pixels >= w[0].failed_pixels);
-    let all_at_end = points.last().is_some_and(|p| p.failed_pixels == rt_reflective);
+    let monotonic = points.windows(2).all(|w| w[1].traced_pixels >= w[0].traced_pixels);
+    let all_at_end = points.last().is_some_and(|p| p.traced_pixels == rt_reflective);
     Ok(SplitReport {
-        device: ctx.device_name.clone(),
+        header: Header::new("bench.reflect", Some(ctx), Some(base)),
         scene: scene.name.clone(),
         resolution: [base.width, base.height],
+        rounds,
+        warmup_rounds: warmup,
         reflective_pixels: rt_reflective,
         rt_frame_ms,
         points,

@@ -77,6 +77,9 @@ pub struct Scene {
     pub camera: Camera,
     pub light: Light,
     pub sky: Sky,
+    /// What loading changed without failing (e.g. out-of-range MTL values clamped), one
+    /// line each, for the command line to print.
+    pub warnings: Vec<String>,
 }
 
 /// Accumulates meshes into a scene.
@@ -109,6 +112,7 @@ impl SceneBuilder {
                     zenith: Vec3::new(0.25, 0.45, 0.85),
                     horizon: Vec3::new(0.75, 0.8, 0.9),
                 },
+                warnings: Vec::new(),
             },
         }
     }

@@ -44,7 +44,31 @@ fn texture_mean(path: &Path) -> Result<Vec3> {
     Ok(Vec3::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32))
 }
 
-fn convert_material(m: &tobj::Material, dir: &Path) -> Result<Material> {
+/// Out-of-range values of a material that `Material::gpu` will clamp, described for
+/// one warning line (empty when every value is in range).
+fn out_of_range(m: &tobj::Material, roughness: f32, reflectivity: f32) -> Vec<String> {
+    let mut notes = Vec::new();
+    let unit = |v: f32| (0.0..=1.0).contains(&v);
+    for (key, c) in [("Kd", m.diffuse), ("Ks", m.specular)] {
+        if let Some(c) = c.filter(|c| !c.iter().all(|&v| unit(v))) {
+            notes.push(format!("{key} {} {} {} clamped to [0, 1]", c[0], c[1], c[2]));
+        }
+    }
+    if let Some(ns) = m.shininess.filter(|&ns| ns < 0.0) {
+        notes.push(format!("Ns {ns} taken as 0"));
+    }
+    if !unit(roughness) {
+        notes.push(format!("roughness {roughness} clamped to [0, 1]"));
+    }
+    if !unit(reflectivity) {
+        notes.push(format!("reflectivity {reflectivity} clamped to [0, 1]"));
+    }
+    notes
+}
+
+/// A material of the MTL file `mtl` (for messages; textures resolve against `dir`),
+/// and the warning its out-of-range values raise, if any.
+fn convert_material(m: &tobj::Material, dir: &Path, mtl: &Path) -> Result<(Material, Option<String>)> {
     let mut albedo = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
     if let Some(tex) = m.diffuse_texture.as_deref().filter(|t| !t.trim().is_empty()) {
         albedo *= texture_mean(&dir.join(tex.trim()))?;
@@ -65,12 +89,15 @@ fn convert_material(m: &tobj::Material, dir: &Path) -> Result<Material> {
     let mat = Material::new(&m.name, albedo.to_array(), roughness, reflectivity);
     if !(mat.albedo.is_finite() && mat.roughness.is_finite() && mat.reflectivity.is_finite()) {
         return Err(Error::BadAsset {
-            what: "material",
-            path: dir.join(&m.name),
-            detail: "non-finite value".into(),
+            what: "MTL file",
+            path: mtl.into(),
+            detail: format!("material '{}' has a non-finite value", m.name),
         });
     }
-    Ok(mat)
+    let notes = out_of_range(m, roughness, reflectivity);
+    let warning =
+        (!notes.is_empty()).then(|| format!("material '{}' in '{}': {}", m.name, mtl.display(), notes.join("; ")));
+    Ok((mat, warning))
 }
 
 /// Colour statements need three numbers: tobj 4 panics on fewer, so they are checked
@@ -124,8 +151,10 @@ pub fn load(path: &Path) -> Result<Scene> {
         ignore_lines: true,
     };
     let mtl_failure: RefCell<Option<Error>> = RefCell::new(None);
+    let mtl_files: RefCell<Vec<PathBuf>> = RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut text.as_slice(), &options, |mtl: &Path| {
         let mtl_path: PathBuf = dir.join(mtl);
+        mtl_files.borrow_mut().push(mtl_path.clone());
         match std::fs::read(&mtl_path) {
             Err(source) => {
                 mtl_failure.replace(Some(Error::Io {
@@ -172,10 +201,20 @@ pub fn load(path: &Path) -> Result<Scene> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "obj".into());
     let mut b = SceneBuilder::new(&path.display().to_string());
-    let ids: Vec<u32> = materials
-        .iter()
-        .map(|m| convert_material(m, &dir).map(|m| b.material(m)))
-        .collect::<Result<_>>()?;
+    // tobj does not say which MTL file a material came from: name the one file, or the
+    // OBJ when it names several.
+    let mtl_files = mtl_files.into_inner();
+    let mtl = match mtl_files.as_slice() {
+        [one] => one.clone(),
+        _ => path.to_path_buf(),
+    };
+    let mut warnings = Vec::new();
+    let mut ids = Vec::new();
+    for m in &materials {
+        let (material, warning) = convert_material(m, &dir, &mtl)?;
+        ids.push(b.material(material));
+        warnings.extend(warning);
+    }
     let mut default_material = None;
     for model in &models {
         let mesh = &model.mesh;
@@ -228,5 +267,6 @@ pub fn load(path: &Path) -> Result<Scene> {
     let (lo, hi) = scene.bounds();
     scene.camera = Camera::framing(lo, hi);
     scene.name = name;
+    scene.warnings = warnings;
     Ok(scene)
 }

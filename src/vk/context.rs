@@ -40,13 +40,7 @@ pub struct DeviceInfo {
 impl DeviceInfo {
     /// "discrete GPU", "CPU", ... for listings.
     pub fn kind_name(&self) -> &'static str {
-        match self.kind {
-            vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
-            vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
-            vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
-            vk::PhysicalDeviceType::CPU => "CPU",
-            _ => "other",
-        }
+        kind_name(self.kind)
     }
 
     /// Preference order when no device is named: lower is better.
@@ -58,6 +52,17 @@ impl DeviceInfo {
             vk::PhysicalDeviceType::CPU => 3,
             _ => 4,
         }
+    }
+}
+
+/// "discrete GPU", "CPU", ... for a device type.
+pub fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
+    match kind {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+        vk::PhysicalDeviceType::CPU => "CPU",
+        _ => "other",
     }
 }
 
@@ -78,6 +83,16 @@ pub struct Context {
     pub queue_family: u32,
     /// Device name, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
     pub device_name: String,
+    /// The device's type (discrete GPU, CPU, ...).
+    pub device_type: vk::PhysicalDeviceType,
+    /// Vulkan version the device supports (`vk::make_api_version` encoding).
+    pub api_version: u32,
+    /// The driver's raw version number (its encoding is the vendor's).
+    pub driver_version: u32,
+    /// `VkPhysicalDeviceDriverProperties`: the driver's name and version text, e.g.
+    /// "llvmpipe" and "Mesa 22.3.6 (LLVM 15.0.6)".
+    pub driver_name: String,
+    pub driver_info: String,
     pub limits: vk::PhysicalDeviceLimits,
     /// Nanoseconds per timestamp tick.
     pub timestamp_period_ns: f64,
@@ -334,6 +349,11 @@ impl Context {
         let (physical_device, info) = list[chosen].clone();
         let queue_family = check_device(&instance, physical_device).expect("checked by select");
         let props = unsafe { instance.get_physical_device_properties(physical_device) };
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        unsafe { instance.get_physical_device_properties2(physical_device, &mut props2) };
+        let text = |c: Result<&CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+        let (driver_name, driver_info) = (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()));
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
 
         let priorities = [1.0f32];
@@ -398,6 +418,11 @@ impl Context {
             queue,
             queue_family,
             device_name: info.name,
+            device_type: props.device_type,
+            api_version: props.api_version,
+            driver_version: props.driver_version,
+            driver_name,
+            driver_info,
             limits: props.limits,
             timestamp_period_ns: props.limits.timestamp_period as f64,
             timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,

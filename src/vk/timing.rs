@@ -145,6 +145,11 @@ impl Timings {
         }
     }
 
+    /// The samples of scope `name` (milliseconds, in frame order), if it was timed.
+    pub fn samples(&self, name: &str) -> Option<&[f64]> {
+        self.samples.get(name).map(|v| v.as_slice())
+    }
+
     /// Median milliseconds per scope.
     pub fn medians(&self) -> BTreeMap<&'static str, f64> {
         self.samples.iter().map(|(k, v)| (*k, median(v))).collect()

@@ -1,0 +1,332 @@
+//! `speculum bench modes|reflect|lbvh`: GPU timing benchmarks that check what they time.
+
+use super::{cell, check_count, check_outputs, progress, GpuArgs, SettingsArgs, Text};
+use anyhow::Result;
+use clap::{Args, Subcommand};
+use speculum::bench::lbvh::{run_case, Options, Report, STAGES};
+use speculum::output::Kind;
+use speculum::passes::lbvh::MortonBits;
+use speculum::renderer::{FRAME, SCOPES};
+use speculum::report::Header;
+use std::path::PathBuf;
+
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// LBVH build (per stage), refit, SAH quality and traversal throughput.
+    Lbvh(LbvhArgs),
+    /// Time of the reflection passes as the ray-traced share varies (every point and rt
+    /// interleaved in one run).
+    Reflect(ReflectArgs),
+    /// Every mode timed in the same run, interleaved: per-pass medians, frame time
+    /// against rt, SSIM/RMSE against rt, and whether ssr < hybrid < rt.
+    Modes(ModesArgs),
+}
+
+/// What every benchmark shares: reports, quietness, the device.
+#[derive(Args, Clone, Debug)]
+pub struct Common {
+    /// Write the report as JSON to this file (`-`: stdout; the table goes to stderr).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// No progress bar and no table (errors still go to stderr).
+    #[arg(long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+#[derive(Args, Clone, Debug)]
+pub struct ModesArgs {
+    /// Built-in scene names or .obj paths (each timed on its own).
+    #[arg(long, num_args = 1.., default_value = "room")]
+    pub scene: Vec<String>,
+    /// Measured rounds (one frame of every mode each).
+    #[arg(long, default_value_t = 7)]
+    pub rounds: u32,
+    /// Uncounted warm-up rounds.
+    #[arg(long, default_value_t = 1)]
+    pub warmup: u32,
+    #[command(flatten)]
+    pub frame: SettingsArgs,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+#[derive(Args, Clone, Debug)]
+pub struct ReflectArgs {
+    /// Built-in scene name or .obj path.
+    #[arg(long, default_value = "room")]
+    pub scene: String,
+    /// Measured rounds: one frame of every point and of rt each (after one warm-up round).
+    #[arg(long, default_value_t = 3)]
+    pub frames: u32,
+    #[command(flatten)]
+    pub frame: SettingsArgs,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+#[derive(Args, Clone, Debug)]
+pub struct LbvhArgs {
+    /// Random triangle soups of these sizes (default 10000 100000 1000000 when no
+    /// --scene is given).
+    #[arg(long, num_args = 1..)]
+    pub tris: Vec<u32>,
+    /// Built-in scene names or .obj paths to benchmark as well.
+    #[arg(long, num_args = 1..)]
+    pub scene: Vec<String>,
+    /// Morton code width: 30 or 63 bits.
+    #[arg(long, default_value = "30", value_parser = ["30", "63"])]
+    pub bits: String,
+    /// Timed repetitions of each build and trace (medians are reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: u32,
+    /// Rays per ray set (coherent and incoherent).
+    #[arg(long, default_value_t = 262144)]
+    pub rays: u32,
+    /// Rays of each set checked against the CPU reference.
+    #[arg(long, default_value_t = 2000)]
+    pub check_rays: u32,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+pub fn run(command: BenchCommand) -> Result<()> {
+    match command {
+        BenchCommand::Lbvh(a) => lbvh(a),
+        BenchCommand::Reflect(a) => reflect(a),
+        BenchCommand::Modes(a) => modes(a),
+    }
+}
+
+fn valid_or_fail(valid: bool) -> Result<()> {
+    if !valid {
+        anyhow::bail!("a benchmark check failed (see the report)");
+    }
+    Ok(())
+}
+
+fn lbvh(args: LbvhArgs) -> Result<()> {
+    let c = &args.common;
+    check_count("--repeats", args.repeats, 1)?;
+    let bits = if args.bits == "63" {
+        MortonBits::Bits63
+    } else {
+        MortonBits::Bits30
+    };
+    let opts = Options {
+        repeats: args.repeats,
+        rays: args.rays.max(1),
+        check_rays: args.check_rays,
+        bits,
+    };
+    let mut tris = args.tris.clone();
+    if tris.is_empty() && args.scene.is_empty() {
+        tris = vec![10_000, 100_000, 1_000_000];
+    }
+    check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
+    // Load every input first: a bad scene fails before any GPU work.
+    let mut inputs = Vec::new();
+    for &n in &tris {
+        if n == 0 {
+            anyhow::bail!("--tris 0: a BVH needs at least one triangle");
+        }
+        if n > speculum::passes::lbvh::MAX_TRIANGLES {
+            anyhow::bail!(
+                "--tris {n}: more than the LBVH's {} triangles",
+                speculum::passes::lbvh::MAX_TRIANGLES
+            );
+        }
+        let size = speculum::scene::soup::default_size(n as usize);
+        let (v, i) = speculum::scene::soup::random_soup(n as usize, 1.0, size, n as u64);
+        inputs.push((format!("soup-{n}"), v, i));
+    }
+    for name in &args.scene {
+        let scene = speculum::scene::load(name)?;
+        inputs.push((scene.name.clone(), scene.vertices, scene.indices));
+    }
+    let text = Text::new(&[c.json.as_deref()], c.quiet);
+    let ctx = c.gpu.context()?;
+    text.line(format_args!(
+        "LBVH on {} ({}-bit Morton, median (p10–p90) of {} runs, GPU ms)",
+        ctx.device_name, args.bits, opts.repeats
+    ));
+    let bar = progress(inputs.len() as u64 * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
+    let mut cases = Vec::new();
+    for (name, v, i) in &inputs {
+        let case = run_case(&ctx, name, v, i, &opts, &mut || bar.inc(1))?;
+        let stages: Vec<String> = STAGES
+            .iter()
+            .map(|s| format!("{} {:.3}", s.trim_start_matches("lbvh."), case.stages_ms.median(s)))
+            .collect();
+        bar.suspend(|| {
+            text.line(format_args!(
+                "{:<14} {:>9} tris  build {} ({:7.2} Mtris/s) [{}]  refit {}",
+                case.name,
+                case.triangles,
+                cell(Some(case.build_ms)),
+                case.mtris_per_s,
+                stages.join(", "),
+                cell(Some(case.refit_ms))
+            ));
+            text.line(format_args!(
+                "{:<14} SAH {:.2} vs CPU binned {:.2} (ratio {:.3}); {:.1} B/tri; coherent {:.2} Mrays/s, incoherent {:.2} Mrays/s; {}",
+                "",
+                case.sah_lbvh,
+                case.sah_cpu_binned,
+                case.sah_ratio,
+                case.bytes_per_triangle,
+                case.coherent.mrays_per_s,
+                case.incoherent.mrays_per_s,
+                if case.valid {
+                    "valid".to_string()
+                } else {
+                    format!(
+                        "INVALID: {:?} {} {} mismatches",
+                        case.invariant_error, case.coherent.mismatches, case.incoherent.mismatches
+                    )
+                }
+            ));
+        });
+        cases.push(case);
+    }
+    bar.finish_and_clear();
+    let valid = cases.iter().all(|c| c.valid);
+    let report = Report {
+        header: Header::new("bench.lbvh", Some(&ctx), None),
+        options: opts,
+        cases,
+        valid,
+    };
+    if let Some(path) = &c.json {
+        super::write_report(path, &report, &text)?;
+    }
+    super::check_validation(&ctx)?;
+    valid_or_fail(valid)
+}
+
+fn reflect(args: ReflectArgs) -> Result<()> {
+    let c = &args.common;
+    let settings = args.frame.resolve()?;
+    check_count("--frames", args.frames, 1)?;
+    check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
+    let scene = speculum::scene::load(&args.scene)?;
+    let text = Text::new(&[c.json.as_deref()], c.quiet);
+    let ctx = c.gpu.context()?;
+    let renderers = speculum::bench::reflect::sweep(&settings).len() as u64 + 1;
+    let bar = progress(renderers * (args.frames as u64 + 1), "bench reflect", c.quiet);
+    let mut r = speculum::bench::reflect::run(&ctx, &scene, &settings, 1, args.frames, &mut || bar.inc(1))?;
+    bar.finish_and_clear();
+    r.header.refresh_validation(&ctx);
+    text.line(format_args!(
+        "{} on {}: {}x{}, {} reflective pixels; rt mode frame {} ms",
+        r.scene,
+        ctx.device_name,
+        r.resolution[0],
+        r.resolution[1],
+        r.reflective_pixels,
+        cell(Some(r.rt_frame_ms))
+    ));
+    let passes = [
+        "ssr.classify",
+        "ssr.trace",
+        "ssr.compact",
+        "rt.reflect",
+        "reflect.merge",
+    ];
+    text.line(format_args!(
+        "  steps  min conf   traced  {}   frame (ms)  / rt",
+        passes.map(|p| format!("{p:>13}")).join(" ")
+    ));
+    for p in &r.points {
+        let ms = passes.map(|k| format!("{:>13.1}", p.passes_ms.median(k))).join(" ");
+        text.line(format_args!(
+            "  {:5} {:9.2} {:7.1}%  {ms} {:12.1} {:6.3}",
+            p.ssr_max_steps,
+            p.ssr_min_confidence,
+            100.0 * p.rt_pixel_fraction,
+            p.frame_ms.median,
+            p.frame_over_rt.median
+        ));
+    }
+    if let Some(path) = &c.json {
+        super::write_report(path, &r, &text)?;
+    }
+    super::check_validation(&ctx)?;
+    valid_or_fail(r.valid)
+}
+
+fn modes(args: ModesArgs) -> Result<()> {
+    use speculum::bench::modes::{run, ModesReport};
+    let c = &args.common;
+    let settings = args.frame.resolve()?;
+    check_count("--rounds", args.rounds, 1)?;
+    check_count("--warmup", args.warmup, 0)?;
+    // SSIM against rt needs an image its window fits in: known before any GPU work.
+    speculum::metrics::check_size(settings.width, settings.height)?;
+    check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
+    // Load every scene first: a bad one fails before any GPU work.
+    let scenes = args
+        .scene
+        .iter()
+        .map(|s| speculum::scene::load(s))
+        .collect::<speculum::Result<Vec<_>>>()?;
+    let text = Text::new(&[c.json.as_deref()], c.quiet);
+    let ctx = c.gpu.context()?;
+    let modes = speculum::settings::Mode::ALL.len() as u64;
+    let per_scene = modes * (args.rounds + args.warmup) as u64;
+    let bar = progress(per_scene * scenes.len() as u64, "bench modes", c.quiet);
+    let mut results = Vec::new();
+    for scene in &scenes {
+        let r = run(&ctx, scene, &settings, args.warmup, args.rounds, &mut || bar.inc(1))?;
+        bar.suspend(|| print_modes(&text, &r, &ctx.device_name, args.rounds));
+        results.push(r);
+    }
+    bar.finish_and_clear();
+    let valid = results.iter().all(|r| r.valid);
+    let report = ModesReport {
+        header: Header::new("bench.modes", Some(&ctx), Some(&settings)),
+        rounds: args.rounds,
+        warmup_rounds: args.warmup,
+        scenes: results,
+        valid,
+    };
+    if let Some(path) = &c.json {
+        super::write_report(path, &report, &text)?;
+    }
+    super::check_validation(&ctx)?;
+    valid_or_fail(valid)
+}
+
+fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str, rounds: u32) {
+    text.line(format_args!(
+        "{} on {device}: {}x{}, median of {rounds} interleaved rounds",
+        r.scene, r.resolution[0], r.resolution[1]
+    ));
+    let header: String = r.modes.iter().map(|m| format!(" {:>10}", m.mode)).collect();
+    text.line(format_args!("  {:<14}{header}", "pass (ms)"));
+    let row = |name: &str, f: &dyn Fn(&speculum::bench::modes::ModeResult) -> String| {
+        let cells: String = r.modes.iter().map(|m| format!(" {:>10}", f(m))).collect();
+        text.line(format_args!("  {name:<14}{cells}"));
+    };
+    // Passes in frame order; the uniform upload is too small to matter.
+    for p in SCOPES
+        .iter()
+        .filter(|&&p| p != FRAME && p != speculum::renderer::UNIFORMS)
+    {
+        row(p, &|m| match m.passes_ms.get(p) {
+            Some(s) => format!("{:.1}", s.median),
+            None => "-".into(),
+        });
+    }
+    row("frame", &|m| format!("{:.1}", m.frame_ms.median));
+    row("frame / rt", &|m| format!("{:.3}", m.frame_over_rt.median));
+    row("traced %", &|m| format!("{:.1}", 100.0 * m.rt_pixel_fraction));
+    row("SSIM vs rt", &|m| format!("{:.4}", m.ssim_vs_rt));
+    row("RMSE vs rt", &|m| format!("{:.4}", m.rmse_vs_rt));
+    text.line(format_args!(
+        "  ssr < hybrid < rt: {}; checks {}",
+        if r.ordered { "yes" } else { "NO" },
+        if r.valid { "valid" } else { "INVALID" }
+    ));
+}

@@ -1,0 +1,169 @@
+//! Pieces every command shares: device choice and validation, the settings file with
+//! flags that override it only when given, reports to a file or stdout, progress bars.
+
+pub mod bench;
+pub mod compare;
+pub mod render;
+
+use anyhow::{Context as _, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use speculum::vk::{Context, ContextDesc};
+use speculum::Settings;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+/// Device choice and validation, shared by every command that uses the GPU.
+#[derive(Args, Clone, Debug)]
+pub struct GpuArgs {
+    /// Device by index or name substring (see `speculum devices`).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable Vulkan validation + synchronization validation (also SPECULUM_VALIDATION=1).
+    #[arg(long)]
+    pub validation: bool,
+}
+
+impl GpuArgs {
+    pub fn context(&self) -> Result<std::sync::Arc<Context>> {
+        let validation = self.validation || validation_from_env();
+        Ok(Context::new(&ContextDesc {
+            validation,
+            device: self.device.clone(),
+        })?)
+    }
+}
+
+/// The settings a frame is rendered with: a settings file, then flags that override it
+/// only when they are given.
+#[derive(Args, Clone, Debug, Default)]
+pub struct SettingsArgs {
+    /// Settings file (JSON object) with any fields of the settings struct
+    /// (`speculum settings --defaults` prints them all); flags given override it.
+    #[arg(long)]
+    pub settings: Option<PathBuf>,
+    /// Width in pixels [default: 960, or the settings file's].
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Height in pixels [default: 540, or the settings file's].
+    #[arg(long)]
+    pub height: Option<u32>,
+}
+
+impl SettingsArgs {
+    /// The effective settings, validated.
+    pub fn resolve(&self) -> Result<Settings> {
+        let mut s = load_settings(self.settings.as_deref())?;
+        if let Some(w) = self.width {
+            s.width = w;
+        }
+        if let Some(h) = self.height {
+            s.height = h;
+        }
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// Fails when validation reported anything (0 when validation is off).
+pub fn check_validation(ctx: &Context) -> Result<()> {
+    if ctx.validation_messages() > 0 {
+        anyhow::bail!("{} validation message(s) reported", ctx.validation_messages());
+    }
+    Ok(())
+}
+
+fn validation_from_env() -> bool {
+    std::env::var("SPECULUM_VALIDATION").is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+/// The settings file's values (a JSON object; missing fields take their defaults), or
+/// the defaults.
+pub fn load_settings(path: Option<&Path>) -> Result<Settings> {
+    let Some(path) = path else {
+        return Ok(Settings::default());
+    };
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read settings file '{}'", path.display()))?;
+    Settings::from_json(&text).with_context(|| format!("invalid settings file '{}'", path.display()))
+}
+
+/// Checks report and image outputs before any GPU work.
+pub fn check_outputs(outputs: &[(Option<&Path>, speculum::output::Kind)]) -> Result<()> {
+    for (path, kind) in outputs {
+        if let Some(p) = path {
+            speculum::output::check(p, *kind)?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes a JSON report to `path` (`-`: stdout), atomically.
+pub fn write_report<T: serde::Serialize>(path: &Path, report: &T, text: &Text) -> Result<()> {
+    speculum::output::write_atomic(path, speculum::report::to_json(report).as_bytes())?;
+    if path != Path::new("-") {
+        text.line(format_args!("wrote {}", path.display()));
+    }
+    Ok(())
+}
+
+/// Where human-readable output goes: stdout, or stderr when a report takes stdout
+/// (`--json -`), or nowhere with `--quiet`.
+pub struct Text {
+    to_stderr: bool,
+    quiet: bool,
+}
+
+impl Text {
+    /// `reports` are the JSON outputs of the command; one of them may be `-`.
+    pub fn new(reports: &[Option<&Path>], quiet: bool) -> Self {
+        Self {
+            to_stderr: reports.iter().flatten().any(|p| *p == Path::new("-")),
+            quiet,
+        }
+    }
+
+    pub fn line(&self, s: impl std::fmt::Display) {
+        if self.quiet {
+            return;
+        }
+        if self.to_stderr {
+            eprintln!("{s}");
+        } else {
+            println!("{s}");
+        }
+    }
+}
+
+/// A progress bar on stderr for `total` steps; hidden when stderr is not a terminal or
+/// with `--quiet`.
+pub fn progress(total: u64, what: &str, quiet: bool) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    if quiet || !std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed} (ETA {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(what.to_string());
+    bar
+}
+
+/// Frame-count flags share one bound (`headless::MAX_FRAMES`).
+pub fn check_count(flag: &str, value: u32, min: u32) -> Result<()> {
+    let max = speculum::headless::MAX_FRAMES;
+    if value < min || value > max {
+        anyhow::bail!("{flag} {value} is outside {min}..={max}");
+    }
+    Ok(())
+}
+
+/// `ms` as a table cell: a median with its p10–p90 spread.
+pub fn cell(stat: Option<speculum::report::Stat>) -> String {
+    match stat {
+        Some(s) => format!("{:.2} ({:.2}–{:.2})", s.median, s.p10, s.p90),
+        None => "-".into(),
+    }
+}

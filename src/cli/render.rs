@@ -1,0 +1,156 @@
+//! `speculum render`: one scene headless to a PNG, with per-pass GPU timings.
+
+use super::{check_count, check_outputs, progress, GpuArgs, SettingsArgs, Text};
+use anyhow::Result;
+use clap::Args;
+use speculum::output::{Batch, Kind};
+use speculum::settings::Mode;
+use speculum::{headless, Settings};
+use std::path::PathBuf;
+
+/// Help for `--scene`, naming every built-in scene.
+pub fn scene_help() -> String {
+    format!(
+        "Built-in scene ({}) or a path to an .obj file",
+        speculum::scene::procedural::NAMES.join(", ")
+    )
+}
+
+#[derive(Args, Clone, Debug)]
+pub struct RenderArgs {
+    #[arg(long, default_value = "room", help = scene_help())]
+    pub scene: String,
+    /// Reflection mode [default: hybrid, or the settings file's]: `rt` traces every
+    /// reflective pixel (the reference), `provenance` paints pixels by source.
+    #[arg(long, value_enum)]
+    pub mode: Option<Mode>,
+    /// Frames to measure (after the warm-up frames, which are not counted).
+    #[arg(long, default_value_t = 10)]
+    pub frames: u32,
+    /// Also render the same frame in `rt` mode (the reference) and report SSIM and RMSE
+    /// against it; the reference image is written next to --out as *_rt.png.
+    #[arg(long)]
+    pub reference: bool,
+    /// Uncounted warm-up frames (pipeline JIT, caches).
+    #[arg(long, default_value_t = 2)]
+    pub warmup: u32,
+    /// Output PNG.
+    #[arg(long, default_value = "frame.png")]
+    pub out: PathBuf,
+    /// Also write the timings report as JSON to this file (`-`: stdout).
+    #[arg(long)]
+    pub timings: Option<PathBuf>,
+    /// Also write the SSR fail mask as a PNG, coloured by reason (see README).
+    #[arg(long)]
+    pub fail_mask: Option<PathBuf>,
+    /// No progress bar and no text output (errors still go to stderr).
+    #[arg(long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub frame: SettingsArgs,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+impl RenderArgs {
+    /// The command with no arguments: `render` with every default.
+    pub fn defaults() -> Self {
+        use clap::FromArgMatches;
+        let cmd = <Self as Args>::augment_args(clap::Command::new("render"));
+        Self::from_arg_matches(&cmd.get_matches_from(["render"])).expect("defaults parse")
+    }
+}
+
+fn reference_path(out: &std::path::Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "frame".into());
+    out.with_file_name(format!("{stem}_rt.png"))
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    // Everything that can be known before the GPU is touched is checked here.
+    let mut settings: Settings = args.frame.resolve()?;
+    if let Some(mode) = args.mode {
+        settings.mode = mode;
+    }
+    check_count("--frames", args.frames, 1)?;
+    check_count("--warmup", args.warmup, 0)?;
+    let plan = headless::FramePlan {
+        warmup: args.warmup,
+        frames: args.frames,
+        reference: args.reference,
+    };
+    plan.validate(&settings)?;
+    let reference_out = args.reference.then(|| reference_path(&args.out));
+    check_outputs(&[
+        (Some(&args.out), Kind::Png),
+        (reference_out.as_deref(), Kind::Png),
+        (args.fail_mask.as_deref(), Kind::Png),
+        (args.timings.as_deref(), Kind::Json),
+    ])?;
+    let scene = speculum::scene::load(&args.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let text = Text::new(&[args.timings.as_deref()], args.quiet);
+    let ctx = args.gpu.context()?;
+
+    let bar = progress(plan.total_frames(), "render", args.quiet);
+    let rendered = headless::render(&ctx, &scene, &settings, plan, &mut || bar.inc(1))?;
+    bar.finish_and_clear();
+    let (w, h) = (settings.width, settings.height);
+    let mut r = rendered.report;
+    r.header.refresh_validation(&ctx);
+    // Every output is written only after the whole render succeeded, all or none.
+    let mut outputs = Batch::default();
+    outputs.add(&args.out, headless::png_bytes(&rendered.rgba, w, h)?);
+    if let (Some(path), Some(reference)) = (&reference_out, &rendered.reference_rgba) {
+        outputs.add(path, headless::png_bytes(reference, w, h)?);
+    }
+    if let Some(path) = &args.fail_mask {
+        outputs.add(path, headless::png_bytes(&rendered.fail_mask_rgba, w, h)?);
+    }
+    if let Some(path) = &args.timings {
+        outputs.add(path, speculum::report::to_json(&r).into_bytes());
+    }
+    outputs.commit()?;
+
+    text.line(format_args!(
+        "{} on {}: {}x{}, {} mode, median (p10–p90) of {} frames, GPU ms",
+        r.scene, ctx.device_name, r.resolution[0], r.resolution[1], r.mode, r.frames
+    ));
+    for (name, stat) in &r.passes_ms.0 {
+        if stat.is_some() {
+            text.line(format_args!("  {name:<14} {}", super::cell(*stat)));
+        }
+    }
+    text.line(format_args!("  {:<14} {}", "frame", super::cell(Some(r.frame_ms))));
+    text.line(format_args!(
+        "  reflective pixels {}, SSR failed on {}, ray traced {} ({:.1}%)",
+        r.reflective_pixels,
+        r.ssr_failed_pixels,
+        r.traced_pixels,
+        100.0 * r.rt_pixel_fraction
+    ));
+    if let (Some(ssim), Some(rmse), Some(rt)) = (r.ssim_vs_rt, r.rmse_vs_rt, r.rt_frame_ms) {
+        text.line(format_args!(
+            "  vs rt reference: SSIM {ssim:.4}, RMSE {rmse:.4}; rt frame {}",
+            super::cell(Some(rt))
+        ));
+    }
+    if let Some(n) = r.header.validation_messages {
+        text.line(format_args!("  validation messages: {n}"));
+    }
+    let written = [
+        Some(&args.out),
+        reference_out.as_ref(),
+        args.fail_mask.as_ref(),
+        args.timings.as_ref(),
+    ];
+    for path in written.into_iter().flatten().filter(|p| p.as_os_str() != "-") {
+        text.line(format_args!("wrote {}", path.display()));
+    }
+    super::check_validation(&ctx)
+}

@@ -1,0 +1,275 @@
+//! Every JSON report follows the one schema (`speculum::report`): an object starting
+//! with the common header keys, every key present (nulls where a value does not
+//! apply), a `Stat` (median, p10, p90, samples) beside every timing, and `passes_ms`
+//! listing every scope of the frame. Runs each report kind through the real binary.
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::Command;
+
+fn speculum(args: &[&str], dir: &Path) -> Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
+        .args(args)
+        .env("SPECULUM_VALIDATION", "1")
+        .current_dir(dir)
+        .output()
+        .expect("run speculum");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{args:?}: {stderr}");
+    assert!(!stderr.contains("[vulkan"), "{args:?}: {stderr}");
+    let text =
+        std::fs::read_to_string(dir.join("r.json")).unwrap_or_else(|_| String::from_utf8_lossy(&out.stdout).into());
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}): {text}"))
+}
+
+/// The header every report starts with.
+fn check_header(r: &Value, kind: &str, gpu: bool) {
+    let obj = r.as_object().expect("a report is an object");
+    let keys: Vec<&String> = obj.keys().collect();
+    let header = [
+        "schema",
+        "kind",
+        "speculum_version",
+        "git_commit",
+        "device",
+        "settings",
+        "validation_messages",
+    ];
+    assert_eq!(
+        &keys[..header.len()],
+        header.map(String::from).iter().collect::<Vec<_>>(),
+        "{kind}"
+    );
+    assert_eq!(r["schema"], speculum::report::SCHEMA);
+    assert_eq!(r["kind"], kind);
+    assert!(r["git_commit"].as_str().is_some_and(|c| !c.is_empty()));
+    if gpu {
+        let d = &r["device"];
+        for k in [
+            "name",
+            "kind",
+            "driver_name",
+            "driver_info",
+            "driver_version",
+            "vulkan_version",
+        ] {
+            assert!(!d[k].is_null(), "{kind}: device.{k}");
+        }
+        assert!(d["vulkan_version"].as_str().unwrap().starts_with("1."));
+        assert_eq!(r["validation_messages"], 0, "{kind}: validation was on");
+    } else {
+        assert!(r["device"].is_null() && r["settings"].is_null());
+    }
+}
+
+fn check_stat(v: &Value, what: &str) {
+    for k in ["median", "p10", "p90", "samples"] {
+        assert!(v[k].is_number(), "{what}: {k} in {v}");
+    }
+    let (p10, m, p90) = (
+        v["p10"].as_f64().unwrap(),
+        v["median"].as_f64().unwrap(),
+        v["p90"].as_f64().unwrap(),
+    );
+    assert!(p10 <= m && m <= p90, "{what}: {v}");
+}
+
+/// `passes_ms` has every scope of the frame, in frame order; `null` where not run.
+fn check_passes(p: &Value, not_run: &[&str]) {
+    let names: Vec<&str> = p.as_object().unwrap().keys().map(String::as_str).collect();
+    let want: Vec<&str> = speculum::renderer::SCOPES
+        .iter()
+        .copied()
+        .filter(|s| *s != speculum::renderer::FRAME)
+        .collect();
+    assert_eq!(names, want);
+    for (name, v) in p.as_object().unwrap() {
+        if not_run.contains(&name.as_str()) {
+            assert!(v.is_null(), "{name} did not run: {v}");
+        } else {
+            check_stat(v, name);
+        }
+    }
+}
+
+#[test]
+fn render_report_follows_the_schema() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = speculum(
+        &[
+            "render",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--frames",
+            "2",
+            "--warmup",
+            "0",
+            "--mode",
+            "ssr",
+            "--timings",
+            "r.json",
+        ],
+        dir.path(),
+    );
+    check_header(&r, "render", true);
+    assert_eq!(
+        (r["settings"]["width"].as_u64(), r["settings"]["mode"].as_str()),
+        (Some(48), Some("ssr"))
+    );
+    check_passes(&r["passes_ms"], &["ssr.compact", "rt.reflect"]);
+    check_stat(&r["frame_ms"], "frame_ms");
+    assert_eq!(r["traced_pixels"], 0, "ssr mode traces nothing");
+    assert_eq!(
+        r["fail_reasons"].as_object().unwrap().len(),
+        8,
+        "every reason, zeros included"
+    );
+    assert_eq!(r["fail_reasons"]["forced"], 0);
+    for k in ["ssim_vs_rt", "rmse_vs_rt", "rt_frame_ms"] {
+        assert!(
+            r.get(k).is_some_and(Value::is_null),
+            "{k} is present and null without --reference"
+        );
+    }
+}
+
+/// `--json -` writes the report to stdout (the text goes to stderr).
+#[test]
+fn reports_go_to_stdout_with_a_dash() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = speculum(
+        &[
+            "render",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--reference",
+            "--timings",
+            "-",
+            "--out",
+            "f.png",
+        ],
+        dir.path(),
+    );
+    check_header(&r, "render", true);
+    check_passes(&r["passes_ms"], &[]);
+    check_stat(&r["rt_frame_ms"], "rt_frame_ms");
+    assert!(r["ssim_vs_rt"].as_f64().unwrap() > 0.5);
+}
+
+#[test]
+fn bench_reports_follow_the_schema() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = ["--width", "48", "--height", "32"];
+    let modes = speculum(
+        &[
+            &["bench", "modes", "--rounds", "2", "--warmup", "0", "--json", "r.json"][..],
+            &small,
+        ]
+        .concat(),
+        dir.path(),
+    );
+    check_header(&modes, "bench.modes", true);
+    let scene = &modes["scenes"][0];
+    for m in scene["modes"].as_array().unwrap() {
+        check_stat(&m["frame_ms"], "frame_ms");
+        check_stat(&m["frame_over_rt"], "frame_over_rt");
+        let not_run: &[&str] = match m["mode"].as_str().unwrap() {
+            "raster" => &[
+                "ssr.classify",
+                "ssr.trace",
+                "ssr.compact",
+                "rt.reflect",
+                "reflect.merge",
+            ],
+            "ssr" => &["ssr.compact", "rt.reflect"],
+            "rt" => &["ssr.trace"],
+            _ => &[],
+        };
+        check_passes(&m["passes_ms"], not_run);
+    }
+    std::fs::remove_file(dir.path().join("r.json")).unwrap();
+
+    let reflect = speculum(
+        &[&["bench", "reflect", "--frames", "1", "--json", "r.json"][..], &small].concat(),
+        dir.path(),
+    );
+    check_header(&reflect, "bench.reflect", true);
+    check_stat(&reflect["rt_frame_ms"], "rt_frame_ms");
+    for p in reflect["points"].as_array().unwrap() {
+        check_stat(&p["frame_over_rt"], "frame_over_rt");
+        check_passes(&p["passes_ms"], &[]);
+    }
+    std::fs::remove_file(dir.path().join("r.json")).unwrap();
+
+    let lbvh = speculum(
+        &[
+            "bench",
+            "lbvh",
+            "--tris",
+            "2000",
+            "--repeats",
+            "2",
+            "--rays",
+            "1024",
+            "--check-rays",
+            "100",
+            "--json",
+            "r.json",
+        ],
+        dir.path(),
+    );
+    check_header(&lbvh, "bench.lbvh", true);
+    assert!(lbvh["settings"].is_null() && lbvh["options"]["repeats"] == 2);
+    let case = &lbvh["cases"][0];
+    for k in ["build_ms", "refit_ms"] {
+        check_stat(&case[k], k);
+    }
+    check_stat(&case["coherent"]["trace_ms"], "trace_ms");
+    let stages: Vec<&String> = case["stages_ms"].as_object().unwrap().keys().collect();
+    assert_eq!(
+        stages,
+        speculum::bench::lbvh::STAGES
+            .map(String::from)
+            .iter()
+            .collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn compare_report_follows_the_schema_and_thresholds_fail() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.png");
+    let b = dir.path().join("b.png");
+    image::RgbaImage::from_fn(32, 32, |x, y| image::Rgba([(x * 8) as u8, (y * 8) as u8, 90, 255]))
+        .save(&a)
+        .unwrap();
+    image::RgbaImage::from_fn(32, 32, |x, y| image::Rgba([(x * 8) as u8, (y * 7) as u8, 90, 255]))
+        .save(&b)
+        .unwrap();
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let r = speculum(&["compare", a, b, "--json", "r.json", "--diff", "d.png"], dir.path());
+    check_header(&r, "compare", false);
+    assert!(r["min_ssim"].is_null() && r["passed"] == true && r["rmse"].as_f64().unwrap() > 0.0);
+    let diff = image::open(dir.path().join("d.png")).unwrap().to_rgba8();
+    assert_eq!(diff.dimensions(), (32, 32));
+    assert_eq!(diff.get_pixel(0, 0).0, [0, 0, 0, 255], "equal pixels are black");
+    assert_ne!(diff.get_pixel(0, 31).0, [0, 0, 0, 255], "differing pixels are not");
+    // A threshold that is not met fails with one line naming it.
+    for (flag, v) in [("--min-ssim", "0.9999"), ("--max-rmse", "0.0001")] {
+        let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
+            .args(["compare", a, b, flag, v])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains(flag) && stderr.lines().count() == 1, "{stderr}");
+    }
+}

@@ -161,7 +161,11 @@ fn resize_renders_what_a_fresh_renderer_renders() {
             assert_eq!(r.uniforms(), fresh.uniforms());
         }
         assert!(r.resize(0, 10).is_err(), "a zero size is refused");
-        assert_eq!((r.settings().width, r.settings().height), (90, 50), "and changes nothing");
+        assert_eq!(
+            (r.settings().width, r.settings().height),
+            (90, 50),
+            "and changes nothing"
+        );
     }
     common::assert_no_validation_messages(&ctx);
 }

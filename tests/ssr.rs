@@ -1,9 +1,14 @@
-//! ssr.classify against its CPU reference on a random G-buffer, and ssr.trace's
-//! coverage of the march list it dispatches over.
+//! ssr.classify against its CPU reference on a random G-buffer, ssr.trace's coverage of
+//! the march list it dispatches over, and the march itself against
+//! `cpu_ref::ssr::march` on a random G-buffer and on `room`.
 //!
-//! Tolerance: the heading confidence goes through GPU `normalize` and matrix products
+//! Tolerances: the heading confidence goes through GPU `normalize` and matrix products
 //! that are not correctly rounded, so a pixel whose confidence lies within 1e-4 of the
-//! threshold may be classified either way; every other pixel must match exactly.
+//! threshold may be classified either way; every other pixel must match exactly. The
+//! march's fail mask must match exactly, its confidence within 1e-4 and its colour
+//! within 1e-3 (relative), except where the CPU march grazed a decision — a depth test
+//! or the secant's within 1e-4 relative, or a looked-up position within 2e-3 px of a
+//! pixel boundary (a ray grazing a depth edge) — and such pixels must be at most 1%.
 
 mod common;
 
@@ -13,7 +18,10 @@ use rand::Rng;
 use speculum::cpu_ref::ssr::{self, Class};
 use speculum::passes::gbuffer::GBuffer;
 use speculum::passes::ssr_trace::{SsrParams, SsrPass};
-use speculum::shader_defines::{FAIL_LOW_CONFIDENCE, LIST_STRIPES, SSR_LIST_WG};
+use speculum::shader_defines::{
+    FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
+    FAIL_OUT_OF_STEPS, LIST_STRIPES, SSR_LIST_WG,
+};
 use speculum::vk::{barrier, Image};
 
 const POISON_MASK: u32 = 0xdead_beef;
@@ -163,6 +171,236 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
                 "{groups} workgroups"
             );
         }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// How the GPU march of the listed pixels compares with `cpu_ref::ssr::march`.
+#[derive(Debug, Default)]
+struct MarchComparison {
+    listed: usize,
+    /// Pixels whose mask or colour differ where the CPU march grazed a decision
+    /// (margin below `GRAZE` or a looked-up position within `GRAZE_PX` of a pixel
+    /// boundary): allowed, and counted.
+    grazing: usize,
+    /// Per fail value, how many listed pixels the CPU gave it.
+    outcomes: std::collections::BTreeMap<u32, usize>,
+}
+
+/// A decision within this relative margin may go either way on the GPU: its matrix
+/// products, divisions and `normalize` are not correctly rounded (and may fuse into
+/// FMAs), so values agree with the CPU's to ~1e-6 relative, and a margin 100x that is
+/// taken as a tie.
+const GRAZE: f32 = 1e-4;
+/// A looked-up position this close (pixels) to a pixel boundary may fall on either side:
+/// positions up to ~1000 px accumulate a few ulps (6e-5 px each) over a march.
+const GRAZE_PX: f32 = 2e-3;
+
+/// Compares the march of every listed pixel: mask exactly, confidence within 1e-4 and
+/// colour within 1e-3 relative (bilinear weights from the sub-pixel hit position),
+/// except for grazing pixels.
+fn compare_march(
+    frame: &speculum::gpu_types::FrameUniforms,
+    inputs: &ssr::MarchInputs<'_>,
+    params: &SsrParams,
+    listed: &[IVec2],
+    mask: &[u32],
+    color: &[[f32; 4]],
+) -> MarchComparison {
+    let w = frame.resolution[0] as i32;
+    let mut c = MarchComparison {
+        listed: listed.len(),
+        ..Default::default()
+    };
+    for &p in listed {
+        let i = (p.y * w + p.x) as usize;
+        let want = ssr::march(frame, p, inputs, params);
+        *c.outcomes.entry(want.fail).or_default() += 1;
+        let close = |a: f32, b: f32, tol: f32| (a - b).abs() <= tol * (1.0 + a.abs().max(b.abs()));
+        let same = mask[i] == want.fail
+            && close(color[i][3], want.color[3], 1e-4)
+            && (0..3).all(|k| close(color[i][k], want.color[k], 1e-3));
+        if same {
+            continue;
+        }
+        let grazing = want.margin < GRAZE || want.pixel_margin < GRAZE_PX;
+        assert!(
+            grazing,
+            "pixel {p}: GPU mask {:#x} colour {:?}, CPU {want:?}",
+            mask[i], color[i]
+        );
+        c.grazing += 1;
+    }
+    c
+}
+
+/// Unpacks the first `len` entries of a march list.
+fn listed_pixels(raw: &[u32], len: usize) -> Vec<IVec2> {
+    raw[..len]
+        .iter()
+        .map(|e| IVec2::new((e & 0xffff) as i32, (e >> 16) as i32))
+        .collect()
+}
+
+/// The march against its CPU reference on a random G-buffer: the mask of every listed
+/// pixel matches exactly, its colour and confidence within tolerance, except pixels
+/// whose ray grazes a decision (at most 1%).
+#[test]
+fn march_matches_cpu_on_a_random_gbuffer() {
+    let ctx = common::context();
+    let mut rng = common::rng(91);
+    let scene = speculum::scene::procedural::room().unwrap();
+    let settings = speculum::Settings {
+        width: 131,
+        height: 77,
+        ..Default::default()
+    };
+    let frame = speculum::renderer::frame_uniforms(&scene, &settings);
+    let n = (settings.width * settings.height) as usize;
+    let extent = vk::Extent2D {
+        width: settings.width,
+        height: settings.height,
+    };
+    let mut g = common::random_gbuffer(&mut rng, n);
+    // Smooth depth in patches (with sky holes) so rays march some steps before they hit
+    // or pass behind: per-pixel noise would end nearly every ray at its first step.
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    for y in 0..h {
+        for x in 0..w {
+            let patch = ((x / 16) + 7 * (y / 16)) % 5;
+            let d = 0.95 + 0.008 * patch as f32 + 0.0004 * ((x % 16) as f32 - (y % 16) as f32);
+            g.depth[y * w + x] = if patch == 4 && x % 16 < 5 { 1.0 } else { d };
+        }
+    }
+    let gb = GBuffer::new(&ctx, extent).unwrap();
+    let (ro, general) = (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, vk::ImageLayout::GENERAL);
+    gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
+    gb.normal.write(&g.normal_bytes, ro).unwrap();
+    gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
+    let lit_texels: Vec<[f32; 4]> = (0..n)
+        .map(|_| {
+            [
+                rng.random_range(0.0..3.0),
+                rng.random_range(0.0..1.0),
+                rng.random_range(0.0..0.5),
+                1.0,
+            ]
+        })
+        .collect();
+    let lit = Image::storage(&ctx, "test.lit", extent, vk::Format::R32G32B32A32_SFLOAT).unwrap();
+    lit.write(bytemuck::cast_slice(&lit_texels), general).unwrap();
+    let ubo = common::frame_ubo(&ctx, &frame);
+    let pass = SsrPass::new(&ctx, extent).unwrap();
+    // A short budget, so rays also run out of steps; a recursion threshold that
+    // lets random reflectivities both pass and fail.
+    let params = SsrParams {
+        recursion_min: 0.6,
+        max_steps: 5,
+        ..SsrParams::from_settings(&settings)
+    };
+    let out = &pass.out;
+    out.mask
+        .write(bytemuck::cast_slice(&vec![POISON_MASK; n]), general)
+        .unwrap();
+    out.color
+        .write(bytemuck::cast_slice(&vec![POISON_COLOR; n]), general)
+        .unwrap();
+    ctx.one_shot(|cmd| {
+        pass.classify(cmd, &ubo, &gb, &params, false);
+        pass.trace(cmd, &ubo, &gb, &lit, &params);
+    })
+    .unwrap();
+    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
+    let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap());
+    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
+    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
+    let inputs = ssr::MarchInputs {
+        depth: &g.depth,
+        normal: &g.normal,
+        lit: &lit_texels,
+    };
+    let c = compare_march(
+        &frame,
+        &inputs,
+        &params,
+        &listed_pixels(&list, args[3] as usize),
+        &mask,
+        &color,
+    );
+    println!("{c:?}");
+    assert!(c.grazing * 100 <= c.listed, "{c:?}");
+    // Hits kept, hits judged and misses all occur, so every branch was compared.
+    let outcomes = [
+        0,
+        FAIL_BLEND,
+        FAIL_BEHIND,
+        FAIL_LEFT_SCREEN,
+        FAIL_OUT_OF_STEPS,
+        FAIL_BACK_FACE,
+        FAIL_HIT_REFLECTIVE,
+    ];
+    for reason in outcomes {
+        assert!(
+            c.outcomes.get(&reason).is_some_and(|&k| k > 5),
+            "outcome {reason:#x}: {c:?}"
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The march against its CPU reference on `room`'s own G-buffer and lit image, as the
+/// renderer leaves them after a hybrid frame.
+#[test]
+fn march_matches_cpu_on_room() {
+    let ctx = common::context();
+    let scene = speculum::scene::procedural::room().unwrap();
+    let settings = speculum::Settings {
+        width: 192,
+        height: 108,
+        ..Default::default()
+    };
+    let mut r = speculum::Renderer::new(&ctx, &scene, &settings).unwrap();
+    r.render_frame().unwrap();
+    let frame = *r.uniforms();
+    let t = &r.gbuffer.targets;
+    let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.depth).unwrap());
+    let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
+    let lit = r.read_lit().unwrap();
+    let general = vk::ImageLayout::GENERAL;
+    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.mask.read(general).unwrap());
+    let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.ssr.out.color.read(general).unwrap());
+    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_args.read().unwrap());
+    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_list.read().unwrap());
+    let inputs = ssr::MarchInputs {
+        depth: &depth,
+        normal: &normal,
+        lit: &lit,
+    };
+    let params = SsrParams::from_settings(&settings);
+    let c = compare_march(
+        &frame,
+        &inputs,
+        &params,
+        &listed_pixels(&list, args[3] as usize),
+        &mask,
+        &color,
+    );
+    println!("{c:?}");
+    assert!(c.listed > 2000 && c.grazing * 100 <= c.listed, "{c:?}");
+    let outcomes = [
+        0,
+        FAIL_BLEND,
+        FAIL_BEHIND,
+        FAIL_LEFT_SCREEN,
+        FAIL_BACK_FACE,
+        FAIL_LOW_CONFIDENCE,
+        FAIL_HIT_REFLECTIVE,
+    ];
+    for reason in outcomes {
+        assert!(
+            c.outcomes.get(&reason).is_some_and(|&k| k > 5),
+            "outcome {reason:#x}: {c:?}"
+        );
     }
     common::assert_no_validation_messages(&ctx);
 }

@@ -1,10 +1,14 @@
-//! Reference of `glsl/ssr_classify.comp` and the ray setup it shares with
-//! `ssr_trace.comp` (`glsl/shared/ssr.glsl`).
+//! Reference of `glsl/ssr_classify.comp`, of the march `glsl/ssr_trace.comp`, and of
+//! the ray setup they share (`glsl/shared/ssr.glsl`), step for step in f32.
 
 use super::shading::world_from_depth;
 use crate::gpu_types::FrameUniforms;
-use crate::shader_defines::{FAIL_FORCED, FAIL_LOW_CONFIDENCE, MATERIAL_NONE};
-use glam::{IVec2, Mat3, Vec3, Vec4Swizzles};
+use crate::passes::ssr_trace::SsrParams;
+use crate::shader_defines::{
+    FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
+    FAIL_OUT_OF_STEPS, MATERIAL_NONE, SSR_REFINE_STEPS,
+};
+use glam::{IVec2, Mat3, Vec2, Vec2Swizzles, Vec3, Vec4, Vec4Swizzles};
 
 /// The reflected view-space ray of a pixel (`SsrRay`).
 #[derive(Clone, Copy, Debug)]
@@ -62,4 +66,254 @@ pub fn classify(
     } else {
         (Class::Done(FAIL_LOW_CONFIDENCE), h)
     }
+}
+
+/// The G-buffer and lit image a march reads, row-major at the frame's resolution.
+pub struct MarchInputs<'a> {
+    pub depth: &'a [f32],
+    /// xyz: world normal; w: reflectivity (as the GPU reads RGBA16F).
+    pub normal: &'a [[f32; 4]],
+    pub lit: &'a [[f32; 4]],
+}
+
+/// What the march of one pixel writes, and how close it came to deciding otherwise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct March {
+    /// The fail mask (0: SSR answered; `FAIL_BLEND`: a faded hit, kept and traced).
+    pub fail: u32,
+    /// The SSR colour (rgb) and confidence (a; 0 unless the hit is kept).
+    pub color: [f32; 4],
+    /// The pixel the hit was taken from, if there was one.
+    pub hit_pixel: Option<IVec2>,
+    /// Steps marched.
+    pub steps: u32,
+    /// The smallest relative margin of any comparison the march decided on (a depth
+    /// test, the end of the ray, the back-face and confidence tests). Where it is tiny
+    /// (a ray grazing a surface), rounding on the GPU may decide the other way.
+    pub margin: f32,
+    /// The smallest distance (pixels) from a pixel boundary of any position whose
+    /// pixel the march looked up: where a step lands on a boundary, rounding may take
+    /// the neighbour's depth (a ray grazing a depth edge).
+    pub pixel_margin: f32,
+}
+
+/// GLSL `mix`: x (1 - a) + y a, in that order of operations.
+fn mix<T>(x: T, y: T, a: f32) -> T
+where
+    T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+{
+    x * (1.0 - a) + y * a
+}
+
+/// GLSL `sign` (0 for 0, unlike `f32::signum`).
+fn sign(x: f32) -> f32 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+fn swap_if(v: Vec2, permute: bool) -> Vec2 {
+    if permute {
+        v.yx()
+    } else {
+        v
+    }
+}
+
+/// Relative margin of the comparison `a` vs `b`.
+fn gap(a: f32, b: f32) -> f32 {
+    (a - b).abs() / a.abs().max(b.abs()).max(1.0)
+}
+
+/// Distance of a coordinate from the nearest pixel boundary (where `floor` flips).
+fn boundary_gap(x: Vec2) -> f32 {
+    let d = |v: f32| (v - v.round()).abs();
+    d(x.x).min(d(x.y))
+}
+
+/// `ssr_trace.comp` for listed pixel `p`: the reflected ray marched over the depth
+/// buffer by perspective-correct DDA (McGuire & Mara 2014), the hit refined by binary
+/// search and a secant, then judged (back face, reflective surface, confidence).
+pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: &SsrParams) -> March {
+    let res = IVec2::new(frame.resolution[0] as i32, frame.resolution[1] as i32);
+    let at = |q: IVec2| (q.y * res.x + q.x) as usize;
+    let depth_at = |q: IVec2| inputs.depth[at(q)];
+    let proj = frame.proj;
+    let view_z = |d: f32| -proj.w_axis.z / (d + proj.z_axis.z);
+    let to_pixel = |h: Vec4| (h.xy() / h.w * 0.5 + 0.5) * res.as_vec2();
+    let nr = inputs.normal[at(p)];
+    let ray = ssr_ray(frame, p, depth_at(p), Vec3::new(nr[0], nr[1], nr[2]));
+    let (vpos, vn, vdir) = (ray.vpos, ray.vn, ray.vdir);
+    let origin = vpos + vn * (1e-3 * vpos.z.abs());
+
+    let near_z = -proj.w_axis.z / proj.z_axis.z;
+    let ray_len = if origin.z + vdir.z * params.max_distance > near_z {
+        (near_z - origin.z) / vdir.z
+    } else {
+        params.max_distance
+    };
+    let end_point = origin + vdir * ray_len;
+    let h0 = proj * origin.extend(1.0);
+    let h1 = proj * end_point.extend(1.0);
+    let (k0, k1) = (1.0 / h0.w, 1.0 / h1.w);
+    let (q0, q1) = (origin * k0, end_point * k1);
+    let (mut p0, mut p1) = (to_pixel(h0), to_pixel(h1));
+    if (p1 - p0).dot(p1 - p0) < 1e-4 {
+        p1 += Vec2::splat(0.01);
+    }
+    let mut delta = p1 - p0;
+    let permute = delta.x.abs() < delta.y.abs();
+    if permute {
+        delta = delta.yx();
+        p0 = p0.yx();
+        p1 = p1.yx();
+    }
+    let step_dir = sign(delta.x);
+    let invdx = step_dir / delta.x;
+    let dq = (q1 - q0) * invdx * params.stride;
+    let dk = (k1 - k0) * invdx * params.stride;
+    let dp = Vec2::new(step_dir, delta.y * invdx) * params.stride;
+    let mut pp = p0 + dp;
+    let mut qz = q0.z + dq.z;
+    let mut k = k0 + dk;
+    let end = p1.x * step_dir;
+    let mut prev_z = (q0.z + 0.5 * dq.z) / (k0 + 0.5 * dk);
+    let (mut went_behind, mut hit) = (false, false);
+    let mut steps = 0u32;
+    let mut hit_pixel = IVec2::splat(-1);
+    let mut hit_pos = Vec2::splat(-1.0);
+    let (mut margin, mut pixel_margin) = (f32::INFINITY, f32::INFINITY);
+    while pp.x * step_dir <= end && steps < params.max_steps {
+        margin = margin.min(gap(pp.x * step_dir, end));
+        let px = swap_if(pp, permute);
+        pixel_margin = pixel_margin.min(boundary_gap(px));
+        let ip = px.floor().as_ivec2();
+        if ip.cmplt(IVec2::ZERO).any() || ip.cmpge(res).any() {
+            break;
+        }
+        let mut ray_z_min = prev_z;
+        let mut ray_z_max = (dq.z * 0.5 + qz) / (dk * 0.5 + k);
+        prev_z = ray_z_max;
+        if ray_z_min > ray_z_max {
+            std::mem::swap(&mut ray_z_min, &mut ray_z_max);
+        }
+        let scene_depth = depth_at(ip);
+        if scene_depth < 1.0 {
+            let scene_z_max = view_z(scene_depth);
+            let scene_z_min = scene_z_max - params.thickness;
+            margin = margin.min(gap(ray_z_max, scene_z_min)).min(gap(ray_z_min, scene_z_max));
+            if ray_z_max >= scene_z_min && ray_z_min <= scene_z_max {
+                hit = true;
+                hit_pixel = ip;
+                hit_pos = px;
+                break;
+            }
+            if ray_z_max < scene_z_min {
+                went_behind = true;
+                break;
+            }
+        }
+        pp += dp;
+        qz += dq.z;
+        k += dk;
+        steps += 1;
+    }
+    if hit && params.stride > 1.0 {
+        let (mut a_p, mut b_p) = (pp - dp, pp);
+        let (mut a_qz, mut b_qz) = (qz - dq.z, qz);
+        let (mut a_k, mut b_k) = (k - dk, k);
+        let clamp_px = |v: Vec2| v.floor().as_ivec2().clamp(IVec2::ZERO, res - 1);
+        for _ in 0..SSR_REFINE_STEPS {
+            let m_p = 0.5 * (a_p + b_p);
+            let m_qz = 0.5 * (a_qz + b_qz);
+            let m_k = 0.5 * (a_k + b_k);
+            pixel_margin = pixel_margin.min(boundary_gap(swap_if(m_p, permute)));
+            let d = depth_at(clamp_px(swap_if(m_p, permute)));
+            if d < 1.0 {
+                margin = margin.min(gap(m_qz / m_k, view_z(d)));
+            }
+            if d < 1.0 && m_qz / m_k <= view_z(d) {
+                (b_p, b_qz, b_k) = (m_p, m_qz, m_k);
+            } else {
+                (a_p, a_qz, a_k) = (m_p, m_qz, m_k);
+            }
+        }
+        let (pa, pb) = (swap_if(a_p, permute), swap_if(b_p, permute));
+        let za = depth_at(clamp_px(pa));
+        let zb = depth_at(clamp_px(pb));
+        let gap_a = a_qz / a_k - view_z(za);
+        let gap_b = b_qz / b_k - view_z(zb);
+        // `gap_a > 0` decides whether the secant is used at all.
+        margin = margin.min(gap(a_qz / a_k, view_z(za)));
+        let f = if za < 1.0 && gap_a > 0.0 {
+            (gap_a / (gap_a - gap_b)).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        hit_pos = mix(pa, pb, f);
+        pixel_margin = pixel_margin.min(boundary_gap(hit_pos));
+        hit_pixel = hit_pos.floor().as_ivec2().clamp(IVec2::ZERO, res - 1);
+    }
+
+    let fail;
+    let (mut confidence, mut color) = (0.0, Vec3::ZERO);
+    if !hit {
+        let left = steps < params.max_steps;
+        fail = if went_behind {
+            FAIL_BEHIND
+        } else if left {
+            FAIL_LEFT_SCREEN
+        } else {
+            FAIL_OUT_OF_STEPS
+        };
+    } else {
+        let hit_nr = inputs.normal[at(hit_pixel)];
+        let hit_n = Vec3::new(hit_nr[0], hit_nr[1], hit_nr[2]).normalize();
+        let world_dir = Mat3::from_mat4(frame.view).transpose() * vdir;
+        margin = margin.min(hit_n.dot(world_dir).abs());
+        if hit_n.dot(world_dir) > 0.0 {
+            fail = FAIL_BACK_FACE;
+        } else if hit_nr[3] > params.recursion_min {
+            fail = FAIL_HIT_REFLECTIVE;
+        } else {
+            let hp = hit_pixel.as_vec2() + 0.5;
+            let edge = hp.x.min(res.x as f32 - hp.x).min(hp.y.min(res.y as f32 - hp.y));
+            let fade_px = (params.edge_fade * res.x.min(res.y) as f32).max(1.0);
+            confidence = (edge / fade_px).clamp(0.0, 1.0) * heading_confidence(vdir);
+            margin = margin.min(gap(confidence, params.min_confidence));
+            if confidence < params.min_confidence {
+                fail = FAIL_LOW_CONFIDENCE;
+            } else {
+                color = lit_bilinear(inputs.lit, hit_pos, res);
+                fail = if confidence < 1.0 { FAIL_BLEND } else { 0 };
+            }
+        }
+    }
+    let kept = fail == 0 || fail == FAIL_BLEND;
+    March {
+        fail,
+        color: [color.x, color.y, color.z, if kept { confidence } else { 0.0 }],
+        hit_pixel: hit.then_some(hit_pixel),
+        steps,
+        margin,
+        pixel_margin,
+    }
+}
+
+/// The lit colour at sub-pixel position `x` (texel centres at +0.5), bilinear, edges
+/// clamped.
+fn lit_bilinear(lit: &[[f32; 4]], x: Vec2, res: IVec2) -> Vec3 {
+    let t = x - 0.5;
+    let i0 = t.floor().as_ivec2();
+    let f = t - i0.as_vec2();
+    let lo = i0.clamp(IVec2::ZERO, res - 1);
+    let hi = (i0 + 1).clamp(IVec2::ZERO, res - 1);
+    let c = |q: IVec2| Vec4::from(lit[(q.y * res.x + q.x) as usize]).xyz();
+    let (c00, c10) = (c(lo), c(IVec2::new(hi.x, lo.y)));
+    let (c01, c11) = (c(IVec2::new(lo.x, hi.y)), c(hi));
+    mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y)
 }

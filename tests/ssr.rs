@@ -27,6 +27,70 @@ use speculum::vk::{barrier, Image};
 const POISON_MASK: u32 = 0xdead_beef;
 const POISON_COLOR: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
 
+/// A random G-buffer (its depth reshaped by `depth`) and lit image on the GPU, with
+/// the frame of `room` at w x h and an SSR pass to run over them.
+struct Fixture {
+    settings: speculum::Settings,
+    frame: speculum::gpu_types::FrameUniforms,
+    g: common::RandomGBuffer,
+    gb: GBuffer,
+    lit_texels: Vec<[f32; 4]>,
+    lit: Image,
+    ubo: speculum::vk::Buffer,
+    pass: SsrPass,
+}
+
+impl Fixture {
+    fn new(
+        ctx: &std::sync::Arc<speculum::vk::Context>,
+        seed: u64,
+        w: u32,
+        h: u32,
+        depth: impl FnOnce(&mut [f32]),
+    ) -> Self {
+        let mut rng = common::rng(seed);
+        let scene = speculum::scene::procedural::room().unwrap();
+        let settings = speculum::Settings {
+            width: w,
+            height: h,
+            ..Default::default()
+        };
+        let frame = speculum::renderer::frame_uniforms(&scene, &settings);
+        let n = (w * h) as usize;
+        let extent = vk::Extent2D { width: w, height: h };
+        let mut g = common::random_gbuffer(&mut rng, n);
+        depth(&mut g.depth);
+        let gb = GBuffer::new(ctx, extent).unwrap();
+        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
+        gb.normal.write(&g.normal_bytes, ro).unwrap();
+        gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
+        let lit_texels: Vec<[f32; 4]> = (0..n)
+            .map(|_| {
+                [
+                    rng.random_range(0.0..3.0),
+                    rng.random_range(0.0..1.0),
+                    rng.random_range(0.0..0.5),
+                    1.0,
+                ]
+            })
+            .collect();
+        let lit = Image::storage(ctx, "test.lit", extent, vk::Format::R32G32B32A32_SFLOAT).unwrap();
+        lit.write(bytemuck::cast_slice(&lit_texels), vk::ImageLayout::GENERAL)
+            .unwrap();
+        Self {
+            ubo: common::frame_ubo(ctx, &frame),
+            pass: SsrPass::new(ctx, extent).unwrap(),
+            settings,
+            frame,
+            g,
+            gb,
+            lit_texels,
+            lit,
+        }
+    }
+}
+
 /// Every pixel classifies as the CPU says: not reflective (mask 0), failed on its
 /// heading (FAIL_LOW_CONFIDENCE) or listed for the march, each exactly once; listed
 /// pixels are left to the march (their poison stays); the dispatch arguments cover the
@@ -37,42 +101,12 @@ const POISON_COLOR: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
 #[test]
 fn classify_matches_cpu_and_the_march_covers_its_list() {
     let ctx = common::context();
-    let mut rng = common::rng(77);
-    let scene = speculum::scene::procedural::room().unwrap();
-    let settings = speculum::Settings {
-        width: 157,
-        height: 83,
-        ..Default::default()
-    };
-    let frame = speculum::renderer::frame_uniforms(&scene, &settings);
+    let f = Fixture::new(&ctx, 77, 157, 83, |_| {});
+    let (frame, g, gb, lit, ubo, pass, settings) = (&f.frame, &f.g, &f.gb, &f.lit, &f.ubo, &f.pass, &f.settings);
     let (w, h) = (settings.width as usize, settings.height as usize);
     let n = w * h;
-    let extent = vk::Extent2D {
-        width: w as u32,
-        height: h as u32,
-    };
-    let g = common::random_gbuffer(&mut rng, n);
-    let gb = GBuffer::new(&ctx, extent).unwrap();
-    let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
     let general = vk::ImageLayout::GENERAL;
-    gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
-    gb.normal.write(&g.normal_bytes, ro).unwrap();
-    gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
-    let lit_texels: Vec<[f32; 4]> = (0..n)
-        .map(|_| [rng.random_range(0.0..3.0), rng.random_range(0.0..1.0), 0.5, 1.0])
-        .collect();
-    let lit = Image::new(
-        &ctx,
-        "test.lit",
-        extent,
-        vk::Format::R32G32B32A32_SFLOAT,
-        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
-    )
-    .unwrap();
-    lit.write(bytemuck::cast_slice(&lit_texels), general).unwrap();
-    let ubo = common::frame_ubo(&ctx, &frame);
-    let pass = SsrPass::new(&ctx, extent).unwrap();
-    let params = SsrParams::from_settings(&settings);
+    let params = SsrParams::from_settings(settings);
 
     for (mask_only, march) in [(false, false), (true, false), (false, true)] {
         let out = &pass.out;
@@ -87,9 +121,9 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
             .unwrap();
         out.march_args.write(&[0xcdu8; 16]).unwrap();
         ctx.one_shot(|cmd| {
-            pass.classify(cmd, &ubo, &gb, &params, mask_only);
+            pass.classify(cmd, ubo, gb, &params, mask_only);
             if march {
-                pass.trace(cmd, &ubo, &gb, &lit, &params);
+                pass.trace(cmd, ubo, gb, lit, &params);
             }
             // RAW: the readback copies see the shaders' writes.
             let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
@@ -119,14 +153,8 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
         for i in 0..n {
             let p = IVec2::new((i % w) as i32, (i / w) as i32);
             let texel = (g.depth[i], g.normal[i], g.material[i]);
-            let (want, heading) = ssr::classify(
-                &frame,
-                p,
-                texel,
-                params.min_confidence,
-                params.reflective_min,
-                mask_only,
-            );
+            let (want, heading) =
+                ssr::classify(frame, p, texel, params.min_confidence, params.reflective_min, mask_only);
             let got = if listed[i] { Class::March } else { Class::Done(mask[i]) };
             if got != want && (heading - params.min_confidence).abs() < 1e-4 {
                 borderline += 1;
@@ -248,55 +276,27 @@ fn listed_pixels(raw: &[u32], len: usize) -> Vec<IVec2> {
 #[test]
 fn march_matches_cpu_on_a_random_gbuffer() {
     let ctx = common::context();
-    let mut rng = common::rng(91);
-    let scene = speculum::scene::procedural::room().unwrap();
-    let settings = speculum::Settings {
-        width: 131,
-        height: 77,
-        ..Default::default()
-    };
-    let frame = speculum::renderer::frame_uniforms(&scene, &settings);
-    let n = (settings.width * settings.height) as usize;
-    let extent = vk::Extent2D {
-        width: settings.width,
-        height: settings.height,
-    };
-    let mut g = common::random_gbuffer(&mut rng, n);
     // Smooth depth in patches (with sky holes) so rays march some steps before they hit
     // or pass behind: per-pixel noise would end nearly every ray at its first step.
-    let (w, h) = (settings.width as usize, settings.height as usize);
-    for y in 0..h {
-        for x in 0..w {
-            let patch = ((x / 16) + 7 * (y / 16)) % 5;
-            let d = 0.95 + 0.008 * patch as f32 + 0.0004 * ((x % 16) as f32 - (y % 16) as f32);
-            g.depth[y * w + x] = if patch == 4 && x % 16 < 5 { 1.0 } else { d };
+    let (w, h) = (131usize, 77usize);
+    let f = Fixture::new(&ctx, 91, w as u32, h as u32, |depth| {
+        for y in 0..h {
+            for x in 0..w {
+                let patch = ((x / 16) + 7 * (y / 16)) % 5;
+                let d = 0.95 + 0.008 * patch as f32 + 0.0004 * ((x % 16) as f32 - (y % 16) as f32);
+                depth[y * w + x] = if patch == 4 && x % 16 < 5 { 1.0 } else { d };
+            }
         }
-    }
-    let gb = GBuffer::new(&ctx, extent).unwrap();
-    let (ro, general) = (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, vk::ImageLayout::GENERAL);
-    gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
-    gb.normal.write(&g.normal_bytes, ro).unwrap();
-    gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
-    let lit_texels: Vec<[f32; 4]> = (0..n)
-        .map(|_| {
-            [
-                rng.random_range(0.0..3.0),
-                rng.random_range(0.0..1.0),
-                rng.random_range(0.0..0.5),
-                1.0,
-            ]
-        })
-        .collect();
-    let lit = Image::storage(&ctx, "test.lit", extent, vk::Format::R32G32B32A32_SFLOAT).unwrap();
-    lit.write(bytemuck::cast_slice(&lit_texels), general).unwrap();
-    let ubo = common::frame_ubo(&ctx, &frame);
-    let pass = SsrPass::new(&ctx, extent).unwrap();
+    });
+    let (frame, g, gb, ubo, pass, settings) = (&f.frame, &f.g, &f.gb, &f.ubo, &f.pass, &f.settings);
+    let n = w * h;
+    let general = vk::ImageLayout::GENERAL;
     // A short budget, so rays also run out of steps; a recursion threshold that
     // lets random reflectivities both pass and fail.
     let params = SsrParams {
         recursion_min: 0.6,
         max_steps: 5,
-        ..SsrParams::from_settings(&settings)
+        ..SsrParams::from_settings(settings)
     };
     let out = &pass.out;
     out.mask
@@ -306,8 +306,8 @@ fn march_matches_cpu_on_a_random_gbuffer() {
         .write(bytemuck::cast_slice(&vec![POISON_COLOR; n]), general)
         .unwrap();
     ctx.one_shot(|cmd| {
-        pass.classify(cmd, &ubo, &gb, &params, false);
-        pass.trace(cmd, &ubo, &gb, &lit, &params);
+        pass.classify(cmd, ubo, gb, &params, false);
+        pass.trace(cmd, ubo, gb, &f.lit, &params);
     })
     .unwrap();
     let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
@@ -317,10 +317,10 @@ fn march_matches_cpu_on_a_random_gbuffer() {
     let inputs = ssr::MarchInputs {
         depth: &g.depth,
         normal: &g.normal,
-        lit: &lit_texels,
+        lit: &f.lit_texels,
     };
     let c = compare_march(
-        &frame,
+        frame,
         &inputs,
         &params,
         &listed_pixels(&list, args[3] as usize),

@@ -61,7 +61,7 @@ struct ClassifyPush {
 /// Push constants of `ssr_trace.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct TracePush {
+struct MarchPush {
     max_steps: u32,
     stride: f32,
     thickness: f32,
@@ -109,7 +109,7 @@ impl SsrPass {
             ctx: ctx.clone(),
             classify: Pipeline::compute::<ClassifyPush>(ctx, CLASSIFY_NAME, classify)?,
             mask_only: Pipeline::compute_specialized::<ClassifyPush>(ctx, "ssr.mask_only", classify, &[1])?,
-            trace: Pipeline::compute::<TracePush>(ctx, NAME, shaders::SSR_TRACE_COMP)?,
+            trace: Pipeline::compute::<MarchPush>(ctx, NAME, shaders::SSR_TRACE_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "ssr.sampler")?,
             out: SsrOutputs::new(ctx, extent)?,
         })
@@ -198,7 +198,7 @@ impl SsrPass {
                 Resource::Buffer(&out.march_list),
                 Resource::Buffer(&out.march_args),
             ],
-            &TracePush {
+            &MarchPush {
                 max_steps: params.max_steps,
                 stride: params.stride,
                 thickness: params.thickness,

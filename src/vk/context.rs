@@ -204,6 +204,17 @@ fn check_device(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::result
     if f13.synchronization2 == 0 || f13.dynamic_rendering == 0 {
         return Err("no synchronization2 or dynamic rendering".into());
     }
+    // The list kernels aggregate their atomics per subgroup (ballot, elect, broadcast,
+    // subgroupOr), whatever the subgroup's size.
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+    unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
+    let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::BALLOT | vk::SubgroupFeatureFlags::ARITHMETIC;
+    if !subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+        || !subgroup.supported_operations.contains(ops)
+    {
+        return Err("no basic, ballot and arithmetic subgroup operations in compute shaders".into());
+    }
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     families
         .iter()

@@ -29,6 +29,6 @@ void main() {
         running += c;
     }
     if (l == 0u) {
-        indirect = uvec4((total + RT_LIST_WG - 1u) / RT_LIST_WG, 1u, 1u, total);
+        indirect = uvec4(list_groups((total + RT_LIST_WG - 1u) / RT_LIST_WG), 1u, total);
     }
 }

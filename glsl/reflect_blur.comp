@@ -13,6 +13,7 @@
 // scratch is never written, and its reflection never changes). No texel is both read
 // and written by different workgroups of one pass.
 #include "frame.glsl"
+#include "pixel_list.glsl"
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
 
@@ -20,6 +21,7 @@ layout(binding = 1, rgba32f) uniform image2D reflection;
 layout(binding = 2, rgba32f) uniform image2D scratch;
 layout(binding = 3, std430) readonly buffer TileActive { uint tile_active[]; };
 layout(binding = 4, std430) readonly buffer TileList { uint tile_list[]; };
+layout(binding = 5, std430) readonly buffer BlurArgs { uvec4 blur_args; }; // w: tiles listed
 
 layout(push_constant) uniform Push {
     ivec2 axis;  // (1, 0): horizontal pass; (0, 1): vertical pass
@@ -38,7 +40,11 @@ vec4 source_at(ivec2 q) {
 }
 
 void main() {
-    int t = int(tile_list[gl_WorkGroupID.x]);
+    uint w = list_workgroup(); // one workgroup per listed tile
+    if (w >= blur_args.w) {
+        return; // the last row of a 2D dispatch (the whole workgroup alike)
+    }
+    int t = int(tile_list[w]);
     int tiles_x = tile_grid().x;
     ivec2 p = ivec2(t % tiles_x, t / tiles_x) * int(WG_2D) + ivec2(gl_LocalInvocationID.xy);
     ivec2 res = ivec2(frame.resolution);

@@ -8,6 +8,7 @@
 // whose length is the indirect dispatch of the blur (one workgroup per tile), so the
 // blur costs nothing where there is no seam. Mirrored by cpu_ref::merge::active_tiles.
 #include "frame.glsl"
+#include "pixel_list.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -15,7 +16,8 @@ layout(binding = 1, std430) readonly buffer TileSources { uint tile_sources[]; }
 layout(binding = 2, std430) writeonly buffer TileActive { uint tile_active[]; };
 layout(binding = 3, std430) writeonly buffer TileList { uint tile_list[]; };
 // VkDispatchIndirectCommand of the blur; x (the list's length) is zeroed before.
-layout(binding = 4, std430) buffer BlurArgs { uint blur_args[3]; };
+// x, y, z: the blur's indirect dispatch (list_groups of the tile count); w: the count.
+layout(binding = 4, std430) buffer BlurArgs { uvec4 blur_args; };
 
 layout(push_constant) uniform Push {
     int band; // half-width of the seam band in pixels
@@ -44,7 +46,10 @@ void main() {
     uint n = subgroupBallotBitCount(ballot);
     uint base = 0u;
     if (subgroupElect() && n > 0u) {
-        base = atomicAdd(blur_args[0], n);
+        base = atomicAdd(blur_args.w, n);
+        uvec2 groups = list_groups(base + n);
+        atomicMax(blur_args.x, groups.x);
+        atomicMax(blur_args.y, groups.y);
     }
     base = subgroupBroadcastFirst(base);
     if (is_active) {

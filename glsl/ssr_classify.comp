@@ -60,7 +60,9 @@ void main() {
     uint base = 0u;
     if (subgroupElect() && n > 0u) {
         base = atomicAdd(march_args.w, n);
-        atomicMax(march_args.x, (base + n + SSR_LIST_WG - 1u) / SSR_LIST_WG);
+        uvec2 groups = list_groups((base + n + SSR_LIST_WG - 1u) / SSR_LIST_WG);
+        atomicMax(march_args.x, groups.x);
+        atomicMax(march_args.y, groups.y);
     }
     base = subgroupBroadcastFirst(base);
     if (march) {

@@ -70,6 +70,12 @@ pub const SSR_LIST_WG: u32 = 64;
 /// workgroups gets an even share of the list.
 pub const LIST_STRIPES: u32 = 16;
 
+/// Most workgroups a list kernel's indirect dispatch puts along x: Vulkan's guaranteed
+/// minimum of `maxComputeWorkGroupCount[0]` (lavapipe's limit). Longer lists spread over
+/// y as well (`list_groups` in `glsl/shared/pixel_list.glsl`), so a list of any length a
+/// frame can hold is dispatched on any device.
+pub const LIST_GROUPS_X: u32 = 65535;
+
 /// Pixels of one row (or column) segment that a `reflect.merge` blur workgroup owns.
 pub const BLUR_LINE: u32 = 64;
 /// Largest seam-blur radius and band (pixels): the shared-memory apron of a blur
@@ -127,6 +133,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("SSR_REFINE_STEPS", SSR_REFINE_STEPS),
     ("SSR_LIST_WG", SSR_LIST_WG),
     ("LIST_STRIPES", LIST_STRIPES),
+    ("LIST_GROUPS_X", LIST_GROUPS_X),
     ("BLUR_LINE", BLUR_LINE),
     ("BLUR_MAX_EXTENT", BLUR_MAX_EXTENT),
     ("FAIL_LEFT_SCREEN", FAIL_LEFT_SCREEN),

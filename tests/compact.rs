@@ -50,7 +50,10 @@ fn compaction_matches_cpu_on_random_masks() {
             let args: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.indirect.read().unwrap());
             assert_eq!(
                 args,
-                [(want.len() as u32).div_ceil(RT_LIST_WG), 1, 1, want.len() as u32],
+                {
+                    let [x, y] = speculum::passes::list_groups((want.len() as u32).div_ceil(RT_LIST_WG));
+                    [x, y, 1, want.len() as u32]
+                },
                 "{w}x{h} density {density}"
             );
             let got: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.pixels.read().unwrap());

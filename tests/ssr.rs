@@ -27,7 +27,7 @@ use speculum::vk::{barrier, Image};
 const POISON_MASK: u32 = 0xdead_beef;
 const POISON_COLOR: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
 
-/// A random G-buffer (its depth reshaped by `depth`) and lit image on the GPU, with
+/// A random G-buffer (reshaped by `shape`) and lit image on the GPU, with
 /// the frame of `room` at w x h and an SSR pass to run over them.
 struct Fixture {
     settings: speculum::Settings,
@@ -46,7 +46,7 @@ impl Fixture {
         seed: u64,
         w: u32,
         h: u32,
-        depth: impl FnOnce(&mut [f32]),
+        shape: impl FnOnce(&mut common::RandomGBuffer),
     ) -> Self {
         let mut rng = common::rng(seed);
         let scene = speculum::scene::procedural::room().unwrap();
@@ -59,7 +59,10 @@ impl Fixture {
         let n = (w * h) as usize;
         let extent = vk::Extent2D { width: w, height: h };
         let mut g = common::random_gbuffer(&mut rng, n);
-        depth(&mut g.depth);
+        shape(&mut g);
+        // The normals as the GPU will read them (rounded through RGBA16F).
+        g.normal_bytes = speculum::cpu_ref::f32_to_rgba16f(&g.normal);
+        g.normal = speculum::cpu_ref::rgba16f_to_f32(&g.normal_bytes);
         let gb = GBuffer::new(ctx, extent).unwrap();
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
@@ -136,11 +139,8 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
         let list_raw: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
         let len = args[3] as usize;
         assert!(len <= n, "list length {len}");
-        assert_eq!(
-            args[..3],
-            [len.div_ceil(SSR_LIST_WG as usize) as u32, 1, 1],
-            "dispatch arguments"
-        );
+        let [x, y] = speculum::passes::list_groups(len.div_ceil(SSR_LIST_WG as usize) as u32);
+        assert_eq!(args[..3], [x, y, 1], "dispatch arguments");
         let mut listed = vec![false; n];
         for &e in &list_raw[..len] {
             let (x, y) = ((e & 0xffff) as usize, (e >> 16) as usize);
@@ -279,7 +279,8 @@ fn march_matches_cpu_on_a_random_gbuffer() {
     // Smooth depth in patches (with sky holes) so rays march some steps before they hit
     // or pass behind: per-pixel noise would end nearly every ray at its first step.
     let (w, h) = (131usize, 77usize);
-    let f = Fixture::new(&ctx, 91, w as u32, h as u32, |depth| {
+    let f = Fixture::new(&ctx, 91, w as u32, h as u32, |g| {
+        let depth = &mut g.depth;
         for y in 0..h {
             for x in 0..w {
                 let patch = ((x / 16) + 7 * (y / 16)) % 5;
@@ -402,5 +403,49 @@ fn march_matches_cpu_on_room() {
             "outcome {reason:#x}: {c:?}"
         );
     }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// A march list longer than `LIST_GROUPS_X` workgroups (every device's dispatch limit
+/// along x) is dispatched over x and y, and every listed pixel is marched.
+#[test]
+fn a_march_list_beyond_one_row_of_workgroups_is_covered() {
+    use speculum::shader_defines::LIST_GROUPS_X;
+    let ctx = common::context();
+    let (w, h) = (2200u32, 1920u32);
+    // Every pixel a mirror-like floor (normal up, away-heading rays): nearly all listed.
+    let f = Fixture::new(&ctx, 5, w, h, |g| {
+        for (i, n) in g.normal.iter_mut().enumerate() {
+            *n = [0.0, 1.0, 0.0, 0.9];
+            g.material[i] = 0;
+        }
+    });
+    let n = (w * h) as usize;
+    let general = vk::ImageLayout::GENERAL;
+    let out = &f.pass.out;
+    out.mask
+        .write(bytemuck::cast_slice(&vec![POISON_MASK; n]), general)
+        .unwrap();
+    let params = SsrParams::from_settings(&f.settings);
+    ctx.one_shot(|cmd| {
+        f.pass.classify(cmd, &f.ubo, &f.gb, &params, false);
+        f.pass.trace(cmd, &f.ubo, &f.gb, &f.lit, &params);
+    })
+    .unwrap();
+    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
+    let len = args[3] as usize;
+    let groups = len.div_ceil(SSR_LIST_WG as usize);
+    assert!(
+        groups > LIST_GROUPS_X as usize,
+        "{groups} workgroups: the list must need a second row"
+    );
+    assert_eq!(args[..3], [LIST_GROUPS_X, 2, 1]);
+    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
+    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
+    let unmarched = listed_pixels(&list, len)
+        .iter()
+        .filter(|p| mask[(p.y as u32 * w + p.x as u32) as usize] == POISON_MASK)
+        .count();
+    assert_eq!(unmarched, 0, "listed pixels the march never reached");
     common::assert_no_validation_messages(&ctx);
 }

@@ -10,6 +10,18 @@ ivec2 unpack_pixel(uint packed) {
     return ivec2(packed & 0xffffu, packed >> 16);
 }
 
+// The indirect dispatch size (x, y) of `groups` workgroups: at most LIST_GROUPS_X along
+// x (the limit every device has), the rest over y. Each component is non-decreasing in
+// `groups`, so kernels that append to a list may atomicMax them as the list grows.
+uvec2 list_groups(uint groups) {
+    return uvec2(min(groups, LIST_GROUPS_X), max((groups + LIST_GROUPS_X - 1u) / LIST_GROUPS_X, 1u));
+}
+
+// This workgroup's index in a dispatch sized by `list_groups` (row-major over x, y).
+uint list_workgroup() {
+    return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+}
+
 // The list entry of this invocation, for kernels dispatched with one invocation per
 // entry (1D workgroups of `wg_size`; `gl_WorkGroupSize` is not yet known where this is
 // included), covering the list's `length` entries. lavapipe hands each of its threads
@@ -20,10 +32,11 @@ ivec2 unpack_pixel(uint packed) {
 // workgroup-sized chunks in a striped order: of LIST_STRIPES equal stripes, workgroup
 // w takes chunk w / LIST_STRIPES of stripe w % LIST_STRIPES, so any contiguous range of
 // workgroups holds an even share of every stripe. Chunks past the last whole stripe
-// keep their place; entries within a chunk stay consecutive (coherent SIMD groups).
+// keep their place, as do workgroups past the list's end (a 2D dispatch's last row);
+// entries within a chunk stay consecutive (coherent SIMD groups).
 // GPUs schedule workgroups dynamically and lose nothing by it.
 uint list_entry(uint length, uint wg_size) {
-    uint n = (length + wg_size - 1u) / wg_size, w = gl_WorkGroupID.x;
+    uint n = (length + wg_size - 1u) / wg_size, w = list_workgroup();
     uint per_stripe = n / LIST_STRIPES;
     uint chunk = w < per_stripe * LIST_STRIPES ? (w % LIST_STRIPES) * per_stripe + w / LIST_STRIPES : w;
     return chunk * wg_size + gl_LocalInvocationID.x;

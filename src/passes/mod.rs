@@ -1,6 +1,11 @@
 //! One file per pass. A pass owns its pipeline and its output images and records its
-//! own commands; it knows nothing of the other passes. Layout transitions and the
-//! barriers between passes belong to `renderer.rs`.
+//! own commands; it knows nothing of the other passes beyond the names of its outputs'
+//! readers. Barrier rule: a pass's `record` begins with the barriers that make its
+//! outputs writable (the previous frame's readers done; attachments moved to their
+//! attachment layout) and ends with the barrier that makes them visible to the readers
+//! its documentation names. Storage images stay in `GENERAL` from creation
+//! (`Image::storage`), so compute passes need memory barriers only. `renderer.rs`
+//! records only what spans passes (the uniform upload) and the timer scopes.
 
 pub mod compose;
 pub mod gbuffer;
@@ -33,6 +38,13 @@ pub(crate) fn set_viewport(device: &ash::Device, cmd: vk::CommandBuffer, extent:
         device.cmd_set_viewport(cmd, 0, &[viewport]);
         device.cmd_set_scissor(cmd, 0, &[scissor]);
     }
+}
+
+/// `list_groups` of `glsl/shared/pixel_list.glsl`: the (x, y) workgroup counts of a
+/// list kernel's indirect dispatch over `groups` workgroups.
+pub fn list_groups(groups: u32) -> [u32; 2] {
+    use crate::shader_defines::LIST_GROUPS_X;
+    [groups.min(LIST_GROUPS_X), groups.div_ceil(LIST_GROUPS_X).max(1)]
 }
 
 /// The scene's GPU geometry, as raster passes draw it.

@@ -63,7 +63,8 @@ struct Targets {
     tile_active: Buffer,
     /// The active tiles' indices (row-major tile index), in no particular order.
     tile_list: Buffer,
-    /// `[groups_x, 1, 1]`: the blur's indirect dispatch (one workgroup per listed tile).
+    /// `[groups_x, groups_y, 1, count]`: the blur's indirect dispatch (one workgroup per
+    /// listed tile, `list_groups` of the count), then the count.
     blur_args: Buffer,
     tiles: u32,
 }
@@ -78,7 +79,7 @@ impl Targets {
             tile_sources: buffer("reflect.tile_sources", tiles * 4)?,
             tile_active: buffer("reflect.tile_active", tiles * 4)?,
             tile_list: buffer("reflect.tile_list", tiles * 4)?,
-            blur_args: buffer("reflect.blur_args", 12)?,
+            blur_args: buffer("reflect.blur_args", 16)?,
             tiles: tiles as u32,
         })
     }
@@ -122,7 +123,7 @@ impl MergePass {
         let active: Vec<u32> = bytemuck::pod_collect_to_vec(&t.tile_active.read()?);
         let args: Vec<u32> = bytemuck::pod_collect_to_vec(&t.blur_args.read()?);
         let listed: Vec<u32> = bytemuck::pod_collect_to_vec(&t.tile_list.read()?);
-        let mut listed = listed[..(args[0] as usize).min(t.tiles as usize)].to_vec();
+        let mut listed = listed[..(args[3] as usize).min(t.tiles as usize)].to_vec();
         listed.sort_unstable();
         Ok((active.iter().map(|&a| a != 0).collect(), listed))
     }
@@ -209,7 +210,7 @@ impl MergePass {
             ],
             &[],
         );
-        let args: [u32; 3] = [0, 1, 1];
+        let args: [u32; 4] = [0, 1, 1, 0];
         unsafe { d.cmd_update_buffer(cmd, t.blur_args.raw, 0, bytemuck::bytes_of(&args)) };
         // RAW: the tile pass's atomics see the zeroed count.
         barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
@@ -252,6 +253,7 @@ impl MergePass {
                     Resource::StorageImage(&t.scratch),
                     Resource::Buffer(&t.tile_active),
                     Resource::Buffer(&t.tile_list),
+                    Resource::Buffer(&t.blur_args),
                 ],
                 &push,
                 Groups::Indirect(&t.blur_args),

@@ -35,8 +35,8 @@ struct CompactPush {
 pub struct CompactOutputs {
     /// One `u32` per listed pixel: `x | y << 16`.
     pub pixels: Buffer,
-    /// `[groups_x, 1, 1, count]`: a `VkDispatchIndirectCommand` for `RT_LIST_WG`-wide
-    /// workgroups, then the number of listed pixels.
+    /// `[groups_x, groups_y, 1, count]`: a `VkDispatchIndirectCommand` for `RT_LIST_WG`-wide
+    /// workgroups (`list_groups`), then the number of listed pixels.
     pub indirect: Buffer,
     tile_counts: Buffer,
     extent: vk::Extent2D,

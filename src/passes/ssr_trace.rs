@@ -77,7 +77,8 @@ pub struct SsrOutputs {
     pub mask: Image,
     /// The pixels to march (packed x | y << 16), in no particular order.
     pub march_list: Buffer,
-    /// `[groups_x, 1, 1, length]`: ssr.trace's indirect dispatch and the list's length.
+    /// `[groups_x, groups_y, 1, length]`: ssr.trace's indirect dispatch (`list_groups`
+    /// of the workgroups the list needs) and the list's length.
     pub march_args: Buffer,
 }
 

@@ -1,8 +1,11 @@
 //! Speculum: a real-time hybrid reflection renderer on raw Vulkan.
 //!
-//! Layout: `vk` is Vulkan plumbing only; `passes` holds one file per pass; `renderer`
-//! records a frame top to bottom; `scene` loads and builds scenes; `cpu_ref` mirrors
-//! every GPU kernel on the CPU for tests. See DESIGN.md in the shared folder.
+//! Layout: `vk` is Vulkan plumbing only; `passes` holds one file per pass (each placing
+//! its own barriers); `renderer` records a frame top to bottom; `limits` checks a frame
+//! against the device before any GPU work; `scene` loads and builds scenes; `cpu_ref`
+//! mirrors every GPU kernel on the CPU for tests; `report` is the JSON schema every
+//! report follows, `output` writes files all-or-none; `headless` and `bench` drive the
+//! renderer for the command line. See DESIGN.md in the shared folder.
 
 pub mod aabb;
 pub mod bench;

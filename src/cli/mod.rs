@@ -135,11 +135,11 @@ impl Text {
     }
 }
 
-/// A progress bar on stderr for `total` steps; hidden when stderr is not a terminal or
-/// with `--quiet`.
+/// A progress bar on stderr for `total` steps; hidden with `--quiet` and when stdout or
+/// stderr is not a terminal (output piped to a file or a program).
 pub fn progress(total: u64, what: &str, quiet: bool) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-    if quiet || !std::io::stderr().is_terminal() {
+    if quiet || !std::io::stdout().is_terminal() || !std::io::stderr().is_terminal() {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
     bar.set_style(

@@ -1,6 +1,7 @@
 //! `rt.trace`: closest-hit or any-hit traversal of the static and the dynamic BVH for a
-//! list of rays. Usable on its own (`TracePass::trace`) for tests and benchmarks; the
-//! reflection passes record it over their compacted ray lists.
+//! list of rays. Usable on its own (`TracePass::trace`) for tests and benchmarks;
+//! `rt.reflect` walks the same BVHs with the same traversal (`glsl/shared/traverse.glsl`)
+//! from its own kernel, and binds them through `TraceScene::bindings`.
 
 use super::lbvh::{Bvh, Geometry};
 use crate::error::{Error, Result};

@@ -50,7 +50,9 @@ pub enum Error {
     #[error("{0}")]
     Input(String),
     /// A scene name that no built-in scene has.
-    #[error("unknown scene '{name}' (built-in scenes: {known}; or give a path to an .obj file)")]
+    #[error(
+        "unknown scene '{name}' (built-in scenes: {known}; or give a path to a .toml scene file or an .obj model)"
+    )]
     UnknownScene { name: String, known: String },
     /// A file that should exist does not, or cannot be read.
     #[error("cannot read {what} '{path}': {source}")]

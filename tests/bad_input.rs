@@ -486,3 +486,53 @@ fn compare_rejects_bad_images() {
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
     }
 }
+
+/// Scene files: a bad field names the file and its line, an unsupported extension lists
+/// the supported ones, a missing model names its path; each one line, exit 1.
+#[test]
+fn bad_scene_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = write(
+        dir.path(),
+        "bad.toml",
+        "[camera]\nposition = [0, 1, 5]\ntarget = [0, 0, 0]\nfovv = 50\n",
+    );
+    assert_fails(&["--scene", &bad], dir.path(), &["bad.toml", "line 4", "fovv"]);
+    let ply = write(dir.path(), "m.ply", "ply\n");
+    assert_fails(
+        &["--scene", &ply],
+        dir.path(),
+        &["unsupported scene format '.ply'", ".toml, .obj"],
+    );
+    let room = include_str!("../assets/scenes/room.toml");
+    let missing = write(
+        dir.path(),
+        "missing.toml",
+        &format!("{room}\n[[instance]]\nmodel = \"nowhere/teapot.obj\"\n"),
+    );
+    assert_fails(
+        &["--scene", &missing],
+        dir.path(),
+        &["nowhere/teapot.obj", "No such file"],
+    );
+}
+
+/// A scene file places an OBJ model (moved, scaled, its material replaced) among
+/// primitives, and renders.
+#[test]
+fn scene_file_with_a_model_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "cube.obj", CUBE_FACES);
+    let room = include_str!("../assets/scenes/room.toml");
+    let scene = write(
+        dir.path(),
+        "mine.toml",
+        &format!("{room}\n[[instance]]\nmodel = \"cube.obj\"\nmaterial = \"gold\"\ntranslate = [0, 2, 0]\nscale = [2, 2, 1]\n"),
+    );
+    let (ok, stderr) = run(&["--scene", &scene], dir.path());
+    assert!(ok, "{stderr}");
+    let s = speculum::scene::load(&scene).unwrap();
+    let base = speculum::scene::builtin::room().unwrap();
+    assert_eq!(s.triangle_count(), base.triangle_count() + 2);
+    assert_eq!(s.name, "room", "the file's name");
+}

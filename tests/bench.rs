@@ -14,7 +14,7 @@ fn small_room() -> (speculum::scene::Scene, speculum::Settings) {
         height: 90,
         ..Default::default()
     };
-    (speculum::scene::procedural::room().unwrap(), settings)
+    (speculum::scene::builtin::room().unwrap(), settings)
 }
 
 #[test]

@@ -109,7 +109,7 @@ fn compose_matches_cpu_reference() {
 fn light_direct_matches_cpu_reference() {
     let ctx = common::context();
     let mut rng = common::rng(2);
-    let scene = speculum::scene::procedural::room().unwrap();
+    let scene = speculum::scene::builtin::room().unwrap();
     let settings = speculum::Settings {
         width: 45,
         height: 37,

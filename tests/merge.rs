@@ -33,7 +33,7 @@ fn merge_and_seam_blur_match_cpu_reference() {
         height: h as u32,
         ..Default::default()
     };
-    let scene = speculum::scene::procedural::room().unwrap();
+    let scene = speculum::scene::builtin::room().unwrap();
     let frame = speculum::renderer::frame_uniforms(&scene, &settings);
     let reflective_min = 0.3;
 

@@ -34,7 +34,7 @@ fn render(
 #[test]
 fn offscreen_objects_appear_in_hybrid_where_rt_puts_them() {
     let ctx = common::context();
-    let scene = speculum::scene::procedural::offscreen().unwrap();
+    let scene = speculum::scene::builtin::offscreen().unwrap();
     let images: Vec<Vec<u8>> = [Mode::Rt, Mode::Hybrid, Mode::Ssr]
         .iter()
         .map(|&m| render(&ctx, &scene, m, 320, 180).read_output().unwrap())
@@ -132,7 +132,7 @@ fn ssr_succeeds_when_the_reflected_object_is_on_screen() {
 #[test]
 fn provenance_colours_match_the_fail_mask() {
     let ctx = common::context();
-    let scene = speculum::scene::procedural::room().unwrap();
+    let scene = speculum::scene::builtin::room().unwrap();
     let r = render(&ctx, &scene, Mode::Provenance, 320, 180);
     let ldr = r.read_output().unwrap();
     let maps = r.reflection_maps().unwrap();
@@ -197,7 +197,7 @@ fn every_reflective_pixel_gets_a_reflection() {
 #[test]
 fn every_mode_on_every_scene_is_validation_clean() {
     let ctx = common::context();
-    for name in speculum::scene::procedural::NAMES {
+    for name in speculum::scene::builtin::NAMES {
         let scene = speculum::scene::load(name).unwrap();
         for mode in Mode::ALL {
             let r = render(&ctx, &scene, mode, 160, 90);

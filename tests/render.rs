@@ -95,7 +95,7 @@ const GOLDEN: &str = "tests/golden/room_192x108.png";
 #[test]
 fn room_matches_golden_image() {
     let ctx = common::context();
-    let scene = speculum::scene::procedural::room().unwrap();
+    let scene = speculum::scene::builtin::room().unwrap();
     let settings = Settings {
         width: 192,
         height: 108,
@@ -135,7 +135,7 @@ fn room_matches_golden_image() {
 #[test]
 fn resize_renders_what_a_fresh_renderer_renders() {
     let ctx = common::context();
-    let scene = speculum::scene::procedural::room().unwrap();
+    let scene = speculum::scene::builtin::room().unwrap();
     for mode in speculum::settings::Mode::ALL {
         let settings = Settings {
             width: 64,

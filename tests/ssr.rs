@@ -49,7 +49,7 @@ impl Fixture {
         shape: impl FnOnce(&mut common::RandomGBuffer),
     ) -> Self {
         let mut rng = common::rng(seed);
-        let scene = speculum::scene::procedural::room().unwrap();
+        let scene = speculum::scene::builtin::room().unwrap();
         let settings = speculum::Settings {
             width: w,
             height: h,
@@ -362,7 +362,7 @@ fn march_matches_cpu_on_a_random_gbuffer() {
 #[test]
 fn march_matches_cpu_on_room() {
     let ctx = common::context();
-    let scene = speculum::scene::procedural::room().unwrap();
+    let scene = speculum::scene::builtin::room().unwrap();
     let settings = speculum::Settings {
         width: 192,
         height: 108,

@@ -11,8 +11,9 @@ use std::path::PathBuf;
 /// Help for `--scene`, naming every built-in scene.
 pub fn scene_help() -> String {
     format!(
-        "Built-in scene ({}) or a path to an .obj file",
-        speculum::scene::procedural::NAMES.join(", ")
+        "Built-in scene ({}), a scene file (NAME for assets/scenes/NAME.toml, or a path \
+         to a .toml file) or a path to an .obj model",
+        speculum::scene::builtin::NAMES.join(", ")
     )
 }
 

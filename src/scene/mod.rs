@@ -1,13 +1,15 @@
 //! Scenes: triangles in world space, materials, a camera and a light.
 //!
-//! A scene comes from a built-in procedural builder (`procedural`) or an OBJ file
-//! (`obj`). Either way it is validated before the GPU sees it: at least one triangle,
-//! finite coordinates, indices in range.
+//! A scene comes from a scene file (`file`: TOML, primitives and models with
+//! transforms; the built-in scenes are such files, `builtin`) or an OBJ file (`obj`).
+//! Either way it is validated before the GPU sees it: at least one triangle, finite
+//! coordinates, indices in range.
 
+pub mod builtin;
 pub mod camera;
+pub mod file;
 pub mod geometry;
 pub mod obj;
-pub mod procedural;
 pub mod soup;
 
 pub use camera::Camera;
@@ -139,6 +141,36 @@ impl SceneBuilder {
         self
     }
 
+    /// Adds every triangle of `scene` moved by `transform`, with its own materials, or
+    /// all with `material` when given.
+    pub fn append(&mut self, scene: &Scene, transform: Mat4, material: Option<u32>) -> &mut Self {
+        let offset = self.scene.materials.len() as u32;
+        if material.is_none() {
+            self.scene.materials.extend(scene.materials.iter().cloned());
+        }
+        let normals = transform.inverse().transpose();
+        let base = self.scene.vertices.len() as u32;
+        self.scene.vertices.extend(scene.vertices.iter().map(|v| {
+            GpuVertex {
+                position: transform.transform_point3(Vec3::from(v.position)).to_array(),
+                material: material.unwrap_or(v.material + offset),
+                normal: normals
+                    .transform_vector3(Vec3::from(v.normal))
+                    .normalize_or(Vec3::Y)
+                    .to_array(),
+                _pad0: 0,
+            }
+        }));
+        self.scene.indices.extend(scene.indices.iter().map(|i| base + i));
+        self.scene.warnings.extend(scene.warnings.iter().cloned());
+        self
+    }
+
+    pub fn sky(&mut self, sky: Sky) -> &mut Self {
+        self.scene.sky = sky;
+        self
+    }
+
     pub fn camera(&mut self, camera: Camera) -> &mut Self {
         self.scene.camera = camera;
         self
@@ -222,20 +254,43 @@ impl Scene {
     }
 }
 
-/// Loads a scene by built-in name or from an `.obj` path.
+/// Scene file formats `load` reads, by extension.
+pub const FORMATS: &str = ".toml, .obj";
+
+/// Loads a scene: a built-in name, `assets/scenes/NAME.toml` under the current folder,
+/// or a path to a scene file (`.toml`) or a model (`.obj`).
 pub fn load(name_or_path: &str) -> Result<Scene> {
-    if let Some(scene) = procedural::by_name(name_or_path) {
+    if let Some(scene) = builtin::by_name(name_or_path) {
         return scene;
     }
     let path = std::path::Path::new(name_or_path);
-    let looks_like_path = path.extension().is_some() || name_or_path.contains('/') || path.exists();
-    if looks_like_path {
-        return obj::load(path);
+    let in_assets = std::path::Path::new("assets/scenes").join(format!("{name_or_path}.toml"));
+    if path.extension().is_none() && !name_or_path.contains('/') && in_assets.is_file() {
+        return file::load(&in_assets);
     }
-    Err(Error::UnknownScene {
-        name: name_or_path.into(),
-        known: procedural::NAMES.join(", "),
-    })
+    let looks_like_path = path.extension().is_some() || name_or_path.contains('/') || path.exists();
+    if !looks_like_path {
+        return Err(Error::UnknownScene {
+            name: name_or_path.into(),
+            known: builtin::NAMES.join(", "),
+        });
+    }
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("toml") => file::load(path),
+        Some("obj") => obj::load(path),
+        other => Err(Error::Input(format!(
+            "unsupported scene format '{}' in '{}' (supported: {FORMATS})",
+            other
+                .map(|e| format!(".{e}"))
+                .unwrap_or_else(|| "(no extension)".into()),
+            path.display()
+        ))),
+    }
 }
 
 #[cfg(test)]
@@ -244,7 +299,7 @@ mod tests {
 
     #[test]
     fn room_is_valid_and_bounded() {
-        let room = procedural::room().unwrap();
+        let room = builtin::room().unwrap();
         assert!(room.triangle_count() > 1000);
         let (lo, hi) = room.bounds();
         assert!(lo.y >= -1e-4 && hi.y <= 6.0 + 1e-4, "{lo} {hi}");
@@ -252,13 +307,13 @@ mod tests {
 
     #[test]
     fn validation_rejects_broken_geometry() {
-        let mut s = procedural::room().unwrap();
+        let mut s = builtin::room().unwrap();
         s.vertices[3].position[1] = f32::INFINITY;
         assert!(s.validate().unwrap_err().to_string().contains("non-finite"));
-        let mut s = procedural::room().unwrap();
+        let mut s = builtin::room().unwrap();
         s.indices[7] = s.vertices.len() as u32;
         assert!(s.validate().unwrap_err().to_string().contains("past the"));
-        let mut s = procedural::room().unwrap();
+        let mut s = builtin::room().unwrap();
         s.indices.clear();
         assert!(s.validate().unwrap_err().to_string().contains("no triangles"));
     }

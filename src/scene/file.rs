@@ -1,0 +1,384 @@
+//! Scene files (TOML): a camera, a sun, a sky, named materials and a list of instances —
+//! primitives (plane, box, sphere) or model files — each with a transform. The built-in
+//! scenes are such files (`assets/scenes/*.toml`, compiled into the binary). The format
+//! is documented in the README; every field here says what it is.
+//!
+//! A transform is `translate * rotate * scale`, `rotate` in degrees about x, then y, then
+//! z (the matrix `Rz * Ry * Rx`), `scale` uniform or per axis.
+
+use super::{obj, Camera, Light, Material, Scene, SceneBuilder, Sky, TriMesh};
+use crate::error::{Error, Result};
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A whole scene file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Name in reports (default: the file's stem).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    pub camera: CameraDesc,
+    pub sun: SunDesc,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky: Option<SkyDesc>,
+    /// Materials in order; instances name them.
+    #[serde(default)]
+    pub materials: Vec<MaterialDesc>,
+    #[serde(rename = "instance")]
+    pub instances: Vec<Instance>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub position: [f32; 3],
+    pub target: [f32; 3],
+    /// Vertical field of view in degrees.
+    pub fov: f32,
+    /// Near and far clip distances (defaults 0.05 and 100).
+    #[serde(default = "default_near")]
+    pub near: f32,
+    #[serde(default = "default_far")]
+    pub far: f32,
+}
+
+fn default_near() -> f32 {
+    0.05
+}
+fn default_far() -> f32 {
+    100.0
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunDesc {
+    /// Towards the sun (normalized on load).
+    pub direction: [f32; 3],
+    /// Linear RGB.
+    pub color: [f32; 3],
+    pub intensity: f32,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkyDesc {
+    /// Linear RGB straight up and at the horizon.
+    pub zenith: [f32; 3],
+    pub horizon: [f32; 3],
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    pub name: String,
+    /// Linear RGB in [0, 1].
+    pub base_color: [f32; 3],
+    /// 0 = mirror, 1 = fully rough.
+    pub roughness: f32,
+    /// Specular reflectance in [0, 1] (0: no reflection traced).
+    #[serde(default)]
+    pub reflectivity: f32,
+}
+
+/// What an instance places: exactly one of the shape keys.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Instance {
+    /// A rectangle [width, depth] in the xz-plane facing +y.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plane: Option<[f32; 2]>,
+    /// A box of these full extents, centred.
+    #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
+    pub cuboid: Option<[f32; 3]>,
+    /// A UV sphere of this radius (`segments` around, `rings` pole to pole).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere: Option<f32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segments: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rings: Option<u32>,
+    /// A model file (OBJ with its MTL), relative to the scene file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// A material of `materials` by name: required for primitives; for a model it
+    /// replaces every material of the file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translate: Option<[f32; 3]>,
+    /// Degrees about x, then y, then z.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<[f32; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<Scale>,
+}
+
+/// Uniform or per-axis scale.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f32),
+    Axes([f32; 3]),
+}
+
+impl Instance {
+    /// `translate * Rz * Ry * Rx * scale`; factors that are the identity are left out,
+    /// so a plain translation is exactly `Mat4::from_translation`.
+    pub fn transform(&self) -> Mat4 {
+        let mut m = Mat4::IDENTITY;
+        if let Some(t) = self.translate {
+            m = Mat4::from_translation(Vec3::from(t));
+        }
+        if let Some([x, y, z]) = self.rotate {
+            for (angle, rot) in [
+                (z, Mat4::from_rotation_z as fn(f32) -> Mat4),
+                (y, Mat4::from_rotation_y),
+                (x, Mat4::from_rotation_x),
+            ] {
+                if angle != 0.0 {
+                    m *= rot(angle.to_radians());
+                }
+            }
+        }
+        match self.scale {
+            Some(Scale::Uniform(s)) if s != 1.0 => m *= Mat4::from_scale(Vec3::splat(s)),
+            Some(Scale::Axes(s)) if s != [1.0; 3] => m *= Mat4::from_scale(Vec3::from(s)),
+            _ => {}
+        }
+        m
+    }
+}
+
+/// One line for a TOML error: the message and the line it is on.
+fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
+    let line = e
+        .span()
+        .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let message = e.message().trim().replace('\n', " ");
+    Error::BadAsset {
+        what: "scene file",
+        path: path.into(),
+        detail: match line {
+            Some(l) => format!("line {l}: {message}"),
+            None => message,
+        },
+    }
+}
+
+impl SceneFile {
+    /// Parses a scene file's text (`path` names it in errors).
+    pub fn parse(path: &Path, text: &str) -> Result<Self> {
+        toml::from_str(text).map_err(|e| toml_error(path, text, &e))
+    }
+
+    /// The file as TOML text.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).expect("scene files serialize")
+    }
+
+    /// Builds the scene; model paths resolve against `dir`, errors name `path`.
+    pub fn build(&self, path: &Path, dir: &Path) -> Result<Scene> {
+        let bad = |detail: String| Error::BadAsset {
+            what: "scene file",
+            path: path.into(),
+            detail,
+        };
+        let name = self.name.clone().unwrap_or_else(|| {
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into())
+        });
+        let mut b = SceneBuilder::new(&name);
+        let mut ids = Vec::new();
+        for m in &self.materials {
+            if ids.iter().any(|(n, _)| n == &m.name) {
+                return Err(bad(format!("material '{}' is defined twice", m.name)));
+            }
+            let id = b.material(Material::new(&m.name, m.base_color, m.roughness, m.reflectivity));
+            ids.push((m.name.clone(), id));
+        }
+        let find = |i: usize, name: &str| {
+            ids.iter().find(|(n, _)| n == name).map(|(_, id)| *id).ok_or_else(|| {
+                let known: Vec<&str> = ids.iter().map(|(n, _)| n.as_str()).collect();
+                bad(format!(
+                    "instance {}: unknown material '{name}' (materials: {})",
+                    i + 1,
+                    known.join(", ")
+                ))
+            })
+        };
+        if self.instances.is_empty() {
+            return Err(bad("no [[instance]]: the scene is empty".into()));
+        }
+        for (i, inst) in self.instances.iter().enumerate() {
+            let shapes = [
+                inst.plane.is_some(),
+                inst.cuboid.is_some(),
+                inst.sphere.is_some(),
+                inst.model.is_some(),
+            ];
+            if shapes.iter().filter(|s| **s).count() != 1 {
+                return Err(bad(format!(
+                    "instance {}: give exactly one of plane, box, sphere, model",
+                    i + 1
+                )));
+            }
+            let transform = inst.transform();
+            if let Some(model) = &inst.model {
+                let scene = obj::load(&dir.join(model))?;
+                let material = inst.material.as_deref().map(|m| find(i, m)).transpose()?;
+                b.append(&scene, transform, material);
+                continue;
+            }
+            let mesh = if let Some([w, d]) = inst.plane {
+                TriMesh::quad(w, d)
+            } else if let Some(size) = inst.cuboid {
+                TriMesh::cuboid(Vec3::from(size))
+            } else {
+                let r = inst.sphere.expect("one shape");
+                TriMesh::sphere(r, inst.segments.unwrap_or(48), inst.rings.unwrap_or(24))
+            };
+            let material = inst
+                .material
+                .as_deref()
+                .ok_or_else(|| bad(format!("instance {}: a primitive needs a material", i + 1)))?;
+            b.mesh(mesh, transform, find(i, material)?);
+        }
+        let c = &self.camera;
+        b.camera(Camera {
+            position: Vec3::from(c.position),
+            target: Vec3::from(c.target),
+            up: Vec3::Y,
+            fov_y_deg: c.fov,
+            near: c.near,
+            far: c.far,
+        });
+        let s = &self.sun;
+        b.light(Light {
+            direction: Vec3::from(s.direction),
+            color: Vec3::from(s.color),
+            intensity: s.intensity,
+        });
+        if let Some(sky) = &self.sky {
+            b.sky(Sky {
+                zenith: Vec3::from(sky.zenith),
+                horizon: Vec3::from(sky.horizon),
+            });
+        }
+        b.build()
+    }
+}
+
+/// Reads and builds a scene file.
+pub fn load(path: &Path) -> Result<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        what: "scene file",
+        path: path.into(),
+        source,
+    })?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    SceneFile::parse(path, &text)?.build(path, &dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEAD: &str = "[camera]\nposition = [0, 2, 6]\ntarget = [0, 0, 0]\nfov = 50\n\
+        [sun]\ndirection = [0, 1, 0]\ncolor = [1, 1, 1]\nintensity = 2\n\
+        [[materials]]\nname = \"m\"\nbase_color = [0.5, 0.5, 0.5]\nroughness = 0.2\nreflectivity = 0.5\n";
+
+    fn build(text: &str, dir: &Path) -> Result<Scene> {
+        let path = dir.join("s.toml");
+        SceneFile::parse(&path, text)?.build(&path, dir)
+    }
+
+    /// Transforms compose as translate * Rz * Ry * Rx * scale.
+    #[test]
+    fn transform_order() {
+        let inst = Instance {
+            translate: Some([1.0, 2.0, 3.0]),
+            rotate: Some([90.0, 0.0, 0.0]),
+            scale: Some(Scale::Axes([2.0, 1.0, 1.0])),
+            ..SceneFile::parse(
+                Path::new("x"),
+                &format!("{HEAD}[[instance]]\nplane = [1, 1]\nmaterial = \"m\"\n"),
+            )
+            .unwrap()
+            .instances[0]
+                .clone()
+        };
+        let p = inst.transform().transform_point3(Vec3::new(1.0, 1.0, 0.0));
+        // Scaled to (2, 1, 0), rotated about x by 90 degrees to (2, 0, 1), moved.
+        assert!((p - Vec3::new(3.0, 2.0, 4.0)).length() < 1e-6, "{p}");
+    }
+
+    /// A model instance places the file's triangles with the transform, and a material
+    /// override replaces the file's materials.
+    #[test]
+    fn model_instances_are_transformed_and_overridden() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let text = format!(
+            "{HEAD}[[instance]]\nmodel = \"t.obj\"\ntranslate = [10, 0, 0]\nscale = 2\n\
+             [[instance]]\nmodel = \"t.obj\"\nmaterial = \"m\"\n"
+        );
+        let s = build(&text, dir.path()).unwrap();
+        assert_eq!(s.triangle_count(), 2);
+        let (lo, hi) = s.bounds();
+        assert_eq!((lo, hi), (Vec3::ZERO, Vec3::new(12.0, 2.0, 0.0)));
+        // The first instance brings the OBJ's default material; the second uses "m".
+        assert_eq!(s.vertices[3].material, 0, "overridden with 'm'");
+        assert_eq!(s.materials[s.vertices[0].material as usize].name, "default");
+    }
+
+    /// Bad files get one line naming the file, the line and the field.
+    #[test]
+    fn bad_files_name_the_line_and_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let cases = [
+            (
+                format!("{HEAD}[[instance]]\nplane = [1, 1]\nmaterial = \"m\"\ncolour = 3\n"),
+                "line 17: unknown field `colour`",
+            ),
+            (
+                format!("{HEAD}[[instance]]\nplane = [1, 1]\nmaterial = \"nope\"\n"),
+                "unknown material 'nope'",
+            ),
+            (
+                format!("{HEAD}[[instance]]\nplane = [1, 1]\nsphere = 1\nmaterial = \"m\"\n"),
+                "exactly one of",
+            ),
+            (format!("{HEAD}[[instance]]\nplane = [1, 1]\n"), "needs a material"),
+            (format!("{HEAD}[[instance]]\nmodel = \"missing.obj\"\n"), "missing.obj"),
+            (HEAD.replace("fov = 50", "fov = \"wide\""), "line 4"),
+            (HEAD.to_string(), "missing field `instance`"),
+        ];
+        for (text, needle) in cases {
+            let e = build(&text, dir.path()).unwrap_err().to_string();
+            assert!(e.contains(needle) && !e.contains('\n'), "{needle}: {e}");
+        }
+    }
+
+    /// The README's complete example is a valid scene file (with a model in place).
+    #[test]
+    fn readme_example_builds() {
+        let readme = include_str!("../../README.md");
+        let start = readme.find("### Scene files").expect("the section");
+        let block = &readme[start..];
+        let toml_start = block.find("```toml\n").expect("an example") + 8;
+        let text = &block[toml_start..toml_start + block[toml_start..].find("```").unwrap()];
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("models")).unwrap();
+        std::fs::write(
+            dir.path().join("models/teapot.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        )
+        .unwrap();
+        let s = build(text, dir.path()).unwrap();
+        assert_eq!(s.name, "teapot on a mirror");
+        assert_eq!(s.triangle_count(), 2 + 12 + 1);
+    }
+}

@@ -28,6 +28,11 @@ pub struct TimingsReport {
     pub resolution: [u32; 2],
     /// Reflection mode of the measured frames.
     pub mode: String,
+    /// The effective camera (scene file, then `--camera-*`/`--fov`): enough to render
+    /// the same view again.
+    pub camera: crate::scene::Camera,
+    /// Unit direction towards the sun.
+    pub sun_direction: [f32; 3],
     /// Frames measured (warm-up frames excluded).
     pub frames: u32,
     pub warmup_frames: u32,
@@ -146,6 +151,8 @@ pub fn render(
         scene: scene.name.clone(),
         resolution: [settings.width, settings.height],
         mode: settings.mode.name().to_string(),
+        camera: scene.camera,
+        sun_direction: scene.light.direction.to_array(),
         frames: plan.frames,
         warmup_frames: plan.warmup,
         passes_ms: PassTimes::of(&timings),

@@ -536,3 +536,59 @@ fn scene_file_with_a_model_renders() {
     assert_eq!(s.triangle_count(), base.triangle_count() + 2);
     assert_eq!(s.name, "room", "the file's name");
 }
+
+/// View flags set the camera and sun: the report holds the effective camera, which
+/// renders the same image again through a scene file's values; bad views are one line.
+#[test]
+fn view_flags_set_and_report_the_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let view = [
+        "--camera-pos",
+        "-3,2.5,6",
+        "--camera-target",
+        "0,1,-1",
+        "--fov",
+        "65",
+        "--sun-dir",
+        "0.5,0.6,0.2",
+    ];
+    let out = dir.path().join("v.png");
+    let json = dir.path().join("v.json");
+    let mut args = vec![
+        "render", "--frames", "1", "--warmup", "0", "--width", "64", "--height", "48",
+    ];
+    args.extend_from_slice(&view);
+    args.extend_from_slice(&["--out", out.to_str().unwrap(), "--timings", json.to_str().unwrap()]);
+    let (ok, stderr) = run_raw(&args, dir.path());
+    assert!(ok, "{stderr}");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(r["camera"]["position"], serde_json::json!([-3.0, 2.5, 6.0]));
+    assert_eq!(r["camera"]["fov_y_deg"], 65.0);
+    let sun: Vec<f64> = serde_json::from_value(r["sun_direction"].clone()).unwrap();
+    assert!(
+        (sun.iter().map(|v| v * v).sum::<f64>() - 1.0).abs() < 1e-5,
+        "normalized: {sun:?}"
+    );
+    // The default view renders a different image.
+    let default_out = dir.path().join("out.png"); // where `run` renders
+    let (ok, stderr) = run(&[], dir.path());
+    assert!(ok, "{stderr}");
+    assert_ne!(std::fs::read(&out).unwrap(), std::fs::read(&default_out).unwrap());
+    for (flag, v, needle) in [
+        ("--fov", "0", "--fov 0 is outside"),
+        ("--sun-dir", "0,0,0", "no direction"),
+        ("--camera-pos", "0,1,-1", "same point"),
+    ] {
+        let extra: &[&str] = if flag == "--camera-pos" {
+            &["--camera-target", "0,1,-1"]
+        } else {
+            &[]
+        };
+        assert_fails(&[&[flag, v][..], extra].concat(), dir.path(), &[needle]);
+    }
+    let (ok, stderr) = run(&["--camera-pos", "1,2"], dir.path());
+    assert!(
+        !ok && stderr.lines().next().unwrap().contains("three finite numbers"),
+        "{stderr}"
+    );
+}

@@ -37,6 +37,8 @@ pub struct Common {
 
 #[derive(Args, Clone, Debug)]
 pub struct ModesArgs {
+    #[command(flatten)]
+    pub view: super::ViewArgs,
     /// Built-in scene names or .obj paths (each timed on its own).
     #[arg(long, num_args = 1.., default_value = "room")]
     pub scene: Vec<String>,
@@ -54,6 +56,8 @@ pub struct ModesArgs {
 
 #[derive(Args, Clone, Debug)]
 pub struct ReflectArgs {
+    #[command(flatten)]
+    pub view: super::ViewArgs,
     /// Built-in scene name or .obj path.
     #[arg(long, default_value = "room")]
     pub scene: String,
@@ -210,7 +214,8 @@ fn reflect(args: ReflectArgs) -> Result<()> {
     let settings = args.frame.resolve()?;
     check_count("--frames", args.frames, 1)?;
     check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
-    let scene = speculum::scene::load(&args.scene)?;
+    let mut scene = speculum::scene::load(&args.scene)?;
+    args.view.apply(&mut scene)?;
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
     let renderers = speculum::bench::reflect::sweep(&settings).len() as u64 + 1;
@@ -269,8 +274,12 @@ fn modes(args: ModesArgs) -> Result<()> {
     let scenes = args
         .scene
         .iter()
-        .map(|s| speculum::scene::load(s))
-        .collect::<speculum::Result<Vec<_>>>()?;
+        .map(|s| {
+            let mut scene = speculum::scene::load(s)?;
+            args.view.apply(&mut scene)?;
+            Ok(scene)
+        })
+        .collect::<Result<Vec<_>>>()?;
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
     let modes = speculum::settings::Mode::ALL.len() as u64;

@@ -65,6 +65,66 @@ impl SettingsArgs {
     }
 }
 
+/// The view of a scene, set from the command line; each flag replaces the scene's value.
+#[derive(Args, Clone, Debug, Default)]
+pub struct ViewArgs {
+    /// Camera position, x,y,z in world units.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub camera_pos: Option<glam::Vec3>,
+    /// Point the camera looks at, x,y,z.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub camera_target: Option<glam::Vec3>,
+    /// Vertical field of view in degrees (0 < fov < 180).
+    #[arg(long)]
+    pub fov: Option<f32>,
+    /// Direction towards the sun, x,y,z (normalized).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub sun_dir: Option<glam::Vec3>,
+}
+
+/// "x,y,z" as a vector of three finite numbers.
+pub fn parse_vec3(s: &str) -> std::result::Result<glam::Vec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let nums: Vec<f32> = parts.iter().filter_map(|p| p.parse::<f32>().ok()).collect();
+    match nums[..] {
+        [x, y, z] if parts.len() == 3 && nums.iter().all(|v| v.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(format!("'{s}' is not three finite numbers x,y,z")),
+    }
+}
+
+impl ViewArgs {
+    /// Applies the flags given to `scene`, checking the view they make.
+    pub fn apply(&self, scene: &mut speculum::scene::Scene) -> Result<()> {
+        let cam = &mut scene.camera;
+        if let Some(p) = self.camera_pos {
+            cam.position = p;
+        }
+        if let Some(t) = self.camera_target {
+            cam.target = t;
+        }
+        if let Some(f) = self.fov {
+            if !(f > 0.0 && f < 180.0) {
+                anyhow::bail!("--fov {f} is outside (0, 180) degrees");
+            }
+            cam.fov_y_deg = f;
+        }
+        let dir = cam.target - cam.position;
+        if dir.length() < 1e-6 * cam.position.length().max(1.0) {
+            anyhow::bail!("the camera's position and target are the same point ({})", cam.position);
+        }
+        if dir.normalize().cross(cam.up).length() < 1e-4 {
+            anyhow::bail!("the camera looks straight along its up axis (y): tilt --camera-target a little");
+        }
+        if let Some(d) = self.sun_dir {
+            if d.length() < 1e-6 {
+                anyhow::bail!("--sun-dir {d} has no direction");
+            }
+            scene.light.direction = d.normalize();
+        }
+        Ok(())
+    }
+}
+
 /// Fails when validation reported anything (0 when validation is off).
 pub fn check_validation(ctx: &Context) -> Result<()> {
     if ctx.validation_messages() > 0 {

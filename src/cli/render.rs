@@ -50,6 +50,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub frame: SettingsArgs,
     #[command(flatten)]
+    pub view: super::ViewArgs,
+    #[command(flatten)]
     pub gpu: GpuArgs,
 }
 
@@ -91,7 +93,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         (args.fail_mask.as_deref(), Kind::Png),
         (args.timings.as_deref(), Kind::Json),
     ])?;
-    let scene = speculum::scene::load(&args.scene)?;
+    let mut scene = speculum::scene::load(&args.scene)?;
+    args.view.apply(&mut scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

@@ -61,7 +61,7 @@ fn valid_obj_with_mtl_and_texture_renders() {
     let (ok, stderr) = run(&["--scene", &obj], dir.path());
     assert!(ok, "{stderr}");
     assert!(dir.path().join("out.png").exists());
-    let scene = speculum::scene::load(&obj).unwrap();
+    let scene = speculum::scene::load_with(&obj, speculum::scene::Floor::None).unwrap();
     assert_eq!(scene.triangle_count(), 2);
     let m = &scene.materials[0];
     assert!(
@@ -590,5 +590,53 @@ fn view_flags_set_and_report_the_camera() {
     assert!(
         !ok && stderr.lines().next().unwrap().contains("three finite numbers"),
         "{stderr}"
+    );
+}
+
+/// A bare model is a usable scene: it stands on a mirror floor (the default) that
+/// shows its reflection, on a matte one, or alone (`--floor`); `--floor` with a scene
+/// that is not a bare model is refused.
+#[test]
+fn bare_models_stand_on_a_floor() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = write(
+        dir.path(),
+        "q.obj",
+        &format!("v 0 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\n{}", "f 1 2 3\nf 1 3 4\n"),
+    );
+    let reflective = |floor: Option<&str>| {
+        let json = dir.path().join("t.json");
+        let mut args = vec!["--scene", obj.as_str(), "--timings", json.to_str().unwrap()];
+        if let Some(f) = floor {
+            args.extend_from_slice(&["--floor", f]);
+        }
+        let (ok, stderr) = run(&args, dir.path());
+        assert!(ok, "{stderr}");
+        let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (
+            r["reflective_pixels"].as_u64().unwrap(),
+            r["traced_pixels"].as_u64().unwrap(),
+        )
+    };
+    let (mirror, traced) = reflective(None);
+    assert!(
+        mirror > 64 * 48 / 4 && traced > 0,
+        "a mirror floor fills the view: {mirror}, {traced}"
+    );
+    assert_eq!(reflective(Some("mirror")).0, mirror);
+    assert_eq!(reflective(Some("matte")).0, 0);
+    assert_eq!(reflective(Some("none")).0, 0);
+    use speculum::scene::{load_with, Floor};
+    let alone = load_with(&obj, Floor::None).unwrap();
+    let floored = load_with(&obj, Floor::Matte).unwrap();
+    assert_eq!(floored.triangle_count(), alone.triangle_count() + 2);
+    assert!(
+        floored.bounds().0.y < 1.0 && floored.bounds().0.y > 0.999,
+        "just under the model"
+    );
+    assert_fails(
+        &["--scene", "room", "--floor", "none"],
+        dir.path(),
+        &["--floor is for a bare model"],
     );
 }

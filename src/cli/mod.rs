@@ -80,6 +80,9 @@ pub struct ViewArgs {
     /// Direction towards the sun, x,y,z (normalized).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub sun_dir: Option<glam::Vec3>,
+    /// The floor a bare model (an .obj given as the scene) stands on [default: mirror].
+    #[arg(long, value_enum)]
+    pub floor: Option<speculum::scene::Floor>,
 }
 
 /// "x,y,z" as a vector of three finite numbers.
@@ -93,6 +96,16 @@ pub fn parse_vec3(s: &str) -> std::result::Result<glam::Vec3, String> {
 }
 
 impl ViewArgs {
+    /// Loads scene `name` (a bare model on `--floor`) with this view applied.
+    pub fn load(&self, name: &str) -> Result<speculum::scene::Scene> {
+        if self.floor.is_some() && !speculum::scene::is_model(name) {
+            anyhow::bail!("--floor is for a bare model (an .obj given as the scene), not for '{name}'");
+        }
+        let mut scene = speculum::scene::load_with(name, self.floor.unwrap_or_default())?;
+        self.apply(&mut scene)?;
+        Ok(scene)
+    }
+
     /// Applies the flags given to `scene`, checking the view they make.
     pub fn apply(&self, scene: &mut speculum::scene::Scene) -> Result<()> {
         let cam = &mut scene.camera;

@@ -93,8 +93,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         (args.fail_mask.as_deref(), Kind::Png),
         (args.timings.as_deref(), Kind::Json),
     ])?;
-    let mut scene = speculum::scene::load(&args.scene)?;
-    args.view.apply(&mut scene)?;
+    let scene = args.view.load(&args.scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

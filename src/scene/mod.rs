@@ -257,9 +257,66 @@ impl Scene {
 /// Scene file formats `load` reads, by extension.
 pub const FORMATS: &str = ".toml, .obj";
 
-/// Loads a scene: a built-in name, `assets/scenes/NAME.toml` under the current folder,
-/// or a path to a scene file (`.toml`) or a model (`.obj`).
+/// The ground a bare model (a model file given as the scene) stands on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Floor {
+    /// No floor: the model alone.
+    None,
+    /// A mirror-like floor (the default), so the model has a reflection to show.
+    #[default]
+    Mirror,
+    /// A rough, non-reflective floor.
+    Matte,
+}
+
+/// Whether `name_or_path` names a model file (which stands on a `Floor`) rather than a
+/// built-in scene or a scene file.
+pub fn is_model(name_or_path: &str) -> bool {
+    let ext = std::path::Path::new(name_or_path).extension().and_then(|e| e.to_str());
+    ext.is_some_and(|e| e.eq_ignore_ascii_case("obj")) && builtin::by_name(name_or_path).is_none()
+}
+
+/// Puts a model on a square floor `floor` under its lowest point, 8x its footprint
+/// wide, and frames the model with the camera (the far plane taking in the floor).
+fn stand_on_floor(mut scene: Scene, floor: Floor) -> Result<Scene> {
+    let material = match floor {
+        Floor::None => return Ok(scene),
+        Floor::Mirror => Material::new("floor (mirror)", [0.3, 0.3, 0.33], 0.03, 0.7),
+        Floor::Matte => Material::new("floor (matte)", [0.55, 0.55, 0.55], 0.9, 0.0),
+    };
+    let (lo, hi) = scene.bounds();
+    let size = hi - lo;
+    let side = 8.0 * size.x.max(size.z).max(size.y).max(1e-3);
+    // A hair below the lowest point: a flat-bottomed model does not z-fight the floor.
+    let y = lo.y - 1e-4 * size.max_element().max(1e-3);
+    let center = Vec3::new(0.5 * (lo.x + hi.x), y, 0.5 * (lo.z + hi.z));
+    let mut b = SceneBuilder::new(&scene.name);
+    b.append(&scene, Mat4::IDENTITY, None);
+    let id = b.material(material);
+    b.mesh(TriMesh::quad(side, side), Mat4::from_translation(center), id);
+    let mut with_floor = b.build()?;
+    with_floor.camera = scene.camera;
+    with_floor.camera.far = scene
+        .camera
+        .far
+        .max((with_floor.camera.position - center).length() + side);
+    scene.vertices = with_floor.vertices;
+    scene.indices = with_floor.indices;
+    scene.materials = with_floor.materials;
+    scene.camera = with_floor.camera;
+    Ok(scene)
+}
+
+/// Loads a scene as `load_with`, a bare model on a mirror floor.
 pub fn load(name_or_path: &str) -> Result<Scene> {
+    load_with(name_or_path, Floor::Mirror)
+}
+
+/// Loads a scene: a built-in name, `assets/scenes/NAME.toml` under the current folder,
+/// a path to a scene file (`.toml`), or a path to a model (`.obj`), which stands on
+/// `floor` with the camera framing it.
+pub fn load_with(name_or_path: &str, floor: Floor) -> Result<Scene> {
     if let Some(scene) = builtin::by_name(name_or_path) {
         return scene;
     }
@@ -282,7 +339,7 @@ pub fn load(name_or_path: &str) -> Result<Scene> {
         .as_deref()
     {
         Some("toml") => file::load(path),
-        Some("obj") => obj::load(path),
+        Some("obj") => stand_on_floor(obj::load(path)?, floor),
         other => Err(Error::Input(format!(
             "unsupported scene format '{}' in '{}' (supported: {FORMATS})",
             other

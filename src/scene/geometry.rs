@@ -93,3 +93,126 @@ impl TriMesh {
         self
     }
 }
+
+/// Faces meeting at a smaller angle than this share a smoothed normal in
+/// `smooth_normals`; a sharper edge stays a crease (a cube keeps flat faces).
+pub const CREASE_ANGLE_DEG: f32 = 60.0;
+
+/// Vertex normals for a mesh that has none: equal positions are welded first, then
+/// each corner of a triangle gets the angle-weighted mean of the normals of the faces
+/// around its vertex that meet its own face at less than `crease_deg` (Thürmer & Wüthrich
+/// 1998, "Computing vertex normals from polygonal facets"). Corners whose normals
+/// differ get vertices of their own. Degenerate triangles keep their corners' normals
+/// from their neighbours (or +y alone).
+pub fn smooth_normals(positions: &[Vec3], indices: &[u32], crease_deg: f32) -> TriMesh {
+    use std::collections::HashMap;
+    // Weld: one id per distinct position (bitwise; -0 and 0 alike).
+    let key = |p: Vec3| (p + Vec3::ZERO).to_array().map(f32::to_bits);
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+    let welded: Vec<u32> = positions
+        .iter()
+        .map(|&p| {
+            let n = ids.len() as u32;
+            *ids.entry(key(p)).or_insert(n)
+        })
+        .collect();
+    let tris: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+    let face: Vec<Vec3> = tris
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            (b - a).cross(c - a).normalize_or_zero()
+        })
+        .collect();
+    // The interior angle of each corner (radians).
+    let corner_angle = |t: &[u32; 3], k: usize| {
+        let p = t.map(|i| positions[i as usize]);
+        let (e1, e2) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+        e1.angle_between(e2)
+    };
+    let mut around: Vec<Vec<(usize, usize)>> = vec![Vec::new(); ids.len()];
+    for (ti, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            around[welded[t[k] as usize] as usize].push((ti, k));
+        }
+    }
+    let cos_crease = crease_deg.to_radians().cos();
+    let mut out = TriMesh::default();
+    let mut made: HashMap<(u32, [u32; 3]), u32> = HashMap::new();
+    for (ti, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let w = welded[t[k] as usize];
+            let mut n = Vec3::ZERO;
+            for &(tj, kj) in &around[w as usize] {
+                let nj = face[tj];
+                if face[ti] == Vec3::ZERO || face[ti].dot(nj) >= cos_crease {
+                    let a = corner_angle(&tris[tj], kj);
+                    if a.is_finite() {
+                        n += a * nj;
+                    }
+                }
+            }
+            let n = n.normalize_or(if face[ti] == Vec3::ZERO { Vec3::Y } else { face[ti] });
+            let p = positions[t[k] as usize];
+            let index = *made.entry((w, n.to_array().map(f32::to_bits))).or_insert_with(|| {
+                out.positions.push(p);
+                out.normals.push(n);
+                out.positions.len() as u32 - 1
+            });
+            out.indices.push(index);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A box given with 8 shared corners keeps flat faces: 24 vertices, each normal one
+    /// of the six axes, equal to its face's.
+    #[test]
+    fn a_shared_corner_cube_keeps_flat_faces() {
+        let p: Vec<Vec3> = (0..8)
+            .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32))
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let indices: Vec<u32> = quads
+            .iter()
+            .flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]])
+            .collect();
+        let m = smooth_normals(&p, &indices, CREASE_ANGLE_DEG);
+        assert_eq!(m.positions.len(), 24);
+        for t in m.indices.chunks_exact(3) {
+            let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
+            let face = (b - a).cross(c - a).normalize();
+            for &i in t {
+                assert!((m.normals[i as usize] - face).length() < 1e-6);
+            }
+        }
+    }
+
+    /// A finely tessellated sphere with duplicated seam vertices is smoothed across the
+    /// seam: welded, every normal points outwards, and no vertex is split.
+    #[test]
+    fn a_sphere_is_smooth_across_its_seam() {
+        let s = TriMesh::sphere(2.0, 24, 12);
+        let m = smooth_normals(&s.positions, &s.indices, CREASE_ANGLE_DEG);
+        for (p, n) in m.positions.iter().zip(&m.normals) {
+            assert!(n.dot(p.normalize()) > 0.99, "{p} {n}");
+        }
+        let distinct: std::collections::HashSet<[u32; 3]> = s
+            .indices
+            .iter()
+            .map(|&i| (s.positions[i as usize] + Vec3::ZERO).to_array().map(f32::to_bits))
+            .collect();
+        assert_eq!(m.positions.len(), distinct.len(), "one vertex per welded position");
+    }
+}

@@ -8,8 +8,10 @@
 //! - reflectivity = `refl` (a Speculum key) or `Pm` when given, else `max(Ks)` for
 //!   illumination models 3-9 (the MTL models with reflection on), else 0.
 //!
-//! Faces are triangulated; missing normals are computed (area-weighted).
+//! Faces are triangulated; missing normals are computed by `geometry::smooth_normals`
+//! (equal positions welded, angle-weighted, creases sharper than 60 degrees kept).
 
+use super::geometry::{smooth_normals, CREASE_ANGLE_DEG};
 use super::{Camera, Material, Scene, SceneBuilder, TriMesh};
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};
@@ -119,23 +121,6 @@ fn check_mtl_colors(bytes: &[u8], path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Area-weighted vertex normals for a mesh that has none.
-fn computed_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
-    let mut normals = vec![Vec3::ZERO; positions.len()];
-    for t in indices.chunks_exact(3) {
-        let (a, b, c) = (
-            positions[t[0] as usize],
-            positions[t[1] as usize],
-            positions[t[2] as usize],
-        );
-        let n = (b - a).cross(c - a); // length = 2 × area: larger faces weigh more
-        for &i in t {
-            normals[i as usize] += n;
-        }
-    }
-    normals.into_iter().map(|n| n.normalize_or(Vec3::Y)).collect()
-}
-
 /// Loads an OBJ file (and the MTL files it names) as a scene.
 pub fn load(path: &Path) -> Result<Scene> {
     let text = std::fs::read(path).map_err(|source| Error::Io {
@@ -235,27 +220,25 @@ pub fn load(path: &Path) -> Result<Scene> {
                 ),
             });
         }
-        let normals = if mesh.normals.len() == mesh.positions.len() {
-            mesh.normals
+        let geometry = if mesh.normals.len() == mesh.positions.len() {
+            let normals = mesh
+                .normals
                 .chunks_exact(3)
                 .map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or(Vec3::Y))
-                .collect()
+                .collect();
+            TriMesh {
+                positions,
+                normals,
+                indices: mesh.indices.clone(),
+            }
         } else {
-            computed_normals(&positions, &mesh.indices)
+            smooth_normals(&positions, &mesh.indices, CREASE_ANGLE_DEG)
         };
         let material = match mesh.material_id.and_then(|i| ids.get(i)) {
             Some(&id) => id,
             None => *default_material.get_or_insert_with(|| b.material(Material::new("default", [0.8; 3], 0.8, 0.0))),
         };
-        b.mesh(
-            TriMesh {
-                positions,
-                normals,
-                indices: mesh.indices.clone(),
-            },
-            Mat4::IDENTITY,
-            material,
-        );
+        b.mesh(geometry, Mat4::IDENTITY, material);
     }
     let mut scene = b.build().map_err(|e| match e {
         Error::BadGeometry { detail, .. } => Error::BadGeometry {

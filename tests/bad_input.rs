@@ -108,13 +108,43 @@ fn malformed_obj_file() {
 
 #[test]
 fn missing_mtl_file() {
+    // A missing MTL is a warning naming it; the model renders in the default material.
     let dir = tempfile::tempdir().unwrap();
     let obj = write(
         dir.path(),
         "a.obj",
         &format!("mtllib nowhere.mtl\nusemtl x\n{CUBE_FACES}"),
     );
-    assert_fails(&["--scene", &obj], dir.path(), &["cannot read MTL file", "nowhere.mtl"]);
+    let (ok, stderr) = run(&["--scene", &obj], dir.path());
+    assert!(ok, "{stderr}");
+    let warnings: Vec<&str> = stderr.lines().filter(|l| l.starts_with("warning: ")).collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(
+        warnings[0].contains("nowhere.mtl") && warnings[0].contains("default"),
+        "{stderr}"
+    );
+    let scene = speculum::scene::load_with(&obj, speculum::scene::Floor::None).unwrap();
+    assert_eq!(scene.materials.len(), 1);
+    assert_eq!(scene.materials[0].name, "default");
+}
+
+/// `map_Kd` options are skipped: the texture named after them is the one read.
+#[test]
+fn texture_options_before_the_file_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = image::RgbaImage::from_pixel(4, 4, image::Rgba([255, 0, 0, 255]));
+    img.save(dir.path().join("red.png")).unwrap();
+    write(
+        dir.path(),
+        "o.mtl",
+        "newmtl t\nKd 1 1 1\nmap_Kd -s 2 2 1 -bm 0.5 red.png\n",
+    );
+    let obj = write(dir.path(), "o.obj", &format!("mtllib o.mtl\nusemtl t\n{CUBE_FACES}"));
+    let (ok, stderr) = run(&["--scene", &obj], dir.path());
+    assert!(ok, "{stderr}");
+    let scene = speculum::scene::load_with(&obj, speculum::scene::Floor::None).unwrap();
+    let a = scene.materials[0].albedo;
+    assert!(a.x > 0.9 && a.y < 0.01 && a.z < 0.01, "the red texture's mean: {a}");
 }
 
 #[test]

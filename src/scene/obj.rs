@@ -10,6 +10,8 @@
 //!
 //! Faces are triangulated; missing normals are computed by `geometry::smooth_normals`
 //! (equal positions welded, angle-weighted, creases sharper than 60 degrees kept).
+//! A missing MTL file is a warning, its materials the default; `map_Kd` options are
+//! skipped to the file name.
 
 use super::geometry::{smooth_normals, CREASE_ANGLE_DEG};
 use super::{Camera, Material, Scene, SceneBuilder, TriMesh};
@@ -46,6 +48,32 @@ fn texture_mean(path: &Path) -> Result<Vec3> {
     Ok(Vec3::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32))
 }
 
+/// The file name of a texture statement's arguments (`map_Kd -s 2 2 1 -bm 0.5 a b.png`
+/// → `a b.png`): the MTL options before it are skipped with their arguments (`-o`,
+/// `-s`, `-t` take one to three numbers, `-mm` two, the others one).
+fn texture_file(spec: &str) -> Option<String> {
+    let tokens: Vec<&str> = spec.split_whitespace().collect();
+    let mut i = 0;
+    while i < tokens.len() && tokens[i].starts_with('-') {
+        let option = tokens[i];
+        i += 1;
+        match option {
+            "-o" | "-s" | "-t" => {
+                let numbers = tokens[i..]
+                    .iter()
+                    .take(3)
+                    .take_while(|t| t.parse::<f32>().is_ok())
+                    .count();
+                i += numbers.max(1);
+            }
+            "-mm" => i += 2,
+            _ => i += 1,
+        }
+    }
+    let name = tokens.get(i..).map(|t| t.join(" ")).unwrap_or_default();
+    (!name.is_empty()).then_some(name)
+}
+
 /// Out-of-range values of a material that `Material::gpu` will clamp, described for
 /// one warning line (empty when every value is in range).
 fn out_of_range(m: &tobj::Material, roughness: f32, reflectivity: f32) -> Vec<String> {
@@ -72,8 +100,8 @@ fn out_of_range(m: &tobj::Material, roughness: f32, reflectivity: f32) -> Vec<St
 /// and the warning its out-of-range values raise, if any.
 fn convert_material(m: &tobj::Material, dir: &Path, mtl: &Path) -> Result<(Material, Option<String>)> {
     let mut albedo = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
-    if let Some(tex) = m.diffuse_texture.as_deref().filter(|t| !t.trim().is_empty()) {
-        albedo *= texture_mean(&dir.join(tex.trim()))?;
+    if let Some(tex) = m.diffuse_texture.as_deref().and_then(texture_file) {
+        albedo *= texture_mean(&dir.join(tex))?;
     }
     let roughness = mtl_number(m, "Pr")
         .or_else(|| m.shininess.map(|ns| (2.0 / (ns.max(0.0) + 2.0)).sqrt()))
@@ -137,10 +165,20 @@ pub fn load(path: &Path) -> Result<Scene> {
     };
     let mtl_failure: RefCell<Option<Error>> = RefCell::new(None);
     let mtl_files: RefCell<Vec<PathBuf>> = RefCell::new(Vec::new());
+    let missing_mtl: RefCell<Vec<String>> = RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut text.as_slice(), &options, |mtl: &Path| {
         let mtl_path: PathBuf = dir.join(mtl);
         mtl_files.borrow_mut().push(mtl_path.clone());
         match std::fs::read(&mtl_path) {
+            Err(source) if source.kind() == std::io::ErrorKind::NotFound => {
+                // A missing MTL is not fatal: its materials take the default.
+                missing_mtl.borrow_mut().push(format!(
+                    "MTL file '{}' not found: the materials of '{}' are the default grey",
+                    mtl_path.display(),
+                    path.display()
+                ));
+                Err(tobj::LoadError::OpenFileFailed)
+            }
             Err(source) => {
                 mtl_failure.replace(Some(Error::Io {
                     what: "MTL file",
@@ -175,11 +213,18 @@ pub fn load(path: &Path) -> Result<Scene> {
     if let Some(e) = mtl_failure.into_inner() {
         return Err(e);
     }
-    let materials = materials.map_err(|e| Error::BadAsset {
-        what: "MTL file",
-        path: path.into(),
-        detail: e.to_string(),
-    })?;
+    let missing_mtl = missing_mtl.into_inner();
+    let materials = match materials {
+        Ok(m) => m,
+        Err(_) if !missing_mtl.is_empty() => Vec::new(),
+        Err(e) => {
+            return Err(Error::BadAsset {
+                what: "MTL file",
+                path: path.into(),
+                detail: e.to_string(),
+            })
+        }
+    };
 
     let name = path
         .file_stem()
@@ -193,7 +238,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         [one] => one.clone(),
         _ => path.to_path_buf(),
     };
-    let mut warnings = Vec::new();
+    let mut warnings = missing_mtl;
     let mut ids = Vec::new();
     for m in &materials {
         let (material, warning) = convert_material(m, &dir, &mtl)?;
@@ -252,4 +297,25 @@ pub fn load(path: &Path) -> Result<Scene> {
     scene.name = name;
     scene.warnings = warnings;
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `map_Kd` options and their arguments are skipped; the file name may hold spaces.
+    #[test]
+    fn texture_options_are_skipped() {
+        for (spec, want) in [
+            ("wood.png", Some("wood.png")),
+            ("-s 2 2 1 wood.png", Some("wood.png")),
+            ("-o 0.5 wood.png", Some("wood.png")),
+            ("-bm 0.3 -clamp on -mm 0 1 my wood.png", Some("my wood.png")),
+            ("-t 1 1 -imfchan r w.png", Some("w.png")),
+            ("-s 1 1 1", None),
+            ("   ", None),
+        ] {
+            assert_eq!(texture_file(spec).as_deref(), want, "{spec}");
+        }
+    }
 }

@@ -528,11 +528,11 @@ fn bad_scene_files() {
         "[camera]\nposition = [0, 1, 5]\ntarget = [0, 0, 0]\nfovv = 50\n",
     );
     assert_fails(&["--scene", &bad], dir.path(), &["bad.toml", "line 4", "fovv"]);
-    let ply = write(dir.path(), "m.ply", "ply\n");
+    let xyz = write(dir.path(), "m.xyz", "0 0 0\n");
     assert_fails(
-        &["--scene", &ply],
+        &["--scene", &xyz],
         dir.path(),
-        &["unsupported scene format '.ply'", ".toml, .obj"],
+        &["unsupported scene format '.xyz'", ".toml, .obj, .ply"],
     );
     let room = include_str!("../assets/scenes/room.toml");
     let missing = write(
@@ -669,4 +669,81 @@ fn bare_models_stand_on_a_floor() {
         dir.path(),
         &["--floor is for a bare model"],
     );
+}
+
+/// A PLY file, ASCII or binary, loads to the same triangles (fan-triangulated polygons)
+/// as the equivalent OBJ; a bare PLY renders on the mirror floor; a broken one is one
+/// error line.
+#[test]
+fn ply_ascii_and_binary_load_like_obj() {
+    use speculum::scene::{load_with, Floor};
+    let dir = tempfile::tempdir().unwrap();
+    let v = [
+        [0.0f32, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.5, 0.5, 1.0],
+    ];
+    let faces: [&[u32]; 3] = [&[0, 1, 2, 3], &[0, 1, 4], &[1, 2, 4]];
+    let mut obj = String::new();
+    for p in v {
+        obj += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+    }
+    for f in faces {
+        obj += &format!(
+            "f {}\n",
+            f.iter().map(|i| (i + 1).to_string()).collect::<Vec<_>>().join(" ")
+        );
+    }
+    let obj = write(dir.path(), "m.obj", &obj);
+    let header = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+             element face 3\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+    };
+    let mut ascii = header("ascii");
+    for p in v {
+        ascii += &format!("{} {} {}\n", p[0], p[1], p[2]);
+    }
+    for f in faces {
+        ascii += &format!(
+            "{} {}\n",
+            f.len(),
+            f.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(" ")
+        );
+    }
+    let ascii = write(dir.path(), "a.ply", &ascii);
+    let mut binary = header("binary_little_endian").into_bytes();
+    for p in v {
+        for c in p {
+            binary.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for f in faces {
+        binary.push(f.len() as u8);
+        for &i in f {
+            binary.extend_from_slice(&(i as i32).to_le_bytes());
+        }
+    }
+    std::fs::write(dir.path().join("b.ply"), &binary).unwrap();
+    let binary = dir.path().join("b.ply").display().to_string();
+    let corners = |s: &speculum::scene::Scene| -> Vec<[f32; 3]> {
+        s.indices.iter().map(|&i| s.vertices[i as usize].position).collect()
+    };
+    let want = corners(&load_with(&obj, Floor::None).unwrap());
+    assert_eq!(want.len(), 3 * 4, "a quad and two triangles");
+    for ply in [&ascii, &binary] {
+        let s = load_with(ply, Floor::None).unwrap();
+        assert_eq!(corners(&s), want, "{ply}");
+    }
+    let (ok, stderr) = run(&["--scene", &binary], dir.path());
+    assert!(ok, "{stderr}");
+    let broken = write(
+        dir.path(),
+        "x.ply",
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
+    );
+    assert_fails(&["--scene", &broken], dir.path(), &["x.ply"]);
 }

@@ -6,7 +6,7 @@
 //! A transform is `translate * rotate * scale`, `rotate` in degrees about x, then y, then
 //! z (the matrix `Rz * Ry * Rx`), `scale` uniform or per axis.
 
-use super::{obj, Camera, Light, Material, Scene, SceneBuilder, Sky, TriMesh};
+use super::{Camera, Light, Material, Scene, SceneBuilder, Sky, TriMesh};
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
@@ -99,7 +99,7 @@ pub struct Instance {
     pub segments: Option<u32>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rings: Option<u32>,
-    /// A model file (OBJ with its MTL), relative to the scene file.
+    /// A model file (OBJ with its MTL, or PLY), relative to the scene file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model: Option<String>,
     /// A material of `materials` by name: required for primitives; for a model it
@@ -227,7 +227,7 @@ impl SceneFile {
             }
             let transform = inst.transform();
             if let Some(model) = &inst.model {
-                let scene = obj::load(&dir.join(model))?;
+                let scene = super::load_model(&dir.join(model))?;
                 let material = inst.material.as_deref().map(|m| find(i, m)).transpose()?;
                 b.append(&scene, transform, material);
                 continue;

@@ -10,6 +10,7 @@ pub mod camera;
 pub mod file;
 pub mod geometry;
 pub mod obj;
+pub mod ply;
 pub mod soup;
 
 pub use camera::Camera;
@@ -255,7 +256,30 @@ impl Scene {
 }
 
 /// Scene file formats `load` reads, by extension.
-pub const FORMATS: &str = ".toml, .obj";
+pub const FORMATS: &str = ".toml, .obj, .ply";
+
+/// Model file formats (a model stands on a floor as a scene; a scene file places it).
+const MODELS: [&str; 2] = ["obj", "ply"];
+
+/// Loads a model file (OBJ with its MTL, or PLY) by its extension.
+pub fn load_model(path: &std::path::Path) -> Result<Scene> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("obj") => obj::load(path),
+        Some("ply") => ply::load(path),
+        other => Err(Error::Input(format!(
+            "unsupported model format '{}' in '{}' (supported: .obj, .ply)",
+            other
+                .map(|e| format!(".{e}"))
+                .unwrap_or_else(|| "(no extension)".into()),
+            path.display()
+        ))),
+    }
+}
 
 /// The ground a bare model (a model file given as the scene) stands on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
@@ -274,7 +298,7 @@ pub enum Floor {
 /// built-in scene or a scene file.
 pub fn is_model(name_or_path: &str) -> bool {
     let ext = std::path::Path::new(name_or_path).extension().and_then(|e| e.to_str());
-    ext.is_some_and(|e| e.eq_ignore_ascii_case("obj")) && builtin::by_name(name_or_path).is_none()
+    ext.is_some_and(|e| MODELS.iter().any(|m| e.eq_ignore_ascii_case(m))) && builtin::by_name(name_or_path).is_none()
 }
 
 /// Puts a model on a square floor `floor` under its lowest point, 8x its footprint
@@ -339,7 +363,7 @@ pub fn load_with(name_or_path: &str, floor: Floor) -> Result<Scene> {
         .as_deref()
     {
         Some("toml") => file::load(path),
-        Some("obj") => stand_on_floor(obj::load(path)?, floor),
+        Some("obj" | "ply") => stand_on_floor(load_model(path)?, floor),
         other => Err(Error::Input(format!(
             "unsupported scene format '{}' in '{}' (supported: {FORMATS})",
             other

@@ -23,8 +23,8 @@ layout(binding = 7, std430) readonly buffer MarchArgs { uvec4 march_args; }; // 
 layout(push_constant) uniform Push {
     uint max_steps;
     float stride;         // pixels per step
-    float thickness;      // view-space depth a surface is assumed to have
-    float max_distance;   // view-space length of the ray
+    float thickness;      // depth a surface is assumed to have, as a fraction of its view depth
+    float max_distance;   // length of the ray, in multiples of the reflecting point's view depth
     float edge_fade;      // fraction of the screen's smaller side over which confidence fades
     float min_confidence; // below: the pixel fails
     float recursion_min;  // hits on surfaces more reflective than this fail
@@ -64,7 +64,9 @@ void main() {
     vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
 
     float near_z = -frame.proj[3][2] / frame.proj[2][2];
-    float ray_len = (origin.z + vdir.z * pc.max_distance) > near_z ? (near_z - origin.z) / vdir.z : pc.max_distance;
+    // Lengths relative to the view depth keep SSR's answers the same at any scene scale.
+    float max_len = pc.max_distance * abs(origin.z);
+    float ray_len = (origin.z + vdir.z * max_len) > near_z ? (near_z - origin.z) / vdir.z : max_len;
     vec3 end_point = origin + vdir * ray_len;
     vec4 h0 = frame.proj * vec4(origin, 1.0);
     vec4 h1 = frame.proj * vec4(end_point, 1.0);
@@ -116,7 +118,7 @@ void main() {
         float scene_depth = texelFetch(gb_depth, ip, 0).r;
         if (scene_depth < 1.0) { // depth 1 is the cleared value: sky, nothing to hit
             float scene_z_max = view_z(scene_depth);
-            float scene_z_min = scene_z_max - pc.thickness;
+            float scene_z_min = scene_z_max - pc.thickness * abs(scene_z_max);
             if (ray_z_max >= scene_z_min && ray_z_min <= scene_z_max) {
                 hit = true;
                 hit_pixel = ip;

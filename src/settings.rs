@@ -108,10 +108,12 @@ pub struct Settings {
     /// step over objects thinner than a step (a hit is refined to the pixel by binary
     /// search inside its step).
     pub ssr_stride: f32,
-    /// Depth (view-space units) a surface is assumed to have: thicker finds hits behind
-    /// thin silhouettes but makes false hits behind objects.
+    /// Depth a surface is assumed to have, as a fraction of its distance along the view
+    /// axis (so the same at any scene scale): thicker finds hits behind thin
+    /// silhouettes but makes false hits behind objects.
     pub ssr_thickness: f32,
-    /// Longest SSR ray in view-space units.
+    /// Longest SSR ray, in multiples of the reflecting point's distance along the view
+    /// axis (scale-free): longer finds farther hits at more steps.
     pub ssr_max_distance: f32,
     /// Fraction of the screen's smaller side over which SSR confidence fades at the
     /// edges: larger hides the edge seam but sends more pixels to the ray tracer.
@@ -149,8 +151,8 @@ impl Default for Settings {
             max_bounces: 3,
             ssr_max_steps: 64,
             ssr_stride: 8.0,
-            ssr_thickness: 0.25,
-            ssr_max_distance: 40.0,
+            ssr_thickness: 0.03,
+            ssr_max_distance: 5.0,
             ssr_edge_fade: 0.05,
             ssr_min_confidence: 0.3,
             ssr_recursion_min: 0.2,

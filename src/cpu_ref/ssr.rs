@@ -151,10 +151,11 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
     let origin = vpos + vn * (1e-3 * vpos.z.abs());
 
     let near_z = -proj.w_axis.z / proj.z_axis.z;
-    let ray_len = if origin.z + vdir.z * params.max_distance > near_z {
+    let max_len = params.max_distance * origin.z.abs();
+    let ray_len = if origin.z + vdir.z * max_len > near_z {
         (near_z - origin.z) / vdir.z
     } else {
-        params.max_distance
+        max_len
     };
     let end_point = origin + vdir * ray_len;
     let h0 = proj * origin.extend(1.0);
@@ -204,7 +205,7 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         let scene_depth = depth_at(ip);
         if scene_depth < 1.0 {
             let scene_z_max = view_z(scene_depth);
-            let scene_z_min = scene_z_max - params.thickness;
+            let scene_z_min = scene_z_max - params.thickness * scene_z_max.abs();
             margin = margin.min(gap(ray_z_max, scene_z_min)).min(gap(ray_z_min, scene_z_max));
             if ray_z_max >= scene_z_min && ray_z_min <= scene_z_max {
                 hit = true;

@@ -1,0 +1,51 @@
+//! SSR works at any scene scale: the same scene at 1/100 and 100 times its size (the
+//! camera scaled with it) gives the same fail mask, pixel for pixel up to rounding.
+
+mod common;
+
+use speculum::scene::Scene;
+use speculum::{Renderer, Settings};
+
+/// `scene` with every length multiplied by `s`: vertices, camera and clip planes.
+fn scaled(scene: &Scene, s: f32) -> Scene {
+    let mut out = scene.clone();
+    for v in &mut out.vertices {
+        v.position = v.position.map(|c| c * s);
+    }
+    let c = &mut out.camera;
+    c.position *= s;
+    c.target *= s;
+    c.near *= s;
+    c.far *= s;
+    out
+}
+
+#[test]
+fn fail_masks_do_not_depend_on_the_scene_scale() {
+    let ctx = common::context();
+    let room = speculum::scene::builtin::room().unwrap();
+    let settings = Settings {
+        width: 192,
+        height: 108,
+        ..Default::default()
+    };
+    let mask = |scene: &Scene| {
+        let mut r = Renderer::new(&ctx, scene, &settings).unwrap();
+        r.render_frame().unwrap();
+        r.reflection_maps().unwrap()
+    };
+    let base = mask(&room);
+    let reflective = base.reflective.iter().filter(|r| **r).count();
+    assert!(reflective > 1000);
+    for s in [0.01f32, 100.0] {
+        let other = mask(&scaled(&room, s));
+        let same = base.mask.iter().zip(&other.mask).filter(|(a, b)| a == b).count();
+        let share = same as f64 / base.mask.len() as f64;
+        println!(
+            "scale {s}: {same} of {} pixels have the same fail mask ({share:.4})",
+            base.mask.len()
+        );
+        assert!(share >= 0.99, "scale {s}: only {share:.4} of the fail mask is the same");
+    }
+    common::assert_no_validation_messages(&ctx);
+}

@@ -261,14 +261,23 @@ pub const FORMATS: &str = ".toml, .obj, .ply";
 /// Model file formats (a model stands on a floor as a scene; a scene file places it).
 const MODELS: [&str; 2] = ["obj", "ply"];
 
+/// A path's extension, lower-cased.
+fn extension(path: &std::path::Path) -> Option<String> {
+    path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase)
+}
+
+/// "unsupported scene format '.xyz' in 'f.xyz' (supported: ...)".
+fn unsupported(kind: &str, ext: Option<&str>, path: &std::path::Path, supported: &str) -> Error {
+    let ext = ext.map(|e| format!(".{e}")).unwrap_or_else(|| "(no extension)".into());
+    Error::Input(format!(
+        "unsupported {kind} format '{ext}' in '{}' (supported: {supported})",
+        path.display()
+    ))
+}
+
 /// Loads a model file (OBJ with its MTL, or PLY) by its extension.
 pub fn load_model(path: &std::path::Path) -> Result<Scene> {
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .as_deref()
-    {
+    match extension(path).as_deref() {
         Some("obj") => obj::load(path),
         Some("ply") => ply::load(path),
         other => Err(Error::Input(format!(
@@ -356,12 +365,7 @@ pub fn load_with(name_or_path: &str, floor: Floor) -> Result<Scene> {
             known: builtin::NAMES.join(", "),
         });
     }
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .as_deref()
-    {
+    match extension(path).as_deref() {
         Some("toml") => file::load(path),
         Some("obj" | "ply") => stand_on_floor(load_model(path)?, floor),
         other => Err(Error::Input(format!(

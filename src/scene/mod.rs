@@ -280,13 +280,7 @@ pub fn load_model(path: &std::path::Path) -> Result<Scene> {
     match extension(path).as_deref() {
         Some("obj") => obj::load(path),
         Some("ply") => ply::load(path),
-        other => Err(Error::Input(format!(
-            "unsupported model format '{}' in '{}' (supported: .obj, .ply)",
-            other
-                .map(|e| format!(".{e}"))
-                .unwrap_or_else(|| "(no extension)".into()),
-            path.display()
-        ))),
+        other => Err(unsupported("model", other, path, ".obj, .ply")),
     }
 }
 
@@ -368,13 +362,7 @@ pub fn load_with(name_or_path: &str, floor: Floor) -> Result<Scene> {
     match extension(path).as_deref() {
         Some("toml") => file::load(path),
         Some("obj" | "ply") => stand_on_floor(load_model(path)?, floor),
-        other => Err(Error::Input(format!(
-            "unsupported scene format '{}' in '{}' (supported: {FORMATS})",
-            other
-                .map(|e| format!(".{e}"))
-                .unwrap_or_else(|| "(no extension)".into()),
-            path.display()
-        ))),
+        other => Err(unsupported("scene", other, path, FORMATS)),
     }
 }
 

@@ -82,10 +82,36 @@ impl View {
             bounds: scene.bounds(),
         }
     }
+
+    /// The same view with the world moved by `-origin`.
+    fn relative_to(mut self, origin: Vec3) -> Self {
+        self.camera.position -= origin;
+        self.camera.target -= origin;
+        self.bounds = (self.bounds.0 - origin, self.bounds.1 - origin);
+        self
+    }
+}
+
+/// Where the renderer puts its origin for `scene`: the scene's centre when that is
+/// farther from the world origin than the scene's own radius (a model at 1e4 units
+/// would lose depth and shadow precision in f32 otherwise), else the world origin (a
+/// scene around the origin renders in world coordinates, exactly as given).
+pub fn render_origin(scene: &Scene) -> Vec3 {
+    let (lo, hi) = scene.bounds();
+    let center = 0.5 * (lo + hi);
+    let radius = 0.5 * (hi - lo).length();
+    if center.length() > radius.max(1e-6) {
+        center
+    } else {
+        Vec3::ZERO
+    }
 }
 
 pub struct Renderer {
     ctx: Arc<Context>,
+    /// World position of the renderer's origin (`render_origin`): the G-buffer, the
+    /// BVHs and `uniforms()` are relative to it.
+    origin: Vec3,
     settings: Settings,
     view: View,
     scene: SceneBuffers,
@@ -162,8 +188,24 @@ impl Renderer {
         crate::limits::check_frame(ctx, settings)?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(|m| m.gpu()).collect();
+        // Every pass works relative to `origin` (see `render_origin`).
+        let origin = render_origin(scene);
+        let shifted;
+        let vertices = if origin == Vec3::ZERO {
+            &scene.vertices
+        } else {
+            shifted = scene
+                .vertices
+                .iter()
+                .map(|v| crate::gpu_types::GpuVertex {
+                    position: (Vec3::from(v.position) - origin).to_array(),
+                    ..*v
+                })
+                .collect::<Vec<_>>();
+            &shifted
+        };
         let scene_buffers = SceneBuffers {
-            vertices: Buffer::with_data(ctx, "scene.vertices", storage, bytemuck::cast_slice(&scene.vertices))?,
+            vertices: Buffer::with_data(ctx, "scene.vertices", storage, bytemuck::cast_slice(vertices))?,
             indices: Buffer::with_data(
                 ctx,
                 "scene.indices",
@@ -197,8 +239,9 @@ impl Renderer {
         }
         let static_bvh_build = build_timer.results()?;
         let extent = extent(settings);
-        let view = View::of(scene);
+        let view = View::of(scene).relative_to(origin);
         Ok(Self {
+            origin,
             ctx: ctx.clone(),
             settings: settings.clone(),
             view,
@@ -218,6 +261,11 @@ impl Renderer {
             timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
             cmd: ctx.allocate_command_buffer()?,
         })
+    }
+
+    /// World position of the origin the renderer works relative to.
+    pub fn origin(&self) -> Vec3 {
+        self.origin
     }
 
     /// The uniforms the next frame uses.

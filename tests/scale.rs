@@ -49,3 +49,33 @@ fn fail_masks_do_not_depend_on_the_scene_scale() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+/// A scene far from the origin renders as it does at the origin: the renderer works
+/// relative to the scene's centre, so neither depth nor shadows lose precision.
+#[test]
+fn far_from_the_origin_renders_the_same() {
+    let ctx = common::context();
+    let room = speculum::scene::builtin::room().unwrap();
+    let settings = Settings {
+        width: 192,
+        height: 108,
+        ..Default::default()
+    };
+    let render = |scene: &Scene| {
+        let mut r = Renderer::new(&ctx, scene, &settings).unwrap();
+        r.render_frame().unwrap();
+        r.read_output().unwrap()
+    };
+    let base = render(&room);
+    let offset = glam::Vec3::new(1e4, -3e3, 2e4);
+    let mut far = room.clone();
+    for v in &mut far.vertices {
+        v.position = (glam::Vec3::from(v.position) + offset).to_array();
+    }
+    far.camera.position += offset;
+    far.camera.target += offset;
+    let c = speculum::metrics::compare_rgba8(&base, &render(&far), settings.width, settings.height).unwrap();
+    println!("translated by {offset}: SSIM {:.4}, RMSE {:.4}", c.ssim, c.rmse);
+    assert!(c.ssim >= 0.99, "SSIM {:.4}", c.ssim);
+    common::assert_no_validation_messages(&ctx);
+}

@@ -51,7 +51,7 @@ pub enum Error {
     Input(String),
     /// A scene name that no built-in scene has.
     #[error(
-        "unknown scene '{name}' (built-in scenes: {known}; or give a path to a .toml scene file or an .obj or .ply model)"
+        "unknown scene '{name}' (built-in scenes: {known}; or give a path to a .toml scene file or an .obj, .gltf, .glb or .ply model)"
     )]
     UnknownScene { name: String, known: String },
     /// A file that should exist does not, or cannot be read.

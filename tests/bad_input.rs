@@ -532,7 +532,7 @@ fn bad_scene_files() {
     assert_fails(
         &["--scene", &xyz],
         dir.path(),
-        &["unsupported scene format '.xyz'", ".toml, .obj, .ply"],
+        &["unsupported scene format '.xyz'", ".toml, .obj, .gltf, .glb, .ply"],
     );
     let room = include_str!("../assets/scenes/room.toml");
     let missing = write(
@@ -746,4 +746,72 @@ fn ply_ascii_and_binary_load_like_obj() {
         "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
     );
     assert_fails(&["--scene", &broken], dir.path(), &["x.ply"]);
+}
+
+/// The glTF document of `gltf_loads_node_transforms_and_materials`: a triangle under a
+/// child node (scale 2) of a translated root node, a metal and a plain material.
+fn gltf_json(buffer_uri: Option<&str>) -> String {
+    let uri = buffer_uri.map(|u| format!(r#""uri": "{u}", "#)).unwrap_or_default();
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+ "nodes": [{{"translation": [10.0, 0.0, 0.0], "children": [1]}}, {{"scale": [2.0, 2.0, 2.0], "mesh": 0}}],
+ "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}}],
+ "materials": [{{"name": "gold", "pbrMetallicRoughness": {{"baseColorFactor": [1.0, 0.7, 0.2, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.1}}}}],
+ "buffers": [{{{uri}"byteLength": 44}}],
+ "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 6}}],
+ "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}},
+               {{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}}]}}"#
+    )
+}
+
+/// glTF (external buffer) and GLB (embedded) load the node hierarchy's transforms and
+/// the metal's material, render as bare models, and a broken file is one error line.
+#[test]
+fn gltf_loads_node_transforms_and_materials() {
+    use speculum::scene::{load_with, Floor};
+    let dir = tempfile::tempdir().unwrap();
+    let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    bin.extend([0u8; 2]); // pad to 44 bytes (a multiple of 4)
+    std::fs::write(dir.path().join("tri.bin"), &bin).unwrap();
+    let gltf = write(dir.path(), "tri.gltf", &gltf_json(Some("tri.bin")));
+    // GLB: header, JSON chunk (space-padded), BIN chunk.
+    let mut json = gltf_json(None).into_bytes();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut glb = Vec::new();
+    glb.extend(b"glTF");
+    glb.extend(2u32.to_le_bytes());
+    glb.extend(((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
+    glb.extend((json.len() as u32).to_le_bytes());
+    glb.extend(b"JSON");
+    glb.extend(&json);
+    glb.extend((bin.len() as u32).to_le_bytes());
+    glb.extend(b"BIN\0");
+    glb.extend(&bin);
+    std::fs::write(dir.path().join("tri.glb"), &glb).unwrap();
+    let glb = dir.path().join("tri.glb").display().to_string();
+    for file in [&gltf, &glb] {
+        let s = load_with(file, Floor::None).unwrap();
+        assert_eq!(s.triangle_count(), 1, "{file}");
+        let (lo, hi) = s.bounds();
+        assert_eq!(
+            (lo, hi),
+            (glam::Vec3::new(10.0, 0.0, 0.0), glam::Vec3::new(12.0, 2.0, 0.0)),
+            "{file}"
+        );
+        let m = &s.materials[s.vertices[0].material as usize];
+        assert_eq!(
+            (m.name.as_str(), m.albedo, m.roughness, m.reflectivity),
+            ("gold", glam::Vec3::new(1.0, 0.7, 0.2), 0.1, 1.0)
+        );
+        let (ok, stderr) = run(&["--scene", file], dir.path());
+        assert!(ok, "{file}: {stderr}");
+    }
+    let broken = write(dir.path(), "x.gltf", "{\"asset\": 3}");
+    assert_fails(&["--scene", &broken], dir.path(), &["x.gltf"]);
 }

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 pub fn scene_help() -> String {
     format!(
         "Built-in scene ({}), a scene file (NAME for assets/scenes/NAME.toml, or a path \
-         to a .toml file) or a path to an .obj or .ply model",
+         to a .toml file) or a path to an .obj, .gltf, .glb or .ply model",
         speculum::scene::builtin::NAMES.join(", ")
     )
 }

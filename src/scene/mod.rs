@@ -9,6 +9,7 @@ pub mod builtin;
 pub mod camera;
 pub mod file;
 pub mod geometry;
+pub mod gltf;
 pub mod obj;
 pub mod ply;
 pub mod soup;
@@ -256,10 +257,10 @@ impl Scene {
 }
 
 /// Scene file formats `load` reads, by extension.
-pub const FORMATS: &str = ".toml, .obj, .ply";
+pub const FORMATS: &str = ".toml, .obj, .gltf, .glb, .ply";
 
 /// Model file formats (a model stands on a floor as a scene; a scene file places it).
-const MODELS: [&str; 2] = ["obj", "ply"];
+const MODELS: [&str; 4] = ["obj", "gltf", "glb", "ply"];
 
 /// A path's extension, lower-cased.
 fn extension(path: &std::path::Path) -> Option<String> {
@@ -280,7 +281,8 @@ pub fn load_model(path: &std::path::Path) -> Result<Scene> {
     match extension(path).as_deref() {
         Some("obj") => obj::load(path),
         Some("ply") => ply::load(path),
-        other => Err(unsupported("model", other, path, ".obj, .ply")),
+        Some("gltf" | "glb") => gltf::load(path),
+        other => Err(unsupported("model", other, path, ".obj, .gltf, .glb, .ply")),
     }
 }
 
@@ -361,7 +363,7 @@ pub fn load_with(name_or_path: &str, floor: Floor) -> Result<Scene> {
     }
     match extension(path).as_deref() {
         Some("toml") => file::load(path),
-        Some("obj" | "ply") => stand_on_floor(load_model(path)?, floor),
+        Some("obj" | "gltf" | "glb" | "ply") => stand_on_floor(load_model(path)?, floor),
         other => Err(unsupported("scene", other, path, FORMATS)),
     }
 }

@@ -181,6 +181,11 @@ mod tests {
         let s = Stat::of(&[4.0, 1.0, 10.0, 3.0, 2.0]).unwrap();
         assert_eq!((s.median, s.samples), (3.0, 5));
         assert!((s.p10 - 1.4).abs() < 1e-12 && (s.p90 - 7.6).abs() < 1e-12, "{s:?}");
+        assert_eq!(
+            Stat::of(&[4.0, 1.0, 3.0, 2.0]).unwrap().median,
+            2.5,
+            "even count: the middle two's mean"
+        );
         let one = Stat::of(&[2.5]).unwrap();
         assert_eq!((one.p10, one.median, one.p90), (2.5, 2.5, 2.5));
         assert!(Stat::of(&[]).is_none());

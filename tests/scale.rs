@@ -20,20 +20,26 @@ fn scaled(scene: &Scene, s: f32) -> Scene {
     out
 }
 
+/// Resolution of both tests' frames.
+const SIZE: (u32, u32) = (192, 108);
+
+/// A renderer of `scene` at `SIZE` (default settings) after one frame.
+fn one_frame(ctx: &std::sync::Arc<speculum::vk::Context>, scene: &Scene) -> Renderer {
+    let settings = Settings {
+        width: SIZE.0,
+        height: SIZE.1,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(ctx, scene, &settings).unwrap();
+    r.render_frame().unwrap();
+    r
+}
+
 #[test]
 fn fail_masks_do_not_depend_on_the_scene_scale() {
     let ctx = common::context();
     let room = speculum::scene::builtin::room().unwrap();
-    let settings = Settings {
-        width: 192,
-        height: 108,
-        ..Default::default()
-    };
-    let mask = |scene: &Scene| {
-        let mut r = Renderer::new(&ctx, scene, &settings).unwrap();
-        r.render_frame().unwrap();
-        r.reflection_maps().unwrap()
-    };
+    let mask = |scene: &Scene| one_frame(&ctx, scene).reflection_maps().unwrap();
     let base = mask(&room);
     let reflective = base.reflective.iter().filter(|r| **r).count();
     assert!(reflective > 1000);
@@ -56,16 +62,7 @@ fn fail_masks_do_not_depend_on_the_scene_scale() {
 fn far_from_the_origin_renders_the_same() {
     let ctx = common::context();
     let room = speculum::scene::builtin::room().unwrap();
-    let settings = Settings {
-        width: 192,
-        height: 108,
-        ..Default::default()
-    };
-    let render = |scene: &Scene| {
-        let mut r = Renderer::new(&ctx, scene, &settings).unwrap();
-        r.render_frame().unwrap();
-        r.read_output().unwrap()
-    };
+    let render = |scene: &Scene| one_frame(&ctx, scene).read_output().unwrap();
     let base = render(&room);
     let offset = glam::Vec3::new(1e4, -3e3, 2e4);
     let mut far = room.clone();
@@ -74,7 +71,7 @@ fn far_from_the_origin_renders_the_same() {
     }
     far.camera.position += offset;
     far.camera.target += offset;
-    let c = speculum::metrics::compare_rgba8(&base, &render(&far), settings.width, settings.height).unwrap();
+    let c = speculum::metrics::compare_rgba8(&base, &render(&far), SIZE.0, SIZE.1).unwrap();
     println!("translated by {offset}: SSIM {:.4}, RMSE {:.4}", c.ssim, c.rmse);
     assert!(c.ssim >= 0.99, "SSIM {:.4}", c.ssim);
     common::assert_no_validation_messages(&ctx);

@@ -1,6 +1,6 @@
 //! `speculum render`: one scene headless to a PNG, with per-pass GPU timings.
 
-use super::{check_count, check_outputs, progress, GpuArgs, SettingsArgs, Text};
+use super::{check_outputs, progress, GpuArgs, SettingsArgs, Text};
 use anyhow::Result;
 use clap::Args;
 use speculum::output::{Batch, Kind};
@@ -78,8 +78,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(mode) = args.mode {
         settings.mode = mode;
     }
-    check_count("--frames", args.frames, 1)?;
-    check_count("--warmup", args.warmup, 0)?;
     let plan = headless::FramePlan {
         warmup: args.warmup,
         frames: args.frames,

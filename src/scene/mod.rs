@@ -320,21 +320,11 @@ fn stand_on_floor(mut scene: Scene, floor: Floor) -> Result<Scene> {
     // A hair below the lowest point: a flat-bottomed model does not z-fight the floor.
     let y = lo.y - 1e-4 * size.max_element().max(1e-3);
     let center = Vec3::new(0.5 * (lo.x + hi.x), y, 0.5 * (lo.z + hi.z));
-    let mut b = SceneBuilder::new(&scene.name);
-    b.append(&scene, Mat4::IDENTITY, None);
+    scene.camera.far = scene.camera.far.max((scene.camera.position - center).length() + side);
+    let mut b = SceneBuilder { scene };
     let id = b.material(material);
     b.mesh(TriMesh::quad(side, side), Mat4::from_translation(center), id);
-    let mut with_floor = b.build()?;
-    with_floor.camera = scene.camera;
-    with_floor.camera.far = scene
-        .camera
-        .far
-        .max((with_floor.camera.position - center).length() + side);
-    scene.vertices = with_floor.vertices;
-    scene.indices = with_floor.indices;
-    scene.materials = with_floor.materials;
-    scene.camera = with_floor.camera;
-    Ok(scene)
+    b.build()
 }
 
 /// Loads a scene as `load_with`, a bare model on a mirror floor.

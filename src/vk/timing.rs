@@ -149,26 +149,6 @@ impl Timings {
     pub fn samples(&self, name: &str) -> Option<&[f64]> {
         self.samples.get(name).map(|v| v.as_slice())
     }
-
-    /// Median milliseconds per scope.
-    pub fn medians(&self) -> BTreeMap<&'static str, f64> {
-        self.samples.iter().map(|(k, v)| (*k, median(v))).collect()
-    }
-}
-
-/// Median of a non-empty sample (mean of the two middle values for even counts).
-pub fn median(values: &[f64]) -> f64 {
-    if values.is_empty() {
-        return f64::NAN;
-    }
-    let mut v = values.to_vec();
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 #[cfg(test)]
@@ -176,20 +156,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn median_of_odd_and_even_samples() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
-        assert!(median(&[]).is_nan());
-    }
-
-    #[test]
     fn timings_sum_repeated_scopes_within_a_frame() {
         let mut t = Timings::default();
         t.add_frame(&[("a", 1.0), ("b", 2.0), ("a", 0.5)]);
         t.add_frame(&[("a", 3.0), ("b", 4.0)]);
         t.add_frame(&[("a", 2.0), ("b", 3.0)]);
-        let m = t.medians();
-        assert_eq!(m["a"], 2.0);
-        assert_eq!(m["b"], 3.0);
+        assert_eq!(t.samples("a"), Some(&[1.5, 3.0, 2.0][..]));
+        assert_eq!(t.samples("b"), Some(&[2.0, 4.0, 3.0][..]));
+        assert_eq!(t.samples("c"), None);
     }
 }

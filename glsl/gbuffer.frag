@@ -1,15 +1,18 @@
 #version 460
-// gbuffer: writes normal + reflectivity, albedo + roughness, material id.
+// gbuffer: writes normal + reflectivity, base colour + roughness, material id.
 #include "frame.glsl"
+#include "surface.glsl"
 
 layout(binding = 2, std430) readonly buffer Materials { Material materials[]; };
+layout(binding = 4) uniform sampler2DArray scene_textures;
 
 layout(location = 0) in vec3 in_world;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) flat in uint in_material;
+layout(location = 3) in vec2 in_uv;
 
 layout(location = 0) out vec4 out_normal;   // xyz: unit world normal facing the camera; w: reflectivity
-layout(location = 1) out vec4 out_albedo;   // rgb: albedo; a: roughness
+layout(location = 1) out vec4 out_albedo;   // rgb: base colour (textured); a: roughness
 layout(location = 2) out uint out_material; // material index (MATERIAL_NONE where empty)
 
 void main() {
@@ -20,6 +23,6 @@ void main() {
         n = -n;
     }
     out_normal = vec4(n, m.reflectivity);
-    out_albedo = vec4(m.albedo, m.roughness);
+    out_albedo = vec4(base_color(m, scene_textures, in_uv), m.roughness);
     out_material = in_material;
 }

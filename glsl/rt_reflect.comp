@@ -3,12 +3,15 @@
 // dispatch). The reflected ray starts at the G-buffer position, walks the static and
 // dynamic BVHs, and the hit is shaded with the sun (shadow map lookup, or a shadow ray
 // when asked) and the sky ambient; while the hit is reflective the path continues,
-// up to max_bounces rays. A miss returns the sky.
+// up to max_bounces rays. A miss returns the sky. Textures are looked up at the mip
+// level of a ray cone that starts as wide as the pixel's footprint at the reflecting
+// point and spreads by the pixel's angle (a flat mirror keeps the spread).
 //
 // Self-intersection: each origin is pushed off its surface along the normal by a
 // distance that grows with its distance from the camera (depth-buffer and float
 // error both grow with it), and the hit must be beyond tmin.
 #include "shading.glsl"
+#include "surface.glsl"
 #define TRAVERSE_BINDING 8
 #include "traverse.glsl"
 #include "pixel_list.glsl"
@@ -22,6 +25,10 @@ layout(binding = 4) uniform sampler2D shadow_map;
 layout(binding = 5, std430) readonly buffer Pixels { uint pixels[]; };
 layout(binding = 6, std430) readonly buffer Indirect { uvec4 indirect; }; // w: count
 layout(binding = 7, rgba32f) uniform writeonly image2D rt_out;
+// Bindings 8-13: traverse.glsl. Texture coordinates of the static and dynamic vertices.
+layout(binding = 14, std430) readonly buffer StaticUvs { vec2 s_uvs[]; };
+layout(binding = 15, std430) readonly buffer DynamicUvs { vec2 d_uvs[]; };
+layout(binding = 16) uniform sampler2DArray scene_textures;
 
 layout(push_constant) uniform Push {
     uint max_bounces;  // rays per path (1: a single reflection)
@@ -32,6 +39,19 @@ layout(push_constant) uniform Push {
 
 float offset_scale(vec3 pos) {
     return 2e-4 * max(1.0, length(pos - frame.camera_pos.xyz));
+}
+
+vec2 hit_uv(uint prim, uint k) {
+    uint t = prim & 0x7fffffffu;
+    if ((prim & 0x80000000u) == 0u) {
+        return s_uvs[s_indices[3u * t + k]];
+    }
+    return d_uvs[d_indices[3u * t + k]];
+}
+
+// The angle one pixel subtends at the camera (vertical; square pixels).
+float pixel_spread() {
+    return 2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y));
 }
 
 void main() {
@@ -45,6 +65,9 @@ void main() {
     vec3 n = normalize(texelFetch(gb_normal, p, 0).xyz);
     vec3 dir = reflect(normalize(pos - frame.camera_pos.xyz), n);
     vec3 origin = pos + n * offset_scale(pos);
+    float spread = pixel_spread();
+    // The ray cone's width at `origin`, grown along the path.
+    float cone = spread * length(pos - frame.camera_pos.xyz);
 
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
@@ -58,6 +81,16 @@ void main() {
         Vertex b = hit_vertex(h.prim, 1u);
         Vertex c = hit_vertex(h.prim, 2u);
         Material m = materials[a.material];
+        vec3 albedo = m.albedo;
+        cone += spread * h.t;
+        if (m.texture_layer != TEXTURE_NONE) {
+            vec2 ta = hit_uv(h.prim, 0u), tb = hit_uv(h.prim, 1u), tc = hit_uv(h.prim, 2u);
+            vec2 uv = (1.0 - h.u - h.v) * ta + h.u * tb + h.v * tc;
+            vec3 g = normalize(cross(b.position - a.position, c.position - a.position));
+            float texels = float(textureSize(scene_textures, 0).x);
+            float lod = ray_cone_lod(cone, abs(dot(g, dir)), a.position, b.position, c.position, ta, tb, tc, texels);
+            albedo = base_color_lod(m, scene_textures, uv, lod);
+        }
         vec3 hn = normalize((1.0 - h.u - h.v) * a.normal + h.u * b.normal + h.v * c.normal);
         if (dot(hn, dir) > 0.0) {
             hn = -hn; // double-sided: face the incoming ray
@@ -71,7 +104,7 @@ void main() {
         } else {
             vis = shadow_visibility(shadow_map, hp);
         }
-        radiance += throughput * shade_direct(m.albedo, m.roughness, m.reflectivity, hn, -dir, vis);
+        radiance += throughput * shade_direct(albedo, m.roughness, m.reflectivity, hn, -dir, vis);
         if (m.reflectivity <= 0.0) {
             break;
         }

@@ -28,7 +28,9 @@ pub struct GpuMaterial {
     pub roughness: f32,
     /// Fraction of light reflected specularly in [0, 1] (used by reflection passes).
     pub reflectivity: f32,
-    pub _pad0: [f32; 3],
+    /// Layer of the scene's texture array multiplying `albedo`, or `TEXTURE_NONE`.
+    pub texture_layer: u32,
+    pub _pad0: [f32; 2],
 }
 
 /// Per-frame constants (std140 uniform buffer, 432 bytes).

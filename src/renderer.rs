@@ -15,12 +15,12 @@ use crate::passes::rt_reflect::{self, ReflectInputs, RtReflectPass};
 use crate::passes::rt_trace::{TraceScene, Traceable};
 use crate::passes::ssr_compact::{self, CompactPass};
 use crate::passes::ssr_trace::{self, SsrParams, SsrPass};
-use crate::passes::{gbuffer, light_direct, shadow_map, SceneGeometry};
+use crate::passes::{gbuffer, light_direct, shadow_map, SceneGeometry, Surfaces};
 use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
-use crate::scene::{Camera, Light, Scene, Sky};
+use crate::scene::{texture, Camera, Light, Scene, Sky};
 use crate::settings::{Mode, Settings};
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, GpuTimer, Image};
+use crate::vk::{Buffer, Context, GpuTimer, Image, Sampler};
 use ash::vk;
 use glam::{Mat4, Vec3};
 use std::sync::Arc;
@@ -45,11 +45,14 @@ pub const SCOPES: [&str; 11] = [
     FRAME,
 ];
 
-/// The scene's buffers on the GPU.
+/// The scene's buffers and textures on the GPU.
 struct SceneBuffers {
     vertices: Buffer,
+    uvs: Buffer,
     indices: Buffer,
     materials: Buffer,
+    textures: Image,
+    texture_sampler: Sampler,
     index_count: u32,
 }
 
@@ -61,6 +64,28 @@ impl SceneBuffers {
             index_count: self.index_count,
         }
     }
+
+    fn surfaces(&self) -> Surfaces<'_> {
+        Surfaces {
+            materials: &self.materials,
+            uvs: [&self.uvs, &self.uvs],
+            textures: &self.textures,
+            sampler: &self.texture_sampler,
+        }
+    }
+}
+
+/// The scene's textures as one array texture (`scene::texture`): layers of the largest
+/// texture's power-of-two size (capped by `texture::LAYER_MAX` and the device), each
+/// with its mip chain; one white 1x1 layer when the scene has none.
+fn upload_textures(ctx: &Arc<Context>, scene: &Scene) -> Result<Image> {
+    let max = texture::LAYER_MAX.min(1 << ctx.limits.max_image_dimension2_d.ilog2());
+    let (size, chains) = texture::layers(&scene.textures, max);
+    let chains: Vec<Vec<&[u8]>> = chains
+        .iter()
+        .map(|chain| chain.iter().map(|level| level.as_raw().as_slice()).collect())
+        .collect();
+    Image::texture_array(ctx, "scene.textures", size, &chains)
 }
 
 /// What the frame uniforms are made from besides the settings: the scene's camera,
@@ -206,6 +231,7 @@ impl Renderer {
         };
         let scene_buffers = SceneBuffers {
             vertices: Buffer::with_data(ctx, "scene.vertices", storage, bytemuck::cast_slice(vertices))?,
+            uvs: Buffer::with_data(ctx, "scene.uvs", storage, bytemuck::cast_slice(&scene.uvs))?,
             indices: Buffer::with_data(
                 ctx,
                 "scene.indices",
@@ -213,6 +239,8 @@ impl Renderer {
                 bytemuck::cast_slice(&scene.indices),
             )?,
             materials: Buffer::with_data(ctx, "scene.materials", storage, bytemuck::cast_slice(&materials))?,
+            textures: upload_textures(ctx, scene)?,
+            texture_sampler: Sampler::trilinear_repeat(ctx, "scene.texture_sampler")?,
             index_count: scene.indices.len() as u32,
         };
         let frame_ubo = Buffer::new(
@@ -344,9 +372,9 @@ impl Renderer {
         timer.begin(cmd, FRAME);
         timer.scope(cmd, UNIFORMS, || upload_uniforms(d, cmd, ubo, uniforms));
         timer.scope(cmd, shadow_map::NAME, || shadow.record(cmd, ubo, &scene.geometry()));
-        let materials = &scene.materials;
+        let surfaces = scene.surfaces();
         timer.scope(cmd, gbuffer::NAME, || {
-            gbuffer.record(cmd, ubo, materials, &scene.geometry())
+            gbuffer.record(cmd, ubo, &surfaces, &scene.geometry())
         });
         timer.scope(cmd, light_direct::NAME, || light.record(cmd, ubo, g, &shadow.map));
         let params = SsrParams::from_settings(st);
@@ -364,7 +392,7 @@ impl Renderer {
             let inputs = ReflectInputs {
                 frame: ubo,
                 gbuffer: g,
-                materials,
+                surfaces,
                 shadow_map: &shadow.map,
                 list: &compact.out,
                 scene: TraceScene {

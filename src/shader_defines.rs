@@ -13,6 +13,9 @@ pub const WG_2D: u32 = 8;
 /// Real materials are numbered from 0, so later passes test `id == MATERIAL_NONE`.
 pub const MATERIAL_NONE: u32 = 0xffff_ffff;
 
+/// `Material::texture_layer` of an untextured material.
+pub const TEXTURE_NONE: u32 = 0xffff_ffff;
+
 /// Largest PCF kernel radius in shadow-map texels that `light.direct` accepts: the
 /// (2r+1)^2 taps bound the cost of the shadow lookup per pixel.
 pub const MAX_PCF_RADIUS: u32 = 4;
@@ -117,6 +120,7 @@ pub const COMPOSE_PROVENANCE: u32 = 2;
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("WG_2D", WG_2D),
     ("MATERIAL_NONE", MATERIAL_NONE),
+    ("TEXTURE_NONE", TEXTURE_NONE),
     ("MAX_PCF_RADIUS", MAX_PCF_RADIUS),
     ("LBVH_WG", LBVH_WG),
     ("LBVH_BOUNDS_ITEMS", LBVH_BOUNDS_ITEMS),

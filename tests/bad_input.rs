@@ -72,10 +72,11 @@ fn valid_obj_with_mtl_and_texture_renders() {
         (m.roughness - (2.0f32 / 202.0).sqrt()).abs() < 1e-6,
         "roughness from Ns"
     );
-    assert!(
-        m.albedo.x > m.albedo.y && m.albedo.y > m.albedo.z,
-        "texture tint applied: {:?}",
-        m.albedo
+    assert_eq!(m.albedo, glam::Vec3::new(1.0, 0.2, 0.2), "Kd is the factor");
+    let t = &scene.textures[m.texture.expect("map_Kd gives a texture") as usize];
+    assert_eq!(
+        (t.image.dimensions(), t.image.get_pixel(1, 2).0),
+        ((4, 4), [200, 100, 50, 255])
     );
 }
 
@@ -143,8 +144,8 @@ fn texture_options_before_the_file_name() {
     let (ok, stderr) = run(&["--scene", &obj], dir.path());
     assert!(ok, "{stderr}");
     let scene = speculum::scene::load_with(&obj, speculum::scene::Floor::None).unwrap();
-    let a = scene.materials[0].albedo;
-    assert!(a.x > 0.9 && a.y < 0.01 && a.z < 0.01, "the red texture's mean: {a}");
+    let t = scene.materials[0].texture.expect("the file after the options");
+    assert_eq!(scene.textures[t as usize].image.get_pixel(0, 0).0, [255, 0, 0, 255]);
 }
 
 #[test]
@@ -155,12 +156,65 @@ fn malformed_mtl_file() {
     assert_fails(&["--scene", &obj], dir.path(), &["invalid MTL file", "bad.mtl"]);
 }
 
+/// A missing texture, like a missing MTL file, is a warning: the material keeps its
+/// colour. (Scans and downloads often lose their textures; the geometry still renders.)
 #[test]
 fn missing_texture() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "t.mtl", "newmtl x\nKd 1 1 1\nmap_Kd gone.png\n");
     let obj = write(dir.path(), "a.obj", &format!("mtllib t.mtl\nusemtl x\n{CUBE_FACES}"));
-    assert_fails(&["--scene", &obj], dir.path(), &["cannot read texture", "gone.png"]);
+    let (ok, stderr) = run(&["--scene", &obj], dir.path());
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains("warning: texture") && stderr.contains("gone.png"),
+        "{stderr}"
+    );
+    let scene = speculum::scene::load_with(&obj, speculum::scene::Floor::None).unwrap();
+    assert_eq!((scene.materials[0].texture, scene.textures.len()), (None, 0));
+}
+
+/// A texture that is not PNG or JPEG (here a real BMP) is one error naming the file and
+/// the supported formats; so is a scene file's missing texture.
+#[test]
+fn texture_of_an_unsupported_format() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 2x2 24-bit BMP: file header, BITMAPINFOHEADER, two rows padded to 8 bytes.
+    let mut bmp = Vec::new();
+    bmp.extend(b"BM");
+    bmp.extend(70u32.to_le_bytes());
+    bmp.extend(0u32.to_le_bytes());
+    bmp.extend(54u32.to_le_bytes());
+    for v in [40u32, 2, 2] {
+        bmp.extend(v.to_le_bytes());
+    }
+    bmp.extend(1u16.to_le_bytes());
+    bmp.extend(24u16.to_le_bytes());
+    for v in [0u32, 16, 2835, 2835, 0, 0] {
+        bmp.extend(v.to_le_bytes());
+    }
+    bmp.extend([10u8, 20, 30, 40, 50, 60, 0, 0, 70, 80, 90, 100, 110, 120, 0, 0]);
+    std::fs::write(dir.path().join("t.png"), &bmp).unwrap();
+    write(dir.path(), "t.mtl", "newmtl x\nKd 1 1 1\nmap_Kd t.png\n");
+    let obj = write(dir.path(), "a.obj", &format!("mtllib t.mtl\nusemtl x\n{CUBE_FACES}"));
+    assert_fails(
+        &["--scene", &obj],
+        dir.path(),
+        &[
+            "invalid texture",
+            "t.png",
+            "unsupported texture format Bmp",
+            "PNG, JPEG",
+        ],
+    );
+    let toml = write(
+        dir.path(),
+        "s.toml",
+        "[camera]\nposition = [0.0, 1.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 50.0\n\
+         [sun]\ndirection = [0.0, 1.0, 0.0]\ncolor = [1.0, 1.0, 1.0]\nintensity = 1.0\n\
+         [[materials]]\nname = \"m\"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.5\ntexture = \"none.jpg\"\n\
+         [[instance]]\nplane = [1.0, 1.0]\nmaterial = \"m\"\n",
+    );
+    assert_fails(&["--scene", &toml], dir.path(), &["cannot read texture", "none.jpg"]);
 }
 
 #[test]

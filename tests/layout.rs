@@ -57,6 +57,7 @@ fn material_layout_matches_glsl() {
             albedo,
             roughness,
             reflectivity,
+            texture_layer,
             _pad0
         }),
     );

@@ -13,7 +13,8 @@ struct Material {
     vec3 albedo;
     float roughness;
     float reflectivity;
-    float _pad0[3];
+    uint texture_layer; // TEXTURE_NONE: untextured
+    float _pad0[2];
 };
 
 #define FRAME_UNIFORMS_BLOCK                                                         \

@@ -8,6 +8,7 @@ pub mod merge;
 pub mod reflect;
 pub mod shading;
 pub mod ssr;
+pub mod texture;
 pub mod trace;
 
 /// Decodes tightly packed RGBA16F texels.

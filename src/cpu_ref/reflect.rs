@@ -2,19 +2,23 @@
 //! reflected path through the scene, shaded as the kernel shades it.
 
 use super::shading::{self, ShadowMap};
+use super::texture::{self, TextureArray};
 use super::trace::CpuBvh;
 use crate::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex, Ray};
 use crate::shader_defines::BVH_INVALID;
-use glam::{IVec2, Vec3, Vec4Swizzles};
+use glam::{IVec2, Vec2, Vec3, Vec4Swizzles};
 
-/// What the path sees: the scene's triangles (one static BVH over them), materials,
-/// and the shadow map (unless shadows come from rays).
+/// What the path sees: the scene's triangles (one static BVH over them), their
+/// texture coordinates, materials and textures, and the shadow map (unless shadows
+/// come from rays).
 pub struct PathScene<'a> {
     pub frame: &'a FrameUniforms,
     pub bvh: &'a CpuBvh,
     pub vertices: &'a [GpuVertex],
     pub indices: &'a [u32],
+    pub uvs: &'a [[f32; 2]],
     pub materials: &'a [GpuMaterial],
+    pub textures: &'a TextureArray,
     pub shadow_map: &'a ShadowMap<'a>,
     pub shadow_rays: bool,
 }
@@ -40,6 +44,8 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
     let n = normal.normalize();
     let mut dir = (pos - frame.camera_pos.xyz()).normalize().reflect(n);
     let mut origin = pos + n * offset_scale(frame, pos);
+    let spread = 2.0 / (frame.proj.y_axis.y.abs() * frame.resolution[1] as f32);
+    let mut cone = spread * (pos - frame.camera_pos.xyz()).length();
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
     let mut rays = 0;
@@ -50,9 +56,20 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
             radiance += throughput * shading::sky(frame, dir);
             break;
         }
-        let corner = |k: usize| &s.vertices[s.indices[3 * h.prim as usize + k] as usize];
+        let index = |k: usize| s.indices[3 * h.prim as usize + k] as usize;
+        let corner = |k: usize| &s.vertices[index(k)];
         let (a, b, c) = (corner(0), corner(1), corner(2));
         let m = &s.materials[a.material as usize];
+        cone += spread * h.t;
+        let mut albedo = Vec3::from(m.albedo);
+        if m.texture_layer != crate::shader_defines::TEXTURE_NONE {
+            let t = [0, 1, 2].map(|k| Vec2::from(s.uvs[index(k)]));
+            let uv = (1.0 - h.u - h.v) * t[0] + h.u * t[1] + h.v * t[2];
+            let p = [a, b, c].map(|v| Vec3::from(v.position));
+            let g = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+            let lod = texture::ray_cone_lod(cone, g.dot(dir).abs(), p, t, s.textures.size as f32);
+            albedo = texture::base_color_lod(m, s.textures, uv, lod);
+        }
         let mut hn =
             ((1.0 - h.u - h.v) * Vec3::from(a.normal) + h.u * Vec3::from(b.normal) + h.v * Vec3::from(c.normal))
                 .normalize();
@@ -70,8 +87,7 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
         } else {
             shading::shadow_visibility(frame, s.shadow_map, hp)
         };
-        radiance +=
-            throughput * shading::shade_direct(frame, Vec3::from(m.albedo), m.roughness, m.reflectivity, hn, -dir, vis);
+        radiance += throughput * shading::shade_direct(frame, albedo, m.roughness, m.reflectivity, hn, -dir, vis);
         if m.reflectivity <= 0.0 {
             break;
         }

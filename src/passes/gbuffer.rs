@@ -1,7 +1,7 @@
 //! `gbuffer`: rasterizes the scene from the camera into depth, normal + reflectivity,
 //! albedo + roughness and material id.
 
-use super::{set_viewport, SceneGeometry};
+use super::{set_viewport, SceneGeometry, Surfaces};
 use crate::error::Result;
 use crate::shader_defines::MATERIAL_NONE;
 use crate::shaders;
@@ -14,7 +14,7 @@ pub const NAME: &str = "gbuffer";
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// xyz: unit world normal facing the camera; w: reflectivity.
 pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
-/// rgb: albedo; a: roughness.
+/// rgb: base colour (the albedo times its texture); a: roughness.
 pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// Material index, `MATERIAL_NONE` where no geometry covers the pixel.
 pub const MATERIAL_FORMAT: vk::Format = vk::Format::R32_UINT;
@@ -81,7 +81,13 @@ impl GBufferPass {
 
     /// Records the raster. The targets end in `SHADER_READ_ONLY_OPTIMAL`, visible to
     /// their readers: every later pass of the frame (compute).
-    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, materials: &Buffer, geometry: &SceneGeometry<'_>) {
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        frame: &Buffer,
+        surfaces: &Surfaces<'_>,
+        geometry: &SceneGeometry<'_>,
+    ) {
         use vk::ImageLayout as L;
         let device = &self.ctx.device;
         let [normal, albedo, material] = self.targets.colors();
@@ -147,7 +153,9 @@ impl GBufferPass {
             &[
                 Resource::Buffer(frame),
                 Resource::Buffer(geometry.vertices),
-                Resource::Buffer(materials),
+                Resource::Buffer(surfaces.materials),
+                Resource::Buffer(surfaces.uvs[0]),
+                Resource::Sampled(surfaces.textures, surfaces.sampler),
             ],
             &(),
         );

@@ -47,6 +47,18 @@ pub fn list_groups(groups: u32) -> [u32; 2] {
     [groups.min(LIST_GROUPS_X), groups.div_ceil(LIST_GROUPS_X).max(1)]
 }
 
+/// How the scene's surfaces look, for the passes that shade them (the G-buffer and the
+/// reflection tracer): materials, per-vertex texture coordinates (static and dynamic
+/// geometry; the static ones again while there is no dynamic geometry), and the
+/// texture array with its sampler (`scene::texture`).
+#[derive(Clone, Copy)]
+pub struct Surfaces<'a> {
+    pub materials: &'a crate::vk::Buffer,
+    pub uvs: [&'a crate::vk::Buffer; 2],
+    pub textures: &'a crate::vk::Image,
+    pub sampler: &'a crate::vk::Sampler,
+}
+
 /// The scene's GPU geometry, as raster passes draw it.
 pub struct SceneGeometry<'a> {
     pub vertices: &'a crate::vk::Buffer,

@@ -5,6 +5,7 @@
 use super::gbuffer::GBuffer;
 use super::rt_trace::TraceScene;
 use super::ssr_compact::CompactOutputs;
+use super::Surfaces;
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
@@ -38,7 +39,7 @@ pub struct RtReflectPass {
 pub struct ReflectInputs<'a> {
     pub frame: &'a Buffer,
     pub gbuffer: &'a GBuffer,
-    pub materials: &'a Buffer,
+    pub surfaces: Surfaces<'a>,
     pub shadow_map: &'a Image,
     pub list: &'a CompactOutputs,
     pub scene: TraceScene<'a>,
@@ -79,7 +80,7 @@ impl RtReflectPass {
                 Resource::Buffer(inputs.frame),
                 Resource::Sampled(&inputs.gbuffer.depth, s),
                 Resource::Sampled(&inputs.gbuffer.normal, s),
-                Resource::Buffer(inputs.materials),
+                Resource::Buffer(inputs.surfaces.materials),
                 Resource::Sampled(inputs.shadow_map, s),
                 Resource::Buffer(&inputs.list.pixels),
                 Resource::Buffer(&inputs.list.indirect),
@@ -90,6 +91,9 @@ impl RtReflectPass {
                 dn,
                 dv,
                 di,
+                Resource::Buffer(inputs.surfaces.uvs[0]),
+                Resource::Buffer(inputs.surfaces.uvs[1]),
+                Resource::Sampled(inputs.surfaces.textures, inputs.surfaces.sampler),
             ],
             &push,
             Groups::Indirect(&inputs.list.indirect),

@@ -80,6 +80,10 @@ pub struct MaterialDesc {
     /// Specular reflectance in [0, 1] (0: no reflection traced).
     #[serde(default)]
     pub reflectivity: f32,
+    /// A base-colour texture (PNG or JPEG, relative to the scene file) multiplying
+    /// `base_color` per texel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texture: Option<String>,
 }
 
 /// What an instance places: exactly one of the shape keys.
@@ -196,7 +200,11 @@ impl SceneFile {
             if ids.iter().any(|(n, _)| n == &m.name) {
                 return Err(bad(format!("material '{}' is defined twice", m.name)));
             }
-            let id = b.material(Material::new(&m.name, m.base_color, m.roughness, m.reflectivity));
+            let mut material = Material::new(&m.name, m.base_color, m.roughness, m.reflectivity);
+            if let Some(file) = &m.texture {
+                material.texture = Some(b.texture(super::texture::load(&dir.join(file))?));
+            }
+            let id = b.material(material);
             ids.push((m.name.clone(), id));
         }
         let find = |i: usize, name: &str| {

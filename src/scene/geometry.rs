@@ -1,13 +1,16 @@
-//! Procedural triangle meshes: quads, boxes and UV spheres, with outward normals and
-//! counter-clockwise winding seen from outside.
+//! Procedural triangle meshes: quads, boxes and UV spheres, with outward normals,
+//! texture coordinates and counter-clockwise winding seen from outside.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 
 /// An indexed triangle mesh in its own space.
 #[derive(Clone, Debug, Default)]
 pub struct TriMesh {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
+    /// Texture coordinates per vertex (u right, v down the image: glTF's and Vulkan's
+    /// convention), or empty when the mesh has none (all (0, 0)).
+    pub uvs: Vec<Vec2>,
     pub indices: Vec<u32>,
 }
 
@@ -23,12 +26,14 @@ impl TriMesh {
                 Vec3::new(x, 0.0, -z),
             ],
             normals: vec![Vec3::Y; 4],
+            // The image upright seen from above, +z towards the viewer.
+            uvs: vec![Vec2::ZERO, Vec2::Y, Vec2::ONE, Vec2::X],
             indices: vec![0, 1, 2, 0, 2, 3],
         }
     }
 
     /// An axis-aligned box of the given full extents centred at the origin, with flat
-    /// faces (24 vertices).
+    /// faces (24 vertices), each face mapped to the whole texture.
     pub fn cuboid(size: Vec3) -> Self {
         let h = 0.5 * size;
         let mut mesh = Self::default();
@@ -46,6 +51,7 @@ impl TriMesh {
             for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
                 mesh.positions.push((n + u * su + v * sv) * h);
                 mesh.normals.push(n);
+                mesh.uvs.push(Vec2::new(0.5 + 0.5 * su, 0.5 - 0.5 * sv));
             }
             mesh.indices
                 .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
@@ -53,7 +59,8 @@ impl TriMesh {
         mesh
     }
 
-    /// A UV sphere of `radius` with `segments` around and `rings` from pole to pole.
+    /// A UV sphere of `radius` with `segments` around and `rings` from pole to pole;
+    /// u runs once around (east from +x), v from the north pole (0) to the south (1).
     pub fn sphere(radius: f32, segments: u32, rings: u32) -> Self {
         let mut mesh = Self::default();
         for r in 0..=rings {
@@ -63,6 +70,8 @@ impl TriMesh {
                 let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
                 mesh.positions.push(n * radius);
                 mesh.normals.push(n);
+                mesh.uvs
+                    .push(Vec2::new(s as f32 / segments as f32, r as f32 / rings as f32));
             }
         }
         let row = segments + 1;
@@ -101,10 +110,11 @@ pub const CREASE_ANGLE_DEG: f32 = 60.0;
 /// Vertex normals for a mesh that has none: equal positions are welded first, then
 /// each corner of a triangle gets the angle-weighted mean of the normals of the faces
 /// around its vertex that meet its own face at less than `crease_deg` (Thürmer & Wüthrich
-/// 1998, "Computing vertex normals from polygonal facets"). Corners whose normals
-/// differ get vertices of their own. Degenerate triangles keep their corners' normals
-/// from their neighbours (or +y alone).
-pub fn smooth_normals(positions: &[Vec3], indices: &[u32], crease_deg: f32) -> TriMesh {
+/// 1998, "Computing vertex normals from polygonal facets"). Corners whose normals or
+/// texture coordinates (`uvs`, per input vertex, or empty) differ get vertices of their
+/// own. Degenerate triangles keep their corners' normals from their neighbours (or +y
+/// alone).
+pub fn smooth_normals(positions: &[Vec3], uvs: &[Vec2], indices: &[u32], crease_deg: f32) -> TriMesh {
     use std::collections::HashMap;
     // Weld: one id per distinct position (bitwise; -0 and 0 alike).
     let key = |p: Vec3| (p + Vec3::ZERO).to_array().map(f32::to_bits);
@@ -138,7 +148,8 @@ pub fn smooth_normals(positions: &[Vec3], indices: &[u32], crease_deg: f32) -> T
     }
     let cos_crease = crease_deg.to_radians().cos();
     let mut out = TriMesh::default();
-    let mut made: HashMap<(u32, [u32; 3]), u32> = HashMap::new();
+    let mut made: HashMap<(u32, [u32; 3], [u32; 2]), u32> = HashMap::new();
+    let uv_of = |i: u32| uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO);
     for (ti, t) in tris.iter().enumerate() {
         for k in 0..3 {
             let w = welded[t[k] as usize];
@@ -154,9 +165,14 @@ pub fn smooth_normals(positions: &[Vec3], indices: &[u32], crease_deg: f32) -> T
             }
             let n = n.normalize_or(if face[ti] == Vec3::ZERO { Vec3::Y } else { face[ti] });
             let p = positions[t[k] as usize];
-            let index = *made.entry((w, n.to_array().map(f32::to_bits))).or_insert_with(|| {
+            let uv = uv_of(t[k]);
+            let key = (w, n.to_array().map(f32::to_bits), uv.to_array().map(f32::to_bits));
+            let index = *made.entry(key).or_insert_with(|| {
                 out.positions.push(p);
                 out.normals.push(n);
+                if !uvs.is_empty() {
+                    out.uvs.push(uv);
+                }
                 out.positions.len() as u32 - 1
             });
             out.indices.push(index);
@@ -188,7 +204,7 @@ mod tests {
             .iter()
             .flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]])
             .collect();
-        let m = smooth_normals(&p, &indices, CREASE_ANGLE_DEG);
+        let m = smooth_normals(&p, &[], &indices, CREASE_ANGLE_DEG);
         assert_eq!(m.positions.len(), 24);
         for t in m.indices.chunks_exact(3) {
             let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
@@ -204,7 +220,7 @@ mod tests {
     #[test]
     fn a_sphere_is_smooth_across_its_seam() {
         let s = TriMesh::sphere(2.0, 24, 12);
-        let m = smooth_normals(&s.positions, &s.indices, CREASE_ANGLE_DEG);
+        let m = smooth_normals(&s.positions, &[], &s.indices, CREASE_ANGLE_DEG);
         for (p, n) in m.positions.iter().zip(&m.normals) {
             assert!(n.dot(p.normalize()) > 0.99, "{p} {n}");
         }
@@ -214,5 +230,15 @@ mod tests {
             .map(|&i| (s.positions[i as usize] + Vec3::ZERO).to_array().map(f32::to_bits))
             .collect();
         assert_eq!(m.positions.len(), distinct.len(), "one vertex per welded position");
+        // With texture coordinates the seam's vertices stay apart (u = 0 and u = 1) but
+        // share the smoothed normal, and each keeps its own coordinates.
+        let m = smooth_normals(&s.positions, &s.uvs, &s.indices, CREASE_ANGLE_DEG);
+        assert_eq!(m.uvs.len(), m.positions.len());
+        assert!(m.positions.len() > distinct.len());
+        for ((p, n), uv) in m.positions.iter().zip(&m.normals).zip(&m.uvs) {
+            assert!(n.dot(p.normalize()) > 0.99, "{p} {n}");
+            let k = s.positions.iter().zip(&s.uvs).position(|(q, w)| q == p && w == uv);
+            assert!(k.is_some(), "vertex {p} {uv} is one of the input's");
+        }
     }
 }

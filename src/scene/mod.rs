@@ -13,13 +13,16 @@ pub mod gltf;
 pub mod obj;
 pub mod ply;
 pub mod soup;
+pub mod texture;
 
 pub use camera::Camera;
 pub use geometry::TriMesh;
+pub use texture::Texture;
 
 use crate::error::{Error, Result};
 use crate::gpu_types::{GpuMaterial, GpuVertex};
-use glam::{Mat4, Vec3};
+use crate::shader_defines::TEXTURE_NONE;
+use glam::{Mat4, Vec2, Vec3};
 
 /// A surface description.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,6 +34,8 @@ pub struct Material {
     pub roughness: f32,
     /// Specular reflectance in [0, 1]; later passes trace reflections where it is > 0.
     pub reflectivity: f32,
+    /// Base-colour texture (an index into `Scene::textures`), multiplying `albedo`.
+    pub texture: Option<u32>,
 }
 
 impl Material {
@@ -40,7 +45,14 @@ impl Material {
             albedo: Vec3::from(albedo),
             roughness,
             reflectivity,
+            texture: None,
         }
+    }
+
+    /// The same material with base-colour texture `texture` (a `Scene::textures` index).
+    pub fn textured(mut self, texture: u32) -> Self {
+        self.texture = Some(texture);
+        self
     }
 
     pub fn gpu(&self) -> GpuMaterial {
@@ -48,7 +60,8 @@ impl Material {
             albedo: self.albedo.clamp(Vec3::ZERO, Vec3::ONE).to_array(),
             roughness: self.roughness.clamp(0.0, 1.0),
             reflectivity: self.reflectivity.clamp(0.0, 1.0),
-            _pad0: [0.0; 3],
+            texture_layer: self.texture.unwrap_or(TEXTURE_NONE),
+            _pad0: [0.0; 2],
         }
     }
 }
@@ -76,8 +89,12 @@ pub struct Sky {
 pub struct Scene {
     pub name: String,
     pub vertices: Vec<GpuVertex>,
+    /// Texture coordinates of each vertex (same length as `vertices`).
+    pub uvs: Vec<[f32; 2]>,
     pub indices: Vec<u32>,
     pub materials: Vec<Material>,
+    /// Base-colour textures, which materials name by index.
+    pub textures: Vec<Texture>,
     pub camera: Camera,
     pub light: Light,
     pub sky: Sky,
@@ -97,8 +114,10 @@ impl SceneBuilder {
             scene: Scene {
                 name: name.into(),
                 vertices: Vec::new(),
+                uvs: Vec::new(),
                 indices: Vec::new(),
                 materials: Vec::new(),
+                textures: Vec::new(),
                 camera: Camera {
                     position: Vec3::new(0.0, 2.0, 6.0),
                     target: Vec3::ZERO,
@@ -127,10 +146,18 @@ impl SceneBuilder {
         self.scene.materials.len() as u32 - 1
     }
 
+    /// Adds a texture and returns its index, for `Material::textured`.
+    pub fn texture(&mut self, t: Texture) -> u32 {
+        self.scene.textures.push(t);
+        self.scene.textures.len() as u32 - 1
+    }
+
     /// Adds a mesh moved by `transform`, using material `material`.
     pub fn mesh(&mut self, mesh: TriMesh, transform: Mat4, material: u32) -> &mut Self {
         let mesh = mesh.transformed(transform);
         let base = self.scene.vertices.len() as u32;
+        let uvs = (0..mesh.positions.len()).map(|i| mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO).to_array());
+        self.scene.uvs.extend(uvs);
         self.scene
             .vertices
             .extend(mesh.positions.iter().zip(&mesh.normals).map(|(p, n)| GpuVertex {
@@ -148,8 +175,14 @@ impl SceneBuilder {
     pub fn append(&mut self, scene: &Scene, transform: Mat4, material: Option<u32>) -> &mut Self {
         let offset = self.scene.materials.len() as u32;
         if material.is_none() {
-            self.scene.materials.extend(scene.materials.iter().cloned());
+            let textures = self.scene.textures.len() as u32;
+            self.scene.textures.extend(scene.textures.iter().cloned());
+            self.scene.materials.extend(scene.materials.iter().map(|m| Material {
+                texture: m.texture.map(|t| t + textures),
+                ..m.clone()
+            }));
         }
+        self.scene.uvs.extend(&scene.uvs);
         let normals = transform.inverse().transpose();
         let base = self.scene.vertices.len() as u32;
         self.scene.vertices.extend(scene.vertices.iter().map(|v| {
@@ -224,6 +257,31 @@ impl Scene {
             return bad(format!(
                 "{} indices is not a whole number of triangles",
                 self.indices.len()
+            ));
+        }
+        if self.uvs.len() != self.vertices.len() {
+            return bad(format!(
+                "{} texture coordinates for {} vertices",
+                self.uvs.len(),
+                self.vertices.len()
+            ));
+        }
+        if let Some(i) = self.uvs.iter().position(|uv| !uv.iter().all(|c| c.is_finite())) {
+            return bad(format!(
+                "vertex {i} has non-finite texture coordinates {:?}",
+                self.uvs[i]
+            ));
+        }
+        if let Some(m) = self
+            .materials
+            .iter()
+            .find(|m| m.texture.is_some_and(|t| t as usize >= self.textures.len()))
+        {
+            return bad(format!(
+                "material '{}' uses texture {} but the scene has {}",
+                m.name,
+                m.texture.unwrap_or_default(),
+                self.textures.len()
             ));
         }
         if let Some(i) = self.indices.iter().position(|&i| i as usize >= self.vertices.len()) {

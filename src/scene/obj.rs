@@ -1,51 +1,31 @@
 //! OBJ + MTL loading through tobj.
 //!
 //! Material mapping (MTL → Speculum):
-//! - albedo = `Kd` (grey 0.8 without one), times the mean colour of `map_Kd` when the
-//!   material has a diffuse texture (textures are not sampled per texel yet);
+//! - albedo = `Kd` (grey 0.8 without one), multiplied per texel by the `map_Kd`
+//!   texture when the material has one (PNG or JPEG; a missing file is a warning and
+//!   the material is untextured, one that does not decode an error);
 //! - roughness = `Pr` when given, else `sqrt(2 / (Ns + 2))` (the Blinn-Phong exponent
 //!   to Beckmann roughness mapping), else 0.8;
 //! - reflectivity = `refl` (a Speculum key) or `Pm` when given, else `max(Ks)` for
 //!   illumination models 3-9 (the MTL models with reflection on), else 0.
 //!
-//! Faces are triangulated; missing normals are computed by `geometry::smooth_normals`
+//! Faces are triangulated; texture coordinates are read with v flipped (OBJ's v runs
+//! up the image, Speculum's down); missing normals are computed by `geometry::smooth_normals`
 //! (equal positions welded, angle-weighted, creases sharper than 60 degrees kept).
 //! A missing MTL file is a warning, its materials the default; `map_Kd` options are
 //! skipped to the file name.
 
 use super::geometry::{smooth_normals, CREASE_ANGLE_DEG};
+use super::texture;
 use super::{Camera, Material, Scene, SceneBuilder, TriMesh};
 use crate::error::{Error, Result};
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 use std::cell::RefCell;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 fn mtl_number(m: &tobj::Material, key: &str) -> Option<f32> {
     m.unknown_param.get(key).and_then(|v| v.trim().parse::<f32>().ok())
-}
-
-/// Mean linear RGB of a texture file, which must exist and decode.
-fn texture_mean(path: &Path) -> Result<Vec3> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        what: "texture",
-        path: path.into(),
-        source,
-    })?;
-    let img = image::load_from_memory(&bytes).map_err(|e| Error::BadAsset {
-        what: "texture",
-        path: path.into(),
-        detail: e.to_string(),
-    })?;
-    let rgb = img.to_rgb32f();
-    let n = (rgb.width() as f64 * rgb.height() as f64).max(1.0);
-    let mut sum = [0f64; 3];
-    for p in rgb.pixels() {
-        for (s, c) in sum.iter_mut().zip(p.0) {
-            // sRGB-encoded texels to linear (the usual 2.2 approximation suffices for a mean).
-            *s += (c as f64).powf(2.2);
-        }
-    }
-    Ok(Vec3::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32))
 }
 
 /// The file name of a texture statement's arguments (`map_Kd -s 2 2 1 -bm 0.5 a b.png`
@@ -96,13 +76,48 @@ fn out_of_range(m: &tobj::Material, roughness: f32, reflectivity: f32) -> Vec<St
     notes
 }
 
+/// The scene's textures by file, each loaded once.
+#[derive(Default)]
+struct Textures {
+    by_path: HashMap<PathBuf, Option<u32>>,
+}
+
+impl Textures {
+    /// The index of texture file `path` in `b`, loading it on first use; `None` (and a
+    /// warning) when the file does not exist.
+    fn get(&mut self, b: &mut SceneBuilder, path: PathBuf, warnings: &mut Vec<String>) -> Result<Option<u32>> {
+        if let Some(&id) = self.by_path.get(&path) {
+            return Ok(id);
+        }
+        let id = match texture::load(&path) {
+            Ok(t) => Some(b.texture(t)),
+            Err(Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
+                warnings.push(format!(
+                    "texture '{}' not found: its materials use their colour alone",
+                    path.display()
+                ));
+                None
+            }
+            Err(e) => return Err(e),
+        };
+        self.by_path.insert(path, id);
+        Ok(id)
+    }
+}
+
 /// A material of the MTL file `mtl` (for messages; textures resolve against `dir`),
 /// and the warning its out-of-range values raise, if any.
-fn convert_material(m: &tobj::Material, dir: &Path, mtl: &Path) -> Result<(Material, Option<String>)> {
-    let mut albedo = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
-    if let Some(tex) = m.diffuse_texture.as_deref().and_then(texture_file) {
-        albedo *= texture_mean(&dir.join(tex))?;
-    }
+fn convert_material(
+    m: &tobj::Material,
+    dir: &Path,
+    mtl: &Path,
+    textures: &mut dyn FnMut(PathBuf) -> Result<Option<u32>>,
+) -> Result<(Material, Option<String>)> {
+    let albedo = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
+    let texture = match m.diffuse_texture.as_deref().and_then(texture_file) {
+        Some(file) => textures(dir.join(file))?,
+        None => None,
+    };
     let roughness = mtl_number(m, "Pr")
         .or_else(|| m.shininess.map(|ns| (2.0 / (ns.max(0.0) + 2.0)).sqrt()))
         .unwrap_or(0.8);
@@ -116,7 +131,8 @@ fn convert_material(m: &tobj::Material, dir: &Path, mtl: &Path) -> Result<(Mater
                 0.0
             }
         });
-    let mat = Material::new(&m.name, albedo.to_array(), roughness, reflectivity);
+    let mut mat = Material::new(&m.name, albedo.to_array(), roughness, reflectivity);
+    mat.texture = texture;
     if !(mat.albedo.is_finite() && mat.roughness.is_finite() && mat.reflectivity.is_finite()) {
         return Err(Error::BadAsset {
             what: "MTL file",
@@ -240,8 +256,13 @@ pub fn load(path: &Path) -> Result<Scene> {
     };
     let mut warnings = missing_mtl;
     let mut ids = Vec::new();
+    let mut textures = Textures::default();
     for m in &materials {
-        let (material, warning) = convert_material(m, &dir, &mtl)?;
+        let mut texture_warnings = Vec::new();
+        let (material, warning) = convert_material(m, &dir, &mtl, &mut |path| {
+            textures.get(&mut b, path, &mut texture_warnings)
+        })?;
+        warnings.extend(texture_warnings);
         ids.push(b.material(material));
         warnings.extend(warning);
     }
@@ -265,6 +286,23 @@ pub fn load(path: &Path) -> Result<Scene> {
                 ),
             });
         }
+        let uvs: Vec<Vec2> = if mesh.texcoords.len() == 2 * positions.len() {
+            mesh.texcoords
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        if let Some(i) = uvs.iter().position(|t| !t.is_finite()) {
+            return Err(Error::BadGeometry {
+                source_name: path.display().to_string(),
+                detail: format!(
+                    "object '{}' vertex {i} has non-finite texture coordinates {:?}",
+                    model.name, uvs[i]
+                ),
+            });
+        }
         let geometry = if mesh.normals.len() == mesh.positions.len() {
             let normals = mesh
                 .normals
@@ -274,10 +312,11 @@ pub fn load(path: &Path) -> Result<Scene> {
             TriMesh {
                 positions,
                 normals,
+                uvs,
                 indices: mesh.indices.clone(),
             }
         } else {
-            smooth_normals(&positions, &mesh.indices, CREASE_ANGLE_DEG)
+            smooth_normals(&positions, &uvs, &mesh.indices, CREASE_ANGLE_DEG)
         };
         let material = match mesh.material_id.and_then(|i| ids.get(i)) {
             Some(&id) => id,

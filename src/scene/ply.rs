@@ -70,12 +70,13 @@ pub fn load(path: &Path) -> Result<Scene> {
     }
     let mesh = if normals.len() == positions.len() {
         TriMesh {
+            uvs: Vec::new(),
             positions,
             normals,
             indices,
         }
     } else {
-        smooth_normals(&positions, &indices, CREASE_ANGLE_DEG)
+        smooth_normals(&positions, &[], &indices, CREASE_ANGLE_DEG)
     };
     let name = path
         .file_stem()

@@ -1,4 +1,5 @@
-//! 2D images with a view and a debug name, samplers, and readback for tests and PNGs.
+//! 2D images with a view and a debug name, 2D array textures with mip chains,
+//! samplers, and readback for tests and PNGs.
 
 use super::barrier::{self, access};
 use super::buffer::Buffer;
@@ -9,7 +10,8 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
-/// A 2D single-mip image with one view; freed on drop.
+/// A 2D image with one view over all its layers and mips (single-mip, single-layer
+/// unless made by `texture_array`); freed on drop.
 pub struct Image {
     ctx: Arc<Context>,
     pub raw: vk::Image,
@@ -17,6 +19,8 @@ pub struct Image {
     pub format: vk::Format,
     pub extent: vk::Extent2D,
     pub aspect: vk::ImageAspectFlags,
+    pub layers: u32,
+    pub mips: u32,
     allocation: Option<Allocation>,
 }
 
@@ -40,6 +44,18 @@ impl Image {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
     ) -> Result<Self> {
+        Self::create(ctx, name, extent, format, usage, (1, 1))
+    }
+
+    /// `new` with (array layers, mip levels); more than one layer gets a 2D-array view.
+    fn create(
+        ctx: &Arc<Context>,
+        name: &str,
+        extent: vk::Extent2D,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        (layers, mips): (u32, u32),
+    ) -> Result<Self> {
         if extent.width == 0 || extent.height == 0 {
             return Err(Error::Settings(format!(
                 "image '{name}' of {}x{} has no texels",
@@ -52,6 +68,13 @@ impl Image {
             "texels per side",
             "maxImageDimension2D",
             ctx.limits.max_image_dimension2_d as u64,
+        )?;
+        ctx.check_limit(
+            || format!("image '{name}'"),
+            layers as u64,
+            "array layers",
+            "maxImageArrayLayers",
+            ctx.limits.max_image_array_layers as u64,
         )?;
         let aspect = if format == vk::Format::D32_SFLOAT {
             vk::ImageAspectFlags::DEPTH
@@ -66,8 +89,8 @@ impl Image {
                 height: extent.height,
                 depth: 1,
             })
-            .mip_levels(1)
-            .array_layers(1)
+            .mip_levels(mips)
+            .array_layers(layers)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
@@ -97,19 +120,25 @@ impl Image {
             format,
             extent,
             aspect,
+            layers,
+            mips,
             allocation: Some(allocation),
         };
         let a = image.allocation.as_ref().expect("just set");
         unsafe { ctx.device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
-            .view_type(vk::ImageViewType::TYPE_2D)
+            .view_type(if layers > 1 {
+                vk::ImageViewType::TYPE_2D_ARRAY
+            } else {
+                vk::ImageViewType::TYPE_2D
+            })
             .format(format)
             .subresource_range(
                 vk::ImageSubresourceRange::default()
                     .aspect_mask(aspect)
-                    .level_count(1)
-                    .layer_count(1),
+                    .level_count(mips)
+                    .layer_count(layers),
             );
         image.view = unsafe { ctx.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
         ctx.set_name(raw, name);
@@ -133,6 +162,113 @@ impl Image {
                 (access::NONE, access::ALL_READ_WRITE),
                 (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
             )
+        })?;
+        Ok(image)
+    }
+
+    /// A sampled `R8G8B8A8_SRGB` 2D array texture of `size`² layers, each given as its
+    /// full mip chain (largest first, tightly packed RGBA8 rows; `scene::texture::
+    /// mip_chain`), uploaded and left in `SHADER_READ_ONLY_OPTIMAL`. The view is a 2D
+    /// array even for one layer, as `sampler2DArray` needs.
+    pub fn texture_array(ctx: &Arc<Context>, name: &str, size: u32, layers: &[Vec<&[u8]>]) -> Result<Self> {
+        let mips = size.ilog2() + 1;
+        let extent = vk::Extent2D {
+            width: size,
+            height: size,
+        };
+        let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        let format = vk::Format::R8G8B8A8_SRGB;
+        let mut image = Self::create(ctx, name, extent, format, usage, (layers.len().max(1) as u32, mips))?;
+        if layers.len() == 1 {
+            // One layer: the plain view above is 2D; sampler2DArray needs a 2D array view.
+            unsafe { ctx.device.destroy_image_view(image.view, None) };
+            let info = vk::ImageViewCreateInfo::default()
+                .image(image.raw)
+                .view_type(vk::ImageViewType::TYPE_2D_ARRAY)
+                .format(format)
+                .subresource_range(
+                    vk::ImageSubresourceRange::default()
+                        .aspect_mask(image.aspect)
+                        .level_count(mips)
+                        .layer_count(1),
+                );
+            image.view = unsafe { ctx.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
+            ctx.set_name(image.view, name);
+        }
+        let mut data = Vec::new();
+        let mut regions = Vec::new();
+        for (layer, chain) in layers.iter().enumerate() {
+            assert_eq!(
+                chain.len() as u32,
+                mips,
+                "texture_array: layer {layer} is not a full mip chain"
+            );
+            for (mip, texels) in chain.iter().enumerate() {
+                let edge = (size >> mip).max(1);
+                assert_eq!(
+                    texels.len() as u64,
+                    4 * edge as u64 * edge as u64,
+                    "texture_array: level size"
+                );
+                regions.push(
+                    vk::BufferImageCopy::default()
+                        .buffer_offset(data.len() as u64)
+                        .image_subresource(
+                            vk::ImageSubresourceLayers::default()
+                                .aspect_mask(image.aspect)
+                                .mip_level(mip as u32)
+                                .base_array_layer(layer as u32)
+                                .layer_count(1),
+                        )
+                        .image_extent(vk::Extent3D {
+                            width: edge,
+                            height: edge,
+                            depth: 1,
+                        }),
+                );
+                data.extend_from_slice(texels);
+            }
+        }
+        let mut staging = Buffer::new(
+            ctx,
+            "staging.texture_upload",
+            data.len().max(4) as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.mapped_mut().expect("CpuToGpu is mapped")[..data.len()].copy_from_slice(&data);
+        let device = &ctx.device;
+        ctx.one_shot(|cmd| {
+            let to_dst = barrier::image(
+                image.raw,
+                image.aspect,
+                access::NONE,
+                access::TRANSFER_WRITE,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            );
+            barrier::record(device, cmd, &[], &[to_dst]);
+            if !regions.is_empty() {
+                unsafe {
+                    device.cmd_copy_buffer_to_image(
+                        cmd,
+                        staging.raw,
+                        image.raw,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &regions,
+                    )
+                };
+            }
+            // RAW: every later shader read sees the uploaded texels.
+            let done = barrier::image(
+                image.raw,
+                image.aspect,
+                access::TRANSFER_WRITE,
+                access::ANY_SHADER_READ,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            );
+            barrier::record(device, cmd, &[], &[done]);
         })?;
         Ok(image)
     }
@@ -287,7 +423,24 @@ impl Sampler {
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .max_lod(0.0);
-        let raw = unsafe { ctx.device.create_sampler(&info, None) }.vk("vkCreateSampler")?;
+        Self::create(ctx, name, &info)
+    }
+
+    /// Trilinear (linear texels, linear between mips), repeating: for textures.
+    pub fn trilinear_repeat(ctx: &Arc<Context>, name: &str) -> Result<Self> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(vk::SamplerAddressMode::REPEAT)
+            .address_mode_v(vk::SamplerAddressMode::REPEAT)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(vk::LOD_CLAMP_NONE);
+        Self::create(ctx, name, &info)
+    }
+
+    fn create(ctx: &Arc<Context>, name: &str, info: &vk::SamplerCreateInfo<'_>) -> Result<Self> {
+        let raw = unsafe { ctx.device.create_sampler(info, None) }.vk("vkCreateSampler")?;
         ctx.set_name(raw, name);
         Ok(Self { ctx: ctx.clone(), raw })
     }

@@ -1,6 +1,8 @@
 //! Shared test helpers: a validated context and the zero-message check.
 #![allow(dead_code)]
 
+pub mod showcase;
+
 use speculum::vk::{Context, ContextDesc};
 use std::sync::Arc;
 

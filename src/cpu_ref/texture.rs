@@ -1,0 +1,85 @@
+//! Reference of `glsl/shared/surface.glsl` and of Vulkan's trilinear, repeating
+//! lookup in an `R8G8B8A8_SRGB` 2D array texture (texels decoded to linear before
+//! filtering, as the spec orders).
+
+use crate::gpu_types::GpuMaterial;
+use crate::scene::texture::srgb_to_linear;
+use crate::shader_defines::TEXTURE_NONE;
+use glam::{Vec2, Vec3, Vec4};
+
+/// A texture array as the GPU holds it: layers of `size`², each a mip chain of
+/// tightly packed sRGB RGBA8 levels (`scene::texture::layers`).
+pub struct TextureArray {
+    pub size: u32,
+    pub layers: Vec<Vec<image::RgbaImage>>,
+}
+
+impl TextureArray {
+    pub fn new(textures: &[crate::scene::Texture], max: u32) -> Self {
+        let (size, layers) = crate::scene::texture::layers(textures, max);
+        Self { size, layers }
+    }
+
+    fn texel(&self, layer: usize, level: usize, x: i32, y: i32) -> Vec4 {
+        let img = &self.layers[layer][level];
+        let (w, h) = (img.width() as i32, img.height() as i32);
+        let p = img.get_pixel(x.rem_euclid(w) as u32, y.rem_euclid(h) as u32).0;
+        Vec4::new(
+            srgb_to_linear(p[0]),
+            srgb_to_linear(p[1]),
+            srgb_to_linear(p[2]),
+            p[3] as f32 / 255.0,
+        )
+    }
+
+    fn bilinear(&self, layer: usize, level: usize, uv: Vec2) -> Vec4 {
+        let edge = self.layers[layer][level].width() as f32;
+        let t = uv * edge - 0.5;
+        let i = t.floor();
+        let f = t - i;
+        let (x, y) = (i.x as i32, i.y as i32);
+        let row = |y: i32| {
+            self.texel(layer, level, x, y)
+                .lerp(self.texel(layer, level, x + 1, y), f.x)
+        };
+        row(y).lerp(row(y + 1), f.y)
+    }
+
+    /// `textureLod(textures, vec3(uv, layer), lod)`: the level clamped to the chain,
+    /// linear between the two nearest levels.
+    pub fn sample_lod(&self, layer: u32, uv: Vec2, lod: f32) -> Vec4 {
+        let layer = layer as usize;
+        let last = (self.layers[layer].len() - 1) as f32;
+        let lod = lod.clamp(0.0, last);
+        let d0 = lod.floor();
+        let f = lod - d0;
+        let a = self.bilinear(layer, d0 as usize, uv);
+        if f == 0.0 {
+            return a;
+        }
+        a.lerp(self.bilinear(layer, (d0 + 1.0).min(last) as usize, uv), f)
+    }
+}
+
+/// `base_color_lod`.
+pub fn base_color_lod(m: &GpuMaterial, textures: &TextureArray, uv: Vec2, lod: f32) -> Vec3 {
+    let albedo = Vec3::from(m.albedo);
+    if m.texture_layer == TEXTURE_NONE {
+        return albedo;
+    }
+    albedo * textures.sample_lod(m.texture_layer, uv, lod).truncate()
+}
+
+/// `ray_cone_lod`.
+pub fn ray_cone_lod(width: f32, cos_incidence: f32, p: [Vec3; 3], uv: [Vec2; 3], texels: f32) -> f32 {
+    let (e1, e2) = (uv[1] - uv[0], uv[2] - uv[0]);
+    let t_area = texels * texels * (e1.x * e2.y - e1.y * e2.x).abs();
+    let p_area = (p[1] - p[0]).cross(p[2] - p[0]).length();
+    // `!(x > 0)` as in GLSL: NaN areas take the finest level too.
+    if t_area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+        || p_area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    {
+        return 0.0;
+    }
+    0.5 * (t_area / p_area).log2() + (width / cos_incidence.max(1e-4)).log2()
+}

@@ -1,14 +1,20 @@
 #version 460
-// compose: exposure, ACES tonemap (Narkowicz 2015 fit) and sRGB encoding to LDR.
-// Mirrored by cpu_ref::compose.
+// compose: the lit colour plus the merged reflection weighted by the surface's
+// reflectivity and Fresnel term (shading.glsl), then exposure, ACES tonemap (Narkowicz
+// 2015 fit) and sRGB encoding to LDR. Mirrored by cpu_ref::compose.
+#include "shading.glsl"
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
 
-layout(binding = 0, rgba32f) uniform readonly image2D hdr;
-layout(binding = 1, rgba8) uniform writeonly image2D ldr;
-// rgb: reflected radiance; a: source (SOURCE_*). Added weighted by reflectivity.
-layout(binding = 2, rgba32f) uniform readonly image2D reflection;
-layout(binding = 3) uniform sampler2D gb_normal; // w: reflectivity
+layout(binding = 1, rgba32f) uniform readonly image2D hdr;
+layout(binding = 2, rgba8) uniform writeonly image2D ldr;
+// rgb: reflected radiance; a: source (SOURCE_*).
+layout(binding = 3, rgba32f) uniform readonly image2D reflection;
+layout(binding = 4) uniform sampler2D gb_normal; // w: reflectivity
+layout(binding = 5) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
+layout(binding = 6) uniform sampler2D gb_depth;
+layout(binding = 7) uniform usampler2D gb_material;
+layout(binding = 8, std430) readonly buffer Materials { Material materials[]; };
 
 layout(push_constant) uniform ComposePush {
     uvec2 size;
@@ -24,9 +30,6 @@ vec3 aces(vec3 x) {
     return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
 }
 
-vec3 srgb_encode(vec3 c) {
-    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
-}
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -44,7 +47,14 @@ void main() {
             imageStore(ldr, p, vec4(tint * (0.55 + 0.45 * clamp(luma, 0.0, 1.0)), 1.0));
             return;
         }
-        c += texelFetch(gb_normal, p, 0).w * r.rgb;
+        uint material = texelFetch(gb_material, p, 0).r;
+        if (material != MATERIAL_NONE) {
+            vec4 nr = texelFetch(gb_normal, p, 0);
+            vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
+            vec3 w = world_from_depth(p, texelFetch(gb_depth, p, 0).r);
+            vec3 v = normalize(frame.camera_pos.xyz - w);
+            c += reflection_weight(base, materials[material].metallic, nr.w, normalize(nr.xyz), v) * r.rgb;
+        }
     }
     c = max(c, vec3(0.0)) * pc.exposure;
     // NaN-safe: a NaN (e.g. 0 x inf) is black, anything larger than ACES_MAX is ACES_MAX.

@@ -11,18 +11,27 @@ layout(location = 1) in vec3 in_normal;
 layout(location = 2) flat in uint in_material;
 layout(location = 3) in vec2 in_uv;
 
-layout(location = 0) out vec4 out_normal;   // xyz: unit world normal facing the camera; w: reflectivity
-layout(location = 1) out vec4 out_albedo;   // rgb: base colour (textured); a: roughness
+// xyz: unit world normal facing the camera, its mirror direction above the facet; w: reflectivity
+layout(location = 0) out vec4 out_normal;
+layout(location = 1) out vec4 out_albedo;   // rgb: base colour (textured), sRGB-encoded; a: roughness
 layout(location = 2) out uint out_material; // material index (MATERIAL_NONE where empty)
 
 void main() {
+    // The triangle's own plane (from the position's screen derivatives), facing the viewer.
+    vec3 g = cross(dFdx(in_world), dFdy(in_world));
+    vec3 v = normalize(frame.camera_pos.xyz - in_world);
+    g = dot(g, v) < 0.0 ? -normalize(g) : normalize(g);
     Material m = materials[in_material];
     vec3 n = normalize(in_normal);
     // Culling is off (scenes mix windings): make the normal face the viewer.
-    if (dot(n, frame.camera_pos.xyz - in_world) < 0.0) {
+    if (dot(n, v) < 0.0) {
         n = -n;
     }
+    // A mirror direction below the facet would leave through the surface.
+    if (!any(isnan(g)) && !any(isinf(g))) { // a triangle seen edge-on has no plane here
+        n = clamp_bent_normal(n, g, v);
+    }
     out_normal = vec4(n, m.reflectivity);
-    out_albedo = vec4(base_color(m, scene_textures, in_uv), m.roughness);
+    out_albedo = vec4(srgb_encode(base_color(m, scene_textures, in_uv)), m.roughness);
     out_material = in_material;
 }

@@ -6,10 +6,11 @@ layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
 
 layout(binding = 1) uniform sampler2D gb_depth;
 layout(binding = 2) uniform sampler2D gb_normal;
-layout(binding = 3) uniform sampler2D gb_albedo;
+layout(binding = 3) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
 layout(binding = 4) uniform usampler2D gb_material;
 layout(binding = 5) uniform sampler2D shadow_map;
 layout(binding = 6, rgba32f) uniform writeonly image2D lit;
+layout(binding = 7, std430) readonly buffer Materials { Material materials[]; };
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -27,7 +28,8 @@ void main() {
         vec4 nr = texelFetch(gb_normal, p, 0);
         vec4 ar = texelFetch(gb_albedo, p, 0);
         float vis = shadow_visibility(shadow_map, w);
-        color = shade_direct(ar.rgb, ar.a, nr.w, normalize(nr.xyz), normalize(to_camera), vis);
+        float metallic = materials[material].metallic;
+        color = shade_direct(srgb_decode(ar.rgb), ar.a, nr.w, metallic, normalize(nr.xyz), normalize(to_camera), vis);
     }
     imageStore(lit, p, vec4(color, 1.0));
 }

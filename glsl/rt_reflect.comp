@@ -81,12 +81,14 @@ void main() {
         Vertex b = hit_vertex(h.prim, 1u);
         Vertex c = hit_vertex(h.prim, 2u);
         Material m = materials[a.material];
+        // The facet's plane facing the ray.
+        vec3 g = normalize(cross(b.position - a.position, c.position - a.position));
+        g = dot(g, dir) > 0.0 ? -g : g;
         vec3 albedo = m.albedo;
         cone += spread * h.t;
         if (m.texture_layer != TEXTURE_NONE) {
             vec2 ta = hit_uv(h.prim, 0u), tb = hit_uv(h.prim, 1u), tc = hit_uv(h.prim, 2u);
             vec2 uv = (1.0 - h.u - h.v) * ta + h.u * tb + h.v * tc;
-            vec3 g = normalize(cross(b.position - a.position, c.position - a.position));
             float texels = float(textureSize(scene_textures, 0).x);
             float lod = ray_cone_lod(cone, abs(dot(g, dir)), a.position, b.position, c.position, ta, tb, tc, texels);
             albedo = base_color_lod(m, scene_textures, uv, lod);
@@ -95,22 +97,24 @@ void main() {
         if (dot(hn, dir) > 0.0) {
             hn = -hn; // double-sided: face the incoming ray
         }
+        // The next mirror direction stays above the facet.
+        hn = clamp_bent_normal(hn, g, -dir);
         vec3 hp = origin + dir * h.t;
         float vis;
         if (pc.shadow_rays != 0u) {
-            vec3 so = hp + hn * offset_scale(hp);
+            vec3 so = hp + g * offset_scale(hp);
             Hit sh = trace_ray(so, frame.light_dir.xyz, 0.0, 3.0e38, pc.static_tris, pc.dynamic_tris, true);
             vis = sh.prim == BVH_INVALID ? 1.0 : 0.0;
         } else {
             vis = shadow_visibility(shadow_map, hp);
         }
-        radiance += throughput * shade_direct(albedo, m.roughness, m.reflectivity, hn, -dir, vis);
+        radiance += throughput * shade_direct(albedo, m.roughness, m.reflectivity, m.metallic, hn, -dir, vis);
         if (m.reflectivity <= 0.0) {
             break;
         }
-        throughput *= m.reflectivity;
+        throughput *= reflection_weight(albedo, m.metallic, m.reflectivity, hn, -dir);
         dir = reflect(dir, hn);
-        origin = hp + hn * offset_scale(hp);
+        origin = hp + g * offset_scale(hp); // off the facet itself, whatever the normal
     }
     imageStore(rt_out, p, vec4(radiance, 1.0));
 }

@@ -30,7 +30,9 @@ pub struct GpuMaterial {
     pub reflectivity: f32,
     /// Layer of the scene's texture array multiplying `albedo`, or `TEXTURE_NONE`.
     pub texture_layer: u32,
-    pub _pad0: [f32; 2],
+    /// 0: dielectric (specular reflectance 0.04), 1: metal (reflectance = `albedo`).
+    pub metallic: f32,
+    pub _pad0: f32,
 }
 
 /// Per-frame constants (std140 uniform buffer, 432 bytes).

@@ -376,7 +376,9 @@ impl Renderer {
         timer.scope(cmd, gbuffer::NAME, || {
             gbuffer.record(cmd, ubo, &surfaces, &scene.geometry())
         });
-        timer.scope(cmd, light_direct::NAME, || light.record(cmd, ubo, g, &shadow.map));
+        timer.scope(cmd, light_direct::NAME, || {
+            light.record(cmd, ubo, g, &shadow.map, &scene.materials)
+        });
         let params = SsrParams::from_settings(st);
         if mode.reflects() {
             let mask_only = !mode.marches();
@@ -424,9 +426,11 @@ impl Renderer {
             });
         }
         let inputs = ComposeInputs {
+            frame: ubo,
             hdr: &light.lit,
             reflection: merge.reflection(),
-            normal: &g.normal,
+            gbuffer: g,
+            materials: &scene.materials,
         };
         let compose_mode = match mode {
             Mode::Raster => ComposeMode::Plain,

@@ -106,7 +106,8 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
                     let m = &scene.materials[id as usize];
                     assert!((normal[i][3] - m.reflectivity).abs() < 1e-3, "pixel {p}: reflectivity");
                     assert!((albedo[i * 4 + 3] as f32 / 255.0 - m.roughness).abs() <= 0.5 / 255.0 + 1e-6);
-                    assert!((albedo[i * 4] as f32 / 255.0 - m.albedo.x).abs() <= 0.5 / 255.0 + 1e-6);
+                    let srgb = speculum::scene::texture::linear_to_srgb(m.albedo.x);
+                    assert!(albedo[i * 4].abs_diff(srgb) <= 1, "pixel {p}: base colour");
                     if id == 1 {
                         on_sphere += 1;
                     } else {
@@ -127,7 +128,7 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
 /// A textured plane seen obliquely, magnified (a 16² random texture over 4 m, so the
 /// lookup is level 0's bilinear filter at every pixel): the G-buffer's base colour is
 /// the albedo times the texture at the pixel's analytic texture coordinate. Tolerance:
-/// the target's 8-bit linear storage (0.5/255) plus the interpolation of the texture
+/// the target's 8-bit sRGB storage (half a step) plus the interpolation of the texture
 /// coordinate across the quad (a 1e-3 texel shift moves a texel step of contrast 1 by
 /// 1e-3); silhouette and texel-edge pixels are not special-cased.
 #[test]
@@ -183,11 +184,17 @@ fn gbuffer_samples_textures_per_texel() {
             // quad's UVs: (0, 0) at (-2, -2), u along +x, v along +z.
             let uv = glam::Vec2::new((hit.x + 2.0) / 4.0, (hit.z + 2.0) / 4.0);
             let want = Vec3::from(tint) * textures.sample_lod(0, uv, 0.0).truncate();
-            let got = Vec3::new(albedo[4 * i] as f32, albedo[4 * i + 1] as f32, albedo[4 * i + 2] as f32) / 255.0;
-            assert!(
-                (got - want).abs().max_element() <= 0.5 / 255.0 + 2e-3,
-                "pixel {p}: base colour {got}, texture says {want}"
-            );
+            let got = speculum::cpu_ref::albedo_texel(&albedo[4 * i..4 * i + 4]).0;
+            for c in 0..3 {
+                // Half an sRGB step of the stored byte, plus the coordinate shift.
+                let b = albedo[4 * i + c];
+                let step = speculum::scene::texture::srgb_to_linear(b.saturating_add(1))
+                    - speculum::scene::texture::srgb_to_linear(b.saturating_sub(1));
+                assert!(
+                    (got[c] - want[c]).abs() <= 0.5 * step + 2e-3,
+                    "pixel {p}: base colour {got}, texture says {want}"
+                );
+            }
             checked += 1;
             distinct.insert(albedo[4 * i..4 * i + 3].to_vec());
         }
@@ -197,5 +204,67 @@ fn gbuffer_samples_textures_per_texel() {
         "{checked} pixels, {} colours",
         distinct.len()
     );
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Bent normals (a floor whose file normals all lean 10 degrees away from the camera,
+/// which views it from 2 to 40 degrees above grazing: below 20 the mirror direction
+/// of the file normal dips under the floor): no G-buffer normal mirrors the view
+/// below the floor. Where the file normal would, the stored normal is the clamped one,
+/// whose mirror direction leaves at `BENT_NORMAL_MIN_COS` above the plane (within the
+/// RGBA16F storage of the normal); elsewhere it is the file normal itself.
+#[test]
+fn bent_normals_never_mirror_below_the_surface() {
+    use speculum::cpu_ref::texture::{clamp_bent_normal, BENT_NORMAL_MIN_COS};
+    let ctx = common::context();
+    let bent = Vec3::new(0.0, 10f32.to_radians().cos(), -10f32.to_radians().sin());
+    let mut floor = TriMesh::quad(40.0, 40.0);
+    floor.normals = vec![bent; 4];
+    let mut b = SceneBuilder::new("bent floor");
+    let m = b.material(Material::new("floor", [0.5; 3], 0.1, 0.8));
+    b.mesh(floor, Mat4::IDENTITY, m);
+    b.camera(Camera {
+        position: Vec3::new(0.0, 1.5, 6.0),
+        target: Vec3::new(0.0, 0.0, -1.0),
+        up: Vec3::Y,
+        fov_y_deg: 40.0,
+        near: 0.1,
+        far: 60.0,
+    });
+    let scene = b.build().unwrap();
+    let settings = Settings {
+        width: 96,
+        height: 64,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
+    r.render_frame().unwrap();
+    let t = &r.gbuffer.targets;
+    let depth: Vec<f32> = bytemuck::cast_slice(&r.read_target(&t.depth).unwrap()).to_vec();
+    let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
+    let frame = *r.uniforms();
+    let (mut clamped, mut kept) = (0, 0);
+    for (i, nr) in normal.iter().enumerate() {
+        if depth[i] == 1.0 {
+            continue;
+        }
+        let p = glam::IVec2::new((i % 96) as i32, (i / 96) as i32);
+        let w = speculum::cpu_ref::shading::world_from_depth(&frame, p, depth[i]);
+        let v = (scene.camera.position - w).normalize();
+        let n = Vec3::new(nr[0], nr[1], nr[2]).normalize();
+        let up = (-v).reflect(n).y;
+        assert!(
+            up >= BENT_NORMAL_MIN_COS - 2e-3,
+            "pixel {p}: mirror direction {up} below the floor"
+        );
+        let want = clamp_bent_normal(bent, Vec3::Y, v);
+        assert!((n - want).length() < 3e-3, "pixel {p}: normal {n}, clamped {want}");
+        if (-v).reflect(bent).y < BENT_NORMAL_MIN_COS {
+            clamped += 1;
+        } else {
+            kept += 1;
+        }
+    }
+    assert!(clamped > 500 && kept > 100, "{clamped} clamped, {kept} kept");
     common::assert_no_validation_messages(&ctx);
 }

@@ -12,6 +12,7 @@ use ash::vk;
 use glam::{IVec2, Vec3, Vec4Swizzles};
 use rand::Rng;
 use speculum::cpu_ref::{self, shading};
+use speculum::gpu_types::GpuMaterial;
 use speculum::passes::compose::ComposePass;
 use speculum::passes::gbuffer::GBuffer;
 use speculum::passes::light_direct::LightDirectPass;
@@ -20,86 +21,137 @@ use speculum::vk::{barrier, Image};
 
 const POISON_F32: f32 = -12345.0;
 
+/// The four material ids of the random G-buffers (`common::random_gbuffer`):
+/// a dielectric, a metal and two blends.
+fn random_materials(ctx: &std::sync::Arc<speculum::vk::Context>) -> (Vec<GpuMaterial>, speculum::vk::Buffer) {
+    let materials: Vec<GpuMaterial> = [0.0, 1.0, 0.37, 0.81]
+        .iter()
+        .map(|&metallic| GpuMaterial {
+            metallic,
+            ..Default::default()
+        })
+        .collect();
+    let buffer = speculum::vk::Buffer::with_data(
+        ctx,
+        "test.materials",
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        bytemuck::cast_slice(&materials),
+    )
+    .unwrap();
+    (materials, buffer)
+}
+
 /// compose: random HDR texels (including negatives, zeros, values far above 1, and
 /// NaN, infinities and values whose square overflows f32) tonemap to exactly the CPU
-/// reference, within 1 LSB: NaN black, the overflowing ones white.
+/// reference, within 1 LSB: NaN black, the overflowing ones white. In the reflecting
+/// mode a random G-buffer (normals, base colours, reflectivity, metallic materials,
+/// sky pixels) weighs a random reflection by reflectivity x Fresnel first.
 #[test]
 fn compose_matches_cpu_reference() {
     let ctx = common::context();
     let mut rng = common::rng(1);
     let extent = vk::Extent2D { width: 67, height: 45 }; // not a multiple of the workgroup
+    let n = (extent.width * extent.height) as usize;
     let exposure = 1.7;
-    let texels: Vec<[f32; 4]> = (0..extent.width * extent.height)
-        .map(|_| {
-            if rng.random_bool(0.05) {
-                let special = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, 3e19, f32::MAX];
-                let pick = |rng: &mut rand::rngs::StdRng| special[rng.random_range(0..special.len())];
-                return [pick(&mut rng), pick(&mut rng), rng.random_range(0.0..1.0), 1.0];
-            }
-            let scale = if rng.random_bool(0.1) { 40.0 } else { 2.0 };
-            [
-                rng.random_range(-0.1..1.0) * scale,
-                rng.random_range(0.0..1.0) * scale,
-                rng.random_range(0.0..1.0f32).powi(3),
-                1.0,
-            ]
-        })
+    let mut random_hdr = |special_too: bool| -> Vec<[f32; 4]> {
+        (0..n)
+            .map(|_| {
+                if special_too && rng.random_bool(0.05) {
+                    let special = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, 3e19, f32::MAX];
+                    let pick = |rng: &mut rand::rngs::StdRng| special[rng.random_range(0..special.len())];
+                    return [pick(&mut rng), pick(&mut rng), rng.random_range(0.0..1.0), 1.0];
+                }
+                let scale = if rng.random_bool(0.1) { 40.0 } else { 2.0 };
+                [
+                    rng.random_range(-0.1..1.0) * scale,
+                    rng.random_range(0.0..1.0) * scale,
+                    rng.random_range(0.0..1.0f32).powi(3),
+                    1.0,
+                ]
+            })
+            .collect()
+    };
+    let texels = random_hdr(true);
+    let reflected: Vec<[f32; 4]> = random_hdr(false)
+        .into_iter()
+        .map(|t| [t[0].abs(), t[1], t[2], 2.0])
         .collect();
-    let hdr = Image::new(
-        &ctx,
-        "test.hdr",
-        extent,
-        speculum::passes::light_direct::FORMAT,
-        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
-    )
-    .unwrap();
-    hdr.write(bytemuck::cast_slice(&texels), vk::ImageLayout::GENERAL)
-        .unwrap();
-    let pass = ComposePass::new(&ctx, extent).unwrap();
-    // Poison the output so that unwritten texels cannot pass.
-    let poison = vec![0x5au8; (extent.width * extent.height * 4) as usize];
-    pass.ldr.write(&poison, vk::ImageLayout::GENERAL).unwrap();
-    // Reflection inputs are bound but unused in the plain mode tested here.
-    let normal = Image::new(
-        &ctx,
-        "test.normal",
-        extent,
-        vk::Format::R16G16B16A16_SFLOAT,
-        vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-    )
-    .unwrap();
-    normal
-        .write(
-            &vec![0u8; (extent.width * extent.height * 8) as usize],
-            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    let storage = |name: &str, data: &[[f32; 4]]| {
+        let img = Image::new(
+            &ctx,
+            name,
+            extent,
+            speculum::passes::light_direct::FORMAT,
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
         )
         .unwrap();
-    let inputs = speculum::passes::compose::ComposeInputs {
-        hdr: &hdr,
-        reflection: &hdr,
-        normal: &normal,
+        img.write(bytemuck::cast_slice(data), vk::ImageLayout::GENERAL).unwrap();
+        img
     };
-    ctx.one_shot(|cmd| {
-        pass.record(cmd, &inputs, exposure, speculum::passes::compose::ComposeMode::Plain);
-    })
-    .unwrap();
-    let gpu = pass.ldr.read(vk::ImageLayout::GENERAL).unwrap();
-    let mut worst = 0i32;
-    for (i, t) in texels.iter().enumerate() {
-        let want = cpu_ref::compose::tonemap(*t, exposure);
-        for c in 0..4 {
-            let d = (gpu[i * 4 + c] as i32 - want[c] as i32).abs();
-            worst = worst.max(d);
-            assert!(
-                d <= 1,
-                "texel {i} channel {c}: gpu {} cpu {} (input {:?})",
-                gpu[i * 4 + c],
-                want[c],
-                t
-            );
+    let (hdr, reflection) = (storage("test.hdr", &texels), storage("test.reflection", &reflected));
+    let mut rng = common::rng(7);
+    let g = common::random_gbuffer(&mut rng, n);
+    let albedo: Vec<u8> = (0..n * 4).map(|_| rng.random()).collect();
+    let gb = GBuffer::new(&ctx, extent).unwrap();
+    let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
+    gb.normal.write(&g.normal_bytes, ro).unwrap();
+    gb.albedo.write(&albedo, ro).unwrap();
+    gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
+    let (materials, materials_buffer) = random_materials(&ctx);
+    let scene = speculum::scene::builtin::room().unwrap();
+    let settings = speculum::Settings {
+        width: extent.width,
+        height: extent.height,
+        ..Default::default()
+    };
+    let frame = speculum::renderer::frame_uniforms(&scene, &settings);
+    let ubo = common::frame_ubo(&ctx, &frame);
+    let pass = ComposePass::new(&ctx, extent).unwrap();
+    let inputs = speculum::passes::compose::ComposeInputs {
+        frame: &ubo,
+        hdr: &hdr,
+        reflection: &reflection,
+        gbuffer: &gb,
+        materials: &materials_buffer,
+    };
+    use speculum::passes::compose::ComposeMode;
+    for mode in [ComposeMode::Plain, ComposeMode::Reflect] {
+        // Poison the output so that unwritten texels cannot pass.
+        let poison = vec![0x5au8; n * 4];
+        pass.ldr.write(&poison, vk::ImageLayout::GENERAL).unwrap();
+        ctx.one_shot(|cmd| pass.record(cmd, &inputs, exposure, mode)).unwrap();
+        let gpu = pass.ldr.read(vk::ImageLayout::GENERAL).unwrap();
+        let mut worst = 0i32;
+        for (i, t) in texels.iter().enumerate() {
+            let mut hdr = *t;
+            if mode == ComposeMode::Reflect && g.material[i] != MATERIAL_NONE {
+                let p = IVec2::new((i % extent.width as usize) as i32, (i / extent.width as usize) as i32);
+                let w = shading::world_from_depth(&frame, p, g.depth[i]);
+                let v = (frame.camera_pos.xyz() - w).normalize();
+                let nrm = Vec3::new(g.normal[i][0], g.normal[i][1], g.normal[i][2]).normalize();
+                let base = cpu_ref::albedo_texel(&albedo[4 * i..4 * i + 4]).0;
+                let metallic = materials[g.material[i] as usize].metallic;
+                let weight = shading::reflection_weight(base, metallic, g.normal[i][3], nrm, v);
+                for c in 0..3 {
+                    hdr[c] += weight[c] * reflected[i][c];
+                }
+            }
+            let want = cpu_ref::compose::tonemap(hdr, exposure);
+            for c in 0..4 {
+                let d = (gpu[i * 4 + c] as i32 - want[c] as i32).abs();
+                worst = worst.max(d);
+                assert!(
+                    d <= 1,
+                    "{mode:?} texel {i} channel {c}: gpu {} cpu {} (input {:?})",
+                    gpu[i * 4 + c],
+                    want[c],
+                    t
+                );
+            }
         }
+        println!("compose {mode:?}: worst difference {worst} LSB");
     }
-    println!("compose: worst difference {worst} LSB");
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -150,6 +202,7 @@ fn light_direct_matches_cpu_reference() {
     .unwrap();
     shadow_map.write(bytemuck::cast_slice(&shadow), ro).unwrap();
     let ubo = common::frame_ubo(&ctx, &frame);
+    let (materials, materials_buffer) = random_materials(&ctx);
     let pass = LightDirectPass::new(&ctx, extent).unwrap();
     pass.lit
         .write(
@@ -158,7 +211,7 @@ fn light_direct_matches_cpu_reference() {
         )
         .unwrap();
     ctx.one_shot(|cmd| {
-        pass.record(cmd, &ubo, &gb, &shadow_map);
+        pass.record(cmd, &ubo, &gb, &shadow_map, &materials_buffer);
         // RAW: the readback copy sees the shader's writes.
         let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
         barrier::record(&ctx.device, cmd, &[b], &[]);
@@ -181,21 +234,19 @@ fn light_direct_matches_cpu_reference() {
             let want = if material[i] == MATERIAL_NONE {
                 shading::sky(&frame, -to_camera.normalize())
             } else {
-                let a = |c: usize| albedo[i * 4 + c] as f32 / 255.0;
+                let (base, roughness) = cpu_ref::albedo_texel(&albedo[4 * i..4 * i + 4]);
                 let vis = shading::shadow_visibility(&frame, &map, w);
                 if vis < 1.0 {
                     shadowed += 1;
                 }
                 let nrm = Vec3::new(normal[i][0], normal[i][1], normal[i][2]).normalize();
-                shading::shade_direct(
-                    &frame,
-                    Vec3::new(a(0), a(1), a(2)),
-                    a(3),
-                    normal[i][3],
-                    nrm,
-                    to_camera.normalize(),
-                    vis,
-                )
+                let surface = shading::Surface {
+                    base,
+                    roughness,
+                    reflectivity: normal[i][3],
+                    metallic: materials[material[i] as usize].metallic,
+                };
+                shading::shade_direct(&frame, surface, nrm, to_camera.normalize(), vis)
             };
             let got = Vec3::new(gpu[i][0], gpu[i][1], gpu[i][2]);
             let err = (got - want).abs();

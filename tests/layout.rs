@@ -58,6 +58,7 @@ fn material_layout_matches_glsl() {
             roughness,
             reflectivity,
             texture_layer,
+            metallic,
             _pad0
         }),
     );
@@ -144,7 +145,8 @@ fn light_direct_bindings_are_reflected() {
             D::COMBINED_IMAGE_SAMPLER,
             D::COMBINED_IMAGE_SAMPLER,
             D::COMBINED_IMAGE_SAMPLER,
-            D::STORAGE_IMAGE
+            D::STORAGE_IMAGE,
+            D::STORAGE_BUFFER
         ]
     );
     assert_eq!(

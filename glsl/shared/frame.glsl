@@ -22,6 +22,16 @@ vec3 world_from_depth(ivec2 p, float depth) {
     return w.xyz / w.w;
 }
 
+// The sRGB transfer function and its inverse (IEC 61966-2-1), for the G-buffer's base
+// colour (gbuffer::ALBEDO_FORMAT). Mirrored by scene::texture::{srgb_to_linear, linear_to_srgb}.
+vec3 srgb_encode(vec3 c) {
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
+}
+
+vec3 srgb_decode(vec3 e) {
+    return mix(e / 12.92, pow((e + 0.055) / 1.055, vec3(2.4)), greaterThan(e, vec3(0.04045)));
+}
+
 // Tiles of WG_2D x WG_2D pixels covering the frame (the grid of every 2D kernel's
 // workgroups); tile (x, y) has index y * tile_grid().x + x.
 ivec2 tile_grid() {

@@ -50,24 +50,52 @@ float shadow_visibility(sampler2D shadow_map, vec3 w) {
     return sum / taps;
 }
 
+// The material model (README, "Materials"): a base colour, a metallic blend between a
+// dielectric (specular reflectance DIELECTRIC_F0 at normal incidence) and a metal
+// (reflectance = the base colour), Schlick's Fresnel for the angle, and `reflectivity`,
+// the share of the specular reflection that is a mirror image of the scene (traced by
+// the reflection passes; the rest is approximated by the sky).
+const float DIELECTRIC_F0 = 0.04;
+
+// Specular reflectance at normal incidence.
+vec3 specular_f0(vec3 base, float metallic) {
+    return mix(vec3(DIELECTRIC_F0), base, metallic);
+}
+
+// Schlick's approximation of the Fresnel reflectance at cos_theta = n . v.
+vec3 fresnel_schlick(vec3 f0, float cos_theta) {
+    float m = 1.0 - clamp(cos_theta, 0.0, 1.0);
+    float m2 = m * m;
+    return f0 + (1.0 - f0) * (m2 * m2 * m);
+}
+
+// Weight of the mirror reflection of the scene seen from `v` (n, v unit vectors).
+vec3 reflection_weight(vec3 base, float metallic, float reflectivity, vec3 n, vec3 v) {
+    return reflectivity * fresnel_schlick(specular_f0(base, metallic), dot(n, v));
+}
+
 // Radiance leaving a surface towards `v` under the sun and the sky, without the
-// specular reflection of the scene (the reflection passes add that).
+// mirror reflection of the scene (the reflection passes add that).
 // n, v: unit vectors; visibility: shadow_visibility in [0, 1].
-vec3 shade_direct(vec3 albedo, float roughness, float reflectivity, vec3 n, vec3 v, float visibility) {
+vec3 shade_direct(vec3 base, float roughness, float reflectivity, float metallic, vec3 n, vec3 v, float visibility) {
     vec3 l = frame.light_dir.xyz;
     float ndl = max(dot(n, l), 0.0);
-    // Energy split: what is reflected specularly is not diffused.
-    vec3 diffuse = albedo * (1.0 - reflectivity) * (1.0 / PI);
-    // Normalized Blinn-Phong highlight of the sun; roughness floored so that mirrors
-    // keep a finite, visible highlight.
+    vec3 f0 = specular_f0(base, metallic);
+    vec3 f = fresnel_schlick(f0, dot(n, v));
+    // Energy split: what the surface reflects specularly (f) is not diffused; metals
+    // diffuse nothing.
+    vec3 diffuse_albedo = base * (1.0 - metallic) * (1.0 - f);
+    // Normalized Blinn-Phong highlight of the sun with Schlick's Fresnel at the half
+    // vector; roughness floored so that mirrors keep a finite, visible highlight.
     float r = max(roughness, 0.05);
     float e = max(2.0 / (r * r) - 2.0, 1.0); // >= 1: pow(x, 0) is undefined at x = 0
     vec3 h = normalize(l + v);
     float spec = (e + 8.0) / (8.0 * PI) * pow(max(dot(n, h), 0.0), e);
-    float ks = 0.04 + 0.96 * reflectivity;
-    vec3 direct = (diffuse + vec3(ks * spec)) * frame.light_color.rgb * ndl * visibility;
+    vec3 ks = fresnel_schlick(f0, dot(h, v));
+    vec3 direct = (diffuse_albedo * (1.0 / PI) + ks * spec) * frame.light_color.rgb * ndl * visibility;
+    // Sky ambient: diffuse, plus the specular share that is not a traced mirror image.
     vec3 sky = mix(frame.sky_horizon.rgb, frame.sky_zenith.rgb, n.y * 0.5 + 0.5);
-    vec3 ambient = albedo * (1.0 - reflectivity) * sky * frame.ambient;
+    vec3 ambient = (diffuse_albedo + (1.0 - reflectivity) * f) * sky * frame.ambient;
     return direct + ambient;
 }
 #endif

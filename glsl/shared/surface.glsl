@@ -5,6 +5,27 @@
 #define SURFACE_GLSL
 #include "types.glsl"
 
+// The lowest a mirror direction may leave a surface: cos of its angle to the surface's
+// geometric normal.
+const float BENT_NORMAL_MIN_COS = 0.01;
+
+// A shading normal `n` whose mirror direction for the view direction `v` (towards the
+// viewer) stays above the surface's plane: when reflect(-v, n) points below (or within
+// BENT_NORMAL_MIN_COS of) the plane of the geometric normal `g` (which faces v), the
+// direction is lifted to that bound and the normal becomes the half vector between v
+// and it, the normal that mirrors v there. Interpolated or file normals bent away from
+// the facet (silhouettes of smooth meshes, normal-mapped scans) would otherwise send
+// reflected rays into the surface. All unit vectors.
+vec3 clamp_bent_normal(vec3 n, vec3 g, vec3 v) {
+    vec3 r = reflect(-v, n);
+    float d = dot(r, g);
+    if (d >= BENT_NORMAL_MIN_COS) {
+        return n;
+    }
+    vec3 lifted = normalize(r + g * (BENT_NORMAL_MIN_COS - d));
+    return normalize(v + lifted);
+}
+
 // In a fragment shader: the mip level from the screen-space derivatives of `uv`.
 vec3 base_color(Material m, sampler2DArray textures, vec2 uv) {
     if (m.texture_layer == TEXTURE_NONE) {

@@ -14,7 +14,8 @@ struct Material {
     float roughness;
     float reflectivity;
     uint texture_layer; // TEXTURE_NONE: untextured
-    float _pad0[2];
+    float metallic;     // 0: dielectric, 1: metal (the base colour is its reflectance)
+    float _pad0;
 };
 
 #define FRAME_UNIFORMS_BLOCK                                                         \

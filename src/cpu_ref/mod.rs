@@ -11,6 +11,14 @@ pub mod ssr;
 pub mod texture;
 pub mod trace;
 
+/// A G-buffer base-colour texel (`gbuffer::ALBEDO_FORMAT`) as the shaders decode it
+/// (`srgb_decode`): linear base colour and roughness.
+pub fn albedo_texel(t: &[u8]) -> (glam::Vec3, f32) {
+    use crate::scene::texture::srgb_to_linear;
+    let rgb = glam::Vec3::new(srgb_to_linear(t[0]), srgb_to_linear(t[1]), srgb_to_linear(t[2]));
+    (rgb, t[3] as f32 / 255.0)
+}
+
 /// Decodes tightly packed RGBA16F texels.
 pub fn rgba16f_to_f32(raw: &[u8]) -> Vec<[f32; 4]> {
     raw.chunks_exact(8)

@@ -60,13 +60,16 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
         let corner = |k: usize| &s.vertices[index(k)];
         let (a, b, c) = (corner(0), corner(1), corner(2));
         let m = &s.materials[a.material as usize];
+        let p = [a, b, c].map(|v| Vec3::from(v.position));
+        let mut g = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+        if g.dot(dir) > 0.0 {
+            g = -g;
+        }
         cone += spread * h.t;
         let mut albedo = Vec3::from(m.albedo);
         if m.texture_layer != crate::shader_defines::TEXTURE_NONE {
             let t = [0, 1, 2].map(|k| Vec2::from(s.uvs[index(k)]));
             let uv = (1.0 - h.u - h.v) * t[0] + h.u * t[1] + h.v * t[2];
-            let p = [a, b, c].map(|v| Vec3::from(v.position));
-            let g = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
             let lod = texture::ray_cone_lod(cone, g.dot(dir).abs(), p, t, s.textures.size as f32);
             albedo = texture::base_color_lod(m, s.textures, uv, lod);
         }
@@ -76,9 +79,10 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
         if hn.dot(dir) > 0.0 {
             hn = -hn;
         }
+        hn = texture::clamp_bent_normal(hn, g, -dir);
         let hp = origin + dir * h.t;
         let vis = if s.shadow_rays {
-            let so = hp + hn * offset_scale(frame, hp);
+            let so = hp + g * offset_scale(frame, hp);
             if trace(so, frame.light_dir.xyz()).prim == BVH_INVALID {
                 1.0
             } else {
@@ -87,13 +91,19 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
         } else {
             shading::shadow_visibility(frame, s.shadow_map, hp)
         };
-        radiance += throughput * shading::shade_direct(frame, albedo, m.roughness, m.reflectivity, hn, -dir, vis);
+        let surface = shading::Surface {
+            base: albedo,
+            roughness: m.roughness,
+            reflectivity: m.reflectivity,
+            metallic: m.metallic,
+        };
+        radiance += throughput * shading::shade_direct(frame, surface, hn, -dir, vis);
         if m.reflectivity <= 0.0 {
             break;
         }
-        throughput *= m.reflectivity;
+        throughput *= shading::reflection_weight(albedo, m.metallic, m.reflectivity, hn, -dir);
         dir = dir.reflect(hn);
-        origin = hp + hn * offset_scale(frame, hp);
+        origin = hp + g * offset_scale(frame, hp);
     }
     (radiance, rays)
 }

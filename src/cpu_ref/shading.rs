@@ -79,26 +79,76 @@ pub fn shadow_visibility(frame: &FrameUniforms, map: &ShadowMap<'_>, w: Vec3) ->
     sum / ((2 * r + 1) * (2 * r + 1)) as f32
 }
 
+/// `DIELECTRIC_F0`: a dielectric's specular reflectance at normal incidence.
+pub const DIELECTRIC_F0: f32 = 0.04;
+
+/// `specular_f0`.
+pub fn specular_f0(base: Vec3, metallic: f32) -> Vec3 {
+    Vec3::splat(DIELECTRIC_F0).lerp(base, metallic)
+}
+
+/// `fresnel_schlick`.
+pub fn fresnel_schlick(f0: Vec3, cos_theta: f32) -> Vec3 {
+    let m = 1.0 - cos_theta.clamp(0.0, 1.0);
+    let m2 = m * m;
+    f0 + (Vec3::ONE - f0) * (m2 * m2 * m)
+}
+
+/// `reflection_weight`: the weight of the mirror reflection seen from `v`.
+pub fn reflection_weight(base: Vec3, metallic: f32, reflectivity: f32, n: Vec3, v: Vec3) -> Vec3 {
+    reflectivity * fresnel_schlick(specular_f0(base, metallic), n.dot(v))
+}
+
+/// A surface point's material as `shade_direct` reads it.
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    pub base: Vec3,
+    pub roughness: f32,
+    pub reflectivity: f32,
+    pub metallic: f32,
+}
+
 /// Direct radiance towards `v` (`shade_direct`).
-pub fn shade_direct(
-    frame: &FrameUniforms,
-    albedo: Vec3,
-    roughness: f32,
-    reflectivity: f32,
-    n: Vec3,
-    v: Vec3,
-    visibility: f32,
-) -> Vec3 {
+pub fn shade_direct(frame: &FrameUniforms, s: Surface, n: Vec3, v: Vec3, visibility: f32) -> Vec3 {
     let l = frame.light_dir.xyz();
     let ndl = n.dot(l).max(0.0);
-    let diffuse = albedo * (1.0 - reflectivity) * std::f32::consts::FRAC_1_PI;
-    let r = roughness.max(0.05);
+    let f0 = specular_f0(s.base, s.metallic);
+    let f = fresnel_schlick(f0, n.dot(v));
+    let diffuse_albedo = s.base * (1.0 - s.metallic) * (Vec3::ONE - f);
+    let r = s.roughness.max(0.05);
     let e = (2.0 / (r * r) - 2.0).max(1.0);
     let h = (l + v).normalize();
     let spec = (e + 8.0) / (8.0 * std::f32::consts::PI) * n.dot(h).max(0.0).powf(e);
-    let ks = 0.04 + 0.96 * reflectivity;
-    let direct = (diffuse + Vec3::splat(ks * spec)) * frame.light_color.xyz() * ndl * visibility;
+    let ks = fresnel_schlick(f0, h.dot(v));
+    let direct =
+        (diffuse_albedo * std::f32::consts::FRAC_1_PI + ks * spec) * frame.light_color.xyz() * ndl * visibility;
     let sky = frame.sky_horizon.xyz().lerp(frame.sky_zenith.xyz(), n.y * 0.5 + 0.5);
-    let ambient = albedo * (1.0 - reflectivity) * sky * frame.ambient;
+    let ambient = (diffuse_albedo + (1.0 - s.reflectivity) * f) * sky * frame.ambient;
     direct + ambient
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Schlick: F0 head-on, 1 at grazing, rising in between; a dielectric reflects 4%
+    /// head-on, a metal its base colour; the mirror weight scales with reflectivity.
+    #[test]
+    fn fresnel_rises_from_f0_to_one_at_grazing() {
+        let gold = Vec3::new(1.0, 0.766, 0.336);
+        for f0 in [Vec3::splat(DIELECTRIC_F0), gold] {
+            assert_eq!(fresnel_schlick(f0, 1.0), f0);
+            assert_eq!(fresnel_schlick(f0, 0.0), Vec3::ONE);
+            let mut prev = f0;
+            for k in (0..100).rev() {
+                let f = fresnel_schlick(f0, k as f32 / 100.0);
+                assert!(f.cmpge(prev).all(), "{f} after {prev}");
+                prev = f;
+            }
+        }
+        assert_eq!(specular_f0(gold, 0.0), Vec3::splat(0.04));
+        assert_eq!(specular_f0(gold, 1.0), gold);
+        let w = reflection_weight(gold, 1.0, 0.5, Vec3::Y, Vec3::Y);
+        assert!((w - 0.5 * gold).abs().max_element() < 1e-6);
+    }
 }

@@ -1,4 +1,5 @@
-//! Reference of `glsl/shared/surface.glsl` and of Vulkan's trilinear, repeating
+//! Reference of `glsl/shared/surface.glsl` (base colours, ray-cone LOD, bent-normal
+//! clamping) and of Vulkan's trilinear, repeating
 //! lookup in an `R8G8B8A8_SRGB` 2D array texture (texels decoded to linear before
 //! filtering, as the spec orders).
 
@@ -70,6 +71,21 @@ pub fn base_color_lod(m: &GpuMaterial, textures: &TextureArray, uv: Vec2, lod: f
     albedo * textures.sample_lod(m.texture_layer, uv, lod).truncate()
 }
 
+/// `BENT_NORMAL_MIN_COS`.
+pub const BENT_NORMAL_MIN_COS: f32 = 0.01;
+
+/// `clamp_bent_normal`: `n` with its mirror direction for `v` kept above the plane of
+/// the geometric normal `g` (facing `v`).
+pub fn clamp_bent_normal(n: Vec3, g: Vec3, v: Vec3) -> Vec3 {
+    let r = (-v).reflect(n);
+    let d = r.dot(g);
+    if d >= BENT_NORMAL_MIN_COS {
+        return n;
+    }
+    let lifted = (r + g * (BENT_NORMAL_MIN_COS - d)).normalize();
+    (v + lifted).normalize()
+}
+
 /// `ray_cone_lod`.
 pub fn ray_cone_lod(width: f32, cos_incidence: f32, p: [Vec3; 3], uv: [Vec2; 3], texels: f32) -> f32 {
     let (e1, e2) = (uv[1] - uv[0], uv[2] - uv[0]);
@@ -82,4 +98,49 @@ pub fn ray_cone_lod(width: f32, cos_incidence: f32, p: [Vec3; 3], uv: [Vec2; 3],
         return 0.0;
     }
     0.5 * (t_area / p_area).log2() + (width / cos_incidence.max(1e-4)).log2()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// Random normals, facets and views: the clamped normal is unit, its mirror
+    /// direction is at least `BENT_NORMAL_MIN_COS` above the facet, and a normal that
+    /// already mirrors above it is returned as it was.
+    #[test]
+    fn clamped_normals_mirror_above_the_facet() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let mut unit = || {
+            Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+            .normalize_or(Vec3::Y)
+        };
+        let (mut changed, mut same) = (0, 0);
+        for _ in 0..20000 {
+            let g = unit();
+            let mut v = unit();
+            if v.dot(g) < 0.0 {
+                v = -v;
+            }
+            let mut n = unit();
+            if n.dot(v) < 0.0 {
+                n = -n;
+            }
+            let c = clamp_bent_normal(n, g, v);
+            assert!((c.length() - 1.0).abs() < 1e-5);
+            let up = (-v).reflect(c).dot(g);
+            assert!(up >= BENT_NORMAL_MIN_COS - 1e-4, "{n} {g} {v}: {up}");
+            if (-v).reflect(n).dot(g) >= BENT_NORMAL_MIN_COS {
+                assert_eq!(c, n);
+                same += 1;
+            } else {
+                changed += 1;
+            }
+        }
+        assert!(changed > 1000 && same > 1000, "{changed} {same}");
+    }
 }

@@ -1,11 +1,12 @@
 //! `compose`: exposure, ACES tonemap and sRGB encoding of the HDR frame into the LDR
 //! image that is presented or saved. CPU reference: `cpu_ref::compose`.
 
+use super::gbuffer::GBuffer;
 use crate::error::Result;
 use crate::shader_defines::{COMPOSE_PLAIN, COMPOSE_PROVENANCE, COMPOSE_REFLECT};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Context, Groups, Image, Pipeline, Resource, Sampler};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -48,11 +49,14 @@ pub struct ComposePush {
 
 /// The reflection and the surface data compose weighs it with.
 pub struct ComposeInputs<'a> {
+    pub frame: &'a Buffer,
     pub hdr: &'a Image,
     /// Merged reflection (rgb, a: source); read unless the mode is `Plain`.
     pub reflection: &'a Image,
-    /// G-buffer normal + reflectivity.
-    pub normal: &'a Image,
+    /// The G-buffer (normal + reflectivity, base colour, depth, material id) and the
+    /// materials (metallic), for the reflection's Fresnel weight.
+    pub gbuffer: &'a GBuffer,
+    pub materials: &'a Buffer,
 }
 
 pub struct ComposePass {
@@ -78,7 +82,7 @@ impl ComposePass {
         Ok(())
     }
 
-    /// Records the tonemap. `hdr` and `reflection` in `GENERAL`, `normal` in
+    /// Records the tonemap. `hdr` and `reflection` in `GENERAL`, the G-buffer in
     /// `SHADER_READ_ONLY_OPTIMAL`, all of the render size. `ldr` ends visible to its
     /// readers: copies out of it (readbacks, a blit to a window).
     pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ComposeInputs<'_>, exposure: f32, mode: ComposeMode) {
@@ -94,10 +98,15 @@ impl ComposePass {
         self.pipeline.dispatch(
             cmd,
             &[
+                Resource::Buffer(inputs.frame),
                 Resource::StorageImage(inputs.hdr),
                 Resource::StorageImage(&self.ldr),
                 Resource::StorageImage(inputs.reflection),
-                Resource::Sampled(inputs.normal, &self.sampler),
+                Resource::Sampled(&inputs.gbuffer.normal, &self.sampler),
+                Resource::Sampled(&inputs.gbuffer.albedo, &self.sampler),
+                Resource::Sampled(&inputs.gbuffer.depth, &self.sampler),
+                Resource::Sampled(&inputs.gbuffer.material, &self.sampler),
+                Resource::Buffer(inputs.materials),
             ],
             &push,
             Groups::Cover([e.width, e.height, 1]),

@@ -14,7 +14,10 @@ pub const NAME: &str = "gbuffer";
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// xyz: unit world normal facing the camera; w: reflectivity.
 pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
-/// rgb: base colour (the albedo times its texture); a: roughness.
+/// rgb: base colour (the albedo times its texture), sRGB-encoded by the shader so
+/// that 8 bits keep dark textures free of banding (readers decode with
+/// `gbuffer_base_color`; the encoding is the shader's, not the format's, so GPU and CPU
+/// references decode alike); a: roughness (linear).
 pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// Material index, `MATERIAL_NONE` where no geometry covers the pixel.
 pub const MATERIAL_FORMAT: vk::Format = vk::Format::R32_UINT;

@@ -41,7 +41,14 @@ impl LightDirectPass {
     /// Records the shading dispatch. G-buffer and shadow map in
     /// `SHADER_READ_ONLY_OPTIMAL`. `lit` ends visible to its readers, `ssr.trace` and
     /// `compose` (compute).
-    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, shadow_map: &Image) {
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        frame: &Buffer,
+        gbuffer: &GBuffer,
+        shadow_map: &Image,
+        materials: &Buffer,
+    ) {
         let d = &self.ctx.device;
         let s = &self.sampler;
         // WAR: the previous frame's reads of `lit` finish before it is overwritten.
@@ -57,6 +64,7 @@ impl LightDirectPass {
                 Resource::Sampled(&gbuffer.material, s),
                 Resource::Sampled(shadow_map, s),
                 Resource::StorageImage(&self.lit),
+                Resource::Buffer(materials),
             ],
             &(),
             Groups::Cover([e.width, e.height, 1]),

@@ -44,6 +44,10 @@ pub struct CameraDesc {
     pub far: f32,
 }
 
+fn is_zero(v: &f32) -> bool {
+    *v == 0.0
+}
+
 fn default_near() -> f32 {
     0.05
 }
@@ -77,9 +81,14 @@ pub struct MaterialDesc {
     pub base_color: [f32; 3],
     /// 0 = mirror, 1 = fully rough.
     pub roughness: f32,
-    /// Specular reflectance in [0, 1] (0: no reflection traced).
+    /// The share of the specular reflection that is a traced mirror image, in [0, 1]
+    /// (0: no reflection traced).
     #[serde(default)]
     pub reflectivity: f32,
+    /// 0: dielectric (reflects 4% head-on, more at grazing angles), 1: metal (reflects
+    /// its base colour); default 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub metallic: f32,
     /// A base-colour texture (PNG or JPEG, relative to the scene file) multiplying
     /// `base_color` per texel.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -200,7 +209,7 @@ impl SceneFile {
             if ids.iter().any(|(n, _)| n == &m.name) {
                 return Err(bad(format!("material '{}' is defined twice", m.name)));
             }
-            let mut material = Material::new(&m.name, m.base_color, m.roughness, m.reflectivity);
+            let mut material = Material::new(&m.name, m.base_color, m.roughness, m.reflectivity).metal(m.metallic);
             if let Some(file) = &m.texture {
                 material.texture = Some(b.texture(super::texture::load(&dir.join(file))?));
             }

@@ -6,8 +6,8 @@
 //! Material mapping: albedo = `baseColorFactor.rgb`, multiplied per texel by
 //! `baseColorTexture` (sampled with the texture coordinate set it names; sampler
 //! wrap modes and `KHR_texture_transform` are not read: textures repeat); roughness =
-//! `roughnessFactor`; reflectivity = `metallicFactor` (a metal reflects, a dielectric
-//! does not until Fresnel weighting lands).
+//! `roughnessFactor`; metallic = `metallicFactor`; reflectivity (the traced mirror
+//! share of the specular reflection) = `reflectivity_from_roughness(roughnessFactor)`.
 
 use super::geometry::{smooth_normals, CREASE_ANGLE_DEG};
 use super::Texture;
@@ -15,6 +15,17 @@ use super::{Camera, Material, Scene, SceneBuilder, TriMesh};
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::Path;
+
+/// Roughness at and above which a PBR material (glTF, MTL with `Pr`) gets no traced
+/// mirror reflection.
+pub const MIRROR_ROUGHNESS_MAX: f32 = 0.6;
+
+/// The traced mirror share of a PBR material's specular reflection: 1 for a perfectly
+/// smooth surface, falling linearly to 0 at `MIRROR_ROUGHNESS_MAX` (Speculum traces
+/// sharp reflections only; a rougher surface's blurred one is left to the sky term).
+pub fn reflectivity_from_roughness(roughness: f32) -> f32 {
+    (1.0 - roughness / MIRROR_ROUGHNESS_MAX).clamp(0.0, 1.0)
+}
 
 /// A decoded glTF image as sRGB RGBA8 texels: 8- and 16-bit images with one to four
 /// channels (grey is spread to RGB, a missing alpha is opaque); `None` for float ones.
@@ -79,7 +90,14 @@ pub fn load(path: &Path) -> Result<Scene> {
             Some(i) => format!("material {i}"),
             None => "default".into(),
         });
-        let mut material = Material::new(&name, [f[0], f[1], f[2]], pbr.roughness_factor(), pbr.metallic_factor());
+        let roughness = pbr.roughness_factor();
+        let mut material = Material::new(
+            &name,
+            [f[0], f[1], f[2]],
+            roughness,
+            reflectivity_from_roughness(roughness),
+        )
+        .metal(pbr.metallic_factor());
         let mut set = 0;
         if let Some(info) = pbr.base_color_texture() {
             let image = info.texture().source().index();

@@ -32,8 +32,13 @@ pub struct Material {
     pub albedo: Vec3,
     /// 0 = mirror, 1 = fully rough.
     pub roughness: f32,
-    /// Specular reflectance in [0, 1]; later passes trace reflections where it is > 0.
+    /// The share in [0, 1] of the specular reflection (Fresnel-weighted, see
+    /// `metallic`) that is a mirror image of the scene: the reflection passes trace
+    /// where it is > 0; the rest of the specular reflection sees the sky.
     pub reflectivity: f32,
+    /// 0: a dielectric (specular reflectance 0.04 at normal incidence), 1: a metal
+    /// (reflectance = `albedo`, no diffuse); in between blends the two.
+    pub metallic: f32,
     /// Base-colour texture (an index into `Scene::textures`), multiplying `albedo`.
     pub texture: Option<u32>,
 }
@@ -45,8 +50,15 @@ impl Material {
             albedo: Vec3::from(albedo),
             roughness,
             reflectivity,
+            metallic: 0.0,
             texture: None,
         }
+    }
+
+    /// The same material with `metallic` set.
+    pub fn metal(mut self, metallic: f32) -> Self {
+        self.metallic = metallic;
+        self
     }
 
     /// The same material with base-colour texture `texture` (a `Scene::textures` index).
@@ -61,7 +73,8 @@ impl Material {
             roughness: self.roughness.clamp(0.0, 1.0),
             reflectivity: self.reflectivity.clamp(0.0, 1.0),
             texture_layer: self.texture.unwrap_or(TEXTURE_NONE),
-            _pad0: [0.0; 2],
+            metallic: self.metallic.clamp(0.0, 1.0),
+            _pad0: 0.0,
         }
     }
 }
@@ -369,7 +382,7 @@ pub fn is_model(name_or_path: &str) -> bool {
 fn stand_on_floor(mut scene: Scene, floor: Floor) -> Result<Scene> {
     let material = match floor {
         Floor::None => return Ok(scene),
-        Floor::Mirror => Material::new("floor (mirror)", [0.3, 0.3, 0.33], 0.03, 0.7),
+        Floor::Mirror => Material::new("floor (mirror)", [0.6, 0.6, 0.62], 0.03, 1.0).metal(1.0),
         Floor::Matte => Material::new("floor (matte)", [0.55, 0.55, 0.55], 0.9, 0.0),
     };
     let (lo, hi) = scene.bounds();

@@ -6,8 +6,12 @@
 //!   the material is untextured, one that does not decode an error);
 //! - roughness = `Pr` when given, else `sqrt(2 / (Ns + 2))` (the Blinn-Phong exponent
 //!   to Beckmann roughness mapping), else 0.8;
-//! - reflectivity = `refl` (a Speculum key) or `Pm` when given, else `max(Ks)` for
-//!   illumination models 3-9 (the MTL models with reflection on), else 0.
+//! - metallic = `Pm` when given; else 1 for a coloured `Ks` (channels differing by more
+//!   than a quarter of the largest: a metal's tinted reflection, as gold MTLs give) with
+//!   a reflection model (`illum` 3-9), the base colour then `Ks`; else 0;
+//! - reflectivity (the traced mirror share) = `refl` (a Speculum key) when given; else,
+//!   with `Pr`, `gltf::reflectivity_from_roughness(Pr)`; else `max(Ks)` for
+//!   illumination models 3-9 (the MTL models with reflection on); else 0.
 //!
 //! Faces are triangulated; texture coordinates are read with v flipped (OBJ's v runs
 //! up the image, Speculum's down); missing normals are computed by `geometry::smooth_normals`
@@ -113,7 +117,7 @@ fn convert_material(
     mtl: &Path,
     textures: &mut dyn FnMut(PathBuf) -> Result<Option<u32>>,
 ) -> Result<(Material, Option<String>)> {
-    let albedo = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
+    let mut albedo = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
     let texture = match m.diffuse_texture.as_deref().and_then(texture_file) {
         Some(file) => textures(dir.join(file))?,
         None => None,
@@ -123,7 +127,7 @@ fn convert_material(
         .unwrap_or(0.8);
     let reflective_model = matches!(m.illumination_model, Some(3..=9));
     let reflectivity = mtl_number(m, "refl")
-        .or_else(|| mtl_number(m, "Pm"))
+        .or_else(|| mtl_number(m, "Pr").map(super::gltf::reflectivity_from_roughness))
         .unwrap_or_else(|| {
             if reflective_model {
                 m.specular.map_or(0.0, |s| s[0].max(s[1]).max(s[2]))
@@ -131,9 +135,21 @@ fn convert_material(
                 0.0
             }
         });
-    let mut mat = Material::new(&m.name, albedo.to_array(), roughness, reflectivity);
+    let tinted = m.specular.filter(|s| {
+        let (lo, hi) = (s[0].min(s[1]).min(s[2]), s[0].max(s[1]).max(s[2]));
+        reflective_model && hi > 0.0 && hi - lo > 0.25 * hi
+    });
+    let metallic = match (mtl_number(m, "Pm"), tinted) {
+        (Some(pm), _) => pm,
+        (None, Some(ks)) => {
+            albedo = Vec3::from(ks);
+            1.0
+        }
+        (None, None) => 0.0,
+    };
+    let mut mat = Material::new(&m.name, albedo.to_array(), roughness, reflectivity).metal(metallic);
     mat.texture = texture;
-    if !(mat.albedo.is_finite() && mat.roughness.is_finite() && mat.reflectivity.is_finite()) {
+    if !(mat.albedo.is_finite() && mat.roughness.is_finite() && mat.reflectivity.is_finite() && metallic.is_finite()) {
         return Err(Error::BadAsset {
             what: "MTL file",
             path: mtl.into(),

@@ -8,6 +8,7 @@
 // shader_defines.rs) of the listed pixels; nonzero sends the pixel to rt.trace
 // (FAIL_BLEND: a faded hit, kept and blended with the ray-traced colour by merge).
 #include "ssr.glsl"
+#include "shading.glsl"
 #include "pixel_list.glsl"
 
 layout(local_size_x = SSR_LIST_WG) in;
@@ -19,6 +20,9 @@ layout(binding = 4, rgba32f) uniform writeonly image2D ssr_out; // rgb colour, a
 layout(binding = 5, r32ui) uniform writeonly uimage2D fail_mask;
 layout(binding = 6, std430) readonly buffer MarchList { uint march_list[]; };
 layout(binding = 7, std430) readonly buffer MarchArgs { uvec4 march_args; }; // w: length
+layout(binding = 8) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
+layout(binding = 9) uniform usampler2D gb_material;
+layout(binding = 10, std430) readonly buffer Materials { Material materials[]; };
 
 layout(push_constant) uniform Push {
     uint max_steps;
@@ -27,7 +31,7 @@ layout(push_constant) uniform Push {
     float max_distance;   // length of the ray, in multiples of the reflecting point's view depth
     float edge_fade;      // fraction of the screen's smaller side over which confidence fades
     float min_confidence; // below: the pixel fails
-    float recursion_min;  // hits on surfaces more reflective than this fail
+    float recursion_min;  // hits whose own reflection, seen along the ray, weighs more fail
 } pc;
 
 // View-space z (negative in front of the camera) of G-buffer depth d.
@@ -49,6 +53,17 @@ vec3 lit_bilinear(vec2 x, ivec2 res) {
     vec3 c00 = imageLoad(lit, lo).rgb, c10 = imageLoad(lit, ivec2(hi.x, lo.y)).rgb;
     vec3 c01 = imageLoad(lit, ivec2(lo.x, hi.y)).rgb, c11 = imageLoad(lit, hi).rgb;
     return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
+}
+
+// How much of the surface at pixel q is its own mirror reflection, seen from the ray
+// arriving along -v: reflectivity x Fresnel (shading.glsl), the largest channel. SSR
+// takes the lit colour there, which lacks that reflection.
+float hit_reflection_weight(ivec2 q, float reflectivity, vec3 n, vec3 v) {
+    uint id = texelFetch(gb_material, q, 0).r;
+    float metallic = id == MATERIAL_NONE ? 0.0 : materials[id].metallic;
+    vec3 base = srgb_decode(texelFetch(gb_albedo, q, 0).rgb);
+    vec3 w = reflection_weight(base, metallic, reflectivity, n, v);
+    return max(w.r, max(w.g, w.b));
 }
 
 void main() {
@@ -185,7 +200,7 @@ void main() {
         vec3 world_dir = transpose(mat3(frame.view)) * vdir; // view is rigid
         if (dot(hit_n, world_dir) > 0.0) {
             fail = FAIL_BACK_FACE;
-        } else if (hit_nr.w > pc.recursion_min) {
+        } else if (hit_reflection_weight(hit_pixel, hit_nr.w, hit_n, -world_dir) > pc.recursion_min) {
             fail = FAIL_HIT_REFLECTIVE;
         } else {
             vec2 hp = vec2(hit_pixel) + 0.5;

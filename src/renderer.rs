@@ -387,7 +387,9 @@ impl Renderer {
             });
         }
         if mode.marches() {
-            timer.scope(cmd, ssr_trace::NAME, || ssr.trace(cmd, ubo, g, &light.lit, &params));
+            timer.scope(cmd, ssr_trace::NAME, || {
+                ssr.trace(cmd, ubo, g, &light.lit, &scene.materials, &params)
+            });
         }
         if mode.traces() {
             timer.scope(cmd, ssr_compact::NAME, || compact.record(cmd, &ssr.out.mask));

@@ -121,10 +121,12 @@ pub struct Settings {
     /// SSR hits below this confidence fail (go to the ray tracer): higher is cleaner
     /// and slower.
     pub ssr_min_confidence: f32,
-    /// SSR hits on surfaces more reflective than this fail and go to the ray tracer
-    /// (the screen holds no reflection of a reflection). Hits on weaker reflectors are
-    /// kept without their own reflection: a lower value is closer to the reference,
-    /// a higher one ray traces fewer pixels.
+    /// SSR hits on surfaces whose own mirror reflection, seen along the ray, weighs
+    /// more than this (reflectivity x Fresnel, the largest channel) fail and go to the
+    /// ray tracer (the screen holds no reflection of a reflection). Hits on weaker
+    /// reflectors (a dielectric seen head-on reflects 4%) are kept without their own
+    /// reflection: a lower value is closer to the reference, a higher one ray traces
+    /// fewer pixels.
     pub ssr_recursion_min: f32,
     /// Seam blur radius in pixels (0: off): smoother SSR/RT transitions vs detail.
     pub blur_radius: u32,

@@ -38,6 +38,10 @@ struct Fixture {
     lit: Image,
     ubo: speculum::vk::Buffer,
     pass: SsrPass,
+    /// Random base colours (sRGB-encoded) and the metallic of each material id.
+    albedo: Vec<u8>,
+    metallic: Vec<f32>,
+    materials: speculum::vk::Buffer,
 }
 
 impl Fixture {
@@ -68,6 +72,24 @@ impl Fixture {
         gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
         gb.normal.write(&g.normal_bytes, ro).unwrap();
         gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
+        let albedo: Vec<u8> = (0..n * 4).map(|_| rng.random()).collect();
+        gb.albedo.write(&albedo, ro).unwrap();
+        // The material ids of random_gbuffer: a dielectric, a metal and two blends.
+        let metallic = vec![0.0, 1.0, 0.4, 0.75];
+        let gpu_materials: Vec<speculum::gpu_types::GpuMaterial> = metallic
+            .iter()
+            .map(|&metallic| speculum::gpu_types::GpuMaterial {
+                metallic,
+                ..Default::default()
+            })
+            .collect();
+        let materials = speculum::vk::Buffer::with_data(
+            ctx,
+            "test.materials",
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            bytemuck::cast_slice(&gpu_materials),
+        )
+        .unwrap();
         let lit_texels: Vec<[f32; 4]> = (0..n)
             .map(|_| {
                 [
@@ -90,6 +112,9 @@ impl Fixture {
             gb,
             lit_texels,
             lit,
+            albedo,
+            metallic,
+            materials,
         }
     }
 }
@@ -126,7 +151,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
         ctx.one_shot(|cmd| {
             pass.classify(cmd, ubo, gb, &params, mask_only);
             if march {
-                pass.trace(cmd, ubo, gb, lit, &params);
+                pass.trace(cmd, ubo, gb, lit, &f.materials, &params);
             }
             // RAW: the readback copies see the shaders' writes.
             let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
@@ -321,7 +346,7 @@ fn march_matches_cpu_on_a_random_gbuffer() {
         .unwrap();
     ctx.one_shot(|cmd| {
         pass.classify(cmd, ubo, gb, &params, false);
-        pass.trace(cmd, ubo, gb, &f.lit, &params);
+        pass.trace(cmd, ubo, gb, &f.lit, &f.materials, &params);
     })
     .unwrap();
     let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
@@ -332,6 +357,9 @@ fn march_matches_cpu_on_a_random_gbuffer() {
         depth: &g.depth,
         normal: &g.normal,
         lit: &f.lit_texels,
+        albedo: &f.albedo,
+        material: &g.material,
+        metallic: &f.metallic,
     };
     let c = compare_march(
         frame,
@@ -380,10 +408,16 @@ fn march_matches_cpu_on_room() {
     let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.ssr.out.color.read(general).unwrap());
     let args: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_args.read().unwrap());
     let list: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_list.read().unwrap());
+    let albedo = r.read_target(&t.albedo).unwrap();
+    let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.material).unwrap());
+    let metallic: Vec<f32> = scene.materials.iter().map(|m| m.metallic).collect();
     let inputs = ssr::MarchInputs {
         depth: &depth,
         normal: &normal,
         lit: &lit,
+        albedo: &albedo,
+        material: &material,
+        metallic: &metallic,
     };
     let params = SsrParams::from_settings(&settings);
     let c = compare_march(
@@ -432,7 +466,7 @@ fn a_march_list_beyond_one_row_of_workgroups_is_covered() {
     let params = SsrParams::from_settings(&f.settings);
     ctx.one_shot(|cmd| {
         f.pass.classify(cmd, &f.ubo, &f.gb, &params, false);
-        f.pass.trace(cmd, &f.ubo, &f.gb, &f.lit, &params);
+        f.pass.trace(cmd, &f.ubo, &f.gb, &f.lit, &f.materials, &params);
     })
     .unwrap();
     let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());

@@ -74,6 +74,11 @@ pub struct MarchInputs<'a> {
     /// xyz: world normal; w: reflectivity (as the GPU reads RGBA16F).
     pub normal: &'a [[f32; 4]],
     pub lit: &'a [[f32; 4]],
+    /// G-buffer base colour texels (RGBA8, sRGB-encoded rgb) and material ids.
+    pub albedo: &'a [u8],
+    pub material: &'a [u32],
+    /// `metallic` of each material id.
+    pub metallic: &'a [f32],
 }
 
 /// What the march of one pixel writes, and how close it came to deciding otherwise.
@@ -276,9 +281,23 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         let hit_n = Vec3::new(hit_nr[0], hit_nr[1], hit_nr[2]).normalize();
         let world_dir = Mat3::from_mat4(frame.view).transpose() * vdir;
         margin = margin.min(hit_n.dot(world_dir).abs());
+        // `hit_reflection_weight`: the hit surface's own reflection seen along the ray.
+        let mut own_reflection = |q: IVec2, n: Vec3| {
+            let q = at(q);
+            let id = inputs.material[q];
+            let metallic = if id == MATERIAL_NONE {
+                0.0
+            } else {
+                inputs.metallic[id as usize]
+            };
+            let base = super::albedo_texel(&inputs.albedo[4 * q..4 * q + 4]).0;
+            let w = super::shading::reflection_weight(base, metallic, hit_nr[3], n, -world_dir).max_element();
+            margin = margin.min(gap(w, params.recursion_min));
+            w
+        };
         if hit_n.dot(world_dir) > 0.0 {
             fail = FAIL_BACK_FACE;
-        } else if hit_nr[3] > params.recursion_min {
+        } else if own_reflection(hit_pixel, hit_n) > params.recursion_min {
             fail = FAIL_HIT_REFLECTIVE;
         } else {
             let hp = hit_pixel.as_vec2() + 0.5;

@@ -184,7 +184,17 @@ impl SsrPass {
     /// Records the march over the classification's list: SSR colour + confidence and
     /// the fail mask of the listed pixels, visible at the end to their readers
     /// (`ssr.compact`, `reflect.merge`). `lit` in `GENERAL`.
-    pub fn trace(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, lit: &Image, params: &SsrParams) {
+    /// `materials` gives the hit surfaces' metallic for their own reflection's weight.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace(
+        &self,
+        cmd: vk::CommandBuffer,
+        frame: &Buffer,
+        gbuffer: &GBuffer,
+        lit: &Image,
+        materials: &Buffer,
+        params: &SsrParams,
+    ) {
         let out = &self.out;
         let s = &self.sampler;
         self.trace.dispatch(
@@ -198,6 +208,9 @@ impl SsrPass {
                 Resource::StorageImage(&out.mask),
                 Resource::Buffer(&out.march_list),
                 Resource::Buffer(&out.march_args),
+                Resource::Sampled(&gbuffer.albedo, s),
+                Resource::Sampled(&gbuffer.material, s),
+                Resource::Buffer(materials),
             ],
             &MarchPush {
                 max_steps: params.max_steps,

@@ -832,21 +832,7 @@ fn gltf_loads_node_transforms_and_materials() {
     bin.extend([0u8; 2]); // pad to 44 bytes (a multiple of 4)
     std::fs::write(dir.path().join("tri.bin"), &bin).unwrap();
     let gltf = write(dir.path(), "tri.gltf", &gltf_json(Some("tri.bin")));
-    // GLB: header, JSON chunk (space-padded), BIN chunk.
-    let mut json = gltf_json(None).into_bytes();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut glb = Vec::new();
-    glb.extend(b"glTF");
-    glb.extend(2u32.to_le_bytes());
-    glb.extend(((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
-    glb.extend((json.len() as u32).to_le_bytes());
-    glb.extend(b"JSON");
-    glb.extend(&json);
-    glb.extend((bin.len() as u32).to_le_bytes());
-    glb.extend(b"BIN\0");
-    glb.extend(&bin);
+    let glb = common::showcase::container(gltf_json(None).as_bytes(), &bin);
     std::fs::write(dir.path().join("tri.glb"), &glb).unwrap();
     let glb = dir.path().join("tri.glb").display().to_string();
     for file in [&gltf, &glb] {

@@ -12,7 +12,6 @@ use ash::vk;
 use glam::{IVec2, Vec3, Vec4Swizzles};
 use rand::Rng;
 use speculum::cpu_ref::{self, shading};
-use speculum::gpu_types::GpuMaterial;
 use speculum::passes::compose::ComposePass;
 use speculum::passes::gbuffer::GBuffer;
 use speculum::passes::light_direct::LightDirectPass;
@@ -20,26 +19,6 @@ use speculum::shader_defines::MATERIAL_NONE;
 use speculum::vk::{barrier, Image};
 
 const POISON_F32: f32 = -12345.0;
-
-/// The four material ids of the random G-buffers (`common::random_gbuffer`):
-/// a dielectric, a metal and two blends.
-fn random_materials(ctx: &std::sync::Arc<speculum::vk::Context>) -> (Vec<GpuMaterial>, speculum::vk::Buffer) {
-    let materials: Vec<GpuMaterial> = [0.0, 1.0, 0.37, 0.81]
-        .iter()
-        .map(|&metallic| GpuMaterial {
-            metallic,
-            ..Default::default()
-        })
-        .collect();
-    let buffer = speculum::vk::Buffer::with_data(
-        ctx,
-        "test.materials",
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        bytemuck::cast_slice(&materials),
-    )
-    .unwrap();
-    (materials, buffer)
-}
 
 /// compose: random HDR texels (including negatives, zeros, values far above 1, and
 /// NaN, infinities and values whose square overflows f32) tonemap to exactly the CPU
@@ -98,7 +77,7 @@ fn compose_matches_cpu_reference() {
     gb.normal.write(&g.normal_bytes, ro).unwrap();
     gb.albedo.write(&albedo, ro).unwrap();
     gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
-    let (materials, materials_buffer) = random_materials(&ctx);
+    let (materials, materials_buffer) = common::random_materials(&ctx);
     let scene = speculum::scene::builtin::room().unwrap();
     let settings = speculum::Settings {
         width: extent.width,
@@ -202,7 +181,7 @@ fn light_direct_matches_cpu_reference() {
     .unwrap();
     shadow_map.write(bytemuck::cast_slice(&shadow), ro).unwrap();
     let ubo = common::frame_ubo(&ctx, &frame);
-    let (materials, materials_buffer) = random_materials(&ctx);
+    let (materials, materials_buffer) = common::random_materials(&ctx);
     let pass = LightDirectPass::new(&ctx, extent).unwrap();
     pass.lit
         .write(

@@ -74,22 +74,8 @@ impl Fixture {
         gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
         let albedo: Vec<u8> = (0..n * 4).map(|_| rng.random()).collect();
         gb.albedo.write(&albedo, ro).unwrap();
-        // The material ids of random_gbuffer: a dielectric, a metal and two blends.
-        let metallic = vec![0.0, 1.0, 0.4, 0.75];
-        let gpu_materials: Vec<speculum::gpu_types::GpuMaterial> = metallic
-            .iter()
-            .map(|&metallic| speculum::gpu_types::GpuMaterial {
-                metallic,
-                ..Default::default()
-            })
-            .collect();
-        let materials = speculum::vk::Buffer::with_data(
-            ctx,
-            "test.materials",
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            bytemuck::cast_slice(&gpu_materials),
-        )
-        .unwrap();
+        let (gpu_materials, materials) = common::random_materials(ctx);
+        let metallic = gpu_materials.iter().map(|m| m.metallic).collect();
         let lit_texels: Vec<[f32; 4]> = (0..n)
             .map(|_| {
                 [

@@ -20,7 +20,7 @@ pub const FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 pub enum ComposeMode {
     /// The lit colour alone (the `raster` mode).
     Plain,
-    /// The lit colour plus the merged reflection weighted by reflectivity.
+    /// The lit colour plus the merged reflection weighted by reflectivity x Fresnel.
     Reflect,
     /// Each pixel painted by the source of its reflection.
     Provenance,

@@ -1,5 +1,6 @@
-//! `gbuffer`: rasterizes the scene from the camera into depth, normal + reflectivity,
-//! albedo + roughness and material id.
+//! `gbuffer`: rasterizes the scene from the camera into depth, normal + reflectivity
+//! (the normal clamped so its mirror direction stays above the facet), base colour
+//! (textured, sRGB-encoded) + roughness and material id.
 
 use super::{set_viewport, SceneGeometry, Surfaces};
 use crate::error::Result;

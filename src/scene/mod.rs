@@ -1,9 +1,11 @@
-//! Scenes: triangles in world space, materials, a camera and a light.
+//! Scenes: triangles in world space with texture coordinates, materials (the model is
+//! in the README's "Materials"), base-colour textures, a camera and a light.
 //!
 //! A scene comes from a scene file (`file`: TOML, primitives and models with
-//! transforms; the built-in scenes are such files, `builtin`) or an OBJ file (`obj`).
-//! Either way it is validated before the GPU sees it: at least one triangle, finite
-//! coordinates, indices in range.
+//! transforms; the built-in scenes are such files, `builtin`) or a model file (`obj`,
+//! `gltf`, `ply`), which stands on a floor. Either way it is validated before the GPU
+//! sees it: at least one triangle, finite coordinates and texture coordinates, indices
+//! and texture references in range.
 
 pub mod builtin;
 pub mod camera;

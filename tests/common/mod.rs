@@ -74,6 +74,26 @@ pub fn random_gbuffer(rng: &mut impl rand::Rng, n: usize) -> RandomGBuffer {
     }
 }
 
+/// Materials for the four ids of `random_gbuffer`: a dielectric, a metal and two
+/// blends (only `metallic` is read by the screen-space kernels), and their buffer.
+pub fn random_materials(ctx: &Arc<Context>) -> (Vec<speculum::gpu_types::GpuMaterial>, speculum::vk::Buffer) {
+    let materials: Vec<speculum::gpu_types::GpuMaterial> = [0.0, 1.0, 0.37, 0.81]
+        .iter()
+        .map(|&metallic| speculum::gpu_types::GpuMaterial {
+            metallic,
+            ..Default::default()
+        })
+        .collect();
+    let buffer = speculum::vk::Buffer::with_data(
+        ctx,
+        "test.materials",
+        ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+        bytemuck::cast_slice(&materials),
+    )
+    .unwrap();
+    (materials, buffer)
+}
+
 /// The frame uniform buffer (binding 0 of the screen-space kernels) holding `frame`.
 pub fn frame_ubo(ctx: &Arc<Context>, frame: &speculum::gpu_types::FrameUniforms) -> speculum::vk::Buffer {
     speculum::vk::Buffer::with_data(

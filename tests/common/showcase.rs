@@ -166,10 +166,17 @@ pub fn glb() -> Vec<u8> {
         "bufferViews": views,
         "buffers": [{"byteLength": bin.len()}]
     });
-    let mut json = serde_json::to_vec(&doc).unwrap();
+    container(&serde_json::to_vec(&doc).unwrap(), &bin)
+}
+
+/// A GLB file: the header, the JSON chunk (space-padded to 4 bytes) and the BIN chunk
+/// (`bin`, already a multiple of 4 bytes).
+pub fn container(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let mut json = json.to_vec();
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
+    assert!(bin.len().is_multiple_of(4));
     let mut glb = Vec::new();
     glb.extend(b"glTF");
     glb.extend(2u32.to_le_bytes());
@@ -179,6 +186,6 @@ pub fn glb() -> Vec<u8> {
     glb.extend(&json);
     glb.extend((bin.len() as u32).to_le_bytes());
     glb.extend(b"BIN\0");
-    glb.extend(&bin);
+    glb.extend(bin);
     glb
 }

@@ -15,7 +15,9 @@ pub struct GpuVertex {
     pub material: u32,
     /// Unit normal.
     pub normal: [f32; 3],
-    pub _pad0: u32,
+    /// Dynamic geometry: the index of the body the vertex belongs to (its transform in
+    /// `sim.transform`); 0 in static geometry.
+    pub object: u32,
 }
 
 /// A material (std430, 32 bytes).

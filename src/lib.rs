@@ -22,6 +22,7 @@ pub mod renderer;
 pub mod report;
 pub mod scene;
 pub mod settings;
+pub mod sim;
 pub mod vk;
 
 /// Constants shared with GLSL (also compiled into build.rs).

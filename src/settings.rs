@@ -135,6 +135,10 @@ pub struct Settings {
     /// Shadows at ray-traced hits from shadow rays (exact, one more traversal per hit)
     /// instead of the shadow map (cheap, limited by its resolution).
     pub shadow_rays: bool,
+    /// Simulated seconds per rendered frame of a dynamic scene (a fixed step, so frame
+    /// k is the same image in every run): smaller is smoother motion and more frames
+    /// for the same animation.
+    pub sim_dt: f32,
 }
 
 impl Default for Settings {
@@ -161,6 +165,7 @@ impl Default for Settings {
             blur_radius: 3,
             blur_band: 3,
             shadow_rays: false,
+            sim_dt: 1.0 / 60.0,
         }
     }
 }
@@ -250,6 +255,12 @@ impl Settings {
             if !v.is_finite() || v < 0.0 {
                 return Err(Error::Settings(format!("{name} {v} must be a finite number >= 0")));
             }
+        }
+        if !(self.sim_dt.is_finite() && self.sim_dt > 0.0 && self.sim_dt <= 1.0) {
+            return Err(Error::Settings(format!(
+                "sim_dt {} must be a time step in (0, 1] seconds",
+                self.sim_dt
+            )));
         }
         Ok(())
     }

@@ -40,7 +40,7 @@ fn vertex_layout_matches_glsl() {
             position,
             material,
             normal,
-            _pad0
+            object
         }),
     );
     assert_eq!(r.array_strides["Vertex"] as usize, size_of::<GpuVertex>());

@@ -196,7 +196,7 @@ fn soup_from(tris: &[[Vec3; 3]]) -> (Vec<GpuVertex>, Vec<u32>) {
             position: p.to_array(),
             material: 0,
             normal: [0.0, 1.0, 0.0],
-            _pad0: 0,
+            object: 0,
         })
         .collect();
     (v, (0..3 * tris.len() as u32).collect())

@@ -6,7 +6,7 @@ struct Vertex {
     vec3 position;
     uint material;
     vec3 normal;
-    uint _pad0;
+    uint object; // dynamic geometry: the body's index; 0 in static geometry
 };
 
 struct Material {

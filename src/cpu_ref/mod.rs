@@ -7,6 +7,7 @@ pub mod lbvh;
 pub mod merge;
 pub mod reflect;
 pub mod shading;
+pub mod sim;
 pub mod ssr;
 pub mod texture;
 pub mod trace;

@@ -24,7 +24,7 @@ pub use texture::Texture;
 use crate::error::{Error, Result};
 use crate::gpu_types::{GpuMaterial, GpuVertex};
 use crate::shader_defines::TEXTURE_NONE;
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Quat, Vec2, Vec3};
 
 /// A surface description.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,6 +81,62 @@ impl Material {
     }
 }
 
+/// The collider and mesh of a rigid body, in its own space (centred on its centre of
+/// mass).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BodyShape {
+    Sphere { radius: f32 },
+    /// Full extents.
+    Cuboid { size: Vec3 },
+}
+
+/// A rigid body of the dynamic geometry: simulated (`sim::rigid`), its mesh moved to
+/// its pose every frame, its triangles in the dynamic BVH.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Body {
+    pub shape: BodyShape,
+    /// An index into `Scene::materials`.
+    pub material: u32,
+    /// kg per cubic unit.
+    pub density: f32,
+    /// Bounciness in [0, 1] (averaged with what it hits).
+    pub restitution: f32,
+    pub friction: f32,
+    /// The initial pose and motion (world units per second; radians per second about
+    /// the world axes).
+    pub position: Vec3,
+    pub rotation: Quat,
+    pub velocity: Vec3,
+    pub angular_velocity: Vec3,
+}
+
+impl Body {
+    /// The body's mesh in its own space.
+    pub fn mesh(&self) -> TriMesh {
+        match self.shape {
+            BodyShape::Sphere { radius } => TriMesh::sphere(radius, 32, 16),
+            BodyShape::Cuboid { size } => TriMesh::cuboid(size),
+        }
+    }
+
+    /// Radius of the body's bounding sphere.
+    pub fn radius(&self) -> f32 {
+        match self.shape {
+            BodyShape::Sphere { radius } => radius,
+            BodyShape::Cuboid { size } => 0.5 * size.length(),
+        }
+    }
+}
+
+/// The dynamic geometry in its own spaces, as `sim.transform` reads it: each vertex's
+/// `object` is its body's index; triangles index these vertices.
+#[derive(Clone, Debug, Default)]
+pub struct DynamicMeshes {
+    pub vertices: Vec<GpuVertex>,
+    pub uvs: Vec<[f32; 2]>,
+    pub indices: Vec<u32>,
+}
+
 /// A directional light (the sun): parallel rays, one shadow map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
@@ -110,6 +166,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Base-colour textures, which materials name by index.
     pub textures: Vec<Texture>,
+    /// Rigid bodies: the dynamic geometry (none in a static scene).
+    pub bodies: Vec<Body>,
     pub camera: Camera,
     pub light: Light,
     pub sky: Sky,
@@ -133,6 +191,7 @@ impl SceneBuilder {
                 indices: Vec::new(),
                 materials: Vec::new(),
                 textures: Vec::new(),
+                bodies: Vec::new(),
                 camera: Camera {
                     position: Vec3::new(0.0, 2.0, 6.0),
                     target: Vec3::ZERO,
@@ -161,6 +220,12 @@ impl SceneBuilder {
         self.scene.materials.len() as u32 - 1
     }
 
+    /// Adds a rigid body (dynamic geometry).
+    pub fn body(&mut self, body: Body) -> &mut Self {
+        self.scene.bodies.push(body);
+        self
+    }
+
     /// Adds a texture and returns its index, for `Material::textured`.
     pub fn texture(&mut self, t: Texture) -> u32 {
         self.scene.textures.push(t);
@@ -179,7 +244,7 @@ impl SceneBuilder {
                 position: p.to_array(),
                 material,
                 normal: n.to_array(),
-                _pad0: 0,
+                object: 0,
             }));
         self.scene.indices.extend(mesh.indices.iter().map(|i| base + i));
         self
@@ -208,7 +273,7 @@ impl SceneBuilder {
                     .transform_vector3(Vec3::from(v.normal))
                     .normalize_or(Vec3::Y)
                     .to_array(),
-                _pad0: 0,
+                object: 0,
             }
         }));
         self.scene.indices.extend(scene.indices.iter().map(|i| base + i));
@@ -242,14 +307,50 @@ impl SceneBuilder {
 }
 
 impl Scene {
-    /// Axis-aligned bounds of all vertices (min, max).
+    /// Axis-aligned bounds of the static vertices and of the bodies where they start
+    /// (min, max).
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.vertices
+        let statics = self
+            .vertices
             .iter()
             .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), v| {
                 let p = Vec3::from(v.position);
                 (lo.min(p), hi.max(p))
-            })
+            });
+        self.bodies.iter().fold(statics, |(lo, hi), b| {
+            let r = Vec3::splat(b.radius());
+            (lo.min(b.position - r), hi.max(b.position + r))
+        })
+    }
+
+    /// Whether anything moves.
+    pub fn is_dynamic(&self) -> bool {
+        !self.bodies.is_empty()
+    }
+
+    /// The bodies' meshes in their own spaces, concatenated (`DynamicMeshes`).
+    pub fn dynamic_meshes(&self) -> DynamicMeshes {
+        let mut out = DynamicMeshes::default();
+        for (i, b) in self.bodies.iter().enumerate() {
+            let mesh = b.mesh();
+            let base = out.vertices.len() as u32;
+            for (k, (p, n)) in mesh.positions.iter().zip(&mesh.normals).enumerate() {
+                out.vertices.push(GpuVertex {
+                    position: p.to_array(),
+                    material: b.material,
+                    normal: n.to_array(),
+                    object: i as u32,
+                });
+                out.uvs.push(mesh.uvs.get(k).copied().unwrap_or(Vec2::ZERO).to_array());
+            }
+            out.indices.extend(mesh.indices.iter().map(|t| base + t));
+        }
+        out
+    }
+
+    /// Triangles of the dynamic geometry.
+    pub fn dynamic_triangle_count(&self) -> usize {
+        self.bodies.iter().map(|b| b.mesh().indices.len() / 3).sum()
     }
 
     /// Number of triangles.
@@ -316,6 +417,35 @@ impl Scene {
                     v.material,
                     self.materials.len()
                 ));
+            }
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            let size_ok = match b.shape {
+                BodyShape::Sphere { radius } => radius.is_finite() && radius > 0.0,
+                BodyShape::Cuboid { size } => size.is_finite() && size.min_element() > 0.0,
+            };
+            if !size_ok {
+                return bad(format!("body {i} has a zero, negative or non-finite size ({:?})", b.shape));
+            }
+            if b.material as usize >= self.materials.len() {
+                return bad(format!(
+                    "body {i} uses material {} but the scene has {}",
+                    b.material,
+                    self.materials.len()
+                ));
+            }
+            let state_ok = b.position.is_finite()
+                && b.rotation.is_finite()
+                && b.velocity.is_finite()
+                && b.angular_velocity.is_finite();
+            if !state_ok {
+                return bad(format!("body {i} has a non-finite position, rotation or velocity"));
+            }
+            if !(b.density.is_finite() && b.density > 0.0) {
+                return bad(format!("body {i} has density {} (it must be > 0)", b.density));
+            }
+            if !(b.restitution.is_finite() && b.friction.is_finite() && b.restitution >= 0.0 && b.friction >= 0.0) {
+                return bad(format!("body {i} has a negative or non-finite restitution or friction"));
             }
         }
         let (lo, hi) = self.bounds();

@@ -26,7 +26,7 @@ pub fn random_soup(n: usize, scale: f32, size: f32, seed: u64) -> (Vec<GpuVertex
                 position: (c + o).to_array(),
                 material: 0,
                 normal: [0.0, 1.0, 0.0],
-                _pad0: 0,
+                object: 0,
             });
         }
     }

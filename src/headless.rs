@@ -111,6 +111,9 @@ fn measure(renderer: &mut Renderer, plan: FramePlan, tick: Tick<'_>) -> Result<T
         renderer.render_frame()?;
         tick();
     }
+    // A dynamic scene starts over after the warm-up: measured frame k is the same
+    // image whatever the warm-up (the world after k + 1 time steps).
+    renderer.reset_simulation()?;
     let mut timings = Timings::default();
     for _ in 0..plan.frames {
         timings.add_frame(&renderer.render_frame()?);

@@ -2,9 +2,11 @@
 //! scope. Every pass's `record` places its own barriers (see `passes`); this file only
 //! does what spans passes: the uniform upload, which passes a mode runs, and the scopes.
 //!
-//! Frame: `uniforms` → `shadow.map` → `gbuffer` → `light.direct` → (by mode)
-//! `ssr.classify` → `ssr.trace` → `ssr.compact` → `rt.reflect` → `reflect.merge` →
-//! `compose`. The static BVH is built once, when the renderer is created.
+//! Frame: `uniforms` → (a dynamic scene: `sim.rigid` on the CPU before recording,
+//! `sim.transform`, the dynamic BVH's `lbvh.*`) → `shadow.map` → `gbuffer` →
+//! `light.direct` → (by mode) `ssr.classify` → `ssr.trace` → `ssr.compact` →
+//! `rt.reflect` → `reflect.merge` → `compose`. The static BVH is built once, when the
+//! renderer is created; the dynamic one every frame, over that frame's geometry.
 
 use crate::error::{Result, VkContext};
 use crate::gpu_types::{FrameUniforms, GpuMaterial};
@@ -13,12 +15,14 @@ use crate::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
 use crate::passes::reflect_merge::{self, BlurParams, MergePass};
 use crate::passes::rt_reflect::{self, ReflectInputs, RtReflectPass};
 use crate::passes::rt_trace::{TraceScene, Traceable};
+use crate::passes::sim_transform::{self, SimTransformPass};
 use crate::passes::ssr_compact::{self, CompactPass};
 use crate::passes::ssr_trace::{self, SsrParams, SsrPass};
 use crate::passes::{gbuffer, light_direct, shadow_map, SceneGeometry, Surfaces};
 use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
 use crate::scene::{texture, Camera, Light, Scene, Sky};
 use crate::settings::{Mode, Settings};
+use crate::sim::rigid::RigidWorld;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GpuTimer, Image, Sampler};
 use ash::vk;
@@ -29,10 +33,21 @@ use std::sync::Arc;
 pub const FRAME: &str = "frame";
 /// Timer scope of the per-frame uniform upload.
 pub const UNIFORMS: &str = "uniforms";
+/// The rigid bodies' time step on the CPU (wall clock, before the frame is recorded).
+pub const SIM_RIGID: &str = "sim.rigid";
 /// Every timer scope a frame can have, in frame order (`FRAME` last): the keys of every
-/// report's `passes_ms`, a pass a mode does not run reported as `null`.
-pub const SCOPES: [&str; 11] = [
+/// report's `passes_ms`, a pass a mode (or a static scene) does not run reported as
+/// `null`. All are GPU time but `sim.rigid`, the CPU's; the dynamic BVH's stages are
+/// `lbvh.*` (the static BVH's, built once, are reported apart).
+pub const SCOPES: [&str; 18] = [
     UNIFORMS,
+    SIM_RIGID,
+    sim_transform::NAME,
+    crate::passes::lbvh::BOUNDS,
+    crate::passes::lbvh::MORTON,
+    crate::passes::lbvh::SORT,
+    crate::passes::lbvh::HIERARCHY,
+    crate::passes::lbvh::FIT,
     shadow_map::NAME,
     gbuffer::NAME,
     light_direct::NAME,
@@ -60,18 +75,155 @@ impl SceneBuffers {
     fn geometry(&self) -> SceneGeometry<'_> {
         SceneGeometry {
             vertices: &self.vertices,
+            uvs: &self.uvs,
             indices: &self.indices,
             index_count: self.index_count,
         }
     }
 
-    fn surfaces(&self) -> Surfaces<'_> {
+    /// The surfaces, with the dynamic geometry's texture coordinates when there is any.
+    fn surfaces<'a>(&'a self, dynamic: Option<&'a DynamicGeometry>) -> Surfaces<'a> {
         Surfaces {
             materials: &self.materials,
-            uvs: [&self.uvs, &self.uvs],
+            uvs: [&self.uvs, dynamic.map_or(&self.uvs, |d| &d.uvs)],
             textures: &self.textures,
             sampler: &self.texture_sampler,
         }
+    }
+}
+
+/// The moving geometry of a scene with bodies: its simulation, the bodies' meshes in
+/// their own spaces, their poses (written by the host each frame, copied to the GPU in
+/// the frame), the world-space vertices `sim.transform` writes, and the BVH over them,
+/// rebuilt every frame.
+struct DynamicGeometry {
+    world: RigidWorld,
+    objects: Buffer,
+    vertices: Buffer,
+    uvs: Buffer,
+    indices: Buffer,
+    poses_staging: Buffer,
+    poses: Buffer,
+    bvh: Bvh,
+    vertex_count: u32,
+    index_count: u32,
+    /// Wall-clock milliseconds of the last `sim.rigid` step.
+    sim_ms: f64,
+}
+
+impl DynamicGeometry {
+    fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings) -> Result<Self> {
+        use vk::BufferUsageFlags as U;
+        let meshes = scene.dynamic_meshes();
+        let vertex_count = meshes.vertices.len() as u32;
+        ctx.check_limit(
+            || "the dynamic geometry".to_string(),
+            vertex_count as u64,
+            "vertices",
+            "sim.transform's dispatch (65535 workgroups)",
+            sim_transform::MAX_VERTICES as u64,
+        )?;
+        let tris = (meshes.indices.len() / 3) as u32;
+        let storage = U::STORAGE_BUFFER;
+        let pose_bytes = (scene.bodies.len() * std::mem::size_of::<Mat4>()) as u64;
+        let world_vertices = Buffer::new(
+            ctx,
+            "dynamic.vertices",
+            std::mem::size_of_val(meshes.vertices.as_slice()) as u64,
+            storage | U::TRANSFER_SRC,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
+        Ok(Self {
+            world: RigidWorld::new(scene, settings.sim_dt)?,
+            objects: Buffer::with_data(ctx, "dynamic.objects", storage, bytemuck::cast_slice(&meshes.vertices))?,
+            vertices: world_vertices,
+            uvs: Buffer::with_data(ctx, "dynamic.uvs", storage, bytemuck::cast_slice(&meshes.uvs))?,
+            indices: Buffer::with_data(
+                ctx,
+                "dynamic.indices",
+                U::INDEX_BUFFER | storage,
+                bytemuck::cast_slice(&meshes.indices),
+            )?,
+            poses_staging: Buffer::new(
+                ctx,
+                "dynamic.poses_staging",
+                pose_bytes,
+                U::TRANSFER_SRC,
+                gpu_allocator::MemoryLocation::CpuToGpu,
+            )?,
+            poses: Buffer::new(
+                ctx,
+                "dynamic.poses",
+                pose_bytes,
+                storage | U::TRANSFER_DST,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )?,
+            bvh: Bvh::new(ctx, tris, MortonBits::Bits30)?,
+            vertex_count,
+            index_count: meshes.indices.len() as u32,
+            sim_ms: 0.0,
+        })
+    }
+
+    fn geometry(&self) -> SceneGeometry<'_> {
+        SceneGeometry {
+            vertices: &self.vertices,
+            uvs: &self.uvs,
+            indices: &self.indices,
+            index_count: self.index_count,
+        }
+    }
+
+    fn traceable(&self) -> Traceable<'_> {
+        Traceable {
+            bvh: &self.bvh,
+            geometry: Geometry {
+                vertices: &self.vertices,
+                indices: &self.indices,
+                tri_count: self.bvh.tri_count,
+            },
+        }
+    }
+
+    /// One `sim.rigid` step (timed), its poses written for the next frame's upload,
+    /// relative to the renderer's `origin`.
+    fn step(&mut self, origin: Vec3) {
+        let start = std::time::Instant::now();
+        self.world.step();
+        self.sim_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.write_poses(origin);
+    }
+
+    fn write_poses(&mut self, origin: Vec3) {
+        let shift = Mat4::from_translation(-origin);
+        let poses: Vec<Mat4> = self.world.poses().into_iter().map(|m| shift * m).collect();
+        let bytes: &[u8] = bytemuck::cast_slice(&poses);
+        self.poses_staging.mapped_mut().expect("CpuToGpu is mapped")[..bytes.len()].copy_from_slice(bytes);
+    }
+
+    /// Records `sim.transform` (the poses copied in first) and the dynamic BVH's
+    /// rebuild, each stage under its scope.
+    fn record(
+        &self,
+        d: &ash::Device,
+        cmd: vk::CommandBuffer,
+        timer: &mut GpuTimer,
+        transform: &SimTransformPass,
+        builder: &LbvhBuilder,
+    ) {
+        timer.scope(cmd, sim_transform::NAME, || {
+            // WAR: the previous frame's transform read the poses before they change.
+            barrier::global(d, cmd, access::COMPUTE_READ, access::TRANSFER_WRITE);
+            let region = vk::BufferCopy::default().size(self.poses.size);
+            unsafe { d.cmd_copy_buffer(cmd, self.poses_staging.raw, self.poses.raw, &[region]) };
+            // RAW: the transform reads the poses just copied.
+            barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ);
+            transform.record(cmd, &self.objects, &self.poses, &self.vertices, self.vertex_count);
+        });
+        // WAR: the previous frame's traversal of the dynamic BVH is done before it is rebuilt.
+        barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
+        let t = self.traceable();
+        builder.record_build(cmd, timer, t.geometry, &self.bvh);
     }
 }
 
@@ -154,6 +306,10 @@ pub struct Renderer {
     pub static_bvh: Bvh,
     /// GPU milliseconds per stage of the static BVH build.
     pub static_bvh_build: Vec<(&'static str, f64)>,
+    /// What moves, when the scene has bodies.
+    dynamic: Option<DynamicGeometry>,
+    transform: SimTransformPass,
+    builder: LbvhBuilder,
     timer: GpuTimer,
     cmd: vk::CommandBuffer,
 }
@@ -253,8 +409,8 @@ impl Renderer {
         // The static BVH, once: the scene has no dynamic geometry yet.
         let static_bvh = Bvh::new(ctx, scene_buffers.index_count / 3, MortonBits::Bits30)?;
         let mut build_timer = GpuTimer::new(ctx, 8)?;
+        let builder = LbvhBuilder::new(ctx)?;
         {
-            let builder = LbvhBuilder::new(ctx)?;
             let geometry = Geometry {
                 vertices: &scene_buffers.vertices,
                 indices: &scene_buffers.indices,
@@ -266,6 +422,14 @@ impl Renderer {
             })?;
         }
         let static_bvh_build = build_timer.results()?;
+        let mut dynamic = if scene.is_dynamic() {
+            Some(DynamicGeometry::new(ctx, scene, settings)?)
+        } else {
+            None
+        };
+        if let Some(d) = &mut dynamic {
+            d.write_poses(origin);
+        }
         let extent = extent(settings);
         let view = View::of(scene).relative_to(origin);
         Ok(Self {
@@ -286,6 +450,9 @@ impl Renderer {
             compose: compose::ComposePass::new(ctx, extent)?,
             static_bvh,
             static_bvh_build,
+            dynamic,
+            transform: SimTransformPass::new(ctx)?,
+            builder,
             timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
             cmd: ctx.allocate_command_buffer()?,
         })
@@ -329,8 +496,41 @@ impl Renderer {
         Ok(())
     }
 
-    /// Records, submits and waits for one frame; returns its GPU time per scope (ms).
+    /// Whether the scene moves (has bodies): each frame then advances it by `sim_dt`.
+    pub fn is_dynamic(&self) -> bool {
+        self.dynamic.is_some()
+    }
+
+    /// Time steps the dynamic scene has taken since its initial state (0 for a static one).
+    pub fn sim_steps(&self) -> u64 {
+        self.dynamic.as_ref().map_or(0, |d| d.world.steps())
+    }
+
+    /// Triangles of the dynamic geometry (0 for a static scene).
+    pub fn dynamic_triangles(&self) -> u32 {
+        self.dynamic.as_ref().map_or(0, |d| d.bvh.tri_count)
+    }
+
+    /// Puts a dynamic scene back to its initial state: the next frame is its first
+    /// time step again. Nothing changes for a static scene.
+    pub fn reset_simulation(&mut self) -> Result<()> {
+        if let Some(d) = &mut self.dynamic {
+            unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
+            d.world.reset();
+            d.write_poses(self.origin);
+        }
+        Ok(())
+    }
+
+    /// Records, submits and waits for one frame; returns its time per scope (ms). A
+    /// dynamic scene first advances by one time step (`sim.rigid`, CPU wall clock):
+    /// frame k after a reset shows the world at time (k + 1) x `sim_dt`.
     pub fn render_frame(&mut self) -> Result<Vec<(&'static str, f64)>> {
+        let origin = self.origin;
+        if let Some(d) = &mut self.dynamic {
+            // The previous frame was waited for: nothing reads the staging poses now.
+            d.step(origin);
+        }
         let device = self.ctx.device.clone();
         let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         unsafe {
@@ -344,7 +544,11 @@ impl Renderer {
         self.record(self.cmd);
         unsafe { device.end_command_buffer(self.cmd) }.vk("vkEndCommandBuffer")?;
         self.ctx.submit_and_wait(self.cmd)?;
-        self.timer.results()
+        let mut times = self.timer.results()?;
+        if let Some(d) = &self.dynamic {
+            times.push((SIM_RIGID, d.sim_ms));
+        }
+        Ok(times)
     }
 
     /// Records one frame into `cmd`: DESIGN.md's frame table, pass by pass.
@@ -364,18 +568,26 @@ impl Renderer {
             merge,
             compose,
             static_bvh,
+            dynamic,
+            transform,
+            builder,
             timer,
             ..
         } = self;
         let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.targets);
+        let dynamic = dynamic.as_ref();
         timer.reset(cmd);
         timer.begin(cmd, FRAME);
         timer.scope(cmd, UNIFORMS, || upload_uniforms(d, cmd, ubo, uniforms));
-        timer.scope(cmd, shadow_map::NAME, || shadow.record(cmd, ubo, &scene.geometry()));
-        let surfaces = scene.surfaces();
-        timer.scope(cmd, gbuffer::NAME, || {
-            gbuffer.record(cmd, ubo, &surfaces, &scene.geometry())
-        });
+        if let Some(dy) = dynamic {
+            dy.record(d, cmd, timer, transform, builder);
+        }
+        let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.geometry())
+            .chain(dynamic.map(|dy| dy.geometry()))
+            .collect();
+        timer.scope(cmd, shadow_map::NAME, || shadow.record(cmd, ubo, &geometries));
+        let surfaces = scene.surfaces(dynamic);
+        timer.scope(cmd, gbuffer::NAME, || gbuffer.record(cmd, ubo, &surfaces, &geometries));
         timer.scope(cmd, light_direct::NAME, || {
             light.record(cmd, ubo, g, &shadow.map, &scene.materials)
         });
@@ -408,7 +620,7 @@ impl Renderer {
                             tri_count: static_bvh.tri_count,
                         },
                     }),
-                    dynamic_bvh: None,
+                    dynamic_bvh: dynamic.map(|dy| dy.traceable()),
                 },
             };
             timer.scope(cmd, rt_reflect::NAME, || {

@@ -198,7 +198,11 @@ mod tests {
         let p = PassTimes::of(&t);
         let json = serde_json::to_string(&p).unwrap();
         assert!(
-            json.starts_with("{\"uniforms\":null,\"shadow.map\":null,\"gbuffer\":{\"median\":2.0"),
+            json.starts_with(
+                "{\"uniforms\":null,\"sim.rigid\":null,\"sim.transform\":null,\"lbvh.bounds\":null,\
+                 \"lbvh.morton\":null,\"lbvh.sort\":null,\"lbvh.hierarchy\":null,\"lbvh.fit\":null,\
+                 \"shadow.map\":null,\"gbuffer\":{\"median\":2.0"
+            ),
             "{json}"
         );
         assert!(

@@ -14,7 +14,7 @@ mod common;
 
 use ash::vk;
 use glam::{IVec2, Vec3};
-use speculum::cpu_ref::reflect::{reflected_radiance, PathScene};
+use speculum::cpu_ref::reflect::{reflected_radiance, PathScene, Triangles};
 use speculum::cpu_ref::shading::ShadowMap;
 use speculum::cpu_ref::texture::TextureArray;
 use speculum::cpu_ref::trace::CpuBvh;
@@ -24,6 +24,8 @@ use speculum::settings::Mode;
 use speculum::{Renderer, Settings};
 
 const POISON: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
+/// Frames rendered on `drop` before the comparison (its bodies fall and bounce).
+const DROP_FRAMES: u32 = 40;
 
 /// Random-coloured texels (a 64² and a 200x120 texture, so layers are resampled to
 /// 256²) on a floor and a box's faces seen in two mirrors and a mirror sphere: the
@@ -78,7 +80,13 @@ fn textured_scene() -> Scene {
 #[test]
 fn reflected_paths_match_cpu_reference() {
     let ctx = common::context();
-    for (name, shadow_rays) in [("room", false), ("mirrors", true), ("textured", false)] {
+    for (name, shadow_rays) in [
+        ("room", false),
+        ("mirrors", true),
+        ("textured", false),
+        ("drop", false),
+        ("drop", true),
+    ] {
         let scene = if name == "textured" {
             textured_scene()
         } else {
@@ -98,7 +106,12 @@ fn reflected_paths_match_cpu_reference() {
         r.rt.color
             .write(bytemuck::cast_slice(&vec![POISON; w * h]), general)
             .unwrap();
-        r.render_frame().unwrap();
+        // A dynamic scene: the world after DROP_FRAMES time steps, bodies in the air
+        // and on the floor.
+        let frames = if scene.is_dynamic() { DROP_FRAMES } else { 1 };
+        for _ in 0..frames {
+            r.render_frame().unwrap();
+        }
         let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.targets.depth).unwrap());
         let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&r.gbuffer.targets.normal).unwrap());
         let shadow: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.shadow.map).unwrap());
@@ -112,6 +125,30 @@ fn reflected_paths_match_cpu_reference() {
             size: settings.shadow_map_size,
             depth: &shadow,
         };
+        // The dynamic geometry of that frame, moved on the CPU by an independent world.
+        let (dyn_vertices, dyn_bvh, meshes) = if scene.is_dynamic() {
+            let mut world = speculum::sim::rigid::RigidWorld::new(&scene, settings.sim_dt).unwrap();
+            for _ in 0..frames {
+                world.step();
+            }
+            let poses = world.poses();
+            let meshes = scene.dynamic_meshes();
+            let v: Vec<_> = meshes
+                .vertices
+                .iter()
+                .map(|v| speculum::cpu_ref::sim::transform(v, &poses))
+                .collect();
+            let bvh = CpuBvh::build(&v, &meshes.indices);
+            (v, Some(bvh), meshes)
+        } else {
+            (Vec::new(), None, Default::default())
+        };
+        let dynamic = dyn_bvh.as_ref().map(|bvh| Triangles {
+            bvh,
+            vertices: &dyn_vertices,
+            indices: &meshes.indices,
+            uvs: &meshes.uvs,
+        });
         let path_scene = PathScene {
             frame: &frame,
             bvh: &bvh,
@@ -122,6 +159,7 @@ fn reflected_paths_match_cpu_reference() {
             textures: &textures,
             shadow_map: &shadow_map,
             shadow_rays,
+            dynamic,
         };
         let (mut compared, mut parted, mut multi) = (0usize, 0usize, 0usize);
 

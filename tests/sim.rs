@@ -20,20 +20,36 @@ fn transform_matches_cpu_reference() {
     let bodies = 37;
     let poses: Vec<Mat4> = (0..bodies)
         .map(|_| {
-            let axis = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
-                .normalize_or(Vec3::Y);
+            let axis = Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+            .normalize_or(Vec3::Y);
             let rotation = Quat::from_axis_angle(axis, rng.random_range(-3.2..3.2));
-            let t = Vec3::new(rng.random_range(-50.0..50.0), rng.random_range(-5.0..20.0), rng.random_range(-50.0..50.0));
+            let t = Vec3::new(
+                rng.random_range(-50.0..50.0),
+                rng.random_range(-5.0..20.0),
+                rng.random_range(-50.0..50.0),
+            );
             Mat4::from_rotation_translation(rotation, t)
         })
         .collect();
     let count = 3001; // not a multiple of the workgroup
     let vertices: Vec<GpuVertex> = (0..count)
         .map(|_| {
-            let n = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
-                .normalize_or(Vec3::X);
+            let n = Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+            .normalize_or(Vec3::X);
             GpuVertex {
-                position: [rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0)],
+                position: [
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                ],
                 material: rng.random_range(0..9),
                 normal: n.to_array(),
                 object: rng.random_range(0..bodies as u32),
@@ -43,12 +59,15 @@ fn transform_matches_cpu_reference() {
     let storage = ash::vk::BufferUsageFlags::STORAGE_BUFFER;
     let objects = Buffer::with_data(&ctx, "test.objects", storage, bytemuck::cast_slice(&vertices)).unwrap();
     let pose_buffer = Buffer::with_data(&ctx, "test.poses", storage, bytemuck::cast_slice(&poses)).unwrap();
-    let poison = vec![GpuVertex {
-        position: [f32::NAN; 3],
-        material: 0xdead,
-        normal: [-7.0; 3],
-        object: 0xbeef,
-    }; count + 5];
+    let poison = vec![
+        GpuVertex {
+            position: [f32::NAN; 3],
+            material: 0xdead,
+            normal: [-7.0; 3],
+            object: 0xbeef,
+        };
+        count + 5
+    ];
     let readable = storage | ash::vk::BufferUsageFlags::TRANSFER_SRC;
     let world = Buffer::with_data(&ctx, "test.world", readable, bytemuck::cast_slice(&poison)).unwrap();
     let pass = SimTransformPass::new(&ctx).unwrap();

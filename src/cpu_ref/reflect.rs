@@ -8,9 +8,19 @@ use crate::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex, Ray};
 use crate::shader_defines::BVH_INVALID;
 use glam::{IVec2, Vec2, Vec3, Vec4Swizzles};
 
+/// Triangles with their BVH and texture coordinates: the static scene, or the dynamic
+/// geometry of one frame (world space).
+#[derive(Clone, Copy)]
+pub struct Triangles<'a> {
+    pub bvh: &'a CpuBvh,
+    pub vertices: &'a [GpuVertex],
+    pub indices: &'a [u32],
+    pub uvs: &'a [[f32; 2]],
+}
+
 /// What the path sees: the scene's triangles (one static BVH over them), their
-/// texture coordinates, materials and textures, and the shadow map (unless shadows
-/// come from rays).
+/// texture coordinates, materials and textures, the dynamic geometry if any, and the
+/// shadow map (unless shadows come from rays).
 pub struct PathScene<'a> {
     pub frame: &'a FrameUniforms,
     pub bvh: &'a CpuBvh,
@@ -21,6 +31,9 @@ pub struct PathScene<'a> {
     pub textures: &'a TextureArray,
     pub shadow_map: &'a ShadowMap<'a>,
     pub shadow_rays: bool,
+    /// The dynamic triangles, traced after the static ones (a tie goes to the static
+    /// triangle, as in the kernel); their hits carry bit 31.
+    pub dynamic: Option<Triangles<'a>>,
 }
 
 fn offset_scale(frame: &FrameUniforms, pos: Vec3) -> f32 {
@@ -38,7 +51,28 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
             dir: dir.into(),
             tmax: 3.0e38,
         };
-        s.bvh.trace(&ray, s.vertices, s.indices)
+        let hit = s.bvh.trace(&ray, s.vertices, s.indices);
+        match &s.dynamic {
+            Some(d) => {
+                let closer = Ray { tmax: hit.t, ..ray };
+                let dh = d.bvh.trace(&closer, d.vertices, d.indices);
+                if dh.prim == BVH_INVALID {
+                    hit
+                } else {
+                    crate::gpu_types::Hit {
+                        prim: dh.prim | 0x8000_0000,
+                        ..dh
+                    }
+                }
+            }
+            None => hit,
+        }
+    };
+    let statics = Triangles {
+        bvh: s.bvh,
+        vertices: s.vertices,
+        indices: s.indices,
+        uvs: s.uvs,
     };
     let pos = shading::world_from_depth(frame, p, depth);
     let n = normal.normalize();
@@ -56,8 +90,14 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
             radiance += throughput * shading::sky(frame, dir);
             break;
         }
-        let index = |k: usize| s.indices[3 * h.prim as usize + k] as usize;
-        let corner = |k: usize| &s.vertices[index(k)];
+        let tris = if h.prim & 0x8000_0000 != 0 {
+            s.dynamic.expect("a dynamic hit needs dynamic triangles")
+        } else {
+            statics
+        };
+        let prim = (h.prim & 0x7fff_ffff) as usize;
+        let index = |k: usize| tris.indices[3 * prim + k] as usize;
+        let corner = |k: usize| &tris.vertices[index(k)];
         let (a, b, c) = (corner(0), corner(1), corner(2));
         let m = &s.materials[a.material as usize];
         let p = [a, b, c].map(|v| Vec3::from(v.position));
@@ -68,7 +108,7 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
         cone += spread * h.t;
         let mut albedo = Vec3::from(m.albedo);
         if m.texture_layer != crate::shader_defines::TEXTURE_NONE {
-            let t = [0, 1, 2].map(|k| Vec2::from(s.uvs[index(k)]));
+            let t = [0, 1, 2].map(|k| Vec2::from(tris.uvs[index(k)]));
             let uv = (1.0 - h.u - h.v) * t[0] + h.u * t[1] + h.v * t[2];
             let lod = texture::ray_cone_lod(cone, g.dot(dir).abs(), p, t, s.textures.size as f32);
             albedo = texture::base_color_lod(m, s.textures, uv, lod);

@@ -90,7 +90,7 @@ impl GBufferPass {
         cmd: vk::CommandBuffer,
         frame: &Buffer,
         surfaces: &Surfaces<'_>,
-        geometry: &SceneGeometry<'_>,
+        geometries: &[SceneGeometry<'_>],
     ) {
         use vk::ImageLayout as L;
         let device = &self.ctx.device;
@@ -152,22 +152,24 @@ impl GBufferPass {
             .depth_attachment(&depth);
         unsafe { device.cmd_begin_rendering(cmd, &info) };
         set_viewport(device, cmd, extent);
-        self.pipeline.bind(
-            cmd,
-            &[
-                Resource::Buffer(frame),
-                Resource::Buffer(geometry.vertices),
-                Resource::Buffer(surfaces.materials),
-                Resource::Buffer(surfaces.uvs[0]),
-                Resource::Sampled(surfaces.textures, surfaces.sampler),
-            ],
-            &(),
-        );
-        unsafe {
-            device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
-            device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
-            device.cmd_end_rendering(cmd);
+        for geometry in geometries {
+            self.pipeline.bind(
+                cmd,
+                &[
+                    Resource::Buffer(frame),
+                    Resource::Buffer(geometry.vertices),
+                    Resource::Buffer(surfaces.materials),
+                    Resource::Buffer(geometry.uvs),
+                    Resource::Sampled(surfaces.textures, surfaces.sampler),
+                ],
+                &(),
+            );
+            unsafe {
+                device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
+                device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
+            }
         }
+        unsafe { device.cmd_end_rendering(cmd) };
         // RAW: the compute passes read the G-buffer written above.
         barrier::transition(
             device,

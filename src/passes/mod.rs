@@ -60,9 +60,11 @@ pub struct Surfaces<'a> {
     pub sampler: &'a crate::vk::Sampler,
 }
 
-/// The scene's GPU geometry, as raster passes draw it.
+/// Geometry as the raster passes draw it (the static scene, or the dynamic geometry
+/// `sim.transform` moved): vertices in world space, their texture coordinates, indices.
 pub struct SceneGeometry<'a> {
     pub vertices: &'a crate::vk::Buffer,
+    pub uvs: &'a crate::vk::Buffer,
     pub indices: &'a crate::vk::Buffer,
     pub index_count: u32,
 }

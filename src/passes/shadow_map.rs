@@ -55,7 +55,7 @@ impl ShadowMapPass {
 
     /// Records the depth pass. The map ends in `SHADER_READ_ONLY_OPTIMAL`, visible to
     /// its readers: `light.direct` and `rt.reflect` (compute).
-    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, geometry: &SceneGeometry<'_>) {
+    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, geometries: &[SceneGeometry<'_>]) {
         use vk::ImageLayout as L;
         let device = &self.ctx.device;
         // WAR: the previous frame's compute reads finish before the map is cleared (old
@@ -84,16 +84,18 @@ impl ShadowMapPass {
             .depth_attachment(&depth);
         unsafe { device.cmd_begin_rendering(cmd, &info) };
         set_viewport(device, cmd, self.map.extent);
-        self.pipeline.bind(
-            cmd,
-            &[Resource::Buffer(frame), Resource::Buffer(geometry.vertices)],
-            &(),
-        );
-        unsafe {
-            device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
-            device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
-            device.cmd_end_rendering(cmd);
+        for geometry in geometries {
+            self.pipeline.bind(
+                cmd,
+                &[Resource::Buffer(frame), Resource::Buffer(geometry.vertices)],
+                &(),
+            );
+            unsafe {
+                device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
+                device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
+            }
         }
+        unsafe { device.cmd_end_rendering(cmd) };
         // RAW: the compute passes sample the depth written above.
         barrier::transition(
             device,

@@ -37,7 +37,11 @@ impl SimTransformPass {
         barrier::global(d, cmd, access::ALL_READ_WRITE, access::COMPUTE_WRITE);
         self.pipeline.dispatch(
             cmd,
-            &[Resource::Buffer(objects), Resource::Buffer(poses), Resource::Buffer(world)],
+            &[
+                Resource::Buffer(objects),
+                Resource::Buffer(poses),
+                Resource::Buffer(world),
+            ],
             &count,
             Groups::Cover([count, 1, 1]),
         );

@@ -7,15 +7,16 @@ use crate::error::Result;
 use std::path::Path;
 
 /// (name, scene file text) of every built-in scene; the first is the default.
-const SCENES: [(&str, &str); 4] = [
+const SCENES: [(&str, &str); 5] = [
     ("room", include_str!("../../assets/scenes/room.toml")),
     ("offscreen", include_str!("../../assets/scenes/offscreen.toml")),
     ("mirrors", include_str!("../../assets/scenes/mirrors.toml")),
     ("spheres", include_str!("../../assets/scenes/spheres.toml")),
+    ("drop", include_str!("../../assets/scenes/drop.toml")),
 ];
 
 /// Names accepted by `--scene`.
-pub const NAMES: [&str; 4] = [SCENES[0].0, SCENES[1].0, SCENES[2].0, SCENES[3].0];
+pub const NAMES: [&str; 5] = [SCENES[0].0, SCENES[1].0, SCENES[2].0, SCENES[3].0, SCENES[4].0];
 
 /// The parsed scene file of the built-in scene `name`, if there is one.
 pub fn file(name: &str) -> Option<Result<SceneFile>> {
@@ -59,6 +60,11 @@ pub fn spheres() -> Result<Scene> {
     named("spheres")
 }
 
+/// Rigid bodies falling into `room`'s room, a chrome sphere rolling across its floor.
+pub fn drop() -> Result<Scene> {
+    named("drop")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -72,7 +78,7 @@ mod tests {
             assert_eq!(f, again, "{name}");
             let s = by_name(name).unwrap().unwrap();
             assert_eq!(s.name, name);
-            assert!(s.triangle_count() > 10);
+            assert!(s.triangle_count() + s.dynamic_triangle_count() > 10);
         }
         assert!(by_name("nope").is_none());
     }

@@ -28,6 +28,44 @@ pub struct SceneFile {
     pub materials: Vec<MaterialDesc>,
     #[serde(rename = "instance")]
     pub instances: Vec<Instance>,
+    /// Rigid bodies (dynamic geometry): simulated, they fall and collide with the
+    /// instances and each other.
+    #[serde(default, rename = "body", skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<BodyDesc>,
+}
+
+/// A rigid body: exactly one shape key, a material, its initial pose and motion.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyDesc {
+    /// A ball of this radius.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere: Option<f32>,
+    /// A box of these full extents.
+    #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
+    pub cuboid: Option<[f32; 3]>,
+    /// A material of `materials` by name.
+    pub material: String,
+    /// Where its centre starts.
+    pub translate: [f32; 3],
+    /// Degrees about x, then y, then z (as instances).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<[f32; 3]>,
+    /// Initial velocity, units per second (default at rest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<[f32; 3]>,
+    /// Initial angular velocity about the world axes, radians per second.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angular_velocity: Option<[f32; 3]>,
+    /// kg per cubic unit (default 1000, water).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<f32>,
+    /// Bounciness in [0, 1] (default 0.4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restitution: Option<f32>,
+    /// Coulomb friction (default 0.5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f32>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -262,6 +300,32 @@ impl SceneFile {
                 .as_deref()
                 .ok_or_else(|| bad(format!("instance {}: a primitive needs a material", i + 1)))?;
             b.mesh(mesh, transform, find(i, material)?);
+        }
+        for (i, body) in self.bodies.iter().enumerate() {
+            let shape = match (body.sphere, body.cuboid) {
+                (Some(radius), None) => super::BodyShape::Sphere { radius },
+                (None, Some(size)) => super::BodyShape::Cuboid { size: Vec3::from(size) },
+                _ => return Err(bad(format!("body {}: give exactly one of sphere, box", i + 1))),
+            };
+            let material = ids
+                .iter()
+                .find(|(n, _)| n == &body.material)
+                .map(|(_, id)| *id)
+                .ok_or_else(|| bad(format!("body {}: unknown material '{}'", i + 1, body.material)))?;
+            let [x, y, z] = body.rotate.unwrap_or([0.0; 3]).map(f32::to_radians);
+            b.body(super::Body {
+                shape,
+                material,
+                density: body.density.unwrap_or(1000.0),
+                restitution: body.restitution.unwrap_or(0.4),
+                friction: body.friction.unwrap_or(0.5),
+                position: Vec3::from(body.translate),
+                rotation: glam::Quat::from_rotation_z(z)
+                    * glam::Quat::from_rotation_y(y)
+                    * glam::Quat::from_rotation_x(x),
+                velocity: Vec3::from(body.velocity.unwrap_or([0.0; 3])),
+                angular_velocity: Vec3::from(body.angular_velocity.unwrap_or([0.0; 3])),
+            });
         }
         let c = &self.camera;
         b.camera(Camera {

@@ -85,9 +85,13 @@ impl Material {
 /// mass).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum BodyShape {
-    Sphere { radius: f32 },
+    Sphere {
+        radius: f32,
+    },
     /// Full extents.
-    Cuboid { size: Vec3 },
+    Cuboid {
+        size: Vec3,
+    },
 }
 
 /// A rigid body of the dynamic geometry: simulated (`sim::rigid`), its mesh moved to
@@ -425,7 +429,10 @@ impl Scene {
                 BodyShape::Cuboid { size } => size.is_finite() && size.min_element() > 0.0,
             };
             if !size_ok {
-                return bad(format!("body {i} has a zero, negative or non-finite size ({:?})", b.shape));
+                return bad(format!(
+                    "body {i} has a zero, negative or non-finite size ({:?})",
+                    b.shape
+                ));
             }
             if b.material as usize >= self.materials.len() {
                 return bad(format!(

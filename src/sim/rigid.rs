@@ -26,6 +26,8 @@ pub struct RigidWorld {
     ccd: CCDSolver,
     params: IntegrationParameters,
     steps: u64,
+    /// The bodies and colliders as built, for `reset`.
+    initial: (RigidBodySet, ColliderSet),
 }
 
 impl RigidWorld {
@@ -70,6 +72,7 @@ impl RigidWorld {
             ..IntegrationParameters::default()
         };
         Ok(Self {
+            initial: (bodies.clone(), colliders.clone()),
             bodies,
             colliders,
             handles,
@@ -104,6 +107,21 @@ impl RigidWorld {
             &(),
         );
         self.steps += 1;
+    }
+
+    /// Back to the initial state, as `new` left it (the solver's caches too, so the
+    /// steps that follow repeat those after `new`).
+    pub fn reset(&mut self) {
+        (self.bodies, self.colliders) = self.initial.clone();
+        self.pipeline = PhysicsPipeline::new();
+        self.islands = IslandManager::new();
+        self.broad_phase = DefaultBroadPhase::new();
+        self.narrow_phase = NarrowPhase::new();
+        self.impulse_joints = ImpulseJointSet::new();
+        self.multibody_joints = MultibodyJointSet::new();
+        self.soft_bodies = SoftBodySet::new();
+        self.ccd = CCDSolver::new();
+        self.steps = 0;
     }
 
     /// Time steps taken since the initial state.
@@ -172,5 +190,11 @@ mod tests {
         }
         assert_eq!(again.poses(), w.poses());
         assert_eq!(w.steps(), 300);
+        again.reset();
+        assert_eq!(again.poses()[0].w_axis.y, 3.0);
+        for _ in 0..300 {
+            again.step();
+        }
+        assert_eq!(again.poses(), w.poses(), "a reset world repeats its steps");
     }
 }

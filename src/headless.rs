@@ -106,43 +106,96 @@ impl FramePlan {
     }
 }
 
-fn measure(renderer: &mut Renderer, plan: FramePlan, tick: Tick<'_>) -> Result<Timings> {
-    for _ in 0..plan.warmup {
-        renderer.render_frame()?;
-        tick();
-    }
-    // A dynamic scene starts over after the warm-up: measured frame k is the same
-    // image whatever the warm-up (the world after k + 1 time steps).
-    renderer.reset_simulation()?;
-    let mut timings = Timings::default();
-    for _ in 0..plan.frames {
-        timings.add_frame(&renderer.render_frame()?);
-        tick();
-    }
-    Ok(timings)
+/// One measured frame, as `render`'s per-frame hook sees it (for `--sequence`).
+pub struct FrameRecord<'a> {
+    /// Measured frame number, from 0.
+    pub index: u32,
+    /// The frame's time per scope (ms; `sim.rigid` is CPU wall clock).
+    pub times: &'a [(&'static str, f64)],
+    pub rgba: &'a [u8],
+    pub dynamic_triangles: u32,
+    pub rt_pixel_fraction: f64,
+    /// With a reference: SSIM and RMSE against the same frame in `rt` mode.
+    pub vs_rt: Option<crate::metrics::Comparison>,
 }
 
-/// Renders `plan.warmup` uncounted frames, then `plan.frames` measured ones (and the
-/// `rt` reference when asked); `tick` is called after every frame.
-pub fn render(
+/// Called with every measured frame; its error ends the render.
+pub type OnFrame<'a> = &'a mut dyn FnMut(FrameRecord<'_>) -> Result<()>;
+
+/// Renders `plan.warmup` uncounted frames, resets a dynamic scene, then renders
+/// `plan.frames` measured ones; with a reference, an `rt` renderer runs in lockstep (the
+/// same frame of a dynamic scene), its frame right after each measured one. `tick` is
+/// called after every frame, `on_frame` (when given) with every measured frame.
+pub fn render_frames(
     ctx: &Arc<Context>,
     scene: &Scene,
     settings: &Settings,
     plan: FramePlan,
     tick: Tick<'_>,
+    mut on_frame: Option<OnFrame<'_>>,
 ) -> Result<Rendered> {
     plan.validate(settings)?;
     let mut renderer = Renderer::new(ctx, scene, settings)?;
-    let timings = measure(&mut renderer, plan, tick)?;
+    let mut reference = if plan.reference {
+        Some(Renderer::new(
+            ctx,
+            scene,
+            &Settings {
+                mode: Mode::Rt,
+                ..settings.clone()
+            },
+        )?)
+    } else {
+        None
+    };
+    for _ in 0..plan.warmup {
+        for r in std::iter::once(&mut renderer).chain(reference.as_mut()) {
+            r.render_frame()?;
+            tick();
+        }
+    }
+    // A dynamic scene starts over after the warm-up: measured frame k is the same
+    // image whatever the warm-up (the world after k + 1 time steps).
+    for r in std::iter::once(&mut renderer).chain(reference.as_mut()) {
+        r.reset_simulation()?;
+    }
+    let (mut timings, mut ref_timings) = (Timings::default(), Timings::default());
+    for index in 0..plan.frames {
+        let times = renderer.render_frame()?;
+        tick();
+        timings.add_frame(&times);
+        if let Some(r) = &mut reference {
+            ref_timings.add_frame(&r.render_frame()?);
+            tick();
+        }
+        if let Some(hook) = on_frame.as_mut() {
+            let rgba = renderer.read_output()?;
+            let vs_rt = match &reference {
+                Some(r) => Some(compare_rgba8(
+                    &rgba,
+                    &r.read_output()?,
+                    settings.width,
+                    settings.height,
+                )?),
+                None => None,
+            };
+            hook(FrameRecord {
+                index,
+                times: &times,
+                rgba: &rgba,
+                dynamic_triangles: renderer.dynamic_triangles(),
+                rt_pixel_fraction: renderer.reflection_stats()?.rt_pixel_fraction(),
+                vs_rt,
+            })?;
+        }
+    }
     let rgba = renderer.read_output()?;
     let maps = renderer.reflection_maps()?;
     let stats = maps.stats();
     let frame_stat = |t: &Timings| t.samples(FRAME).and_then(Stat::of).expect("every frame is timed");
     let (mut ssim, mut rmse, mut rt_frame_ms, mut reference_rgba) = (None, None, None, None);
-    if plan.reference {
-        renderer.set_mode(Mode::Rt);
-        let ref_timings = measure(&mut renderer, plan, tick)?;
-        let reference = renderer.read_output()?;
+    if let Some(r) = &reference {
+        let reference = r.read_output()?;
         let c = compare_rgba8(&rgba, &reference, settings.width, settings.height)?;
         ssim = Some(c.ssim);
         rmse = Some(c.rmse);
@@ -175,6 +228,17 @@ pub fn render(
         reference_rgba,
         fail_mask_rgba: maps.fail_mask_rgba(),
     })
+}
+
+/// `render_frames` without a per-frame hook.
+pub fn render(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    settings: &Settings,
+    plan: FramePlan,
+    tick: Tick<'_>,
+) -> Result<Rendered> {
+    render_frames(ctx, scene, settings, plan, tick, None)
 }
 
 /// Tightly packed RGBA8 encoded as a PNG.

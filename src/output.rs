@@ -48,6 +48,32 @@ pub fn check(path: &Path, kind: Kind) -> Result<()> {
     Ok(())
 }
 
+/// Checks that folder `dir` can receive a sequence of files: it is a folder, or does
+/// not exist yet in an existing folder, and a file can be created there (tried with a
+/// temporary file, removed again).
+pub fn check_dir(dir: &Path) -> Result<()> {
+    let bad = |detail: String| Error::Output {
+        path: dir.into(),
+        detail,
+    };
+    let existing = if dir.exists() {
+        if !dir.is_dir() {
+            return Err(bad("is not a folder".into()));
+        }
+        dir.to_path_buf()
+    } else {
+        let parent = folder(dir);
+        if !parent.is_dir() {
+            return Err(bad(format!("folder '{}' does not exist", parent.display())));
+        }
+        parent
+    };
+    let probe = existing.join(format!(".speculum-probe.{}.tmp", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| bad(format!("cannot write there: {e}")))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
 fn folder(path: &Path) -> PathBuf {
     match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),

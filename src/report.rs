@@ -166,6 +166,68 @@ impl Serialize for PassTimes {
     }
 }
 
+/// One frame's milliseconds per scope of the frame but `frame` and `sim.rigid` (which
+/// its line has apart), in frame order, `null` where not run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameTimes(pub Vec<(&'static str, Option<f64>)>);
+
+impl FrameTimes {
+    pub fn of(times: &[(&'static str, f64)]) -> Self {
+        let skip = [FRAME, crate::renderer::SIM_RIGID];
+        Self(
+            SCOPES
+                .iter()
+                .filter(|s| !skip.contains(s))
+                .map(|&s| (s, times.iter().find(|(n, _)| *n == s).map(|t| t.1)))
+                .collect(),
+        )
+    }
+}
+
+impl Serialize for FrameTimes {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, ms) in &self.0 {
+            map.serialize_entry(name, ms)?;
+        }
+        map.end()
+    }
+}
+
+/// One line of `render --sequence`'s `frames.jsonl`: a measured frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameLine {
+    /// From 0, the first measured frame.
+    pub frame: u32,
+    /// CPU wall-clock ms of the frame's rigid-body step; `null` for a static scene.
+    pub sim_ms: Option<f64>,
+    pub passes_ms: FrameTimes,
+    /// GPU ms of the whole frame.
+    pub frame_ms: f64,
+    pub dynamic_triangles: u32,
+    /// Traced / reflective pixels.
+    pub rt_pixel_fraction: f64,
+    /// With `--reference`: against the same frame in `rt` mode; `null` without.
+    pub ssim: Option<f64>,
+    pub rmse: Option<f64>,
+}
+
+impl FrameLine {
+    pub fn of(r: &crate::headless::FrameRecord<'_>) -> Self {
+        let get = |name: &str| r.times.iter().find(|(n, _)| *n == name).map(|t| t.1);
+        Self {
+            frame: r.index,
+            sim_ms: get(crate::renderer::SIM_RIGID),
+            passes_ms: FrameTimes::of(r.times),
+            frame_ms: get(FRAME).unwrap_or(f64::NAN),
+            dynamic_triangles: r.dynamic_triangles,
+            rt_pixel_fraction: r.rt_pixel_fraction,
+            ssim: r.vs_rt.map(|c| c.ssim),
+            rmse: r.vs_rt.map(|c| c.rmse),
+        }
+    }
+}
+
 /// A report as pretty JSON with a trailing newline.
 pub fn to_json<T: Serialize>(report: &T) -> String {
     serde_json::to_string_pretty(report).expect("reports serialize") + "\n"

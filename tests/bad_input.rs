@@ -858,3 +858,41 @@ fn gltf_loads_node_transforms_and_materials() {
     let broken = write(dir.path(), "x.gltf", "{\"asset\": 3}");
     assert_fails(&["--scene", &broken], dir.path(), &["x.gltf"]);
 }
+
+/// Dynamic-scene inputs: a time step that is not positive, a sequence folder that
+/// cannot be written (a file, or under one), a contact sheet of fewer than six frames:
+/// one error line each, before any GPU work, and nothing written.
+#[test]
+fn dynamic_scene_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let zero = write(dir.path(), "dt0.json", "{\"sim_dt\": 0.0}");
+    assert_fails(
+        &["--scene", "drop", "--settings", &zero],
+        dir.path(),
+        &["sim_dt 0", "(0, 1]"],
+    );
+    let negative = write(dir.path(), "dtn.json", "{\"sim_dt\": -0.01}");
+    assert_fails(
+        &["--scene", "drop", "--settings", &negative],
+        dir.path(),
+        &["sim_dt -0.01"],
+    );
+    let file = write(dir.path(), "plain.txt", "x");
+    assert_fails(
+        &["--scene", "drop", "--sequence", &file],
+        dir.path(),
+        &["plain.txt", "not a folder"],
+    );
+    let under = format!("{file}/seq");
+    assert_fails(
+        &["--scene", "drop", "--sequence", &under],
+        dir.path(),
+        &["plain.txt", "does not exist"],
+    );
+    assert_fails(
+        &["--scene", "drop", "--contact-sheet", "sheet.png"],
+        dir.path(),
+        &["--contact-sheet", "at least 6 frames"],
+    );
+    assert!(!dir.path().join("out.png").exists() && !dir.path().join("sheet.png").exists());
+}

@@ -80,3 +80,50 @@ fn drop_hybrid_matches_rt_on_every_frame() {
     assert!(worst.0 >= 0.97, "frame {}: hybrid vs rt SSIM {}", worst.1, worst.0);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// `render --sequence DIR --contact-sheet F --reference` on `drop`: one PNG and one
+/// JSON line per measured frame, each line with its timings (the dynamic scopes
+/// included), its dynamic triangles and its SSIM against rt; a sheet six frames wide.
+#[test]
+fn sequences_write_every_frame_and_their_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let seq = dir.path().join("seq");
+    let sheet = dir.path().join("sheet.png");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_speculum"))
+        .args([
+            "render", "--scene", "drop", "--frames", "7", "--warmup", "1", "--width", "64", "--height", "48",
+        ])
+        .args(["--reference", "--quiet", "--sequence"])
+        .arg(&seq)
+        .arg("--contact-sheet")
+        .arg(&sheet)
+        .arg("--out")
+        .arg(dir.path().join("last.png"))
+        .env("SPECULUM_VALIDATION", "1")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(seq.join("frames.jsonl")).unwrap();
+    let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), 7);
+    let triangles = speculum::scene::builtin::drop().unwrap().dynamic_triangle_count() as u64;
+    for (k, l) in lines.iter().enumerate() {
+        assert_eq!(l["frame"], k as u64);
+        assert!(seq.join(format!("frame_{k:04}.png")).is_file());
+        assert_eq!(l["dynamic_triangles"], triangles);
+        assert!(l["sim_ms"].as_f64().unwrap() >= 0.0 && l["frame_ms"].as_f64().unwrap() > 0.0);
+        for scope in ["sim.transform", "lbvh.sort", "lbvh.fit", "rt.reflect"] {
+            assert!(l["passes_ms"][scope].as_f64().unwrap() > 0.0, "frame {k}: {scope}");
+        }
+        assert!(l["passes_ms"].get("frame").is_none() && l["passes_ms"].get("sim.rigid").is_none());
+        let ssim = l["ssim"].as_f64().unwrap();
+        assert!(ssim > 0.5 && ssim <= 1.0, "frame {k}: {ssim}");
+    }
+    // The last sequence frame is the --out frame.
+    assert_eq!(
+        std::fs::read(seq.join("frame_0006.png")).unwrap(),
+        std::fs::read(dir.path().join("last.png")).unwrap()
+    );
+    let img = image::open(&sheet).unwrap();
+    assert_eq!((img.width(), img.height()), (6 * 64, 48));
+}

@@ -44,6 +44,15 @@ pub struct RenderArgs {
     /// Also write the SSR fail mask as a PNG, coloured by reason (see README).
     #[arg(long)]
     pub fail_mask: Option<PathBuf>,
+    /// Also write every measured frame to this folder (created if needed) as
+    /// frame_0000.png, ..., and frames.jsonl (one JSON object per frame: its timings,
+    /// dynamic triangles, traced share, and with --reference its SSIM/RMSE against rt).
+    #[arg(long)]
+    pub sequence: Option<PathBuf>,
+    /// Also write six evenly spaced measured frames side by side as one PNG (at least
+    /// 6 frames).
+    #[arg(long)]
+    pub contact_sheet: Option<PathBuf>,
     /// No progress bar and no text output (errors still go to stderr).
     #[arg(long)]
     pub quiet: bool,
@@ -62,6 +71,22 @@ impl RenderArgs {
         let cmd = <Self as Args>::augment_args(clap::Command::new("render"));
         Self::from_arg_matches(&cmd.get_matches_from(["render"])).expect("defaults parse")
     }
+}
+
+/// Frames on a contact sheet.
+const SHEET_FRAMES: u32 = 6;
+
+/// RGBA8 images of `w` x `h`, side by side in one row.
+fn side_by_side(images: &[Vec<u8>], w: u32, h: u32) -> Vec<u8> {
+    let (w, h) = (w as usize, h as usize);
+    let mut out = vec![0u8; images.len() * w * h * 4];
+    let row = images.len() * w * 4;
+    for (i, img) in images.iter().enumerate() {
+        for y in 0..h {
+            out[y * row + i * w * 4..][..w * 4].copy_from_slice(&img[y * w * 4..][..w * 4]);
+        }
+    }
+    out
 }
 
 fn reference_path(out: &std::path::Path) -> PathBuf {
@@ -84,12 +109,22 @@ pub fn run(args: RenderArgs) -> Result<()> {
         reference: args.reference,
     };
     plan.validate(&settings)?;
+    if args.contact_sheet.is_some() && plan.frames < SHEET_FRAMES {
+        anyhow::bail!(speculum::error::Error::Input(format!(
+            "--contact-sheet needs at least {SHEET_FRAMES} frames, not {}",
+            plan.frames
+        )));
+    }
+    if let Some(dir) = &args.sequence {
+        speculum::output::check_dir(dir)?;
+    }
     let reference_out = args.reference.then(|| reference_path(&args.out));
     check_outputs(&[
         (Some(&args.out), Kind::Png),
         (reference_out.as_deref(), Kind::Png),
         (args.fail_mask.as_deref(), Kind::Png),
         (args.timings.as_deref(), Kind::Json),
+        (args.contact_sheet.as_deref(), Kind::Png),
     ])?;
     let scene = args.view.load(&args.scene)?;
     for w in &scene.warnings {
@@ -99,9 +134,27 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let ctx = args.gpu.context()?;
 
     let bar = progress(plan.total_frames(), "render", args.quiet);
-    let rendered = headless::render(&ctx, &scene, &settings, plan, &mut || bar.inc(1))?;
-    bar.finish_and_clear();
     let (w, h) = (settings.width, settings.height);
+    // Per measured frame: its PNG and line (a sequence), or the frames of the sheet.
+    let (mut frames_png, mut lines, mut sheet) = (Vec::new(), String::new(), Vec::new());
+    let sheet_at: Vec<u32> = (0..SHEET_FRAMES)
+        .map(|i| i * (plan.frames - 1) / (SHEET_FRAMES - 1))
+        .collect();
+    let wants_frames = args.sequence.is_some() || args.contact_sheet.is_some();
+    let mut hook = |f: headless::FrameRecord<'_>| -> speculum::error::Result<()> {
+        if args.sequence.is_some() {
+            frames_png.push(headless::png_bytes(f.rgba, w, h)?);
+            lines += &serde_json::to_string(&speculum::report::FrameLine::of(&f)).expect("lines serialize");
+            lines.push('\n');
+        }
+        if args.contact_sheet.is_some() && sheet_at.contains(&f.index) {
+            sheet.push(f.rgba.to_vec());
+        }
+        Ok(())
+    };
+    let on_frame: Option<headless::OnFrame<'_>> = if wants_frames { Some(&mut hook) } else { None };
+    let rendered = headless::render_frames(&ctx, &scene, &settings, plan, &mut || bar.inc(1), on_frame)?;
+    bar.finish_and_clear();
     let mut r = rendered.report;
     r.header.refresh_validation(&ctx);
     // Every output is written only after the whole render succeeded, all or none.
@@ -115,6 +168,22 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     if let Some(path) = &args.timings {
         outputs.add(path, speculum::report::to_json(&r).into_bytes());
+    }
+    if let Some(dir) = &args.sequence {
+        for (k, png) in frames_png.into_iter().enumerate() {
+            outputs.add(&dir.join(format!("frame_{k:04}.png")), png);
+        }
+        outputs.add(&dir.join("frames.jsonl"), lines.into_bytes());
+        std::fs::create_dir_all(dir).map_err(|e| speculum::error::Error::Output {
+            path: dir.clone(),
+            detail: e.to_string(),
+        })?;
+    }
+    if let Some(path) = &args.contact_sheet {
+        outputs.add(
+            path,
+            headless::png_bytes(&side_by_side(&sheet, w, h), w * SHEET_FRAMES, h)?,
+        );
     }
     outputs.commit()?;
 

@@ -511,6 +511,20 @@ impl Renderer {
         self.dynamic.as_ref().map_or(0, |d| d.bvh.tri_count)
     }
 
+    /// The dynamic BVH and the world-space geometry it was built over in the last
+    /// frame (relative to `origin()`), for tracing it apart (tests, benchmarks).
+    pub fn dynamic_traceable(&self) -> Option<Traceable<'_>> {
+        self.dynamic.as_ref().map(|d| d.traceable())
+    }
+
+    /// The last frame's world-space dynamic vertices (relative to `origin()`), read back.
+    pub fn read_dynamic_vertices(&self) -> Result<Option<Vec<crate::gpu_types::GpuVertex>>> {
+        self.dynamic
+            .as_ref()
+            .map(|d| Ok(bytemuck::pod_collect_to_vec(&d.vertices.read()?)))
+            .transpose()
+    }
+
     /// Puts a dynamic scene back to its initial state: the next frame is its first
     /// time step again. Nothing changes for a static scene.
     pub fn reset_simulation(&mut self) -> Result<()> {

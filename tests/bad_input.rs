@@ -896,3 +896,23 @@ fn dynamic_scene_bad_input() {
     );
     assert!(!dir.path().join("out.png").exists() && !dir.path().join("sheet.png").exists());
 }
+
+/// `--bodies`: 0 and 10,000,000 are out of range, and a scene without a [spawn] table
+/// takes none; one error line each, before any GPU work.
+#[test]
+fn bodies_out_of_range_or_without_a_spawn() {
+    let dir = tempfile::tempdir().unwrap();
+    assert_fails(
+        &["--scene", "stress", "--bodies", "0"],
+        dir.path(),
+        &["--bodies 0", "1..=20000"],
+    );
+    assert_fails(
+        &["--scene", "stress", "--bodies", "10000000"],
+        dir.path(),
+        &["--bodies 10000000", "1..=20000"],
+    );
+    assert_fails(&["--scene", "room", "--bodies", "10"], dir.path(), &["[spawn]", "room"]);
+    let (ok, stderr) = run(&["--scene", "stress", "--bodies", "7"], dir.path());
+    assert!(ok, "{stderr}");
+}

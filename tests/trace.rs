@@ -286,3 +286,65 @@ fn refit_traces_like_a_fresh_build() {
     assert!(a.iter().filter(|h| h.prim != BVH_INVALID).count() > 4000);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// After `drop`'s bodies have moved for 30 frames, the renderer's dynamic BVH (rebuilt
+/// in the frame over the vertices `sim.transform` moved) traces like brute force over
+/// those vertices: rays aimed at random dynamic triangles from around the room, and
+/// random ones; dynamic hits carry bit 31.
+#[test]
+fn the_moved_dynamic_bvh_equals_brute_force() {
+    let ctx = common::context();
+    let scene = speculum::scene::builtin::drop().unwrap();
+    let settings = speculum::Settings {
+        width: 64,
+        height: 48,
+        mode: speculum::settings::Mode::Raster,
+        ..Default::default()
+    };
+    let mut r = speculum::Renderer::new(&ctx, &scene, &settings).unwrap();
+    for _ in 0..30 {
+        r.render_frame().unwrap();
+    }
+    let v = r.read_dynamic_vertices().unwrap().unwrap();
+    let i = scene.dynamic_meshes().indices;
+    // The bodies did move: most vertices are far from where they started.
+    let start = speculum::sim::rigid::RigidWorld::new(&scene, settings.sim_dt)
+        .unwrap()
+        .poses();
+    let moved = scene
+        .dynamic_meshes()
+        .vertices
+        .iter()
+        .zip(&v)
+        .filter(|(o, w)| {
+            let p0 = Vec3::from(speculum::cpu_ref::sim::transform(o, &start).position);
+            (p0 - Vec3::from(w.position)).length() > 0.2
+        })
+        .count();
+    assert!(moved * 2 > v.len(), "{moved} of {} vertices moved", v.len());
+    let rays = random_rays(8000, &v, &i, 4.0, 31);
+    let cpu: Vec<Hit> = rays
+        .iter()
+        .map(|ray| {
+            let h = brute_force(ray, &v, &i);
+            if h.prim == BVH_INVALID {
+                h
+            } else {
+                Hit {
+                    prim: h.prim | 0x8000_0000,
+                    ..h
+                }
+            }
+        })
+        .collect();
+    let tracer = TracePass::new(&ctx).unwrap();
+    let scene_bvhs = TraceScene {
+        static_bvh: None,
+        dynamic_bvh: r.dynamic_traceable(),
+    };
+    let (gpu, _) = tracer.trace(&rays, scene_bvhs, false).unwrap();
+    let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, (p & 0x7fff_ffff) as usize));
+    let hits = gpu.iter().filter(|h| h.prim != BVH_INVALID).count();
+    assert!(hits > 3000 && ties <= rays.len() / 1000, "{hits} hits, {ties} ties");
+    common::assert_no_validation_messages(&ctx);
+}

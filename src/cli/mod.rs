@@ -83,6 +83,9 @@ pub struct ViewArgs {
     /// The floor a bare model (an .obj given as the scene) stands on [default: mirror].
     #[arg(long, value_enum)]
     pub floor: Option<speculum::scene::Floor>,
+    /// Bodies a scene with a [spawn] table drops (`stress`: 100 by default), 1..=20000.
+    #[arg(long)]
+    pub bodies: Option<u32>,
 }
 
 /// "x,y,z" as a vector of three finite numbers.
@@ -102,6 +105,9 @@ impl ViewArgs {
             anyhow::bail!("--floor is for a bare model (an .obj given as the scene), not for '{name}'");
         }
         let mut scene = speculum::scene::load_with(name, self.floor.unwrap_or_default())?;
+        if let Some(n) = self.bodies {
+            scene.set_spawn_count(n)?;
+        }
         self.apply(&mut scene)?;
         Ok(scene)
     }

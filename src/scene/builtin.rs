@@ -7,16 +7,24 @@ use crate::error::Result;
 use std::path::Path;
 
 /// (name, scene file text) of every built-in scene; the first is the default.
-const SCENES: [(&str, &str); 5] = [
+const SCENES: [(&str, &str); 6] = [
     ("room", include_str!("../../assets/scenes/room.toml")),
     ("offscreen", include_str!("../../assets/scenes/offscreen.toml")),
     ("mirrors", include_str!("../../assets/scenes/mirrors.toml")),
     ("spheres", include_str!("../../assets/scenes/spheres.toml")),
     ("drop", include_str!("../../assets/scenes/drop.toml")),
+    ("stress", include_str!("../../assets/scenes/stress.toml")),
 ];
 
 /// Names accepted by `--scene`.
-pub const NAMES: [&str; 5] = [SCENES[0].0, SCENES[1].0, SCENES[2].0, SCENES[3].0, SCENES[4].0];
+pub const NAMES: [&str; 6] = [
+    SCENES[0].0,
+    SCENES[1].0,
+    SCENES[2].0,
+    SCENES[3].0,
+    SCENES[4].0,
+    SCENES[5].0,
+];
 
 /// The parsed scene file of the built-in scene `name`, if there is one.
 pub fn file(name: &str) -> Option<Result<SceneFile>> {
@@ -65,6 +73,11 @@ pub fn drop() -> Result<Scene> {
     named("drop")
 }
 
+/// A grid of many bodies (100 unless `set_spawn_count`) falling onto a polished floor.
+pub fn stress() -> Result<Scene> {
+    named("stress")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -81,5 +94,29 @@ mod tests {
             assert!(s.triangle_count() + s.dynamic_triangle_count() > 10);
         }
         assert!(by_name("nope").is_none());
+    }
+
+    /// `stress` spawns its 100 bodies; `set_spawn_count` replaces them (and only them),
+    /// the grid taller for more; every body starts above the floor, none overlapping.
+    #[test]
+    fn stress_spawns_and_respawns() {
+        let mut s = stress().unwrap();
+        assert_eq!(s.bodies.len(), 100);
+        s.set_spawn_count(1000).unwrap();
+        assert_eq!(s.bodies.len(), 1000);
+        s.validate().unwrap();
+        for (i, a) in s.bodies.iter().enumerate() {
+            assert!(a.position.y - a.radius() > 0.0, "body {i} starts in the floor");
+            for b in &s.bodies[..i] {
+                assert!(
+                    (a.position - b.position).length() > a.radius() + b.radius(),
+                    "bodies overlap"
+                );
+            }
+        }
+        s.set_spawn_count(3).unwrap();
+        assert_eq!(s.bodies.len(), 3);
+        let mut room = room().unwrap();
+        assert!(room.set_spawn_count(3).is_err());
     }
 }

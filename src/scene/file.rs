@@ -32,6 +32,23 @@ pub struct SceneFile {
     /// instances and each other.
     #[serde(default, rename = "body", skip_serializing_if = "Vec::is_empty")]
     pub bodies: Vec<BodyDesc>,
+    /// A grid of bodies dropped into the scene (`scene::Spawn`; `--bodies` overrides
+    /// `count`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spawn: Option<SpawnDesc>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpawnDesc {
+    /// How many bodies (1..=20000).
+    pub count: u32,
+    /// Ball radius, and 1/1.6 of the cubes' edge.
+    pub size: f32,
+    /// Centre of the lowest layer's bottom.
+    pub center: [f32; 3],
+    /// Materials by name, cycled through.
+    pub materials: Vec<String>,
 }
 
 /// A rigid body: exactly one shape key, a material, its initial pose and motion.
@@ -326,6 +343,41 @@ impl SceneFile {
                 velocity: Vec3::from(body.velocity.unwrap_or([0.0; 3])),
                 angular_velocity: Vec3::from(body.angular_velocity.unwrap_or([0.0; 3])),
             });
+        }
+        if let Some(sp) = &self.spawn {
+            if sp.count == 0 || sp.count > super::MAX_BODIES {
+                return Err(bad(format!(
+                    "spawn: count {} is outside 1..={}",
+                    sp.count,
+                    super::MAX_BODIES
+                )));
+            }
+            if !(sp.size.is_finite() && sp.size > 0.0) {
+                return Err(bad(format!("spawn: size {} must be > 0", sp.size)));
+            }
+            let materials = sp
+                .materials
+                .iter()
+                .map(|name| {
+                    ids.iter()
+                        .find(|(n, _)| n == name)
+                        .map(|(_, id)| *id)
+                        .ok_or_else(|| bad(format!("spawn: unknown material '{name}'")))
+                })
+                .collect::<Result<Vec<u32>>>()?;
+            if materials.is_empty() {
+                return Err(bad("spawn: give at least one material".into()));
+            }
+            let spawn = super::Spawn {
+                count: sp.count,
+                size: sp.size,
+                center: Vec3::from(sp.center),
+                materials,
+            };
+            for body in spawn.bodies() {
+                b.body(body);
+            }
+            b.spawn(spawn);
         }
         let c = &self.camera;
         b.camera(Camera {

@@ -132,6 +132,70 @@ impl Body {
     }
 }
 
+/// Most bodies a scene may spawn (`Spawn::count`, `--bodies`).
+pub const MAX_BODIES: u32 = 20_000;
+
+/// A grid of bodies a scene file asks for (`[spawn]`): the scalability test of the
+/// dynamic geometry (`stress`). Bodies alternate between balls of radius `size` and
+/// cubes of edge 1.6 `size`, take `materials` by a fixed hash, and start in layers of
+/// ceil(cbrt(count))² on a grid `4 size` apart whose lowest layer is centred on
+/// `center`, each slightly offset and turned (a fixed hash of its index), at rest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spawn {
+    pub count: u32,
+    pub size: f32,
+    pub center: Vec3,
+    pub materials: Vec<u32>,
+}
+
+impl Spawn {
+    pub fn bodies(&self) -> Vec<Body> {
+        let side = (self.count as f64).cbrt().ceil().max(1.0) as u32;
+        let spacing = 4.0 * self.size;
+        // A fixed hash of (index, salt) in [0, 1).
+        let hash = |k: u32, salt: u32| {
+            let mut x = k.wrapping_mul(0x9E37_79B9) ^ salt.wrapping_mul(0x85EB_CA6B);
+            x ^= x >> 16;
+            x = x.wrapping_mul(0x7FEB_352D);
+            x ^= x >> 15;
+            (x >> 8) as f32 / (1u32 << 24) as f32
+        };
+        (0..self.count)
+            .map(|k| {
+                let (x, z, y) = (k % side, (k / side) % side, k / (side * side));
+                let half = 0.5 * (side - 1) as f32;
+                let jitter = Vec3::new(hash(k, 1) - 0.5, 0.0, hash(k, 2) - 0.5) * (0.2 * spacing);
+                let position = self.center
+                    + Vec3::new(
+                        (x as f32 - half) * spacing,
+                        y as f32 * spacing + self.size,
+                        (z as f32 - half) * spacing,
+                    )
+                    + jitter;
+                let shape = if k % 2 == 0 {
+                    BodyShape::Sphere { radius: self.size }
+                } else {
+                    BodyShape::Cuboid {
+                        size: Vec3::splat(1.6 * self.size),
+                    }
+                };
+                Body {
+                    shape,
+                    material: self.materials
+                        [(hash(k, 5) * self.materials.len() as f32) as usize % self.materials.len()],
+                    density: 1000.0,
+                    restitution: 0.3,
+                    friction: 0.5,
+                    position,
+                    rotation: Quat::from_euler(glam::EulerRot::YXZ, 6.3 * hash(k, 3), 3.2 * hash(k, 4), 0.0),
+                    velocity: Vec3::ZERO,
+                    angular_velocity: Vec3::ZERO,
+                }
+            })
+            .collect()
+    }
+}
+
 /// The dynamic geometry in its own spaces, as `sim.transform` reads it: each vertex's
 /// `object` is its body's index; triangles index these vertices.
 #[derive(Clone, Debug, Default)]
@@ -170,8 +234,11 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Base-colour textures, which materials name by index.
     pub textures: Vec<Texture>,
-    /// Rigid bodies: the dynamic geometry (none in a static scene).
+    /// Rigid bodies: the dynamic geometry (none in a static scene); the last ones are
+    /// `spawn`'s when there is one.
     pub bodies: Vec<Body>,
+    /// The grid of bodies the scene file asked for, if any (`set_spawn_count`).
+    pub spawn: Option<Spawn>,
     pub camera: Camera,
     pub light: Light,
     pub sky: Sky,
@@ -196,6 +263,7 @@ impl SceneBuilder {
                 materials: Vec::new(),
                 textures: Vec::new(),
                 bodies: Vec::new(),
+                spawn: None,
                 camera: Camera {
                     position: Vec3::new(0.0, 2.0, 6.0),
                     target: Vec3::ZERO,
@@ -222,6 +290,12 @@ impl SceneBuilder {
     pub fn material(&mut self, m: Material) -> u32 {
         self.scene.materials.push(m);
         self.scene.materials.len() as u32 - 1
+    }
+
+    /// Records the spawn whose bodies were just added (the last `spawn.count` bodies).
+    pub fn spawn(&mut self, spawn: Spawn) -> &mut Self {
+        self.scene.spawn = Some(spawn);
+        self
     }
 
     /// Adds a rigid body (dynamic geometry).
@@ -325,6 +399,26 @@ impl Scene {
             let r = Vec3::splat(b.radius());
             (lo.min(b.position - r), hi.max(b.position + r))
         })
+    }
+
+    /// Replaces the spawned bodies by `count` of them (`--bodies`): the scene must have
+    /// a spawn (`[spawn]` in its file, as `stress`), and `count` be in 1..=`MAX_BODIES`.
+    pub fn set_spawn_count(&mut self, count: u32) -> Result<()> {
+        if count == 0 || count > MAX_BODIES {
+            return Err(Error::Input(format!("--bodies {count} is outside 1..={MAX_BODIES}")));
+        }
+        let Some(spawn) = &mut self.spawn else {
+            return Err(Error::Input(format!(
+                "--bodies needs a scene with a [spawn] table (such as stress); '{}' has none",
+                self.name
+            )));
+        };
+        let keep = self.bodies.len() - spawn.count as usize;
+        spawn.count = count;
+        let bodies = spawn.bodies();
+        self.bodies.truncate(keep);
+        self.bodies.extend(bodies);
+        Ok(())
     }
 
     /// Whether anything moves.

@@ -101,3 +101,36 @@ fn modes_benchmark_is_valid() {
     assert!(by("rt").passes_ms.get("ssr.trace").is_none(), "rt mode marches nothing");
     common::assert_no_validation_messages(&ctx);
 }
+
+/// `bench dynamic` on `stress` with 4 and 12 bodies: every point valid (both BVHs'
+/// hits equal the CPU's), the triangles growing with the bodies, each time measured.
+#[test]
+fn small_dynamic_benchmark_is_valid() {
+    let ctx = common::context();
+    let settings = speculum::Settings {
+        width: 96,
+        height: 54,
+        ..Default::default()
+    };
+    let mut points = Vec::new();
+    for n in [4, 12] {
+        let mut scene = speculum::scene::builtin::stress().unwrap();
+        scene.set_spawn_count(n).unwrap();
+        let p = speculum::bench::dynamic::run_point(&ctx, &scene, &settings, 1, 4, 3000, &mut || {}).unwrap();
+        assert!(p.valid, "{p:?}");
+        assert_eq!(p.bodies, n);
+        for (what, ms) in [
+            ("sim.transform", p.sim_transform_ms.median),
+            ("rebuild", p.rebuild_ms.median),
+            ("refit", p.refit_ms.median),
+            ("rt.reflect", p.rt_reflect_ms.median),
+            ("trace", p.trace_refit_ms),
+        ] {
+            assert!(ms > 0.0 && ms.is_finite(), "{n} bodies: {what} {ms}");
+        }
+        assert!(p.frame_ms.median >= p.rebuild_ms.median);
+        points.push(p);
+    }
+    assert!(points[1].dynamic_triangles > 2 * points[0].dynamic_triangles);
+    common::assert_no_validation_messages(&ctx);
+}

@@ -147,7 +147,14 @@ pub fn incoherent_rays(lo: Vec3, hi: Vec3, count: u32, seed: u64) -> Vec<Ray> {
 }
 
 /// Checks `sample` evenly spaced rays against the CPU BVH: (mismatches, ties).
-fn check_hits(rays: &[Ray], gpu: &[Hit], cpu: &CpuBvh, v: &[GpuVertex], i: &[u32], sample: u32) -> (u32, u32) {
+pub(crate) fn check_hits(
+    rays: &[Ray],
+    gpu: &[Hit],
+    cpu: &CpuBvh,
+    v: &[GpuVertex],
+    i: &[u32],
+    sample: u32,
+) -> (u32, u32) {
     let step = (rays.len() / sample.max(1) as usize).max(1);
     let (mut mismatches, mut ties) = (0, 0);
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);

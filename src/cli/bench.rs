@@ -1,4 +1,5 @@
-//! `speculum bench modes|reflect|lbvh`: GPU timing benchmarks that check what they time.
+//! `speculum bench modes|reflect|lbvh|dynamic`: GPU timing benchmarks that check what
+//! they time.
 
 use super::{cell, check_count, check_outputs, progress, GpuArgs, SettingsArgs, Text};
 use anyhow::Result;
@@ -20,6 +21,32 @@ pub enum BenchCommand {
     /// Every mode timed in the same run, interleaved: per-pass medians, frame time
     /// against rt, SSIM/RMSE against rt, and whether ssr < hybrid < rt.
     Modes(ModesArgs),
+    /// A dynamic scene's per-frame costs as its bodies grow: simulation, transform,
+    /// dynamic BVH rebuild vs refit, tracing, the frame; refit vs rebuilt traversal.
+    Dynamic(DynamicArgs),
+}
+
+#[derive(Args, Clone, Debug)]
+pub struct DynamicArgs {
+    /// A scene with a [spawn] table (built-in, or a scene file).
+    #[arg(long, default_value = "stress")]
+    pub scene: String,
+    /// Body counts, each measured in its own run (1..=20000).
+    #[arg(long, num_args = 1.., default_values_t = [10u32, 100, 1000])]
+    pub bodies: Vec<u32>,
+    /// Measured frames per body count.
+    #[arg(long, default_value_t = 30)]
+    pub frames: u32,
+    /// Uncounted warm-up frames (the scene is reset after them).
+    #[arg(long, default_value_t = 2)]
+    pub warmup: u32,
+    /// Rays traced through the rebuilt and the refit BVH at the last frame.
+    #[arg(long, default_value_t = 65536)]
+    pub rays: u32,
+    #[command(flatten)]
+    pub frame: SettingsArgs,
+    #[command(flatten)]
+    pub common: Common,
 }
 
 /// What every benchmark shares: reports, quietness, the device.
@@ -100,7 +127,102 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Lbvh(a) => lbvh(a),
         BenchCommand::Reflect(a) => reflect(a),
         BenchCommand::Modes(a) => modes(a),
+        BenchCommand::Dynamic(a) => dynamic(a),
     }
+}
+
+fn dynamic(args: DynamicArgs) -> Result<()> {
+    use speculum::bench::dynamic::{run_point, DynamicReport};
+    let c = &args.common;
+    let settings = args.frame.resolve()?;
+    check_count("--frames", args.frames, 1)?;
+    check_count("--warmup", args.warmup, 0)?;
+    check_count("--rays", args.rays, 1)?;
+    check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
+    // Every body count's scene first: a bad one fails before any GPU work.
+    let scenes = args
+        .bodies
+        .iter()
+        .map(|&n| {
+            let mut s = speculum::scene::load(&args.scene)?;
+            s.set_spawn_count(n)?;
+            Ok(s)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let text = Text::new(&[c.json.as_deref()], c.quiet);
+    let ctx = c.gpu.context()?;
+    let per = (args.frames + args.warmup) as u64;
+    let bar = progress(per * scenes.len() as u64, "bench dynamic", c.quiet);
+    let mut points = Vec::new();
+    for scene in &scenes {
+        points.push(run_point(
+            &ctx,
+            scene,
+            &settings,
+            args.warmup,
+            args.frames,
+            args.rays,
+            &mut || bar.inc(1),
+        )?);
+    }
+    bar.finish_and_clear();
+    let (first, last) = (&points[0], &points[points.len() - 1]);
+    let report = DynamicReport {
+        header: Header::new("bench.dynamic", Some(&ctx), Some(&settings)),
+        scene: args.scene.clone(),
+        resolution: [settings.width, settings.height],
+        frames: args.frames,
+        warmup_frames: args.warmup,
+        rebuild_growth: last.rebuild_ms.median / first.rebuild_ms.median,
+        triangle_growth: last.dynamic_triangles as f64 / first.dynamic_triangles as f64,
+        valid: points.iter().all(|p| p.valid),
+        points,
+    };
+    text.line(format_args!(
+        "{} on {}: {}x{}, median of {} frames per body count (ms; sim.rigid is CPU)",
+        report.scene, ctx.device_name, settings.width, settings.height, args.frames
+    ));
+    text.line(format_args!(
+        "  {:>6} {:>9} {:>9} {:>13} {:>9} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9}",
+        "bodies",
+        "tris",
+        "sim.rigid",
+        "sim.transform",
+        "rebuild",
+        "refit",
+        "ratio",
+        "rt.reflect",
+        "frame",
+        "trace new",
+        "trace old"
+    ));
+    for p in &report.points {
+        text.line(format_args!(
+            "  {:>6} {:>9} {:>9.2} {:>13.2} {:>9.2} {:>8.2} {:>7.3} {:>10.1} {:>9.1} {:>9.2} {:>9.2}",
+            p.bodies,
+            p.dynamic_triangles,
+            p.sim_rigid_ms.median,
+            p.sim_transform_ms.median,
+            p.rebuild_ms.median,
+            p.refit_ms.median,
+            p.refit_over_rebuild,
+            p.rt_reflect_ms.median,
+            p.frame_ms.median,
+            p.trace_rebuilt_ms,
+            p.trace_refit_ms
+        ));
+    }
+    text.line(format_args!(
+        "  rebuild grows {:.2}x for {:.2}x the triangles; checks {}",
+        report.rebuild_growth,
+        report.triangle_growth,
+        if report.valid { "valid" } else { "INVALID" }
+    ));
+    if let Some(path) = &c.json {
+        super::write_report(path, &report, &text)?;
+    }
+    super::check_validation(&ctx)?;
+    valid_or_fail(report.valid)
 }
 
 fn valid_or_fail(valid: bool) -> Result<()> {

@@ -1,0 +1,210 @@
+//! `speculum bench dynamic`: what a moving scene costs per frame as its dynamic
+//! geometry grows. For each body count of a scene with a `[spawn]` (`stress`), the
+//! frames of one run give the medians of `sim.rigid` (CPU), `sim.transform`, the
+//! dynamic BVH's rebuild (its five `lbvh.*` stages summed per frame), a refit of the
+//! same BVH over the same frame (timed after the frame, side by side), `rt.reflect`
+//! and the frame. At the last frame, rays are traced through the BVH rebuilt that
+//! frame and through one built at the first measured frame and refit since (refit
+//! trees trace slower as the bodies scatter). Checked: both BVHs' hits equal the CPU
+//! BVH's over the frame's vertices on a sample of the rays.
+
+use super::lbvh::{check_hits, incoherent_rays};
+use crate::cpu_ref::trace::CpuBvh;
+use crate::error::Result;
+use crate::gpu_types::Hit;
+use crate::passes::lbvh::{self, Bvh, LbvhBuilder, MortonBits};
+use crate::passes::rt_trace::{TracePass, TraceScene, Traceable};
+use crate::renderer::{FRAME, SIM_RIGID};
+use crate::report::{Header, Stat};
+use crate::scene::Scene;
+use crate::settings::Settings;
+use crate::shader_defines::BVH_INVALID;
+use crate::vk::{Context, GpuTimer};
+use crate::Renderer;
+use serde::Serialize;
+use std::sync::Arc;
+
+/// The dynamic BVH's build stages, summed into `rebuild_ms`.
+const BUILD: [&str; 5] = [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, lbvh::HIERARCHY, lbvh::FIT];
+
+/// One body count.
+#[derive(Clone, Debug, Serialize)]
+pub struct DynamicPoint {
+    pub bodies: u32,
+    pub dynamic_triangles: u32,
+    /// CPU wall clock.
+    pub sim_rigid_ms: Stat,
+    pub sim_transform_ms: Stat,
+    /// The per-frame rebuild: `lbvh.bounds` … `lbvh.fit` summed.
+    pub rebuild_ms: Stat,
+    /// `lbvh.refit` of the same BVH over the same frame's vertices.
+    pub refit_ms: Stat,
+    /// Median over frames of refit / rebuild.
+    pub refit_over_rebuild: f64,
+    pub rt_reflect_ms: Stat,
+    pub frame_ms: Stat,
+    /// Wall-clock ms (median of 3; upload and readback included, alike for both) to
+    /// trace `rays` random rays at the last frame through the BVH rebuilt that frame,
+    /// and through one built at the first measured frame and refit since.
+    pub trace_rebuilt_ms: f64,
+    pub trace_refit_ms: f64,
+    pub rays: u32,
+    /// Sampled rays whose hits differ from the CPU BVH's (beyond genuine ties), both
+    /// BVHs together; 0 when valid.
+    pub mismatches: u32,
+    pub valid: bool,
+}
+
+/// The `bench dynamic` report.
+#[derive(Clone, Debug, Serialize)]
+pub struct DynamicReport {
+    #[serde(flatten)]
+    pub header: Header,
+    pub scene: String,
+    pub resolution: [u32; 2],
+    pub frames: u32,
+    pub warmup_frames: u32,
+    pub points: Vec<DynamicPoint>,
+    /// Dynamic BVH rebuild time at the largest body count / at the smallest, and the
+    /// same ratio of dynamic triangles: near-linear growth keeps the first near the second.
+    pub rebuild_growth: f64,
+    pub triangle_growth: f64,
+    pub valid: bool,
+}
+
+fn stat(samples: &[f64]) -> Stat {
+    Stat::of(samples).expect("at least one frame")
+}
+
+/// Measures `scene` (its bodies as given) for `frames` frames after `warmup`.
+pub fn run_point(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    settings: &Settings,
+    warmup: u32,
+    frames: u32,
+    rays: u32,
+    tick: super::Tick<'_>,
+) -> Result<DynamicPoint> {
+    let mut r = Renderer::new(ctx, scene, settings)?;
+    for _ in 0..warmup {
+        r.render_frame()?;
+        tick();
+    }
+    r.reset_simulation()?;
+    let builder = LbvhBuilder::new(ctx)?;
+    let mut timer = GpuTimer::new(ctx, 8)?;
+    let tris = r.dynamic_triangles();
+    let aged = Bvh::new(ctx, tris, MortonBits::Bits30)?;
+    let mut series: [Vec<f64>; 7] = Default::default();
+    for k in 0..frames {
+        let times = r.render_frame()?;
+        tick();
+        let get = |name: &str| times.iter().find(|(n, _)| *n == name).map_or(0.0, |t| t.1);
+        let traceable = r.dynamic_traceable().expect("a dynamic scene");
+        if k == 0 {
+            ctx.one_shot(|cmd| {
+                timer.reset(cmd);
+                builder.record_build(cmd, &mut timer, traceable.geometry, &aged);
+            })?;
+        }
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            builder.record_refit(cmd, &mut timer, traceable.geometry, traceable.bvh);
+        })?;
+        let refit = timer
+            .results()?
+            .iter()
+            .find(|(n, _)| *n == lbvh::REFIT)
+            .map_or(f64::NAN, |t| t.1);
+        let rebuild: f64 = BUILD.iter().map(|s| get(s)).sum();
+        for (s, v) in series.iter_mut().zip([
+            get(SIM_RIGID),
+            get(crate::passes::sim_transform::NAME),
+            rebuild,
+            refit,
+            get(crate::passes::rt_reflect::NAME),
+            get(FRAME),
+            refit / rebuild,
+        ]) {
+            s.push(v);
+        }
+    }
+    let fresh = r.dynamic_traceable().expect("a dynamic scene");
+    ctx.one_shot(|cmd| {
+        timer.reset(cmd);
+        builder.record_refit(cmd, &mut timer, fresh.geometry, &aged);
+    })?;
+    let vertices = r.read_dynamic_vertices()?.expect("a dynamic scene");
+    let indices = scene.dynamic_meshes().indices;
+    let (lo, hi) = vertices.iter().fold((glam::Vec3::MAX, glam::Vec3::MIN), |(lo, hi), v| {
+        let p = glam::Vec3::from(v.position);
+        (lo.min(p), hi.max(p))
+    });
+    let ray_set = incoherent_rays(lo, hi, rays, 41);
+    let tracer = TracePass::new(ctx)?;
+    let through = |bvh: &Bvh| -> Result<(Vec<Hit>, f64)> {
+        let t = Traceable {
+            bvh,
+            geometry: fresh.geometry,
+        };
+        // Wall clock of the whole call (upload, traversal, readback), the median of
+        // three: lavapipe's timestamps around this one dispatch read implausibly low
+        // (0.1 ms for 65,536 rays that take tens of ms), so they are not used here.
+        let mut walls = Vec::new();
+        let mut hits = Vec::new();
+        for _ in 0..3 {
+            let start = std::time::Instant::now();
+            hits = tracer
+                .trace(
+                    &ray_set,
+                    TraceScene {
+                        static_bvh: None,
+                        dynamic_bvh: Some(t),
+                    },
+                    false,
+                )?
+                .0;
+            walls.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+        let ms = stat(&walls).median;
+        // Dynamic hits carry bit 31; the CPU BVH numbers the same triangles plainly.
+        let plain = hits
+            .into_iter()
+            .map(|h| Hit {
+                prim: if h.prim == BVH_INVALID {
+                    h.prim
+                } else {
+                    h.prim & 0x7fff_ffff
+                },
+                ..h
+            })
+            .collect();
+        Ok((plain, ms))
+    };
+    let (rebuilt_hits, trace_rebuilt_ms) = through(fresh.bvh)?;
+    let (refit_hits, trace_refit_ms) = through(&aged)?;
+    let cpu = CpuBvh::build(&vertices, &indices);
+    let sample = rays.min(2000);
+    let (m1, _) = check_hits(&ray_set, &rebuilt_hits, &cpu, &vertices, &indices, sample);
+    let (m2, _) = check_hits(&ray_set, &refit_hits, &cpu, &vertices, &indices, sample);
+    let [sim, transform, rebuild, refit, rt_reflect, frame, ratio] = series;
+    let mismatches = m1 + m2;
+    let frame_ms = stat(&frame);
+    Ok(DynamicPoint {
+        bodies: scene.bodies.len() as u32,
+        dynamic_triangles: tris,
+        sim_rigid_ms: stat(&sim),
+        sim_transform_ms: stat(&transform),
+        rebuild_ms: stat(&rebuild),
+        refit_ms: stat(&refit),
+        refit_over_rebuild: stat(&ratio).median,
+        rt_reflect_ms: stat(&rt_reflect),
+        frame_ms,
+        trace_rebuilt_ms,
+        trace_refit_ms,
+        rays,
+        mismatches,
+        valid: mismatches == 0 && frame_ms.median.is_finite() && trace_rebuilt_ms > 0.0,
+    })
+}

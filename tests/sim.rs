@@ -89,3 +89,102 @@ fn transform_matches_cpu_reference() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+/// `sim.cloth` against `cpu_ref::cloth`: a 23x23 sheet with its corners pinned, its
+/// particles randomly displaced (and moving), pressed onto a sphere and the floor, six
+/// steps of 8 iterations; the particles after every step and the vertices (normals)
+/// after the last. Tolerance: 1e-4 absolute on positions (1e-3 of the sheet's
+/// spacing; each iteration's lengths and divisions round differently in f32), 1e-3 on
+/// normals; outputs poisoned first.
+#[test]
+fn cloth_steps_match_cpu_reference() {
+    use speculum::passes::sim_cloth::{ClothPass, ClothState};
+    use speculum::sim::cloth::{Cloth, Particle, Pins};
+    let ctx = common::context();
+    let mut rng = common::rng(23);
+    let cloth = Cloth {
+        size: 2.0,
+        resolution: 23,
+        // Just above the sphere's top and the floor: both collide from the first step.
+        center: Vec3::new(0.1, 1.23, -0.2),
+        pins: Pins::Corners,
+        stiffness: 0.8,
+        iterations: 8,
+        material: 3,
+        spheres: vec![glam::Vec4::new(0.0, 0.7, 0.0, 0.5), glam::Vec4::new(0.8, 0.2, 0.6, 0.3)],
+        floor_y: 1.16,
+    };
+    let dt = 1.0 / 60.0;
+    let base = 17;
+    let mut state = ClothState::new(&ctx, &cloth, dt, base).unwrap();
+    // Random displacements and velocities (pinned particles too: they just do not move).
+    let mut cpu: Vec<Particle> = cloth
+        .particles()
+        .into_iter()
+        .map(|mut p| {
+            let j = Vec3::new(
+                rng.random_range(-0.03..0.03),
+                rng.random_range(-0.05..0.05),
+                rng.random_range(-0.03..0.03),
+            );
+            let v = Vec3::new(
+                rng.random_range(-0.01..0.01),
+                rng.random_range(-0.02..0.0),
+                rng.random_range(-0.01..0.01),
+            );
+            p.pos = (Vec3::from(p.pos) + j).to_array();
+            p.prev = (Vec3::from(p.pos) - v).to_array();
+            p
+        })
+        .collect();
+    for b in &state.particles {
+        b.write(bytemuck::cast_slice(&cpu)).unwrap();
+    }
+    state.push.stiffness = 0.8;
+    let n = cpu.len();
+    let storage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
+    let poison = vec![
+        GpuVertex {
+            position: [f32::NAN; 3],
+            material: 0xdead,
+            normal: [-7.0; 3],
+            object: 0xbeef
+        };
+        base as usize + n + 3
+    ];
+    let world = Buffer::with_data(&ctx, "test.world", storage, bytemuck::cast_slice(&poison)).unwrap();
+    let pass = ClothPass::new(&ctx).unwrap();
+    let spheres = cloth.spheres.clone();
+    for step in 0..6 {
+        ctx.one_shot(|cmd| pass.record(cmd, &state, &world)).unwrap();
+        speculum::cpu_ref::cloth::integrate(&mut cpu, &state.push);
+        for _ in 0..cloth.passes() {
+            cpu = speculum::cpu_ref::cloth::relax(&cpu, &state.push, &spheres);
+        }
+        let gpu: Vec<Particle> = bytemuck::pod_collect_to_vec(&state.particles[0].read().unwrap());
+        for (i, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
+            let d = (Vec3::from(g.pos) - Vec3::from(c.pos)).length();
+            assert!(d <= 1e-4, "step {step} particle {i}: {:?} vs {:?}", g.pos, c.pos);
+            assert_eq!(g.inv_mass, c.inv_mass);
+        }
+    }
+    let want = speculum::cpu_ref::cloth::vertices(&cpu, &state.push);
+    let got: Vec<GpuVertex> = bytemuck::pod_collect_to_vec(&world.read().unwrap());
+    for v in &got[..base as usize] {
+        assert_eq!(v.material, 0xdead, "nothing before the cloth's vertices is written");
+    }
+    for (i, (g, w)) in got[base as usize..base as usize + n].iter().zip(&want).enumerate() {
+        assert_eq!(g.material, 3, "vertex {i}");
+        assert!(
+            (Vec3::from(g.normal) - Vec3::from(w.normal)).length() <= 1e-3,
+            "vertex {i}: {:?} vs {:?}",
+            g.normal,
+            w.normal
+        );
+    }
+    assert_eq!(got[base as usize + n].material, 0xdead);
+    // The sheet moved.
+    let start = cloth.particles();
+    assert!((Vec3::from(cpu[n / 2].pos) - Vec3::from(start[n / 2].pos)).length() > 0.01);
+    common::assert_no_validation_messages(&ctx);
+}

@@ -1,6 +1,7 @@
 //! CPU references of the GPU kernels, written to mirror the GLSL line by line. Tests
 //! and benchmarks compare GPU output against these.
 
+pub mod cloth;
 pub mod compact;
 pub mod compose;
 pub mod lbvh;

@@ -1,0 +1,112 @@
+//! `sim.cloth`: one time step of every cloth on the GPU (integrate, Jacobi iterations
+//! with the colliders, then the cloth's vertices and normals into the dynamic vertex
+//! buffer). Each cloth owns two particle buffers (ping-pong) and its colliders.
+
+use crate::error::Result;
+use crate::shaders;
+use crate::sim::cloth::{Cloth, ClothPush, Particle};
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
+use ash::vk;
+use std::sync::Arc;
+
+pub const NAME: &str = "sim.cloth";
+
+/// One cloth's state on the GPU.
+pub struct ClothState {
+    pub particles: [Buffer; 2],
+    spheres: Buffer,
+    pub push: ClothPush,
+    passes: u32,
+    initial: Vec<Particle>,
+}
+
+impl ClothState {
+    /// `cloth` at rest; its vertices go to the dynamic buffer from `vertex_base`.
+    pub fn new(ctx: &Arc<Context>, cloth: &Cloth, dt: f32, vertex_base: u32) -> Result<Self> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        let initial = cloth.particles();
+        let bytes: &[u8] = bytemuck::cast_slice(&initial);
+        let spheres: Vec<[f32; 4]> = cloth.spheres.iter().map(|s| s.to_array()).collect();
+        Ok(Self {
+            particles: [
+                Buffer::with_data(ctx, "cloth.particles", usage, bytes)?,
+                Buffer::with_data(ctx, "cloth.particles_b", usage, bytes)?,
+            ],
+            spheres: Buffer::with_data(ctx, "cloth.spheres", usage, bytemuck::cast_slice(&spheres))?,
+            push: cloth.push(dt, vertex_base),
+            passes: cloth.passes(),
+            initial,
+        })
+    }
+
+    /// Back to rest (waits for the GPU through the upload).
+    pub fn reset(&self) -> Result<()> {
+        for b in &self.particles {
+            b.write(bytemuck::cast_slice(&self.initial))?;
+        }
+        Ok(())
+    }
+
+    pub fn particle_count(&self) -> u32 {
+        self.push.grid[0] * self.push.grid[1]
+    }
+}
+
+pub struct ClothPass {
+    ctx: Arc<Context>,
+    integrate: Pipeline,
+    relax: Pipeline,
+    vertices: Pipeline,
+}
+
+impl ClothPass {
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        Ok(Self {
+            ctx: ctx.clone(),
+            integrate: Pipeline::compute::<ClothPush>(ctx, NAME, shaders::CLOTH_INTEGRATE_COMP)?,
+            relax: Pipeline::compute::<ClothPush>(ctx, NAME, shaders::CLOTH_RELAX_COMP)?,
+            vertices: Pipeline::compute::<ClothPush>(ctx, NAME, shaders::CLOTH_VERTICES_COMP)?,
+        })
+    }
+
+    /// Records one step of `cloth` and writes its vertices into `world`. `world` ends
+    /// visible to the raster passes and the compute passes.
+    pub fn record(&self, cmd: vk::CommandBuffer, cloth: &ClothState, world: &Buffer) {
+        let d = &self.ctx.device;
+        let n = cloth.particle_count();
+        let groups = Groups::Cover([n, 1, 1]);
+        let [a, b] = &cloth.particles;
+        // WAR: the previous frame's reads of the particles and vertices are done.
+        barrier::global(d, cmd, access::ALL_READ_WRITE, access::COMPUTE_READ_WRITE);
+        self.integrate
+            .dispatch(cmd, &[Resource::Buffer(a)], &cloth.push, groups);
+        for _ in 0..cloth.passes / 2 {
+            for (src, dst) in [(a, b), (b, a)] {
+                // RAW: this iteration reads the last one's positions; WAR: ... and
+                // overwrites what the one before read.
+                barrier::global(d, cmd, access::COMPUTE_READ_WRITE, access::COMPUTE_READ_WRITE);
+                self.relax.dispatch(
+                    cmd,
+                    &[
+                        Resource::Buffer(src),
+                        Resource::Buffer(dst),
+                        Resource::Buffer(&cloth.spheres),
+                    ],
+                    &cloth.push,
+                    groups,
+                );
+            }
+        }
+        // RAW: the vertices are made from the final positions.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
+        self.vertices.dispatch(
+            cmd,
+            &[Resource::Buffer(a), Resource::Buffer(world)],
+            &cloth.push,
+            groups,
+        );
+        // RAW: the raster passes and the BVH read the cloth's vertices.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::ANY_SHADER_READ);
+    }
+}

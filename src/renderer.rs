@@ -15,6 +15,7 @@ use crate::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
 use crate::passes::reflect_merge::{self, BlurParams, MergePass};
 use crate::passes::rt_reflect::{self, ReflectInputs, RtReflectPass};
 use crate::passes::rt_trace::{TraceScene, Traceable};
+use crate::passes::sim_cloth::{ClothPass, ClothState};
 use crate::passes::sim_transform::{self, SimTransformPass};
 use crate::passes::ssr_compact::{self, CompactPass};
 use crate::passes::ssr_trace::{self, SsrParams, SsrPass};
@@ -39,15 +40,17 @@ pub const SIM_RIGID: &str = "sim.rigid";
 /// report's `passes_ms`, a pass a mode (or a static scene) does not run reported as
 /// `null`. All are GPU time but `sim.rigid`, the CPU's; the dynamic BVH's stages are
 /// `lbvh.*` (the static BVH's, built once, are reported apart).
-pub const SCOPES: [&str; 18] = [
+pub const SCOPES: [&str; 20] = [
     UNIFORMS,
     SIM_RIGID,
     sim_transform::NAME,
+    crate::passes::sim_cloth::NAME,
     crate::passes::lbvh::BOUNDS,
     crate::passes::lbvh::MORTON,
     crate::passes::lbvh::SORT,
     crate::passes::lbvh::HIERARCHY,
     crate::passes::lbvh::FIT,
+    crate::passes::lbvh::REFIT,
     shadow_map::NAME,
     gbuffer::NAME,
     light_direct::NAME,
@@ -105,8 +108,16 @@ struct DynamicGeometry {
     poses_staging: Buffer,
     poses: Buffer,
     bvh: Bvh,
+    /// Vertices `sim.transform` moves (the rigid bodies'); the cloths' follow.
     vertex_count: u32,
     index_count: u32,
+    cloths: Vec<ClothState>,
+    /// Refit the BVH instead of rebuilding it (cloth only, unless `cloth_rebuild`),
+    /// rebuilding every `rebuild_every` frames all the same.
+    refit: bool,
+    rebuild_every: u32,
+    /// Frames since the BVH was last built (0: build in the next frame).
+    since_build: u32,
     /// Wall-clock milliseconds of the last `sim.rigid` step.
     sim_ms: f64,
 }
@@ -115,7 +126,7 @@ impl DynamicGeometry {
     fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings) -> Result<Self> {
         use vk::BufferUsageFlags as U;
         let meshes = scene.dynamic_meshes();
-        let vertex_count = meshes.vertices.len() as u32;
+        let vertex_count = scene.rigid_vertex_count() as u32;
         ctx.check_limit(
             || "the dynamic geometry".to_string(),
             vertex_count as u64,
@@ -161,8 +172,31 @@ impl DynamicGeometry {
             bvh: Bvh::new(ctx, tris, MortonBits::Bits30)?,
             vertex_count,
             index_count: meshes.indices.len() as u32,
+            cloths: {
+                let mut base = vertex_count;
+                let mut states = Vec::new();
+                for c in &scene.cloths {
+                    states.push(ClothState::new(ctx, c, settings.sim_dt, base)?);
+                    base += c.resolution * c.resolution;
+                }
+                states
+            },
+            refit: scene.bodies.is_empty() && !settings.cloth_rebuild,
+            rebuild_every: settings.refit_rebuild_every,
+            since_build: 0,
             sim_ms: 0.0,
         })
+    }
+
+    /// Back to the initial state: the world, the cloths, and a fresh build next frame.
+    fn reset(&mut self, origin: Vec3) -> Result<()> {
+        self.world.reset();
+        self.write_poses(origin);
+        for c in &self.cloths {
+            c.reset()?;
+        }
+        self.since_build = 0;
+        Ok(())
     }
 
     fn geometry(&self) -> SceneGeometry<'_> {
@@ -201,29 +235,44 @@ impl DynamicGeometry {
         self.poses_staging.mapped_mut().expect("CpuToGpu is mapped")[..bytes.len()].copy_from_slice(bytes);
     }
 
-    /// Records `sim.transform` (the poses copied in first) and the dynamic BVH's
-    /// rebuild, each stage under its scope.
+    /// Records `sim.transform` (the poses copied in first), the cloths' step
+    /// (`sim.cloth`), then the dynamic BVH's rebuild or refit, each under its scope.
     fn record(
-        &self,
+        &mut self,
         d: &ash::Device,
         cmd: vk::CommandBuffer,
         timer: &mut GpuTimer,
-        transform: &SimTransformPass,
-        builder: &LbvhBuilder,
+        passes: (&SimTransformPass, &ClothPass, &LbvhBuilder),
     ) {
-        timer.scope(cmd, sim_transform::NAME, || {
-            // WAR: the previous frame's transform read the poses before they change.
-            barrier::global(d, cmd, access::COMPUTE_READ, access::TRANSFER_WRITE);
-            let region = vk::BufferCopy::default().size(self.poses.size);
-            unsafe { d.cmd_copy_buffer(cmd, self.poses_staging.raw, self.poses.raw, &[region]) };
-            // RAW: the transform reads the poses just copied.
-            barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ);
-            transform.record(cmd, &self.objects, &self.poses, &self.vertices, self.vertex_count);
-        });
-        // WAR: the previous frame's traversal of the dynamic BVH is done before it is rebuilt.
+        let (transform, cloth, builder) = passes;
+        if self.vertex_count > 0 {
+            timer.scope(cmd, sim_transform::NAME, || {
+                // WAR: the previous frame's transform read the poses before they change.
+                barrier::global(d, cmd, access::COMPUTE_READ, access::TRANSFER_WRITE);
+                let region = vk::BufferCopy::default().size(self.poses.size);
+                unsafe { d.cmd_copy_buffer(cmd, self.poses_staging.raw, self.poses.raw, &[region]) };
+                // RAW: the transform reads the poses just copied.
+                barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ);
+                transform.record(cmd, &self.objects, &self.poses, &self.vertices, self.vertex_count);
+            });
+        }
+        if !self.cloths.is_empty() {
+            timer.scope(cmd, crate::passes::sim_cloth::NAME, || {
+                for c in &self.cloths {
+                    cloth.record(cmd, c, &self.vertices);
+                }
+            });
+        }
+        // WAR: the previous frame's traversal of the dynamic BVH is done before it changes.
         barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
         let t = self.traceable();
-        builder.record_build(cmd, timer, t.geometry, &self.bvh);
+        if self.refit && self.since_build > 0 && self.since_build < self.rebuild_every {
+            builder.record_refit(cmd, timer, t.geometry, &self.bvh);
+            self.since_build += 1;
+        } else {
+            builder.record_build(cmd, timer, t.geometry, &self.bvh);
+            self.since_build = 1;
+        }
     }
 }
 
@@ -309,6 +358,7 @@ pub struct Renderer {
     /// What moves, when the scene has bodies.
     dynamic: Option<DynamicGeometry>,
     transform: SimTransformPass,
+    cloth: ClothPass,
     builder: LbvhBuilder,
     timer: GpuTimer,
     cmd: vk::CommandBuffer,
@@ -452,6 +502,7 @@ impl Renderer {
             static_bvh_build,
             dynamic,
             transform: SimTransformPass::new(ctx)?,
+            cloth: ClothPass::new(ctx)?,
             builder,
             timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
             cmd: ctx.allocate_command_buffer()?,
@@ -530,8 +581,7 @@ impl Renderer {
     pub fn reset_simulation(&mut self) -> Result<()> {
         if let Some(d) = &mut self.dynamic {
             unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
-            d.world.reset();
-            d.write_poses(self.origin);
+            d.reset(self.origin)?;
         }
         Ok(())
     }
@@ -584,18 +634,19 @@ impl Renderer {
             static_bvh,
             dynamic,
             transform,
+            cloth,
             builder,
             timer,
             ..
         } = self;
         let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.targets);
-        let dynamic = dynamic.as_ref();
         timer.reset(cmd);
         timer.begin(cmd, FRAME);
         timer.scope(cmd, UNIFORMS, || upload_uniforms(d, cmd, ubo, uniforms));
-        if let Some(dy) = dynamic {
-            dy.record(d, cmd, timer, transform, builder);
+        if let Some(dy) = dynamic.as_mut() {
+            dy.record(d, cmd, timer, (transform, cloth, builder));
         }
+        let dynamic = dynamic.as_ref();
         let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.geometry())
             .chain(dynamic.map(|dy| dy.geometry()))
             .collect();

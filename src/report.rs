@@ -261,9 +261,9 @@ mod tests {
         let json = serde_json::to_string(&p).unwrap();
         assert!(
             json.starts_with(
-                "{\"uniforms\":null,\"sim.rigid\":null,\"sim.transform\":null,\"lbvh.bounds\":null,\
-                 \"lbvh.morton\":null,\"lbvh.sort\":null,\"lbvh.hierarchy\":null,\"lbvh.fit\":null,\
-                 \"shadow.map\":null,\"gbuffer\":{\"median\":2.0"
+                "{\"uniforms\":null,\"sim.rigid\":null,\"sim.transform\":null,\"sim.cloth\":null,\
+                 \"lbvh.bounds\":null,\"lbvh.morton\":null,\"lbvh.sort\":null,\"lbvh.hierarchy\":null,\
+                 \"lbvh.fit\":null,\"lbvh.refit\":null,\"shadow.map\":null,\"gbuffer\":{\"median\":2.0"
             ),
             "{json}"
         );

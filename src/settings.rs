@@ -139,6 +139,12 @@ pub struct Settings {
     /// k is the same image in every run): smaller is smoother motion and more frames
     /// for the same animation.
     pub sim_dt: f32,
+    /// Rebuild the dynamic BVH of a scene whose only dynamic geometry is cloth every
+    /// frame instead of refitting it (refit is cheaper; its tree loosens as the cloth
+    /// deforms).
+    pub cloth_rebuild: bool,
+    /// When refitting, still rebuild every this many frames (1: always rebuild).
+    pub refit_rebuild_every: u32,
 }
 
 impl Default for Settings {
@@ -166,6 +172,8 @@ impl Default for Settings {
             blur_band: 3,
             shadow_rays: false,
             sim_dt: 1.0 / 60.0,
+            cloth_rebuild: false,
+            refit_rebuild_every: 60,
         }
     }
 }
@@ -255,6 +263,9 @@ impl Settings {
             if !v.is_finite() || v < 0.0 {
                 return Err(Error::Settings(format!("{name} {v} must be a finite number >= 0")));
             }
+        }
+        if self.refit_rebuild_every == 0 {
+            return Err(Error::Settings("refit_rebuild_every must be at least 1".into()));
         }
         if !(self.sim_dt.is_finite() && self.sim_dt > 0.0 && self.sim_dt <= 1.0) {
             return Err(Error::Settings(format!(

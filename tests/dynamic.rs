@@ -1,7 +1,8 @@
-//! Dynamic scenes end to end: `drop`'s rigid bodies move every frame, deterministically,
-//! and the hybrid frame matches the fully ray-traced one at every frame of the
-//! animation (moving bodies reflected in the floor and the metals, one of them behind
-//! the camera, seen only in the reflections).
+//! Dynamic scenes end to end: `drop`'s rigid bodies and `cloth`'s sheet move every
+//! frame, deterministically, and the hybrid frame matches the fully ray-traced one at
+//! every frame of the animation (moving bodies reflected in the floor and the metals,
+//! one of them behind the camera, seen only in the reflections; the cloth in the floor
+//! and the chrome sphere).
 
 mod common;
 
@@ -21,63 +22,83 @@ fn small(mode: Mode) -> Settings {
     }
 }
 
+/// `drop` (rigid bodies) and `cloth` (the GPU cloth, its BVH refit).
+fn dynamic_scenes() -> [speculum::scene::Scene; 2] {
+    [
+        speculum::scene::builtin::drop().unwrap(),
+        speculum::scene::builtin::cloth().unwrap(),
+    ]
+}
+
 /// Frame k of a run is the same image in another run, and with a different warm-up
-/// (warm-up frames are followed by a reset); and the bodies do move (frame 12 differs
+/// (warm-up frames are followed by a reset); and things do move (frame 12 differs
 /// from frame 1).
 #[test]
-fn drop_frames_are_deterministic_whatever_the_warmup() {
+fn dynamic_frames_are_deterministic_whatever_the_warmup() {
     let ctx = common::context();
-    let scene = speculum::scene::builtin::drop().unwrap();
-    let settings = small(Mode::Hybrid);
-    let run = |warmup, frames| {
-        let plan = FramePlan {
-            warmup,
-            frames,
-            reference: false,
+    for scene in dynamic_scenes() {
+        let settings = small(Mode::Hybrid);
+        let run = |warmup, frames| {
+            let plan = FramePlan {
+                warmup,
+                frames,
+                reference: false,
+            };
+            headless::render(&ctx, &scene, &settings, plan, &mut || {})
+                .unwrap()
+                .rgba
         };
-        headless::render(&ctx, &scene, &settings, plan, &mut || {})
-            .unwrap()
-            .rgba
-    };
-    let a = run(0, 12);
-    assert!(a == run(0, 12), "two runs differ at frame 12");
-    assert!(a == run(3, 12), "the warm-up changed frame 12");
-    let first = run(0, 1);
-    let moved = a.iter().zip(&first).filter(|(x, y)| x != y).count();
-    assert!(moved > 1000, "only {moved} bytes changed between frames 1 and 12");
+        let name = &scene.name;
+        let a = run(0, 12);
+        assert!(a == run(0, 12), "{name}: two runs differ at frame 12");
+        assert!(a == run(3, 12), "{name}: the warm-up changed frame 12");
+        let first = run(0, 1);
+        let moved = a.iter().zip(&first).filter(|(x, y)| x != y).count();
+        assert!(
+            moved > 1000,
+            "{name}: only {moved} bytes changed between frames 1 and 12"
+        );
+    }
     common::assert_no_validation_messages(&ctx);
 }
 
-/// Hybrid against rt on every frame of a 60-frame run of `drop`: SSIM at least 0.97,
-/// and every reflective pixel has a reflection.
+/// Hybrid against rt on every frame of a 60-frame run of `drop` and of `cloth`: SSIM
+/// at least 0.97, and every reflective pixel has a reflection.
 #[test]
-fn drop_hybrid_matches_rt_on_every_frame() {
+fn dynamic_hybrid_matches_rt_on_every_frame() {
     let ctx = common::context();
-    let scene = speculum::scene::builtin::drop().unwrap();
-    let mut hybrid = Renderer::new(&ctx, &scene, &small(Mode::Hybrid)).unwrap();
-    let mut rt = Renderer::new(&ctx, &scene, &small(Mode::Rt)).unwrap();
-    assert_eq!(hybrid.dynamic_triangles() as usize, scene.dynamic_triangle_count());
-    let mut worst = (1.0f64, 0);
-    for k in 0..60 {
-        hybrid.render_frame().unwrap();
-        rt.render_frame().unwrap();
-        assert_eq!(hybrid.sim_steps(), k + 1);
-        let (a, b) = (hybrid.read_output().unwrap(), rt.read_output().unwrap());
-        let c = speculum::metrics::compare_rgba8(&a, &b, 320, 180).unwrap();
-        if c.ssim < worst.0 {
-            worst = (c.ssim, k);
+    for scene in dynamic_scenes() {
+        let name = &scene.name;
+        let mut hybrid = Renderer::new(&ctx, &scene, &small(Mode::Hybrid)).unwrap();
+        let mut rt = Renderer::new(&ctx, &scene, &small(Mode::Rt)).unwrap();
+        assert_eq!(hybrid.dynamic_triangles() as usize, scene.dynamic_triangle_count());
+        let mut worst = (1.0f64, 0);
+        for k in 0..60 {
+            hybrid.render_frame().unwrap();
+            rt.render_frame().unwrap();
+            assert_eq!(hybrid.sim_steps(), k + 1);
+            let (a, b) = (hybrid.read_output().unwrap(), rt.read_output().unwrap());
+            let c = speculum::metrics::compare_rgba8(&a, &b, 320, 180).unwrap();
+            if c.ssim < worst.0 {
+                worst = (c.ssim, k);
+            }
+            let stats = hybrid.reflection_stats().unwrap();
+            assert!(stats.reflective_pixels > 1000, "{name} frame {k}");
+            let merged: Vec<[f32; 4]> =
+                bytemuck::pod_collect_to_vec(&hybrid.merge.reflection().read(ash::vk::ImageLayout::GENERAL).unwrap());
+            let reflective = hybrid.reflection_maps().unwrap().reflective;
+            let holes = (0..merged.len())
+                .filter(|&i| reflective[i] && ![SOURCE_SSR, SOURCE_RT].contains(&(merged[i][3] as u32)))
+                .count();
+            assert_eq!(holes, 0, "{name} frame {k}: reflective pixels without a reflection");
         }
-        let stats = hybrid.reflection_stats().unwrap();
-        assert!(stats.reflective_pixels > 1000, "frame {k}");
-        let merged: Vec<[f32; 4]> =
-            bytemuck::pod_collect_to_vec(&hybrid.merge.reflection().read(ash::vk::ImageLayout::GENERAL).unwrap());
-        let reflective = hybrid.reflection_maps().unwrap().reflective;
-        let holes = (0..merged.len())
-            .filter(|&i| reflective[i] && ![SOURCE_SSR, SOURCE_RT].contains(&(merged[i][3] as u32)))
-            .count();
-        assert_eq!(holes, 0, "frame {k}: reflective pixels without a reflection");
+        assert!(
+            worst.0 >= 0.97,
+            "{name} frame {}: hybrid vs rt SSIM {}",
+            worst.1,
+            worst.0
+        );
     }
-    assert!(worst.0 >= 0.97, "frame {}: hybrid vs rt SSIM {}", worst.1, worst.0);
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -75,14 +75,16 @@ fn check_stat(v: &Value, what: &str) {
 }
 
 /// The scopes only a dynamic scene runs (these reports are of static scenes).
-const DYNAMIC_SCOPES: [&str; 7] = [
+const DYNAMIC_SCOPES: [&str; 9] = [
     "sim.rigid",
     "sim.transform",
+    "sim.cloth",
     "lbvh.bounds",
     "lbvh.morton",
     "lbvh.sort",
     "lbvh.hierarchy",
     "lbvh.fit",
+    "lbvh.refit",
 ];
 
 /// `passes_ms` has every scope of the frame, in frame order; `null` where not run.

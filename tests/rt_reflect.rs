@@ -86,6 +86,7 @@ fn reflected_paths_match_cpu_reference() {
         ("textured", false),
         ("drop", false),
         ("drop", true),
+        ("cloth", false),
     ] {
         let scene = if name == "textured" {
             textured_scene()
@@ -125,8 +126,16 @@ fn reflected_paths_match_cpu_reference() {
             size: settings.shadow_map_size,
             depth: &shadow,
         };
-        // The dynamic geometry of that frame, moved on the CPU by an independent world.
-        let (dyn_vertices, dyn_bvh, meshes) = if scene.is_dynamic() {
+        // The dynamic geometry of that frame, moved on the CPU by an independent world;
+        // a cloth's vertices are the GPU's own (sim.cloth has its own CPU comparison in
+        // tests/sim.rs; 40 steps of two f32 simulations drift apart by more than the
+        // shading tolerance).
+        let (dyn_vertices, dyn_bvh, meshes) = if !scene.cloths.is_empty() {
+            let v = r.read_dynamic_vertices().unwrap().unwrap();
+            let meshes = scene.dynamic_meshes();
+            let bvh = CpuBvh::build(&v, &meshes.indices);
+            (v, Some(bvh), meshes)
+        } else if scene.is_dynamic() {
             let mut world = speculum::sim::rigid::RigidWorld::new(&scene, settings.sim_dt).unwrap();
             for _ in 0..frames {
                 world.step();

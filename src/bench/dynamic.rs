@@ -1,5 +1,6 @@
 //! `speculum bench dynamic`: what a moving scene costs per frame as its dynamic
-//! geometry grows. For each body count of a scene with a `[spawn]` (`stress`), the
+//! geometry grows. For each body count of a scene with a `[spawn]` (`stress`), or each
+//! cloth resolution of a scene with cloths (`cloth`), the
 //! frames of one run give the medians of `sim.rigid` (CPU), `sim.transform`, the
 //! dynamic BVH's rebuild (its five `lbvh.*` stages summed per frame), a refit of the
 //! same BVH over the same frame (timed after the frame, side by side), `rt.reflect`
@@ -31,10 +32,14 @@ const BUILD: [&str; 5] = [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, lbvh::HIERARCH
 #[derive(Clone, Debug, Serialize)]
 pub struct DynamicPoint {
     pub bodies: u32,
+    /// Particles per side of the scene's cloths (0: none).
+    pub cloth_resolution: u32,
     pub dynamic_triangles: u32,
     /// CPU wall clock.
     pub sim_rigid_ms: Stat,
     pub sim_transform_ms: Stat,
+    /// The cloths' step (0 without cloth).
+    pub sim_cloth_ms: Stat,
     /// The per-frame rebuild: `lbvh.bounds` … `lbvh.fit` summed.
     pub rebuild_ms: Stat,
     /// `lbvh.refit` of the same BVH over the same frame's vertices.
@@ -86,7 +91,12 @@ pub fn run_point(
     rays: u32,
     tick: super::Tick<'_>,
 ) -> Result<DynamicPoint> {
-    let mut r = Renderer::new(ctx, scene, settings)?;
+    // Rebuilt every frame (a cloth would be refit): the refit is timed apart.
+    let settings = Settings {
+        cloth_rebuild: true,
+        ..settings.clone()
+    };
+    let mut r = Renderer::new(ctx, scene, &settings)?;
     for _ in 0..warmup {
         r.render_frame()?;
         tick();
@@ -96,7 +106,7 @@ pub fn run_point(
     let mut timer = GpuTimer::new(ctx, 8)?;
     let tris = r.dynamic_triangles();
     let aged = Bvh::new(ctx, tris, MortonBits::Bits30)?;
-    let mut series: [Vec<f64>; 7] = Default::default();
+    let mut series: [Vec<f64>; 8] = Default::default();
     for k in 0..frames {
         let times = r.render_frame()?;
         tick();
@@ -121,6 +131,7 @@ pub fn run_point(
         for (s, v) in series.iter_mut().zip([
             get(SIM_RIGID),
             get(crate::passes::sim_transform::NAME),
+            get(crate::passes::sim_cloth::NAME),
             rebuild,
             refit,
             get(crate::passes::rt_reflect::NAME),
@@ -188,14 +199,16 @@ pub fn run_point(
     let sample = rays.min(2000);
     let (m1, _) = check_hits(&ray_set, &rebuilt_hits, &cpu, &vertices, &indices, sample);
     let (m2, _) = check_hits(&ray_set, &refit_hits, &cpu, &vertices, &indices, sample);
-    let [sim, transform, rebuild, refit, rt_reflect, frame, ratio] = series;
+    let [sim, transform, cloth, rebuild, refit, rt_reflect, frame, ratio] = series;
     let mismatches = m1 + m2;
     let frame_ms = stat(&frame);
     Ok(DynamicPoint {
         bodies: scene.bodies.len() as u32,
+        cloth_resolution: scene.cloths.first().map_or(0, |c| c.resolution),
         dynamic_triangles: tris,
         sim_rigid_ms: stat(&sim),
         sim_transform_ms: stat(&transform),
+        sim_cloth_ms: stat(&cloth),
         rebuild_ms: stat(&rebuild),
         refit_ms: stat(&refit),
         refit_over_rebuild: stat(&ratio).median,

@@ -31,9 +31,14 @@ pub struct DynamicArgs {
     /// A scene with a [spawn] table (built-in, or a scene file).
     #[arg(long, default_value = "stress")]
     pub scene: String,
-    /// Body counts, each measured in its own run (1..=20000).
-    #[arg(long, num_args = 1.., default_values_t = [10u32, 100, 1000])]
+    /// Body counts of a [spawn] scene, each measured in its own run (1..=20000;
+    /// default 10 100 1000).
+    #[arg(long, num_args = 1..)]
     pub bodies: Vec<u32>,
+    /// Instead: particles per side of every cloth of a scene with cloths (2..=512),
+    /// each resolution in its own run.
+    #[arg(long, num_args = 1..)]
+    pub cloth_res: Vec<u32>,
     /// Measured frames per body count.
     #[arg(long, default_value_t = 30)]
     pub frames: u32,
@@ -140,15 +145,43 @@ fn dynamic(args: DynamicArgs) -> Result<()> {
     check_count("--rays", args.rays, 1)?;
     check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
     // Every body count's scene first: a bad one fails before any GPU work.
-    let scenes = args
-        .bodies
-        .iter()
-        .map(|&n| {
-            let mut s = speculum::scene::load(&args.scene)?;
-            s.set_spawn_count(n)?;
-            Ok(s)
-        })
-        .collect::<Result<Vec<_>>>()?;
+    if !args.bodies.is_empty() && !args.cloth_res.is_empty() {
+        anyhow::bail!("give --bodies or --cloth-res, not both");
+    }
+    let by_cloth = !args.cloth_res.is_empty();
+    let scenes = if !by_cloth {
+        let counts = if args.bodies.is_empty() {
+            vec![10, 100, 1000]
+        } else {
+            args.bodies.clone()
+        };
+        counts
+            .iter()
+            .map(|&n| {
+                let mut s = speculum::scene::load(&args.scene)?;
+                s.set_spawn_count(n)?;
+                Ok(s)
+            })
+            .collect::<Result<Vec<_>>>()?
+    } else {
+        args.cloth_res
+            .iter()
+            .map(|&n| {
+                let mut s = speculum::scene::load(&args.scene)?;
+                if s.cloths.is_empty() {
+                    anyhow::bail!(
+                        "--cloth-res needs a scene with cloths (such as cloth); '{}' has none",
+                        s.name
+                    );
+                }
+                for c in &mut s.cloths {
+                    c.resolution = n;
+                }
+                s.validate()?;
+                Ok(s)
+            })
+            .collect::<Result<Vec<_>>>()?
+    };
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
     let per = (args.frames + args.warmup) as u64;
@@ -184,10 +217,10 @@ fn dynamic(args: DynamicArgs) -> Result<()> {
     ));
     text.line(format_args!(
         "  {:>6} {:>9} {:>9} {:>13} {:>9} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9}",
-        "bodies",
+        if by_cloth { "cloth" } else { "bodies" },
         "tris",
         "sim.rigid",
-        "sim.transform",
+        if by_cloth { "sim.cloth" } else { "sim.transform" },
         "rebuild",
         "refit",
         "ratio",
@@ -199,10 +232,14 @@ fn dynamic(args: DynamicArgs) -> Result<()> {
     for p in &report.points {
         text.line(format_args!(
             "  {:>6} {:>9} {:>9.2} {:>13.2} {:>9.2} {:>8.2} {:>7.3} {:>10.1} {:>9.1} {:>9.2} {:>9.2}",
-            p.bodies,
+            if by_cloth { p.cloth_resolution } else { p.bodies },
             p.dynamic_triangles,
             p.sim_rigid_ms.median,
-            p.sim_transform_ms.median,
+            if by_cloth {
+                p.sim_cloth_ms.median
+            } else {
+                p.sim_transform_ms.median
+            },
             p.rebuild_ms.median,
             p.refit_ms.median,
             p.refit_over_rebuild,

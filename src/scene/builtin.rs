@@ -7,23 +7,25 @@ use crate::error::Result;
 use std::path::Path;
 
 /// (name, scene file text) of every built-in scene; the first is the default.
-const SCENES: [(&str, &str); 6] = [
+const SCENES: [(&str, &str); 7] = [
     ("room", include_str!("../../assets/scenes/room.toml")),
     ("offscreen", include_str!("../../assets/scenes/offscreen.toml")),
     ("mirrors", include_str!("../../assets/scenes/mirrors.toml")),
     ("spheres", include_str!("../../assets/scenes/spheres.toml")),
     ("drop", include_str!("../../assets/scenes/drop.toml")),
     ("stress", include_str!("../../assets/scenes/stress.toml")),
+    ("cloth", include_str!("../../assets/scenes/cloth.toml")),
 ];
 
 /// Names accepted by `--scene`.
-pub const NAMES: [&str; 6] = [
+pub const NAMES: [&str; 7] = [
     SCENES[0].0,
     SCENES[1].0,
     SCENES[2].0,
     SCENES[3].0,
     SCENES[4].0,
     SCENES[5].0,
+    SCENES[6].0,
 ];
 
 /// The parsed scene file of the built-in scene `name`, if there is one.
@@ -71,6 +73,11 @@ pub fn spheres() -> Result<Scene> {
 /// Rigid bodies falling into `room`'s room, a chrome sphere rolling across its floor.
 pub fn drop() -> Result<Scene> {
     named("drop")
+}
+
+/// A cloth draping over a sphere above a polished floor, beside a chrome sphere.
+pub fn cloth() -> Result<Scene> {
+    named("cloth")
 }
 
 /// A grid of many bodies (100 unless `set_spawn_count`) falling onto a polished floor.

@@ -36,6 +36,37 @@ pub struct SceneFile {
     /// `count`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spawn: Option<SpawnDesc>,
+    /// Cloths (`sim::cloth`), simulated on the GPU.
+    #[serde(default, rename = "cloth", skip_serializing_if = "Vec::is_empty")]
+    pub cloths: Vec<ClothDesc>,
+}
+
+/// A square cloth, horizontal at first.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClothDesc {
+    /// Side length.
+    pub size: f32,
+    /// Particles per side (2..=512).
+    pub resolution: u32,
+    /// Where its centre starts.
+    pub center: [f32; 3],
+    pub material: String,
+    /// none (default), corners (of the first row) or edge (the first row).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pins: Option<crate::sim::cloth::Pins>,
+    /// Jacobi relaxation factor in (0, 1] (default 0.9).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f32>,
+    /// Constraint iterations per step (default 16).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<u32>,
+    /// Spheres it collides with, [x, y, z, radius] each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spheres: Vec<[f32; 4]>,
+    /// The height of a floor it stays above (default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<f32>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -342,6 +373,24 @@ impl SceneFile {
                     * glam::Quat::from_rotation_x(x),
                 velocity: Vec3::from(body.velocity.unwrap_or([0.0; 3])),
                 angular_velocity: Vec3::from(body.angular_velocity.unwrap_or([0.0; 3])),
+            });
+        }
+        for (i, c) in self.cloths.iter().enumerate() {
+            let material = ids
+                .iter()
+                .find(|(n, _)| n == &c.material)
+                .map(|(_, id)| *id)
+                .ok_or_else(|| bad(format!("cloth {}: unknown material '{}'", i + 1, c.material)))?;
+            b.cloth(crate::sim::cloth::Cloth {
+                size: c.size,
+                resolution: c.resolution,
+                center: Vec3::from(c.center),
+                pins: c.pins.unwrap_or(crate::sim::cloth::Pins::None),
+                stiffness: c.stiffness.unwrap_or(0.9),
+                iterations: c.iterations.unwrap_or(16),
+                material,
+                spheres: c.spheres.iter().map(|s| glam::Vec4::from(*s)).collect(),
+                floor_y: c.floor.unwrap_or(0.0),
             });
         }
         if let Some(sp) = &self.spawn {

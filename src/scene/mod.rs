@@ -239,6 +239,8 @@ pub struct Scene {
     pub bodies: Vec<Body>,
     /// The grid of bodies the scene file asked for, if any (`set_spawn_count`).
     pub spawn: Option<Spawn>,
+    /// Cloths: dynamic geometry simulated on the GPU (`sim::cloth`).
+    pub cloths: Vec<crate::sim::cloth::Cloth>,
     pub camera: Camera,
     pub light: Light,
     pub sky: Sky,
@@ -264,6 +266,7 @@ impl SceneBuilder {
                 textures: Vec::new(),
                 bodies: Vec::new(),
                 spawn: None,
+                cloths: Vec::new(),
                 camera: Camera {
                     position: Vec3::new(0.0, 2.0, 6.0),
                     target: Vec3::ZERO,
@@ -295,6 +298,12 @@ impl SceneBuilder {
     /// Records the spawn whose bodies were just added (the last `spawn.count` bodies).
     pub fn spawn(&mut self, spawn: Spawn) -> &mut Self {
         self.scene.spawn = Some(spawn);
+        self
+    }
+
+    /// Adds a cloth (dynamic geometry).
+    pub fn cloth(&mut self, cloth: crate::sim::cloth::Cloth) -> &mut Self {
+        self.scene.cloths.push(cloth);
         self
     }
 
@@ -395,9 +404,13 @@ impl Scene {
                 let p = Vec3::from(v.position);
                 (lo.min(p), hi.max(p))
             });
-        self.bodies.iter().fold(statics, |(lo, hi), b| {
+        let with_bodies = self.bodies.iter().fold(statics, |(lo, hi), b| {
             let r = Vec3::splat(b.radius());
             (lo.min(b.position - r), hi.max(b.position + r))
+        });
+        self.cloths.iter().fold(with_bodies, |(lo, hi), c| {
+            let r = Vec3::splat(0.5 * c.size);
+            (lo.min(c.center - r), hi.max(c.center + r))
         })
     }
 
@@ -423,7 +436,13 @@ impl Scene {
 
     /// Whether anything moves.
     pub fn is_dynamic(&self) -> bool {
-        !self.bodies.is_empty()
+        !self.bodies.is_empty() || !self.cloths.is_empty()
+    }
+
+    /// Vertices of the rigid bodies' meshes (the first of `dynamic_meshes`; the cloths'
+    /// follow).
+    pub fn rigid_vertex_count(&self) -> usize {
+        self.bodies.iter().map(|b| b.mesh().positions.len()).sum()
     }
 
     /// The bodies' meshes in their own spaces, concatenated (`DynamicMeshes`).
@@ -443,12 +462,20 @@ impl Scene {
             }
             out.indices.extend(mesh.indices.iter().map(|t| base + t));
         }
+        for c in &self.cloths {
+            let base = out.vertices.len() as u32;
+            let (indices, uvs) = c.mesh();
+            out.vertices.extend(c.rest_vertices());
+            out.uvs.extend(uvs);
+            out.indices.extend(indices.iter().map(|t| base + t));
+        }
         out
     }
 
     /// Triangles of the dynamic geometry.
     pub fn dynamic_triangle_count(&self) -> usize {
-        self.bodies.iter().map(|b| b.mesh().indices.len() / 3).sum()
+        let cloth: usize = self.cloths.iter().map(|c| 2 * (c.resolution as usize - 1).pow(2)).sum();
+        self.bodies.iter().map(|b| b.mesh().indices.len() / 3).sum::<usize>() + cloth
     }
 
     /// Number of triangles.
@@ -547,6 +574,33 @@ impl Scene {
             }
             if !(b.restitution.is_finite() && b.friction.is_finite() && b.restitution >= 0.0 && b.friction >= 0.0) {
                 return bad(format!("body {i} has a negative or non-finite restitution or friction"));
+            }
+        }
+        for (i, c) in self.cloths.iter().enumerate() {
+            let max = crate::sim::cloth::MAX_RESOLUTION;
+            if c.resolution < 2 || c.resolution > max {
+                return bad(format!("cloth {i}: resolution {} is outside 2..={max}", c.resolution));
+            }
+            if !(c.size.is_finite() && c.size > 0.0 && c.center.is_finite() && c.floor_y.is_finite()) {
+                return bad(format!(
+                    "cloth {i}: its size, centre or floor is not finite (size must be > 0)"
+                ));
+            }
+            if !(c.stiffness > 0.0 && c.stiffness <= 1.0) || c.iterations == 0 || c.iterations > 64 {
+                return bad(format!(
+                    "cloth {i}: stiffness {} must be in (0, 1] and iterations {} in 1..=64",
+                    c.stiffness, c.iterations
+                ));
+            }
+            if c.material as usize >= self.materials.len() {
+                return bad(format!(
+                    "cloth {i} uses material {} but the scene has {}",
+                    c.material,
+                    self.materials.len()
+                ));
+            }
+            if c.spheres.iter().any(|s| !s.is_finite() || s.w <= 0.0) {
+                return bad(format!("cloth {i}: a collider sphere is not finite or has radius <= 0"));
             }
         }
         let (lo, hi) = self.bounds();

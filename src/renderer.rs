@@ -11,7 +11,7 @@
 use crate::error::{Result, VkContext};
 use crate::gpu_types::{FrameUniforms, GpuMaterial};
 use crate::passes::compose::{self, ComposeInputs, ComposeMode};
-use crate::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
+use crate::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
 use crate::passes::reflect_merge::{self, BlurParams, MergePass};
 use crate::passes::rt_reflect::{self, ReflectInputs, RtReflectPass};
 use crate::passes::rt_trace::{TraceScene, Traceable};
@@ -118,6 +118,8 @@ struct DynamicGeometry {
     rebuild_every: u32,
     /// Frames since the BVH was last built (0: build in the next frame).
     since_build: u32,
+    /// The refit order of the BVH as last built (made after the frame that built it).
+    schedule: Option<RefitSchedule>,
     /// Wall-clock milliseconds of the last `sim.rigid` step.
     sim_ms: f64,
 }
@@ -184,6 +186,7 @@ impl DynamicGeometry {
             refit: scene.bodies.is_empty() && !settings.cloth_rebuild,
             rebuild_every: settings.refit_rebuild_every,
             since_build: 0,
+            schedule: None,
             sim_ms: 0.0,
         })
     }
@@ -196,6 +199,7 @@ impl DynamicGeometry {
             c.reset()?;
         }
         self.since_build = 0;
+        self.schedule = None;
         Ok(())
     }
 
@@ -266,12 +270,16 @@ impl DynamicGeometry {
         // WAR: the previous frame's traversal of the dynamic BVH is done before it changes.
         barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
         let t = self.traceable();
-        if self.refit && self.since_build > 0 && self.since_build < self.rebuild_every {
-            builder.record_refit(cmd, timer, t.geometry, &self.bvh);
-            self.since_build += 1;
-        } else {
-            builder.record_build(cmd, timer, t.geometry, &self.bvh);
-            self.since_build = 1;
+        match &self.schedule {
+            Some(schedule) if self.refit && self.since_build < self.rebuild_every => {
+                builder.record_refit_scheduled(cmd, timer, t.geometry, &self.bvh, schedule);
+                self.since_build += 1;
+            }
+            _ => {
+                builder.record_build(cmd, timer, t.geometry, &self.bvh);
+                self.since_build = 1;
+                self.schedule = None;
+            }
         }
     }
 }
@@ -608,6 +616,12 @@ impl Renderer {
         self.record(self.cmd);
         unsafe { device.end_command_buffer(self.cmd) }.vk("vkEndCommandBuffer")?;
         self.ctx.submit_and_wait(self.cmd)?;
+        if let Some(d) = &mut self.dynamic {
+            // A refit BVH's schedule, from the tree this frame built.
+            if d.refit && d.schedule.is_none() {
+                d.schedule = Some(RefitSchedule::of(&self.ctx, &d.bvh)?);
+            }
+        }
         let mut times = self.timer.results()?;
         if let Some(d) = &self.dynamic {
             times.push((SIM_RIGID, d.sim_ms));

@@ -25,6 +25,11 @@ pub const MAX_PCF_RADIUS: u32 = 4;
 /// 256 = 32 subgroups on lavapipe, 8 on NVIDIA; enough to hide latency on GPUs.
 pub const LBVH_WG: u32 = 256;
 
+/// Workgroup of the scheduled refit's last pass (`lbvh_refit_top.comp`): one workgroup
+/// refits every level of at most this many nodes, the tree's top, in one dispatch.
+/// 1024 invocations is the minimum `maxComputeWorkGroupInvocations` Vulkan allows.
+pub const REFIT_TOP_WG: u32 = 1024;
+
 /// Triangles each `lbvh.bounds` invocation folds before the workgroup reduction: fewer
 /// workgroups, so fewer reduction rounds and global atomics.
 pub const LBVH_BOUNDS_ITEMS: u32 = 16;
@@ -123,6 +128,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TEXTURE_NONE", TEXTURE_NONE),
     ("MAX_PCF_RADIUS", MAX_PCF_RADIUS),
     ("LBVH_WG", LBVH_WG),
+    ("REFIT_TOP_WG", REFIT_TOP_WG),
     ("LBVH_BOUNDS_ITEMS", LBVH_BOUNDS_ITEMS),
     ("SORT_RADIX_BITS", SORT_RADIX_BITS),
     ("SORT_BINS", SORT_BINS),

@@ -333,3 +333,64 @@ fn refit_matches_cpu_fit_after_moving_vertices() {
     cref::check_bvh(&after, None, &moved, &i).unwrap();
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The scheduled refit (leaves, then height levels, the top in one workgroup) gives
+/// exactly the CPU fit's boxes after the vertices move, for trees whose levels all fit
+/// the top pass (300 triangles) and ones with big levels of their own (20,000); the
+/// schedule orders every node after both its children.
+#[test]
+fn scheduled_refit_matches_cpu_fit() {
+    use speculum::passes::lbvh::{refit_order, RefitSchedule};
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    for n in [300usize, 20000] {
+        let (v, i) = random_soup(n, 2.0, default_size(n) * 2.0, 7);
+        let g = GpuGeometry::new(&ctx, &v, &i);
+        let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
+        let before = bvh.read_nodes().unwrap();
+        let (order, levels) = refit_order(&before, n as u32);
+        assert_eq!(order.len(), n - 1, "every internal node once");
+        let mut rank = vec![usize::MAX; before.len()];
+        for (k, &node) in order.iter().enumerate() {
+            rank[node as usize] = k;
+        }
+        for (k, &node) in order.iter().enumerate() {
+            for c in [before[node as usize].left, before[node as usize].right] {
+                assert!(
+                    (c as usize) >= n - 1 || rank[c as usize] < k,
+                    "node {node} before its child {c}"
+                );
+            }
+        }
+        assert!(levels.windows(2).all(|w| w[1][1] <= w[0][1]), "levels never grow");
+        let schedule = RefitSchedule::of(&ctx, &bvh).unwrap();
+        let moved: Vec<GpuVertex> = v
+            .iter()
+            .map(|p| {
+                let mut q = *p;
+                q.position[1] += 0.3 * (q.position[0] * 2.0).sin();
+                q
+            })
+            .collect();
+        g.vertices.write(bytemuck::cast_slice(&moved)).unwrap();
+        // Poison the internal boxes: every one must be written.
+        let mut poisoned = before.clone();
+        for nd in &mut poisoned[..n - 1] {
+            nd.lo = [f32::NAN; 3];
+            nd.hi = [f32::NAN; 3];
+        }
+        bvh.nodes.write(bytemuck::cast_slice(&poisoned)).unwrap();
+        let mut timer = GpuTimer::new(&ctx, 2).unwrap();
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            b.record_refit_scheduled(cmd, &mut timer, g.geometry(), &bvh, &schedule);
+        })
+        .unwrap();
+        let after = bvh.read_nodes().unwrap();
+        let mut want = before.clone();
+        cref::fit(&mut want, &moved, &i);
+        assert_eq!(after, want, "{n} triangles");
+        assert!(levels.iter().any(|l| l[1] > 1024) == (n > 5000), "{n}: {levels:?}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}

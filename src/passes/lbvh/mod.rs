@@ -122,6 +122,69 @@ impl Bvh {
     }
 }
 
+/// The order in which a refit of a fixed topology can visit the internal nodes: by
+/// height (1: both children leaves), so a level's children are all done when it runs.
+/// Made on the CPU from the nodes of a built BVH (`of`), valid until it is rebuilt.
+pub struct RefitSchedule {
+    /// Internal nodes by height, lowest first.
+    order: Buffer,
+    /// (first, count) into `order` of each height level.
+    levels: Buffer,
+    level_list: Vec<[u32; 2]>,
+}
+
+impl RefitSchedule {
+    /// The schedule of `bvh` as built now (reads its nodes back; waits for the GPU).
+    pub fn of(ctx: &Arc<Context>, bvh: &Bvh) -> Result<Self> {
+        let (order, level_list) = refit_order(&bvh.read_nodes()?, bvh.tri_count);
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            order: Buffer::with_data(ctx, "lbvh.refit_order", usage, bytemuck::cast_slice(&order))?,
+            levels: Buffer::with_data(ctx, "lbvh.refit_levels", usage, bytemuck::cast_slice(&level_list))?,
+            level_list,
+        })
+    }
+}
+
+/// Internal nodes ordered by height (leaves are 0), and each level's (first, count).
+pub fn refit_order(nodes: &[BvhNode], tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]>) {
+    let internal = tri_count.saturating_sub(1) as usize;
+    let mut height = vec![0u32; nodes.len()];
+    // A post-order walk from the root (children are not numbered above their parents).
+    let mut stack: Vec<(u32, bool)> = if internal > 0 { vec![(0, false)] } else { Vec::new() };
+    while let Some((i, seen)) = stack.pop() {
+        let nd = &nodes[i as usize];
+        if (i as usize) >= internal {
+            continue; // a leaf
+        }
+        if seen {
+            height[i as usize] = 1 + height[nd.left as usize].max(height[nd.right as usize]);
+        } else {
+            stack.push((i, true));
+            stack.push((nd.left, false));
+            stack.push((nd.right, false));
+        }
+    }
+    let top = height[..internal].iter().copied().max().unwrap_or(0);
+    let mut levels = vec![[0u32; 2]; top as usize];
+    for h in &height[..internal] {
+        levels[*h as usize - 1][1] += 1;
+    }
+    let mut first = 0;
+    for l in &mut levels {
+        l[0] = first;
+        first += l[1];
+    }
+    let mut fill: Vec<u32> = levels.iter().map(|l| l[0]).collect();
+    let mut order = vec![0u32; internal];
+    for (i, h) in height[..internal].iter().enumerate() {
+        let h = *h as usize - 1;
+        order[fill[h] as usize] = i as u32;
+        fill[h] += 1;
+    }
+    (order, levels)
+}
+
 /// Push constants of `lbvh_morton.comp` and `lbvh_hierarchy.comp` (`lbvh.bounds` and
 /// `lbvh.fit` push the triangle count alone, as a `u32`).
 #[repr(C)]
@@ -140,6 +203,16 @@ pub struct LbvhBuilder {
     pub sort: RadixSort,
     hierarchy: Pipeline,
     fit: Pipeline,
+    refit_leaves: Pipeline,
+    refit_level: Pipeline,
+    refit_top: Pipeline,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct RangePush {
+    first: u32,
+    count: u32,
 }
 
 impl LbvhBuilder {
@@ -151,6 +224,9 @@ impl LbvhBuilder {
             sort: RadixSort::new(ctx)?,
             hierarchy: Pipeline::compute::<KeyPush>(ctx, HIERARCHY, shaders::LBVH_HIERARCHY_COMP)?,
             fit: Pipeline::compute::<u32>(ctx, FIT, shaders::LBVH_FIT_COMP)?,
+            refit_leaves: Pipeline::compute::<u32>(ctx, REFIT, shaders::LBVH_REFIT_LEAVES_COMP)?,
+            refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
+            refit_top: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_TOP_COMP)?,
         })
     }
 
@@ -251,6 +327,72 @@ impl LbvhBuilder {
         assert_eq!(geom.tri_count, bvh.tri_count, "BVH sized for another triangle count");
         timer.begin(cmd, REFIT);
         self.record_fit(cmd, geom, bvh);
+        timer.end(cmd, REFIT);
+    }
+
+    /// Records a refit of `bvh` by its `schedule` (which must be of the tree as it is):
+    /// the leaves, then each height level with more than `REFIT_TOP_WG` nodes in a
+    /// dispatch of its own, then every smaller level in one workgroup. The same boxes
+    /// as `record_refit` (min and max are exact), without its climb in lockstep.
+    pub fn record_refit_scheduled(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: &mut GpuTimer,
+        geom: Geometry<'_>,
+        bvh: &Bvh,
+        schedule: &RefitSchedule,
+    ) {
+        use crate::shader_defines::REFIT_TOP_WG;
+        assert_eq!(geom.tri_count, bvh.tri_count, "BVH sized for another triangle count");
+        let d = &self.ctx.device;
+        timer.begin(cmd, REFIT);
+        // WAR: earlier reads of the nodes (traversal) finish before the boxes change.
+        barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
+        let n = geom.tri_count;
+        self.refit_leaves.dispatch(
+            cmd,
+            &[
+                Resource::Buffer(geom.vertices),
+                Resource::Buffer(geom.indices),
+                Resource::Buffer(&bvh.nodes),
+            ],
+            &n,
+            Groups::Cover([n, 1, 1]),
+        );
+        let levels = &schedule.level_list;
+        let big = levels.iter().take_while(|l| l[1] > REFIT_TOP_WG).count();
+        for l in &levels[..big] {
+            // RAW: this level reads the boxes of the levels below.
+            barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
+            self.refit_level.dispatch(
+                cmd,
+                &[Resource::Buffer(&bvh.nodes), Resource::Buffer(&schedule.order)],
+                &RangePush {
+                    first: l[0],
+                    count: l[1],
+                },
+                Groups::Cover([l[1], 1, 1]),
+            );
+        }
+        if big < levels.len() {
+            // RAW: the top's first level reads the boxes below it.
+            barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
+            self.refit_top.dispatch(
+                cmd,
+                &[
+                    Resource::Buffer(&bvh.nodes),
+                    Resource::Buffer(&schedule.order),
+                    Resource::Buffer(&schedule.levels),
+                ],
+                &RangePush {
+                    first: big as u32,
+                    count: levels.len() as u32,
+                },
+                Groups::Exact([1, 1, 1]),
+            );
+        }
+        // RAW: traversal (or a readback) reads the finished boxes.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::ALL_READ_WRITE);
         timer.end(cmd, REFIT);
     }
 

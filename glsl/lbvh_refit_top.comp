@@ -1,0 +1,33 @@
+#version 460
+// lbvh.refit (scheduled), last pass: one workgroup refits every remaining level (each
+// at most REFIT_TOP_WG nodes: a level never holds more nodes than the one below it),
+// level by level, a workgroup barrier between levels.
+#include "bvh.glsl"
+
+layout(local_size_x = REFIT_TOP_WG) in;
+
+layout(binding = 0, std430) coherent buffer Nodes { BvhNode nodes[]; };
+layout(binding = 1, std430) readonly buffer Order { uint order[]; };
+layout(binding = 2, std430) readonly buffer Levels { uvec2 levels[]; }; // (first, count)
+
+layout(push_constant) uniform Push {
+    uint first_level;
+    uint level_count;
+} pc;
+
+void main() {
+    uint i = gl_LocalInvocationID.x;
+    for (uint k = pc.first_level; k < pc.level_count; ++k) {
+        uvec2 lv = levels[k];
+        if (i < lv.y) {
+            uint node = order[lv.x + i];
+            uint l = nodes[node].left;
+            uint r = nodes[node].right;
+            nodes[node].lo = min(nodes[l].lo, nodes[r].lo);
+            nodes[node].hi = max(nodes[l].hi, nodes[r].hi);
+        }
+        // The next level reads this one's boxes.
+        memoryBarrierBuffer();
+        barrier();
+    }
+}

@@ -148,3 +148,53 @@ fn sequences_write_every_frame_and_their_lines() {
     let img = image::open(&sheet).unwrap();
     assert_eq!((img.width(), img.height()), (6 * 64, 48));
 }
+
+/// Moving bodies above the top of the screen show in the floor: `drop` at frame 3 seen
+/// from low down, looking at the floor, its bodies still high in the air. The pixels
+/// where the rt frame changes when the bodies are taken out but the raster frame does
+/// not (their shadows change both) hold only their reflections; hybrid must match rt
+/// there, and `ssr`, which cannot see them, must not.
+#[test]
+fn bodies_above_the_screen_appear_in_hybrid_where_rt_puts_them() {
+    let ctx = common::context();
+    let mut scene = speculum::scene::builtin::drop().unwrap();
+    scene.camera.position = glam::Vec3::new(0.0, 1.2, 4.5);
+    scene.camera.target = glam::Vec3::new(0.0, 0.0, 0.0);
+    scene.camera.fov_y_deg = 40.0;
+    let mut without = scene.clone();
+    without.bodies.clear();
+    let at_frame = |scene: &speculum::scene::Scene, mode| {
+        let mut r = Renderer::new(&ctx, scene, &small(mode)).unwrap();
+        for _ in 0..3 {
+            r.render_frame().unwrap();
+        }
+        r.read_output().unwrap()
+    };
+    let (rt, rt_without) = (at_frame(&scene, Mode::Rt), at_frame(&without, Mode::Rt));
+    let (raster, raster_without) = (at_frame(&scene, Mode::Raster), at_frame(&without, Mode::Raster));
+    let (hybrid, ssr) = (at_frame(&scene, Mode::Hybrid), at_frame(&scene, Mode::Ssr));
+    let near = |a: &[u8], b: &[u8], i: usize, tol: i32| {
+        (0..3).all(|c| (a[4 * i + c] as i32 - b[4 * i + c] as i32).abs() <= tol)
+    };
+    let shown: Vec<usize> = (0..rt.len() / 4)
+        .filter(|&i| !near(&rt, &rt_without, i, 16) && near(&raster, &raster_without, i, 1))
+        .collect();
+    assert!(
+        shown.len() > 200,
+        "the bodies' reflections cover {} pixels",
+        shown.len()
+    );
+    let in_hybrid = shown.iter().filter(|&&i| near(&hybrid, &rt, i, 8)).count();
+    let in_ssr = shown.iter().filter(|&&i| near(&ssr, &rt, i, 8)).count();
+    assert!(
+        in_hybrid * 100 >= 95 * shown.len(),
+        "hybrid shows them on {in_hybrid} of {}",
+        shown.len()
+    );
+    assert!(
+        in_ssr * 4 <= shown.len(),
+        "ssr alone shows them on {in_ssr} of {}",
+        shown.len()
+    );
+    common::assert_no_validation_messages(&ctx);
+}

@@ -92,6 +92,17 @@ pub struct BodyDesc {
     /// A box of these full extents.
     #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
     pub cuboid: Option<[f32; 3]>,
+    /// A model file (OBJ, glTF, GLB, PLY; relative to the scene file), centred on its
+    /// bounds' centre and scaled by `scale`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// A model's collider: `hull` (its convex hull, the default) or `mesh` (its
+    /// triangles).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub collider: Option<String>,
+    /// A model's uniform scale (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f32>,
     /// A material of `materials` by name.
     pub material: String,
     /// Where its centre starts.
@@ -350,10 +361,45 @@ impl SceneFile {
             b.mesh(mesh, transform, find(i, material)?);
         }
         for (i, body) in self.bodies.iter().enumerate() {
-            let shape = match (body.sphere, body.cuboid) {
-                (Some(radius), None) => super::BodyShape::Sphere { radius },
-                (None, Some(size)) => super::BodyShape::Cuboid { size: Vec3::from(size) },
-                _ => return Err(bad(format!("body {}: give exactly one of sphere, box", i + 1))),
+            let shape = match (body.sphere, body.cuboid, &body.model) {
+                (Some(radius), None, None) => super::BodyShape::Sphere { radius },
+                (None, Some(size), None) => super::BodyShape::Cuboid { size: Vec3::from(size) },
+                (None, None, Some(model)) => {
+                    let hull = match body.collider.as_deref() {
+                        None | Some("hull") => true,
+                        Some("mesh") => false,
+                        Some(other) => {
+                            return Err(bad(format!(
+                                "body {}: collider '{other}' is neither hull nor mesh",
+                                i + 1
+                            )))
+                        }
+                    };
+                    let m = super::load_model(&dir.join(model))?;
+                    let scale = body.scale.unwrap_or(1.0);
+                    if !(scale.is_finite() && scale > 0.0) {
+                        return Err(bad(format!("body {}: scale {scale} must be > 0", i + 1)));
+                    }
+                    let (lo, hi) = m.bounds();
+                    let center = 0.5 * (lo + hi);
+                    let mesh = TriMesh {
+                        positions: m
+                            .vertices
+                            .iter()
+                            .map(|v| (Vec3::from(v.position) - center) * scale)
+                            .collect(),
+                        normals: m.vertices.iter().map(|v| Vec3::from(v.normal)).collect(),
+                        uvs: m.uvs.iter().map(|t| glam::Vec2::from(*t)).collect(),
+                        indices: m.indices.clone(),
+                    };
+                    let radius = mesh.positions.iter().map(|p| p.length()).fold(0.0f32, f32::max);
+                    super::BodyShape::Mesh {
+                        mesh: b.body_mesh(mesh),
+                        hull,
+                        radius,
+                    }
+                }
+                _ => return Err(bad(format!("body {}: give exactly one of sphere, box, model", i + 1))),
             };
             let material = ids
                 .iter()
@@ -542,6 +588,38 @@ mod tests {
             let e = build(&text, dir.path()).unwrap_err().to_string();
             assert!(e.contains(needle) && !e.contains('\n'), "{needle}: {e}");
         }
+    }
+
+    /// A body may be a model (centred, scaled, a hull or a mesh collider); an unknown
+    /// collider kind is an error naming it.
+    #[test]
+    fn model_bodies_are_centred_and_scaled() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("tri.obj"), "v 2 0 0\nv 4 0 0\nv 2 2 0\nf 1 2 3\n").unwrap();
+        let text = |collider: &str| {
+            format!(
+                "[camera]\nposition = [0.0, 1.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 50.0\n\
+                 [sun]\ndirection = [0.0, 1.0, 0.0]\ncolor = [1.0, 1.0, 1.0]\nintensity = 1.0\n\
+                 [[materials]]\nname = \"m\"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.5\n\
+                 [[instance]]\nplane = [4.0, 4.0]\nmaterial = \"m\"\n\
+                 [[body]]\nmodel = \"tri.obj\"\ncollider = \"{collider}\"\nscale = 0.5\nmaterial = \"m\"\n\
+                 translate = [0.0, 2.0, 0.0]\n"
+            )
+        };
+        let s = build(&text("mesh"), dir.path()).unwrap();
+        match s.bodies[0].shape {
+            crate::scene::BodyShape::Mesh { mesh, hull, radius } => {
+                assert!(!hull);
+                let m = &s.body_meshes[mesh as usize];
+                let xs: Vec<f32> = m.positions.iter().map(|p| p.x).collect();
+                assert_eq!(xs, [-0.5, 0.5, -0.5], "centred on the bounds, half size");
+                assert!((radius - 0.5f32.hypot(0.5)).abs() < 1e-6);
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(s.dynamic_triangle_count(), 1);
+        let e = build(&text("blob"), dir.path()).unwrap_err().to_string();
+        assert!(e.contains("collider 'blob'"), "{e}");
     }
 
     /// The README's complete example is a valid scene file (with a model in place).

@@ -92,6 +92,13 @@ pub enum BodyShape {
     Cuboid {
         size: Vec3,
     },
+    /// `Scene::body_meshes[mesh]` (centred on the origin), colliding as its convex hull
+    /// (`hull`) or as the triangle mesh itself; `radius` bounds it.
+    Mesh {
+        mesh: u32,
+        hull: bool,
+        radius: f32,
+    },
 }
 
 /// A rigid body of the dynamic geometry: simulated (`sim::rigid`), its mesh moved to
@@ -115,19 +122,12 @@ pub struct Body {
 }
 
 impl Body {
-    /// The body's mesh in its own space.
-    pub fn mesh(&self) -> TriMesh {
-        match self.shape {
-            BodyShape::Sphere { radius } => TriMesh::sphere(radius, 32, 16),
-            BodyShape::Cuboid { size } => TriMesh::cuboid(size),
-        }
-    }
-
     /// Radius of the body's bounding sphere.
     pub fn radius(&self) -> f32 {
         match self.shape {
             BodyShape::Sphere { radius } => radius,
             BodyShape::Cuboid { size } => 0.5 * size.length(),
+            BodyShape::Mesh { radius, .. } => radius,
         }
     }
 }
@@ -241,6 +241,8 @@ pub struct Scene {
     pub spawn: Option<Spawn>,
     /// Cloths: dynamic geometry simulated on the GPU (`sim::cloth`).
     pub cloths: Vec<crate::sim::cloth::Cloth>,
+    /// Meshes of the bodies shaped by a model (`BodyShape::Mesh`), in their own space.
+    pub body_meshes: Vec<TriMesh>,
     pub camera: Camera,
     pub light: Light,
     pub sky: Sky,
@@ -267,6 +269,7 @@ impl SceneBuilder {
                 bodies: Vec::new(),
                 spawn: None,
                 cloths: Vec::new(),
+                body_meshes: Vec::new(),
                 camera: Camera {
                     position: Vec3::new(0.0, 2.0, 6.0),
                     target: Vec3::ZERO,
@@ -299,6 +302,12 @@ impl SceneBuilder {
     pub fn spawn(&mut self, spawn: Spawn) -> &mut Self {
         self.scene.spawn = Some(spawn);
         self
+    }
+
+    /// Adds a body mesh (for `BodyShape::Mesh`) and returns its index.
+    pub fn body_mesh(&mut self, mesh: TriMesh) -> u32 {
+        self.scene.body_meshes.push(mesh);
+        self.scene.body_meshes.len() as u32 - 1
     }
 
     /// Adds a cloth (dynamic geometry).
@@ -439,17 +448,26 @@ impl Scene {
         !self.bodies.is_empty() || !self.cloths.is_empty()
     }
 
+    /// A body's mesh in its own space.
+    pub fn body_mesh(&self, b: &Body) -> TriMesh {
+        match b.shape {
+            BodyShape::Sphere { radius } => TriMesh::sphere(radius, 32, 16),
+            BodyShape::Cuboid { size } => TriMesh::cuboid(size),
+            BodyShape::Mesh { mesh, .. } => self.body_meshes[mesh as usize].clone(),
+        }
+    }
+
     /// Vertices of the rigid bodies' meshes (the first of `dynamic_meshes`; the cloths'
     /// follow).
     pub fn rigid_vertex_count(&self) -> usize {
-        self.bodies.iter().map(|b| b.mesh().positions.len()).sum()
+        self.bodies.iter().map(|b| self.body_mesh(b).positions.len()).sum()
     }
 
     /// The bodies' meshes in their own spaces, concatenated (`DynamicMeshes`).
     pub fn dynamic_meshes(&self) -> DynamicMeshes {
         let mut out = DynamicMeshes::default();
         for (i, b) in self.bodies.iter().enumerate() {
-            let mesh = b.mesh();
+            let mesh = self.body_mesh(b);
             let base = out.vertices.len() as u32;
             for (k, (p, n)) in mesh.positions.iter().zip(&mesh.normals).enumerate() {
                 out.vertices.push(GpuVertex {
@@ -475,7 +493,11 @@ impl Scene {
     /// Triangles of the dynamic geometry.
     pub fn dynamic_triangle_count(&self) -> usize {
         let cloth: usize = self.cloths.iter().map(|c| 2 * (c.resolution as usize - 1).pow(2)).sum();
-        self.bodies.iter().map(|b| b.mesh().indices.len() / 3).sum::<usize>() + cloth
+        self.bodies
+            .iter()
+            .map(|b| self.body_mesh(b).indices.len() / 3)
+            .sum::<usize>()
+            + cloth
     }
 
     /// Number of triangles.
@@ -548,6 +570,9 @@ impl Scene {
             let size_ok = match b.shape {
                 BodyShape::Sphere { radius } => radius.is_finite() && radius > 0.0,
                 BodyShape::Cuboid { size } => size.is_finite() && size.min_element() > 0.0,
+                BodyShape::Mesh { mesh, radius, .. } => {
+                    (mesh as usize) < self.body_meshes.len() && radius.is_finite() && radius > 0.0
+                }
             };
             if !size_ok {
                 return bad(format!(

@@ -58,6 +58,19 @@ impl RigidWorld {
             let shape = match b.shape {
                 BodyShape::Sphere { radius } => ColliderBuilder::ball(radius),
                 BodyShape::Cuboid { size } => ColliderBuilder::cuboid(0.5 * size.x, 0.5 * size.y, 0.5 * size.z),
+                BodyShape::Mesh { mesh, hull, .. } => {
+                    let m = &scene.body_meshes[mesh as usize];
+                    let bad = |what: &str| Error::BadGeometry {
+                        source_name: scene.name.clone(),
+                        detail: format!("a body's mesh makes no {what} collider"),
+                    };
+                    if hull {
+                        ColliderBuilder::convex_hull(&m.positions).ok_or_else(|| bad("convex hull"))?
+                    } else {
+                        let tris = m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+                        ColliderBuilder::trimesh(m.positions.clone(), tris).map_err(|_| bad("triangle-mesh"))?
+                    }
+                }
             };
             let collider = shape
                 .density(b.density)
@@ -163,6 +176,40 @@ mod tests {
             angular_velocity: Vec3::ZERO,
         });
         b.build().unwrap()
+    }
+
+    /// A cube given as a mesh rests on the floor at half its edge, as its convex hull
+    /// and as the triangle mesh itself.
+    #[test]
+    fn mesh_bodies_rest_on_the_floor() {
+        for hull in [true, false] {
+            let mut b = SceneBuilder::new("mesh body");
+            let m = b.material(Material::new("m", [0.5; 3], 0.5, 0.0));
+            b.mesh(TriMesh::quad(10.0, 10.0), Mat4::IDENTITY, m);
+            let mesh = b.body_mesh(TriMesh::cuboid(Vec3::ONE));
+            b.body(Body {
+                shape: BodyShape::Mesh {
+                    mesh,
+                    hull,
+                    radius: 0.87,
+                },
+                material: m,
+                density: 1000.0,
+                restitution: 0.0,
+                friction: 0.5,
+                position: Vec3::new(0.0, 2.0, 0.0),
+                rotation: Quat::IDENTITY,
+                velocity: Vec3::ZERO,
+                angular_velocity: Vec3::ZERO,
+            });
+            let scene = b.build().unwrap();
+            let mut w = RigidWorld::new(&scene, 1.0 / 60.0).unwrap();
+            for _ in 0..240 {
+                w.step();
+            }
+            let y = w.poses()[0].w_axis.y;
+            assert!((y - 0.5).abs() < 0.05, "hull {hull}: rests at {y}");
+        }
     }
 
     /// A ball falls freely (y = y0 - g t^2 / 2 until it lands, within 2%), comes to

@@ -125,7 +125,8 @@ struct DynamicGeometry {
 }
 
 impl DynamicGeometry {
-    fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings) -> Result<Self> {
+    /// The dynamic geometry of `scene`, simulated relative to `origin` (the renderer's).
+    fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, origin: Vec3) -> Result<Self> {
         use vk::BufferUsageFlags as U;
         let meshes = scene.dynamic_meshes();
         let vertex_count = scene.rigid_vertex_count() as u32;
@@ -147,7 +148,7 @@ impl DynamicGeometry {
             gpu_allocator::MemoryLocation::GpuOnly,
         )?;
         Ok(Self {
-            world: RigidWorld::new(scene, settings.sim_dt)?,
+            world: RigidWorld::relative_to(scene, settings.sim_dt, origin)?,
             objects: Buffer::with_data(ctx, "dynamic.objects", storage, bytemuck::cast_slice(&meshes.vertices))?,
             vertices: world_vertices,
             uvs: Buffer::with_data(ctx, "dynamic.uvs", storage, bytemuck::cast_slice(&meshes.uvs))?,
@@ -178,7 +179,7 @@ impl DynamicGeometry {
                 let mut base = vertex_count;
                 let mut states = Vec::new();
                 for c in &scene.cloths {
-                    states.push(ClothState::new(ctx, c, settings.sim_dt, base)?);
+                    states.push(ClothState::new(ctx, c, settings.sim_dt, base, origin)?);
                     base += c.resolution * c.resolution;
                 }
                 states
@@ -192,9 +193,9 @@ impl DynamicGeometry {
     }
 
     /// Back to the initial state: the world, the cloths, and a fresh build next frame.
-    fn reset(&mut self, origin: Vec3) -> Result<()> {
+    fn reset(&mut self) -> Result<()> {
         self.world.reset();
-        self.write_poses(origin);
+        self.write_poses();
         for c in &self.cloths {
             c.reset()?;
         }
@@ -223,18 +224,17 @@ impl DynamicGeometry {
         }
     }
 
-    /// One `sim.rigid` step (timed), its poses written for the next frame's upload,
-    /// relative to the renderer's `origin`.
-    fn step(&mut self, origin: Vec3) {
+    /// One `sim.rigid` step (timed), its poses written for the next frame's upload
+    /// (the world is simulated relative to the renderer's origin already).
+    fn step(&mut self) {
         let start = std::time::Instant::now();
         self.world.step();
         self.sim_ms = start.elapsed().as_secs_f64() * 1e3;
-        self.write_poses(origin);
+        self.write_poses();
     }
 
-    fn write_poses(&mut self, origin: Vec3) {
-        let shift = Mat4::from_translation(-origin);
-        let poses: Vec<Mat4> = self.world.poses().into_iter().map(|m| shift * m).collect();
+    fn write_poses(&mut self) {
+        let poses = self.world.poses();
         let bytes: &[u8] = bytemuck::cast_slice(&poses);
         self.poses_staging.mapped_mut().expect("CpuToGpu is mapped")[..bytes.len()].copy_from_slice(bytes);
     }
@@ -481,12 +481,12 @@ impl Renderer {
         }
         let static_bvh_build = build_timer.results()?;
         let mut dynamic = if scene.is_dynamic() {
-            Some(DynamicGeometry::new(ctx, scene, settings)?)
+            Some(DynamicGeometry::new(ctx, scene, settings, origin)?)
         } else {
             None
         };
         if let Some(d) = &mut dynamic {
-            d.write_poses(origin);
+            d.write_poses();
         }
         let extent = extent(settings);
         let view = View::of(scene).relative_to(origin);
@@ -589,7 +589,7 @@ impl Renderer {
     pub fn reset_simulation(&mut self) -> Result<()> {
         if let Some(d) = &mut self.dynamic {
             unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
-            d.reset(self.origin)?;
+            d.reset()?;
         }
         Ok(())
     }
@@ -598,10 +598,9 @@ impl Renderer {
     /// dynamic scene first advances by one time step (`sim.rigid`, CPU wall clock):
     /// frame k after a reset shows the world at time (k + 1) x `sim_dt`.
     pub fn render_frame(&mut self) -> Result<Vec<(&'static str, f64)>> {
-        let origin = self.origin;
         if let Some(d) = &mut self.dynamic {
             // The previous frame was waited for: nothing reads the staging poses now.
-            d.step(origin);
+            d.step();
         }
         let device = self.ctx.device.clone();
         let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);

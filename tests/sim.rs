@@ -116,7 +116,7 @@ fn cloth_steps_match_cpu_reference() {
     };
     let dt = 1.0 / 60.0;
     let base = 17;
-    let mut state = ClothState::new(&ctx, &cloth, dt, base).unwrap();
+    let mut state = ClothState::new(&ctx, &cloth, dt, base, Vec3::ZERO).unwrap();
     // Random displacements and velocities (pinned particles too: they just do not move).
     let mut cpu: Vec<Particle> = cloth
         .particles()

@@ -22,19 +22,35 @@ pub struct ClothState {
 }
 
 impl ClothState {
-    /// `cloth` at rest; its vertices go to the dynamic buffer from `vertex_base`.
-    pub fn new(ctx: &Arc<Context>, cloth: &Cloth, dt: f32, vertex_base: u32) -> Result<Self> {
+    /// `cloth` at rest; its vertices go to the dynamic buffer from `vertex_base`. It is
+    /// simulated relative to `origin` (the renderer's), as the rest of the frame.
+    pub fn new(ctx: &Arc<Context>, cloth: &Cloth, dt: f32, vertex_base: u32, origin: glam::Vec3) -> Result<Self> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-        let initial = cloth.particles();
+        let shift = |p: [f32; 3]| (glam::Vec3::from(p) - origin).to_array();
+        let initial: Vec<Particle> = cloth
+            .particles()
+            .into_iter()
+            .map(|p| Particle {
+                pos: shift(p.pos),
+                prev: shift(p.prev),
+                ..p
+            })
+            .collect();
         let bytes: &[u8] = bytemuck::cast_slice(&initial);
-        let spheres: Vec<[f32; 4]> = cloth.spheres.iter().map(|s| s.to_array()).collect();
+        let spheres: Vec<[f32; 4]> = cloth
+            .spheres
+            .iter()
+            .map(|s| (*s - origin.extend(0.0)).to_array())
+            .collect();
+        let mut push = cloth.push(dt, vertex_base);
+        push.floor_y -= origin.y;
         Ok(Self {
             particles: [
                 Buffer::with_data(ctx, "cloth.particles", usage, bytes)?,
                 Buffer::with_data(ctx, "cloth.particles_b", usage, bytes)?,
             ],
             spheres: Buffer::with_data(ctx, "cloth.spheres", usage, bytemuck::cast_slice(&spheres))?,
-            push: cloth.push(dt, vertex_base),
+            push,
             passes: cloth.passes(),
             initial,
         })

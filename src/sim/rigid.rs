@@ -33,9 +33,15 @@ pub struct RigidWorld {
 impl RigidWorld {
     /// The world of `scene` at its initial state, stepped `dt` seconds at a time.
     pub fn new(scene: &Scene, dt: f32) -> Result<Self> {
+        Self::relative_to(scene, dt, Vec3::ZERO)
+    }
+
+    /// `new` in coordinates relative to `origin` (the renderer's: a scene far from the
+    /// world origin keeps its precision); `poses` are then relative too.
+    pub fn relative_to(scene: &Scene, dt: f32, origin: Vec3) -> Result<Self> {
         let mut bodies = RigidBodySet::new();
         let mut colliders = ColliderSet::new();
-        let vertices: Vec<Vector> = scene.vertices.iter().map(|v| Vec3::from(v.position)).collect();
+        let vertices: Vec<Vector> = scene.vertices.iter().map(|v| Vec3::from(v.position) - origin).collect();
         let triangles: Vec<[u32; 3]> = scene.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
         let ground = ColliderBuilder::trimesh(vertices, triangles)
             .map_err(|e| Error::BadGeometry {
@@ -48,7 +54,7 @@ impl RigidWorld {
         let mut handles = Vec::with_capacity(scene.bodies.len());
         for b in &scene.bodies {
             let body = RigidBodyBuilder::dynamic()
-                .translation(b.position)
+                .translation(b.position - origin)
                 .rotation(b.rotation.to_scaled_axis())
                 .linvel(b.velocity)
                 .angvel(b.angular_velocity)

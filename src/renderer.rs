@@ -63,18 +63,33 @@ pub const SCOPES: [&str; 20] = [
     FRAME,
 ];
 
-/// The scene's buffers and textures on the GPU.
-struct SceneBuffers {
+/// Indexed triangles on the GPU, as the raster passes draw them and the BVH builder and
+/// traversal read them: world-space vertices (relative to the renderer's origin), their
+/// texture coordinates, indices.
+struct MeshBuffers {
     vertices: Buffer,
     uvs: Buffer,
     indices: Buffer,
-    materials: Buffer,
-    textures: Image,
-    texture_sampler: Sampler,
     index_count: u32,
 }
 
-impl SceneBuffers {
+impl MeshBuffers {
+    /// `vertices` (already made) with `uvs` and `indices` uploaded beside them.
+    fn new(ctx: &Arc<Context>, name: &str, vertices: Buffer, uvs: &[[f32; 2]], indices: &[u32]) -> Result<Self> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            vertices,
+            uvs: Buffer::with_data(ctx, &format!("{name}.uvs"), storage, bytemuck::cast_slice(uvs))?,
+            indices: Buffer::with_data(
+                ctx,
+                &format!("{name}.indices"),
+                vk::BufferUsageFlags::INDEX_BUFFER | storage,
+                bytemuck::cast_slice(indices),
+            )?,
+            index_count: indices.len() as u32,
+        })
+    }
+
     fn geometry(&self) -> SceneGeometry<'_> {
         SceneGeometry {
             vertices: &self.vertices,
@@ -84,11 +99,30 @@ impl SceneBuffers {
         }
     }
 
+    /// The triangles as the BVH builder and the traversal read them.
+    fn triangles(&self) -> Geometry<'_> {
+        Geometry {
+            vertices: &self.vertices,
+            indices: &self.indices,
+            tri_count: self.index_count / 3,
+        }
+    }
+}
+
+/// The scene's buffers and textures on the GPU.
+struct SceneBuffers {
+    mesh: MeshBuffers,
+    materials: Buffer,
+    textures: Image,
+    texture_sampler: Sampler,
+}
+
+impl SceneBuffers {
     /// The surfaces, with the dynamic geometry's texture coordinates when there is any.
     fn surfaces<'a>(&'a self, dynamic: Option<&'a DynamicGeometry>) -> Surfaces<'a> {
         Surfaces {
             materials: &self.materials,
-            uvs: [&self.uvs, dynamic.map_or(&self.uvs, |d| &d.uvs)],
+            uvs: [&self.mesh.uvs, dynamic.map_or(&self.mesh.uvs, |d| &d.mesh.uvs)],
             textures: &self.textures,
             sampler: &self.texture_sampler,
         }
@@ -102,15 +136,13 @@ impl SceneBuffers {
 struct DynamicGeometry {
     world: RigidWorld,
     objects: Buffer,
-    vertices: Buffer,
-    uvs: Buffer,
-    indices: Buffer,
+    /// The world-space vertices `sim.transform` and `sim.cloth` write.
+    mesh: MeshBuffers,
     poses_staging: Buffer,
     poses: Buffer,
     bvh: Bvh,
     /// Vertices `sim.transform` moves (the rigid bodies'); the cloths' follow.
     vertex_count: u32,
-    index_count: u32,
     cloths: Vec<ClothState>,
     /// Refit the BVH instead of rebuilding it (cloth only, unless `cloth_rebuild`),
     /// rebuilding every `rebuild_every` frames all the same.
@@ -129,7 +161,7 @@ impl DynamicGeometry {
     fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, origin: Vec3) -> Result<Self> {
         use vk::BufferUsageFlags as U;
         let meshes = scene.dynamic_meshes();
-        let vertex_count = scene.rigid_vertex_count() as u32;
+        let vertex_count = meshes.rigid_vertices as u32;
         ctx.check_limit(
             || "the dynamic geometry".to_string(),
             vertex_count as u64,
@@ -150,14 +182,7 @@ impl DynamicGeometry {
         Ok(Self {
             world: RigidWorld::relative_to(scene, settings.sim_dt, origin)?,
             objects: Buffer::with_data(ctx, "dynamic.objects", storage, bytemuck::cast_slice(&meshes.vertices))?,
-            vertices: world_vertices,
-            uvs: Buffer::with_data(ctx, "dynamic.uvs", storage, bytemuck::cast_slice(&meshes.uvs))?,
-            indices: Buffer::with_data(
-                ctx,
-                "dynamic.indices",
-                U::INDEX_BUFFER | storage,
-                bytemuck::cast_slice(&meshes.indices),
-            )?,
+            mesh: MeshBuffers::new(ctx, "dynamic", world_vertices, &meshes.uvs, &meshes.indices)?,
             poses_staging: Buffer::new(
                 ctx,
                 "dynamic.poses_staging",
@@ -174,7 +199,6 @@ impl DynamicGeometry {
             )?,
             bvh: Bvh::new(ctx, tris, MortonBits::Bits30)?,
             vertex_count,
-            index_count: meshes.indices.len() as u32,
             cloths: {
                 let mut base = vertex_count;
                 let mut states = Vec::new();
@@ -204,23 +228,10 @@ impl DynamicGeometry {
         Ok(())
     }
 
-    fn geometry(&self) -> SceneGeometry<'_> {
-        SceneGeometry {
-            vertices: &self.vertices,
-            uvs: &self.uvs,
-            indices: &self.indices,
-            index_count: self.index_count,
-        }
-    }
-
     fn traceable(&self) -> Traceable<'_> {
         Traceable {
             bvh: &self.bvh,
-            geometry: Geometry {
-                vertices: &self.vertices,
-                indices: &self.indices,
-                tri_count: self.bvh.tri_count,
-            },
+            geometry: self.mesh.triangles(),
         }
     }
 
@@ -257,13 +268,13 @@ impl DynamicGeometry {
                 unsafe { d.cmd_copy_buffer(cmd, self.poses_staging.raw, self.poses.raw, &[region]) };
                 // RAW: the transform reads the poses just copied.
                 barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ);
-                transform.record(cmd, &self.objects, &self.poses, &self.vertices, self.vertex_count);
+                transform.record(cmd, &self.objects, &self.poses, &self.mesh.vertices, self.vertex_count);
             });
         }
         if !self.cloths.is_empty() {
             timer.scope(cmd, crate::passes::sim_cloth::NAME, || {
                 for c in &self.cloths {
-                    cloth.record(cmd, c, &self.vertices);
+                    cloth.record(cmd, c, &self.mesh.vertices);
                 }
             });
         }
@@ -443,19 +454,12 @@ impl Renderer {
                 .collect::<Vec<_>>();
             &shifted
         };
+        let vertices = Buffer::with_data(ctx, "scene.vertices", storage, bytemuck::cast_slice(vertices))?;
         let scene_buffers = SceneBuffers {
-            vertices: Buffer::with_data(ctx, "scene.vertices", storage, bytemuck::cast_slice(vertices))?,
-            uvs: Buffer::with_data(ctx, "scene.uvs", storage, bytemuck::cast_slice(&scene.uvs))?,
-            indices: Buffer::with_data(
-                ctx,
-                "scene.indices",
-                vk::BufferUsageFlags::INDEX_BUFFER | storage,
-                bytemuck::cast_slice(&scene.indices),
-            )?,
+            mesh: MeshBuffers::new(ctx, "scene", vertices, &scene.uvs, &scene.indices)?,
             materials: Buffer::with_data(ctx, "scene.materials", storage, bytemuck::cast_slice(&materials))?,
             textures: upload_textures(ctx, scene)?,
             texture_sampler: Sampler::trilinear_repeat(ctx, "scene.texture_sampler")?,
-            index_count: scene.indices.len() as u32,
         };
         let frame_ubo = Buffer::new(
             ctx,
@@ -465,20 +469,13 @@ impl Renderer {
             gpu_allocator::MemoryLocation::GpuOnly,
         )?;
         // The static BVH, once: the scene has no dynamic geometry yet.
-        let static_bvh = Bvh::new(ctx, scene_buffers.index_count / 3, MortonBits::Bits30)?;
+        let static_bvh = Bvh::new(ctx, scene_buffers.mesh.index_count / 3, MortonBits::Bits30)?;
         let mut build_timer = GpuTimer::new(ctx, 8)?;
         let builder = LbvhBuilder::new(ctx)?;
-        {
-            let geometry = Geometry {
-                vertices: &scene_buffers.vertices,
-                indices: &scene_buffers.indices,
-                tri_count: static_bvh.tri_count,
-            };
-            ctx.one_shot(|cmd| {
-                build_timer.reset(cmd);
-                builder.record_build(cmd, &mut build_timer, geometry, &static_bvh);
-            })?;
-        }
+        ctx.one_shot(|cmd| {
+            build_timer.reset(cmd);
+            builder.record_build(cmd, &mut build_timer, scene_buffers.mesh.triangles(), &static_bvh);
+        })?;
         let static_bvh_build = build_timer.results()?;
         let mut dynamic = if scene.is_dynamic() {
             Some(DynamicGeometry::new(ctx, scene, settings, origin)?)
@@ -580,7 +577,7 @@ impl Renderer {
     pub fn read_dynamic_vertices(&self) -> Result<Option<Vec<crate::gpu_types::GpuVertex>>> {
         self.dynamic
             .as_ref()
-            .map(|d| Ok(bytemuck::pod_collect_to_vec(&d.vertices.read()?)))
+            .map(|d| Ok(bytemuck::pod_collect_to_vec(&d.mesh.vertices.read()?)))
             .transpose()
     }
 
@@ -660,8 +657,8 @@ impl Renderer {
             dy.record(d, cmd, timer, (transform, cloth, builder));
         }
         let dynamic = dynamic.as_ref();
-        let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.geometry())
-            .chain(dynamic.map(|dy| dy.geometry()))
+        let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.mesh.geometry())
+            .chain(dynamic.map(|dy| dy.mesh.geometry()))
             .collect();
         timer.scope(cmd, shadow_map::NAME, || shadow.record(cmd, ubo, &geometries));
         let surfaces = scene.surfaces(dynamic);
@@ -692,11 +689,7 @@ impl Renderer {
                 scene: TraceScene {
                     static_bvh: Some(Traceable {
                         bvh: static_bvh,
-                        geometry: Geometry {
-                            vertices: &scene.vertices,
-                            indices: &scene.indices,
-                            tri_count: static_bvh.tri_count,
-                        },
+                        geometry: scene.mesh.triangles(),
                     }),
                     dynamic_bvh: dynamic.map(|dy| dy.traceable()),
                 },

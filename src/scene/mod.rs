@@ -200,7 +200,9 @@ impl Spawn {
 /// `object` is its body's index; triangles index these vertices.
 #[derive(Clone, Debug, Default)]
 pub struct DynamicMeshes {
+    /// The rigid bodies' vertices first (`rigid_vertices` of them), then the cloths'.
     pub vertices: Vec<GpuVertex>,
+    pub rigid_vertices: usize,
     pub uvs: Vec<[f32; 2]>,
     pub indices: Vec<u32>,
 }
@@ -457,12 +459,6 @@ impl Scene {
         }
     }
 
-    /// Vertices of the rigid bodies' meshes (the first of `dynamic_meshes`; the cloths'
-    /// follow).
-    pub fn rigid_vertex_count(&self) -> usize {
-        self.bodies.iter().map(|b| self.body_mesh(b).positions.len()).sum()
-    }
-
     /// The bodies' meshes in their own spaces, concatenated (`DynamicMeshes`).
     pub fn dynamic_meshes(&self) -> DynamicMeshes {
         let mut out = DynamicMeshes::default();
@@ -480,6 +476,7 @@ impl Scene {
             }
             out.indices.extend(mesh.indices.iter().map(|t| base + t));
         }
+        out.rigid_vertices = out.vertices.len();
         for c in &self.cloths {
             let base = out.vertices.len() as u32;
             let (indices, uvs) = c.mesh();

@@ -109,19 +109,10 @@ impl Textures {
     }
 }
 
-/// A material of the MTL file `mtl` (for messages; textures resolve against `dir`),
-/// and the warning its out-of-range values raise, if any.
-fn convert_material(
-    m: &tobj::Material,
-    dir: &Path,
-    mtl: &Path,
-    textures: &mut dyn FnMut(PathBuf) -> Result<Option<u32>>,
-) -> Result<(Material, Option<String>)> {
+/// A material of the MTL file `mtl` (for messages) with its `map_Kd` texture, already
+/// loaded, and the warning its out-of-range values raise, if any.
+fn convert_material(m: &tobj::Material, mtl: &Path, texture: Option<u32>) -> Result<(Material, Option<String>)> {
     let mut albedo = Vec3::from(m.diffuse.unwrap_or([0.8; 3]));
-    let texture = match m.diffuse_texture.as_deref().and_then(texture_file) {
-        Some(file) => textures(dir.join(file))?,
-        None => None,
-    };
     let roughness = mtl_number(m, "Pr")
         .or_else(|| m.shininess.map(|ns| (2.0 / (ns.max(0.0) + 2.0)).sqrt()))
         .unwrap_or(0.8);
@@ -274,11 +265,12 @@ pub fn load(path: &Path) -> Result<Scene> {
     let mut ids = Vec::new();
     let mut textures = Textures::default();
     for m in &materials {
-        let mut texture_warnings = Vec::new();
-        let (material, warning) = convert_material(m, &dir, &mtl, &mut |path| {
-            textures.get(&mut b, path, &mut texture_warnings)
-        })?;
-        warnings.extend(texture_warnings);
+        // Textures resolve against the OBJ's folder.
+        let texture = match m.diffuse_texture.as_deref().and_then(texture_file) {
+            Some(file) => textures.get(&mut b, dir.join(file), &mut warnings)?,
+            None => None,
+        };
+        let (material, warning) = convert_material(m, &mtl, texture)?;
         ids.push(b.material(material));
         warnings.extend(warning);
     }

@@ -44,10 +44,10 @@ impl Image {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
     ) -> Result<Self> {
-        Self::create(ctx, name, extent, format, usage, (1, 1))
+        Self::create(ctx, name, extent, format, usage, (1, 1), vk::ImageViewType::TYPE_2D)
     }
 
-    /// `new` with (array layers, mip levels); more than one layer gets a 2D-array view.
+    /// `new` with (array layers, mip levels) and the view's type.
     fn create(
         ctx: &Arc<Context>,
         name: &str,
@@ -55,6 +55,7 @@ impl Image {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
         (layers, mips): (u32, u32),
+        view_type: vk::ImageViewType,
     ) -> Result<Self> {
         if extent.width == 0 || extent.height == 0 {
             return Err(Error::Settings(format!(
@@ -128,11 +129,7 @@ impl Image {
         unsafe { ctx.device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
-            .view_type(if layers > 1 {
-                vk::ImageViewType::TYPE_2D_ARRAY
-            } else {
-                vk::ImageViewType::TYPE_2D
-            })
+            .view_type(view_type)
             .format(format)
             .subresource_range(
                 vk::ImageSubresourceRange::default()
@@ -178,23 +175,15 @@ impl Image {
         };
         let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
         let format = vk::Format::R8G8B8A8_SRGB;
-        let mut image = Self::create(ctx, name, extent, format, usage, (layers.len().max(1) as u32, mips))?;
-        if layers.len() == 1 {
-            // One layer: the plain view above is 2D; sampler2DArray needs a 2D array view.
-            unsafe { ctx.device.destroy_image_view(image.view, None) };
-            let info = vk::ImageViewCreateInfo::default()
-                .image(image.raw)
-                .view_type(vk::ImageViewType::TYPE_2D_ARRAY)
-                .format(format)
-                .subresource_range(
-                    vk::ImageSubresourceRange::default()
-                        .aspect_mask(image.aspect)
-                        .level_count(mips)
-                        .layer_count(1),
-                );
-            image.view = unsafe { ctx.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
-            ctx.set_name(image.view, name);
-        }
+        let image = Self::create(
+            ctx,
+            name,
+            extent,
+            format,
+            usage,
+            (layers.len().max(1) as u32, mips),
+            vk::ImageViewType::TYPE_2D_ARRAY,
+        )?;
         let mut data = Vec::new();
         let mut regions = Vec::new();
         for (layer, chain) in layers.iter().enumerate() {

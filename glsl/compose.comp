@@ -15,12 +15,17 @@ layout(binding = 5) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encod
 layout(binding = 6) uniform sampler2D gb_depth;
 layout(binding = 7) uniform usampler2D gb_material;
 layout(binding = 8, std430) readonly buffer Materials { Material materials[]; };
+layout(binding = 9, r32ui) uniform readonly uimage2D fail_mask; // read by COMPOSE_FAIL_MASK
 
 layout(push_constant) uniform ComposePush {
     uvec2 size;
     float exposure;
-    uint mode; // COMPOSE_PLAIN, COMPOSE_REFLECT or COMPOSE_PROVENANCE
+    uint mode; // COMPOSE_PLAIN, COMPOSE_REFLECT, COMPOSE_PROVENANCE or COMPOSE_FAIL_MASK
+    float reflective_min; // COMPOSE_FAIL_MASK: which pixels reflect
 } pc;
+
+const uint FAIL_COLOURS[8] = uint[](MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3,
+                                    MASK_COLOUR_4, MASK_COLOUR_5, MASK_COLOUR_6, MASK_COLOUR_7);
 
 // Beyond 7.24 the ACES fit is flat at 1, and clamping its input here keeps x * x far
 // from f32 overflow (near 1.8e19, where inf / inf would give NaN): e.g. exposure 1e20.
@@ -34,6 +39,17 @@ vec3 aces(vec3 x) {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(p, ivec2(pc.size)))) {
+        return;
+    }
+    if (pc.mode == COMPOSE_FAIL_MASK) {
+        // Mirrored by ReflectionMaps::fail_mask_rgba: black where nothing reflects,
+        // dark blue where SSR answered, else the colour of the lowest reason bit.
+        uint rgb = 0u;
+        if (texelFetch(gb_material, p, 0).r != MATERIAL_NONE && texelFetch(gb_normal, p, 0).w > pc.reflective_min) {
+            uint m = imageLoad(fail_mask, p).r;
+            rgb = m == 0u ? MASK_COLOUR_SSR_OK : FAIL_COLOURS[uint(findLSB(m)) % 8u];
+        }
+        imageStore(ldr, p, vec4(unpackUnorm4x8(rgb).rgb, 1.0));
         return;
     }
     vec3 c = imageLoad(hdr, p).rgb;

@@ -3,7 +3,8 @@
 
 use crate::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
-    FAIL_OUT_OF_STEPS,
+    FAIL_OUT_OF_STEPS, MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3, MASK_COLOUR_4, MASK_COLOUR_5,
+    MASK_COLOUR_6, MASK_COLOUR_7, MASK_COLOUR_SSR_OK,
 };
 use std::collections::BTreeMap;
 
@@ -81,20 +82,25 @@ impl ReflectionMaps {
     }
 }
 
-/// Colour of a reflective pixel SSR answered, in `--fail-mask` images.
-pub const SSR_OK_COLOUR: [u8; 3] = [30, 50, 140];
-/// Colour of each fail reason in `--fail-mask` images, indexed by bit position (the
-/// order of `FAIL_REASONS`): yellow, orange, red, magenta, cyan, green, white, light
-/// blue (an SSR hit blended with the ray tracer's).
+const fn unpack(c: u32) -> [u8; 3] {
+    [c as u8, (c >> 8) as u8, (c >> 16) as u8]
+}
+
+/// Colour of a reflective pixel SSR answered, in `--fail-mask` images and the demo's
+/// fail-mask view (`compose`'s `COMPOSE_FAIL_MASK`, which this mirrors).
+pub const SSR_OK_COLOUR: [u8; 3] = unpack(MASK_COLOUR_SSR_OK);
+/// Colour of each fail reason, indexed by bit position (the order of
+/// `FAIL_REASONS`): yellow, orange, red, magenta, cyan, green, white, light blue (an
+/// SSR hit blended with the ray tracer's).
 pub const FAIL_COLOURS: [[u8; 3]; 8] = [
-    [240, 220, 40],
-    [250, 130, 20],
-    [220, 30, 30],
-    [230, 40, 230],
-    [40, 220, 230],
-    [40, 200, 60],
-    [255, 255, 255],
-    [120, 170, 255],
+    unpack(MASK_COLOUR_0),
+    unpack(MASK_COLOUR_1),
+    unpack(MASK_COLOUR_2),
+    unpack(MASK_COLOUR_3),
+    unpack(MASK_COLOUR_4),
+    unpack(MASK_COLOUR_5),
+    unpack(MASK_COLOUR_6),
+    unpack(MASK_COLOUR_7),
 ];
 
 /// Names of the fail-mask reason bits, for reports.

@@ -138,7 +138,9 @@ struct DynamicGeometry {
     objects: Buffer,
     /// The world-space vertices `sim.transform` and `sim.cloth` write.
     mesh: MeshBuffers,
-    poses_staging: Buffer,
+    /// The poses as the host writes them, one buffer per frame slot (a frame in
+    /// flight still copies from its own while the next one's are written).
+    poses_staging: Vec<Buffer>,
     poses: Buffer,
     bvh: Bvh,
     /// Vertices `sim.transform` moves (the rigid bodies'); the cloths' follow.
@@ -183,13 +185,7 @@ impl DynamicGeometry {
             world: RigidWorld::relative_to(scene, settings.sim_dt, origin)?,
             objects: Buffer::with_data(ctx, "dynamic.objects", storage, bytemuck::cast_slice(&meshes.vertices))?,
             mesh: MeshBuffers::new(ctx, "dynamic", world_vertices, &meshes.uvs, &meshes.indices)?,
-            poses_staging: Buffer::new(
-                ctx,
-                "dynamic.poses_staging",
-                pose_bytes,
-                U::TRANSFER_SRC,
-                gpu_allocator::MemoryLocation::CpuToGpu,
-            )?,
+            poses_staging: vec![pose_staging(ctx, pose_bytes)?],
             poses: Buffer::new(
                 ctx,
                 "dynamic.poses",
@@ -219,7 +215,9 @@ impl DynamicGeometry {
     /// Back to the initial state: the world, the cloths, and a fresh build next frame.
     fn reset(&mut self) -> Result<()> {
         self.world.reset();
-        self.write_poses();
+        for slot in 0..self.poses_staging.len() {
+            self.write_poses(slot);
+        }
         for c in &self.cloths {
             c.reset()?;
         }
@@ -237,17 +235,17 @@ impl DynamicGeometry {
 
     /// One `sim.rigid` step (timed), its poses written for the next frame's upload
     /// (the world is simulated relative to the renderer's origin already).
-    fn step(&mut self) {
+    fn step(&mut self, slot: usize) {
         let start = std::time::Instant::now();
         self.world.step();
         self.sim_ms = start.elapsed().as_secs_f64() * 1e3;
-        self.write_poses();
+        self.write_poses(slot);
     }
 
-    fn write_poses(&mut self) {
+    fn write_poses(&mut self, slot: usize) {
         let poses = self.world.poses();
         let bytes: &[u8] = bytemuck::cast_slice(&poses);
-        self.poses_staging.mapped_mut().expect("CpuToGpu is mapped")[..bytes.len()].copy_from_slice(bytes);
+        self.poses_staging[slot].mapped_mut().expect("CpuToGpu is mapped")[..bytes.len()].copy_from_slice(bytes);
     }
 
     /// Records `sim.transform` (the poses copied in first), the cloths' step
@@ -256,6 +254,7 @@ impl DynamicGeometry {
         &mut self,
         d: &ash::Device,
         cmd: vk::CommandBuffer,
+        slot: usize,
         timer: &mut GpuTimer,
         passes: (&SimTransformPass, &ClothPass, &LbvhBuilder),
     ) {
@@ -265,7 +264,7 @@ impl DynamicGeometry {
                 // WAR: the previous frame's transform read the poses before they change.
                 barrier::global(d, cmd, access::COMPUTE_READ, access::TRANSFER_WRITE);
                 let region = vk::BufferCopy::default().size(self.poses.size);
-                unsafe { d.cmd_copy_buffer(cmd, self.poses_staging.raw, self.poses.raw, &[region]) };
+                unsafe { d.cmd_copy_buffer(cmd, self.poses_staging[slot].raw, self.poses.raw, &[region]) };
                 // RAW: the transform reads the poses just copied.
                 barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ);
                 transform.record(cmd, &self.objects, &self.poses, &self.mesh.vertices, self.vertex_count);
@@ -292,6 +291,32 @@ impl DynamicGeometry {
                 self.schedule = None;
             }
         }
+    }
+}
+
+fn pose_staging(ctx: &Arc<Context>, bytes: u64) -> Result<Buffer> {
+    Buffer::new(
+        ctx,
+        "dynamic.poses_staging",
+        bytes,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        gpu_allocator::MemoryLocation::CpuToGpu,
+    )
+}
+
+/// What one frame in flight owns: its timestamp queries and the host's step time.
+struct FrameSlot {
+    timer: GpuTimer,
+    /// Wall-clock milliseconds of the `sim.rigid` step recorded into this slot's frame.
+    sim_ms: Option<f64>,
+}
+
+impl FrameSlot {
+    fn new(ctx: &Arc<Context>) -> Result<Self> {
+        Ok(Self {
+            timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
+            sim_ms: None,
+        })
     }
 }
 
@@ -379,7 +404,11 @@ pub struct Renderer {
     transform: SimTransformPass,
     cloth: ClothPass,
     builder: LbvhBuilder,
-    timer: GpuTimer,
+    /// One per frame that may be in flight (`set_frames_in_flight`); `render_frame`
+    /// uses the first.
+    slots: Vec<FrameSlot>,
+    /// Paint the fail mask instead of the frame (`set_fail_mask_view`).
+    fail_mask_view: bool,
     cmd: vk::CommandBuffer,
 }
 
@@ -483,7 +512,7 @@ impl Renderer {
             None
         };
         if let Some(d) = &mut dynamic {
-            d.write_poses();
+            d.write_poses(0);
         }
         let extent = extent(settings);
         let view = View::of(scene).relative_to(origin);
@@ -509,7 +538,8 @@ impl Renderer {
             transform: SimTransformPass::new(ctx)?,
             cloth: ClothPass::new(ctx)?,
             builder,
-            timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
+            slots: vec![FrameSlot::new(ctx)?],
+            fail_mask_view: false,
             cmd: ctx.allocate_command_buffer()?,
         })
     }
@@ -531,25 +561,110 @@ impl Renderer {
     /// Renders at a new resolution from the next frame on: every screen-sized image and
     /// list is recreated (the static BVH and the shadow map are kept). Waits for the GPU.
     pub fn resize(&mut self, width: u32, height: u32) -> Result<()> {
-        let settings = Settings {
+        self.set_settings(Settings {
             width,
             height,
             ..self.settings.clone()
-        };
+        })
+    }
+
+    /// Whether `settings` differ from the current ones in a field only a new renderer
+    /// can apply: the time step and BVH policy of a dynamic scene (its simulation is
+    /// made with them). Every other field `set_settings` applies in place.
+    pub fn needs_new_renderer(&self, settings: &Settings) -> bool {
+        let s = &self.settings;
+        self.is_dynamic()
+            && (s.sim_dt != settings.sim_dt
+                || s.cloth_rebuild != settings.cloth_rebuild
+                || s.refit_rebuild_every != settings.refit_rebuild_every)
+    }
+
+    /// Applies `settings` from the next frame on, after checking them (nothing changes
+    /// when they are refused): a new resolution recreates every screen-sized image and
+    /// list, a new shadow-map size or slope bias the shadow map (both wait for the
+    /// GPU); the other fields are read as each frame is recorded. The fields of
+    /// `needs_new_renderer` are refused here.
+    pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         settings.validate()?;
         crate::limits::check_frame(&self.ctx, &settings)?;
-        unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
-        let e = extent(&settings);
-        self.gbuffer.resize(e)?;
-        self.light.resize(e)?;
-        self.ssr.resize(e)?;
-        self.compact.resize(e)?;
-        self.rt.resize(e)?;
-        self.merge.resize(e)?;
-        self.compose.resize(e)?;
+        if self.needs_new_renderer(&settings) {
+            return Err(crate::Error::Settings(
+                "sim_dt, cloth_rebuild and refit_rebuild_every of a dynamic scene need a new renderer".into(),
+            ));
+        }
+        let old = &self.settings;
+        if (old.width, old.height) != (settings.width, settings.height) {
+            unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
+            let e = extent(&settings);
+            self.gbuffer.resize(e)?;
+            self.light.resize(e)?;
+            self.ssr.resize(e)?;
+            self.compact.resize(e)?;
+            self.rt.resize(e)?;
+            self.merge.resize(e)?;
+            self.compose.resize(e)?;
+        }
+        if (old.shadow_map_size, old.shadow_slope_bias) != (settings.shadow_map_size, settings.shadow_slope_bias) {
+            unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
+            self.shadow =
+                shadow_map::ShadowMapPass::new(&self.ctx, settings.shadow_map_size, settings.shadow_slope_bias)?;
+        }
         self.settings = settings;
         self.uniforms = view_uniforms(&self.view, &self.settings);
         Ok(())
+    }
+
+    /// The camera, in world space.
+    pub fn camera(&self) -> Camera {
+        let mut c = self.view.camera;
+        c.position += self.origin;
+        c.target += self.origin;
+        c
+    }
+
+    /// Views the scene through `camera` (world space) from the next frame on.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.view.camera = Camera {
+            position: camera.position - self.origin,
+            target: camera.target - self.origin,
+            ..camera
+        };
+        self.uniforms = view_uniforms(&self.view, &self.settings);
+    }
+
+    /// Paints each reflective pixel by its fail-mask reason instead of the frame (as
+    /// `--fail-mask` images do), in the modes that reflect; `raster` has no fail mask
+    /// and is shown as it is.
+    pub fn set_fail_mask_view(&mut self, on: bool) {
+        self.fail_mask_view = on;
+    }
+
+    /// Whether the fail-mask view is on (`set_fail_mask_view`).
+    pub fn fail_mask_view(&self) -> bool {
+        self.fail_mask_view
+    }
+
+    /// Frames that may be in flight at once (the demo's 2): each gets its own
+    /// timestamp queries and pose staging, indexed by `slot` in `record_frame`.
+    pub fn set_frames_in_flight(&mut self, n: usize) -> Result<()> {
+        let n = n.max(1);
+        unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
+        self.slots.truncate(n);
+        while self.slots.len() < n {
+            self.slots.push(FrameSlot::new(&self.ctx)?);
+        }
+        if let Some(d) = &mut self.dynamic {
+            d.poses_staging.truncate(n);
+            while d.poses_staging.len() < n {
+                d.poses_staging.push(pose_staging(&self.ctx, d.poses.size)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// Frames that may be in flight at once.
+    pub fn frames_in_flight(&self) -> usize {
+        self.slots.len()
     }
 
     /// Whether the scene moves (has bodies): each frame then advances it by `sim_dt`.
@@ -595,10 +710,6 @@ impl Renderer {
     /// dynamic scene first advances by one time step (`sim.rigid`, CPU wall clock):
     /// frame k after a reset shows the world at time (k + 1) x `sim_dt`.
     pub fn render_frame(&mut self) -> Result<Vec<(&'static str, f64)>> {
-        if let Some(d) = &mut self.dynamic {
-            // The previous frame was waited for: nothing reads the staging poses now.
-            d.step();
-        }
         let device = self.ctx.device.clone();
         let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         unsafe {
@@ -609,24 +720,46 @@ impl Renderer {
                 .begin_command_buffer(self.cmd, &begin)
                 .vk("vkBeginCommandBuffer")?;
         }
-        self.record(self.cmd);
+        self.record_frame(self.cmd, 0);
         unsafe { device.end_command_buffer(self.cmd) }.vk("vkEndCommandBuffer")?;
         self.ctx.submit_and_wait(self.cmd)?;
+        self.frame_finished(0)
+    }
+
+    /// Records one frame into `cmd` (begun, not ended), with frame slot `slot`'s
+    /// queries and staging: a dynamic scene first advances by one time step. The
+    /// caller submits it, and must have seen the slot's previous frame finish (a
+    /// fence) before; several slots' frames may be in flight on the queue at once.
+    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
         if let Some(d) = &mut self.dynamic {
-            // A refit BVH's schedule, from the tree this frame built.
+            // The slot's previous frame has finished: nothing reads its staging poses.
+            d.step(slot);
+            self.slots[slot].sim_ms = Some(d.sim_ms);
+        }
+        self.record(cmd, slot);
+    }
+
+    /// After the frame recorded with `slot` has finished on the GPU: its time per
+    /// scope (ms). The first frame after a rebuild of a refit BVH also makes the refit
+    /// schedule here, from the built tree (waiting for the GPU: every frame recorded
+    /// without a schedule rebuilds, so the tree then is the last one built).
+    pub fn frame_finished(&mut self, slot: usize) -> Result<Vec<(&'static str, f64)>> {
+        if let Some(d) = &mut self.dynamic {
             if d.refit && d.schedule.is_none() {
+                unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
                 d.schedule = Some(RefitSchedule::of(&self.ctx, &d.bvh)?);
             }
         }
-        let mut times = self.timer.results()?;
-        if let Some(d) = &self.dynamic {
-            times.push((SIM_RIGID, d.sim_ms));
+        let s = &mut self.slots[slot];
+        let mut times = s.timer.results()?;
+        if let Some(ms) = s.sim_ms.take() {
+            times.push((SIM_RIGID, ms));
         }
         Ok(times)
     }
 
     /// Records one frame into `cmd`: DESIGN.md's frame table, pass by pass.
-    fn record(&mut self, cmd: vk::CommandBuffer) {
+    fn record(&mut self, cmd: vk::CommandBuffer, slot: usize) {
         let Self {
             ctx,
             settings: st,
@@ -646,15 +779,17 @@ impl Renderer {
             transform,
             cloth,
             builder,
-            timer,
+            slots,
+            fail_mask_view,
             ..
         } = self;
+        let timer = &mut slots[slot].timer;
         let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.targets);
         timer.reset(cmd);
         timer.begin(cmd, FRAME);
         timer.scope(cmd, UNIFORMS, || upload_uniforms(d, cmd, ubo, uniforms));
         if let Some(dy) = dynamic.as_mut() {
-            dy.record(d, cmd, timer, (transform, cloth, builder));
+            dy.record(d, cmd, slot, timer, (transform, cloth, builder));
         }
         let dynamic = dynamic.as_ref();
         let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.mesh.geometry())
@@ -716,9 +851,12 @@ impl Renderer {
             reflection: merge.reflection(),
             gbuffer: g,
             materials: &scene.materials,
+            fail_mask: &ssr.out.mask,
+            reflective_min: st.reflective_min,
         };
         let compose_mode = match mode {
             Mode::Raster => ComposeMode::Plain,
+            _ if *fail_mask_view => ComposeMode::FailMask,
             Mode::Provenance => ComposeMode::Provenance,
             Mode::Ssr | Mode::Hybrid | Mode::Rt => ComposeMode::Reflect,
         };

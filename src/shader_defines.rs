@@ -120,6 +120,27 @@ pub const SOURCE_RT: u32 = 2;
 pub const COMPOSE_PLAIN: u32 = 0;
 pub const COMPOSE_REFLECT: u32 = 1;
 pub const COMPOSE_PROVENANCE: u32 = 2;
+/// ... or paint each reflective pixel by its fail-mask reason (the demo's fail-mask
+/// view; the same colours as `--fail-mask` images).
+pub const COMPOSE_FAIL_MASK: u32 = 3;
+
+/// An sRGB colour packed as r | g << 8 | b << 16 (GLSL: `unpackUnorm4x8(c).rgb`).
+pub const fn rgb8(r: u8, g: u8, b: u8) -> u32 {
+    r as u32 | (g as u32) << 8 | (b as u32) << 16
+}
+/// Fail-mask colours (`--fail-mask` images and the demo's view): a reflective pixel
+/// SSR answered is dark blue; a failed one is coloured by its lowest reason bit:
+/// yellow, orange, red, magenta, cyan, green, white, light blue (an SSR hit blended
+/// with the ray tracer's).
+pub const MASK_COLOUR_SSR_OK: u32 = rgb8(30, 50, 140);
+pub const MASK_COLOUR_0: u32 = rgb8(240, 220, 40);
+pub const MASK_COLOUR_1: u32 = rgb8(250, 130, 20);
+pub const MASK_COLOUR_2: u32 = rgb8(220, 30, 30);
+pub const MASK_COLOUR_3: u32 = rgb8(230, 40, 230);
+pub const MASK_COLOUR_4: u32 = rgb8(40, 220, 230);
+pub const MASK_COLOUR_5: u32 = rgb8(40, 200, 60);
+pub const MASK_COLOUR_6: u32 = rgb8(255, 255, 255);
+pub const MASK_COLOUR_7: u32 = rgb8(120, 170, 255);
 
 /// Every constant above, as `(name, value)`, in the form build.rs hands to shaderc.
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
@@ -160,4 +181,14 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("COMPOSE_PLAIN", COMPOSE_PLAIN),
     ("COMPOSE_REFLECT", COMPOSE_REFLECT),
     ("COMPOSE_PROVENANCE", COMPOSE_PROVENANCE),
+    ("COMPOSE_FAIL_MASK", COMPOSE_FAIL_MASK),
+    ("MASK_COLOUR_SSR_OK", MASK_COLOUR_SSR_OK),
+    ("MASK_COLOUR_0", MASK_COLOUR_0),
+    ("MASK_COLOUR_1", MASK_COLOUR_1),
+    ("MASK_COLOUR_2", MASK_COLOUR_2),
+    ("MASK_COLOUR_3", MASK_COLOUR_3),
+    ("MASK_COLOUR_4", MASK_COLOUR_4),
+    ("MASK_COLOUR_5", MASK_COLOUR_5),
+    ("MASK_COLOUR_6", MASK_COLOUR_6),
+    ("MASK_COLOUR_7", MASK_COLOUR_7),
 ];

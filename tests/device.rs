@@ -23,6 +23,7 @@ fn unknown_device_is_a_clear_error() {
         let err = Context::new(&ContextDesc {
             validation: false,
             device: Some(wanted.into()),
+            ..Default::default()
         })
         .err()
         .expect("no device should match");
@@ -39,6 +40,7 @@ fn device_selects_by_index_and_name() {
     let by_index = Context::new(&ContextDesc {
         validation: false,
         device: Some(first.index.to_string()),
+        ..Default::default()
     })
     .unwrap();
     assert_eq!(by_index.device_name, first.name);
@@ -46,6 +48,7 @@ fn device_selects_by_index_and_name() {
     let by_name = Context::new(&ContextDesc {
         validation: false,
         device: Some(needle),
+        ..Default::default()
     })
     .unwrap();
     assert!(by_name

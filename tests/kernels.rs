@@ -87,12 +87,27 @@ fn compose_matches_cpu_reference() {
     let frame = speculum::renderer::frame_uniforms(&scene, &settings);
     let ubo = common::frame_ubo(&ctx, &frame);
     let pass = ComposePass::new(&ctx, extent).unwrap();
+    // A random fail mask: 0 (SSR answered), single reasons and several bits at once.
+    let mask: Vec<u32> = (0..n)
+        .map(|_| match rng.random_range(0..4) {
+            0 => 0,
+            1 => 1 << rng.random_range(0..8),
+            _ => rng.random_range(1..256),
+        })
+        .collect();
+    let fail_mask = Image::storage(&ctx, "test.fail_mask", extent, speculum::passes::ssr_trace::MASK_FORMAT).unwrap();
+    fail_mask
+        .write(bytemuck::cast_slice(&mask), vk::ImageLayout::GENERAL)
+        .unwrap();
+    let reflective_min = 0.3;
     let inputs = speculum::passes::compose::ComposeInputs {
         frame: &ubo,
         hdr: &hdr,
         reflection: &reflection,
         gbuffer: &gb,
         materials: &materials_buffer,
+        fail_mask: &fail_mask,
+        reflective_min,
     };
     use speculum::passes::compose::ComposeMode;
     for mode in [ComposeMode::Plain, ComposeMode::Reflect] {
@@ -131,6 +146,25 @@ fn compose_matches_cpu_reference() {
         }
         println!("compose {mode:?}: worst difference {worst} LSB");
     }
+    // The fail-mask view paints exactly what `--fail-mask` images (the CPU) do.
+    let poison = vec![0x5au8; n * 4];
+    pass.ldr.write(&poison, vk::ImageLayout::GENERAL).unwrap();
+    ctx.one_shot(|cmd| pass.record(cmd, &inputs, exposure, ComposeMode::FailMask))
+        .unwrap();
+    let gpu = pass.ldr.read(vk::ImageLayout::GENERAL).unwrap();
+    let maps = speculum::reflection_maps::ReflectionMaps {
+        reflective: (0..n)
+            .map(|i| g.material[i] != MATERIAL_NONE && g.normal[i][3] > reflective_min)
+            .collect(),
+        mask,
+        traced: true,
+    };
+    let reflective = maps.reflective.iter().filter(|r| **r).count();
+    assert!(
+        reflective > n / 4 && reflective < n,
+        "{reflective} of {n} pixels reflect"
+    );
+    assert_eq!(gpu, maps.fail_mask_rgba(), "fail-mask view");
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -100,11 +100,20 @@ fn frame_uniforms_layout_matches_glsl() {
 #[test]
 fn compose_push_layout_matches_glsl() {
     let r = reflected(shaders::COMPOSE_COMP);
-    check(&r, "ComposePush", rust_layout!(ComposePush { size, exposure, mode }));
+    check(
+        &r,
+        "ComposePush",
+        rust_layout!(ComposePush {
+            size,
+            exposure,
+            mode,
+            reflective_min
+        }),
+    );
 }
 
 /// The push-constant block's size is reflected (pipelines check their push type
-/// against it): 16 B for compose, 4 B for the fit's triangle count, none for
+/// against it): 20 B for compose, 4 B for the fit's triangle count, none for
 /// light.direct.
 #[test]
 fn push_block_sizes_are_reflected() {

@@ -169,3 +169,64 @@ fn resize_renders_what_a_fresh_renderer_renders() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+/// Settings applied in place (a new shadow-map size, bounce count, SSR budget) and a
+/// moved camera render what a fresh renderer made with them renders; the fail-mask
+/// view paints exactly the CPU's `--fail-mask` image of the same frame.
+#[test]
+fn live_settings_camera_and_fail_mask_view_match_a_fresh_renderer() {
+    let ctx = common::context();
+    let scene = speculum::scene::builtin::mirrors().unwrap();
+    let base = Settings {
+        width: 72,
+        height: 48,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, &base).unwrap();
+    r.render_frame().unwrap();
+    let before = r.read_output().unwrap();
+    let changed = Settings {
+        shadow_map_size: 512,
+        max_bounces: 1,
+        ssr_max_steps: 8,
+        shadow_slope_bias: 0.5,
+        ..base.clone()
+    };
+    assert!(!r.needs_new_renderer(&changed));
+    r.set_settings(changed.clone()).unwrap();
+    let mut camera = r.camera();
+    assert_eq!(camera, scene.camera, "the camera is given in world space");
+    camera.position += Vec3::new(0.7, 0.2, -0.4);
+    r.set_camera(camera);
+    r.render_frame().unwrap();
+    let live = r.read_output().unwrap();
+    assert!(live != before, "the changes change the image");
+    let mut moved = scene.clone();
+    moved.camera = camera;
+    let mut fresh = Renderer::new(&ctx, &moved, &changed).unwrap();
+    fresh.render_frame().unwrap();
+    assert!(
+        live == fresh.read_output().unwrap(),
+        "live changes render as a fresh renderer"
+    );
+    // A refused change changes nothing.
+    let bad = Settings {
+        max_bounces: 0,
+        ..changed.clone()
+    };
+    assert!(r.set_settings(bad).is_err());
+    assert_eq!(r.settings(), &changed);
+
+    r.set_fail_mask_view(true);
+    r.render_frame().unwrap();
+    let maps = r.reflection_maps().unwrap();
+    let failed = maps
+        .mask
+        .iter()
+        .zip(&maps.reflective)
+        .filter(|(m, r)| **m != 0 && **r)
+        .count();
+    assert!(failed > 0 && failed < maps.reflective.iter().filter(|r| **r).count());
+    assert!(r.read_output().unwrap() == maps.fail_mask_rgba(), "fail-mask view");
+    common::assert_no_validation_messages(&ctx);
+}

@@ -30,6 +30,7 @@ impl GpuArgs {
         Ok(Context::new(&ContextDesc {
             validation,
             device: self.device.clone(),
+            ..Default::default()
         })?)
     }
 }

@@ -3,7 +3,7 @@
 
 use super::gbuffer::GBuffer;
 use crate::error::Result;
-use crate::shader_defines::{COMPOSE_PLAIN, COMPOSE_PROVENANCE, COMPOSE_REFLECT};
+use crate::shader_defines::{COMPOSE_FAIL_MASK, COMPOSE_PLAIN, COMPOSE_PROVENANCE, COMPOSE_REFLECT};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
@@ -24,6 +24,8 @@ pub enum ComposeMode {
     Reflect,
     /// Each pixel painted by the source of its reflection.
     Provenance,
+    /// Each reflective pixel painted by its fail-mask reason (`ReflectionMaps::fail_mask_rgba`).
+    FailMask,
 }
 
 impl ComposeMode {
@@ -33,6 +35,7 @@ impl ComposeMode {
             ComposeMode::Plain => COMPOSE_PLAIN,
             ComposeMode::Reflect => COMPOSE_REFLECT,
             ComposeMode::Provenance => COMPOSE_PROVENANCE,
+            ComposeMode::FailMask => COMPOSE_FAIL_MASK,
         }
     }
 }
@@ -43,8 +46,10 @@ impl ComposeMode {
 pub struct ComposePush {
     pub size: [u32; 2],
     pub exposure: f32,
-    /// `COMPOSE_PLAIN`, `COMPOSE_REFLECT` or `COMPOSE_PROVENANCE`.
+    /// `COMPOSE_PLAIN`, `COMPOSE_REFLECT`, `COMPOSE_PROVENANCE` or `COMPOSE_FAIL_MASK`.
     pub mode: u32,
+    /// `COMPOSE_FAIL_MASK`: reflectivity above which a pixel reflects.
+    pub reflective_min: f32,
 }
 
 /// The reflection and the surface data compose weighs it with.
@@ -57,6 +62,10 @@ pub struct ComposeInputs<'a> {
     /// materials (metallic), for the reflection's Fresnel weight.
     pub gbuffer: &'a GBuffer,
     pub materials: &'a Buffer,
+    /// The SSR fail mask (`GENERAL`); read by `FailMask` only.
+    pub fail_mask: &'a Image,
+    /// `FailMask`: reflectivity above which a pixel reflects (`Settings::reflective_min`).
+    pub reflective_min: f32,
 }
 
 pub struct ComposePass {
@@ -92,6 +101,7 @@ impl ComposePass {
             size: [e.width, e.height],
             exposure,
             mode: mode.code(),
+            reflective_min: inputs.reflective_min,
         };
         // WAR: earlier copies out of the LDR image finish before it is overwritten.
         barrier::global(d, cmd, access::TRANSFER_READ, access::COMPUTE_WRITE);
@@ -107,6 +117,7 @@ impl ComposePass {
                 Resource::Sampled(&inputs.gbuffer.depth, &self.sampler),
                 Resource::Sampled(&inputs.gbuffer.material, &self.sampler),
                 Resource::Buffer(inputs.materials),
+                Resource::StorageImage(inputs.fail_mask),
             ],
             &push,
             Groups::Cover([e.width, e.height, 1]),

@@ -24,6 +24,25 @@ pub struct ContextDesc {
     /// Pick a device by index (as `speculum devices` lists) or by a case-insensitive
     /// substring of its name; `None` prefers a discrete GPU and falls back to a CPU one.
     pub device: Option<String>,
+    /// A window to present to (the demo): the instance gets the surface extensions
+    /// its platform needs, the context creates its surface (`Context::surface`), the
+    /// device gets `VK_KHR_swapchain`, and a device whose queue cannot present to it
+    /// is refused. The window must outlive the context.
+    pub window: Option<WindowHandles>,
+}
+
+/// A window's raw display and window handles (`raw-window-handle`), for `ContextDesc`.
+#[derive(Clone, Copy, Debug)]
+pub struct WindowHandles {
+    pub display: raw_window_handle::RawDisplayHandle,
+    pub window: raw_window_handle::RawWindowHandle,
+}
+
+/// The window surface of a context made for one (`ContextDesc::window`).
+pub struct Surface {
+    pub loader: ash::khr::surface::Instance,
+    pub raw: vk::SurfaceKHR,
+    pub swapchain: ash::khr::swapchain::Device,
 }
 
 /// One physical device as `speculum devices` shows it.
@@ -106,6 +125,8 @@ pub struct Context {
     validation: bool,
     allocator: ManuallyDrop<Mutex<Allocator>>,
     command_pool: vk::CommandPool,
+    /// The window's surface when the context was made for one.
+    pub surface: Option<Surface>,
 }
 
 unsafe extern "system" fn debug_callback(
@@ -139,7 +160,11 @@ fn load_entry() -> Result<ash::Entry> {
     unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))
 }
 
-fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instance, bool)> {
+fn create_instance(
+    entry: &ash::Entry,
+    validation: bool,
+    window: Option<&WindowHandles>,
+) -> Result<(ash::Instance, bool)> {
     let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
     let has_layer = layers
         .iter()
@@ -163,11 +188,16 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instanc
     } else {
         vec![]
     };
-    let ext_names = if has_debug_utils {
+    let mut ext_names = if has_debug_utils {
         vec![ash::ext::debug_utils::NAME.as_ptr()]
     } else {
         vec![]
     };
+    if let Some(w) = window {
+        let needed = ash_window::enumerate_required_extensions(w.display)
+            .map_err(|e| Error::NoDevice(format!("this window system has no Vulkan surface support: {e}")))?;
+        ext_names.extend_from_slice(needed);
+    }
     let enabled = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
     let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled);
     let mut info = vk::InstanceCreateInfo::default()
@@ -254,7 +284,7 @@ fn describe(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceI
 /// Lists the physical devices, usable or not, in the order `--device INDEX` counts them.
 pub fn list_devices() -> Result<Vec<DeviceInfo>> {
     let entry = load_entry()?;
-    let (instance, _) = create_instance(&entry, false)?;
+    let (instance, _) = create_instance(&entry, false, None)?;
     let list = describe(&instance);
     unsafe { instance.destroy_instance(None) };
     Ok(list?.into_iter().map(|(_, info)| info).collect())
@@ -311,7 +341,7 @@ impl Context {
     /// Creates the instance, picks a device and creates the queue and allocator.
     pub fn new(desc: &ContextDesc) -> Result<std::sync::Arc<Self>> {
         let entry = load_entry()?;
-        let (instance, has_debug_utils) = create_instance(&entry, desc.validation)?;
+        let (instance, has_debug_utils) = create_instance(&entry, desc.validation, desc.window.as_ref())?;
         // From here on, a failure must destroy the instance: build the rest in a helper.
         // `entry` (the loaded library) must outlive the instance destroyed below.
         match Self::with_instance(entry.clone(), instance.clone(), has_debug_utils, desc) {
@@ -355,10 +385,45 @@ impl Context {
             }
         };
 
+        let surface = match &desc.window {
+            Some(w) => {
+                let loader = ash::khr::surface::Instance::new(&entry, &instance);
+                let raw = unsafe { ash_window::create_surface(&entry, &instance, w.display, w.window, None) }
+                    .vk("vkCreate*SurfaceKHR")
+                    .inspect_err(|_| destroy_messenger(&debug_instance))?;
+                Some((loader, raw))
+            }
+            None => None,
+        };
+        let destroy_messenger = |d: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
+            if let Some((loader, raw)) = &surface {
+                unsafe { loader.destroy_surface(*raw, None) };
+            }
+            destroy_messenger(d)
+        };
         let list = describe(&instance).inspect_err(|_| destroy_messenger(&debug_instance))?;
         let chosen = select(&list, desc.device.as_deref()).inspect_err(|_| destroy_messenger(&debug_instance))?;
         let (physical_device, info) = list[chosen].clone();
         let queue_family = check_device(&instance, physical_device).expect("checked by select");
+        if let Some((loader, raw)) = &surface {
+            let presents = unsafe { loader.get_physical_device_surface_support(physical_device, queue_family, *raw) }
+                .unwrap_or(false);
+            let has_swapchain = unsafe { instance.enumerate_device_extension_properties(physical_device) }
+                .unwrap_or_default()
+                .iter()
+                .any(|e| {
+                    e.extension_name_as_c_str()
+                        .is_ok_and(|n| n == ash::khr::swapchain::NAME)
+                });
+            if !presents || !has_swapchain {
+                destroy_messenger(&debug_instance);
+                return Err(Error::NoDevice(format!(
+                    "device '{}' cannot present to this window (its graphics+compute queue has no present support{})",
+                    info.name,
+                    if has_swapchain { "" } else { ", no VK_KHR_swapchain" }
+                )));
+            }
+        }
         let props = unsafe { instance.get_physical_device_properties(physical_device) };
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
@@ -371,7 +436,10 @@ impl Context {
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
-        let dev_exts = [ash::khr::push_descriptor::NAME.as_ptr()];
+        let mut dev_exts = vec![ash::khr::push_descriptor::NAME.as_ptr()];
+        if surface.is_some() {
+            dev_exts.push(ash::khr::swapchain::NAME.as_ptr());
+        }
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
             .dynamic_rendering(true);
@@ -421,6 +489,11 @@ impl Context {
             }
         };
 
+        let surface = surface.map(|(loader, raw)| Surface {
+            loader,
+            raw,
+            swapchain: ash::khr::swapchain::Device::new(&instance, &device),
+        });
         Ok(Self {
             entry,
             instance,
@@ -444,6 +517,7 @@ impl Context {
             validation: desc.validation,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             command_pool,
+            surface,
         })
     }
 
@@ -549,6 +623,9 @@ impl Drop for Context {
             self.device.destroy_command_pool(self.command_pool, None);
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
+            if let Some(s) = &self.surface {
+                s.loader.destroy_surface(s.raw, None);
+            }
             if let Some((loader, messenger)) = &self.debug_instance {
                 loader.destroy_debug_utils_messenger(*messenger, None);
             }

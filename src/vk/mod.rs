@@ -9,7 +9,7 @@ pub mod spirv;
 pub mod timing;
 
 pub use buffer::Buffer;
-pub use context::{list_devices, Context, ContextDesc, DeviceInfo};
+pub use context::{list_devices, Context, ContextDesc, DeviceInfo, Surface, WindowHandles};
 pub use image::{Image, Sampler};
 pub use pipeline::{GraphicsDesc, Groups, Pipeline, Resource, Shader};
 pub use timing::{GpuTimer, Timings};

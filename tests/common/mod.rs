@@ -11,6 +11,7 @@ pub fn context() -> Arc<Context> {
     Context::new(&ContextDesc {
         validation: true,
         device: std::env::var("SPECULUM_TEST_DEVICE").ok(),
+        ..Default::default()
     })
     .expect("a Vulkan device with validation layers (run tools/test, which installs them)")
 }

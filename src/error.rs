@@ -49,6 +49,9 @@ pub enum Error {
     /// Inputs that cannot be used together (e.g. images of different sizes).
     #[error("{0}")]
     Input(String),
+    /// The demo's window could not be opened or driven (no display, a window-system error).
+    #[error("window: {0}")]
+    Window(String),
     /// A scene name that no built-in scene has.
     #[error(
         "unknown scene '{name}' (built-in scenes: {known}; or give a path to a .toml scene file or an .obj, .gltf, .glb or .ply model)"

@@ -10,6 +10,7 @@
 pub mod aabb;
 pub mod bench;
 pub mod cpu_ref;
+pub mod demo;
 pub mod error;
 pub mod gpu_types;
 pub mod headless;

@@ -1,5 +1,5 @@
-//! The `speculum` command line: `render` (headless, the default), `bench`, `compare`,
-//! `settings` and `devices`. Each command lives in `cli/`.
+//! The `speculum` command line: `render` (headless, the default), `demo` (the window),
+//! `bench`, `compare`, `settings` and `devices`. Each command lives in `cli/`.
 
 mod cli;
 
@@ -27,6 +27,8 @@ struct Cli {
 enum Command {
     /// Render a scene headless to a PNG and report per-pass GPU timings.
     Render(Box<RenderArgs>),
+    /// Open a window: the scene live, with a HUD of timings and every setting.
+    Demo(Box<cli::demo::DemoArgs>),
     /// List the Vulkan devices, in the order --device INDEX counts them.
     Devices,
     /// SSIM (on luma; Gaussian 11x11, sigma 1.5) and RMSE (RGB, [0, 1]) of two PNGs.
@@ -104,6 +106,7 @@ fn main() {
     let result = match cli.command {
         None => cli::render::run(RenderArgs::defaults()),
         Some(Command::Render(args)) => cli::render::run(*args),
+        Some(Command::Demo(args)) => cli::demo::run(*args),
         Some(Command::Devices) => devices(),
         Some(Command::Compare(args)) => cli::compare::run(args),
         Some(Command::Bench(command)) => cli::bench::run(command),

@@ -409,6 +409,9 @@ pub struct Renderer {
     slots: Vec<FrameSlot>,
     /// Paint the fail mask instead of the frame (`set_fail_mask_view`).
     fail_mask_view: bool,
+    /// Hold a dynamic scene still (`set_paused`); `step_once` advances one frame.
+    paused: bool,
+    step_once: bool,
     cmd: vk::CommandBuffer,
 }
 
@@ -540,6 +543,8 @@ impl Renderer {
             builder,
             slots: vec![FrameSlot::new(ctx)?],
             fail_mask_view: false,
+            paused: false,
+            step_once: false,
             cmd: ctx.allocate_command_buffer()?,
         })
     }
@@ -731,12 +736,31 @@ impl Renderer {
     /// caller submits it, and must have seen the slot's previous frame finish (a
     /// fence) before; several slots' frames may be in flight on the queue at once.
     pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
+        let advance = !self.paused || std::mem::take(&mut self.step_once);
         if let Some(d) = &mut self.dynamic {
-            // The slot's previous frame has finished: nothing reads its staging poses.
-            d.step(slot);
-            self.slots[slot].sim_ms = Some(d.sim_ms);
+            if advance {
+                // The slot's previous frame has finished: nothing reads its staging poses.
+                d.step(slot);
+                self.slots[slot].sim_ms = Some(d.sim_ms);
+            }
         }
-        self.record(cmd, slot);
+        self.record(cmd, slot, advance);
+    }
+
+    /// Holds a dynamic scene still from the next frame on (its geometry and BVH stay
+    /// as the last frame left them), or lets it move again.
+    pub fn set_paused(&mut self, paused: bool) {
+        self.paused = paused;
+    }
+
+    /// Whether the dynamic scene is held still.
+    pub fn paused(&self) -> bool {
+        self.paused
+    }
+
+    /// While paused, advances the next frame by one time step.
+    pub fn step_once(&mut self) {
+        self.step_once = true;
     }
 
     /// After the frame recorded with `slot` has finished on the GPU: its time per
@@ -759,7 +783,7 @@ impl Renderer {
     }
 
     /// Records one frame into `cmd`: DESIGN.md's frame table, pass by pass.
-    fn record(&mut self, cmd: vk::CommandBuffer, slot: usize) {
+    fn record(&mut self, cmd: vk::CommandBuffer, slot: usize, advance: bool) {
         let Self {
             ctx,
             settings: st,
@@ -788,7 +812,7 @@ impl Renderer {
         timer.reset(cmd);
         timer.begin(cmd, FRAME);
         timer.scope(cmd, UNIFORMS, || upload_uniforms(d, cmd, ubo, uniforms));
-        if let Some(dy) = dynamic.as_mut() {
+        if let Some(dy) = dynamic.as_mut().filter(|_| advance) {
             dy.record(d, cmd, slot, timer, (transform, cloth, builder));
         }
         let dynamic = dynamic.as_ref();

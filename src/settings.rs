@@ -201,6 +201,37 @@ impl Settings {
         serde_json::from_str(text).map_err(|e| Error::Settings(e.to_string()))
     }
 
+    /// The names of the fields, in declaration order.
+    pub fn field_names() -> Vec<String> {
+        match serde_json::to_value(Settings::default()) {
+            Ok(serde_json::Value::Object(map)) => map.keys().cloned().collect(),
+            _ => unreachable!("Settings serialize to an object"),
+        }
+    }
+
+    /// These settings with field `name` set to `value`, checked: the value is JSON
+    /// (`3`, `0.5`, `true`) or, for the mode, its name (`hybrid`). The one path by
+    /// which the demo's HUD and scripts change a setting; an unknown field, a value
+    /// of the wrong type or one `validate` refuses is an error naming the field.
+    pub fn with_field(&self, name: &str, value: &str) -> Result<Settings> {
+        let serde_json::Value::Object(mut map) = serde_json::to_value(self).expect("Settings serialize") else {
+            unreachable!("Settings serialize to an object")
+        };
+        if !map.contains_key(name) {
+            return Err(Error::Settings(format!(
+                "unknown setting '{name}' (settings: {})",
+                Self::field_names().join(", ")
+            )));
+        }
+        let parsed =
+            serde_json::from_str(value.trim()).unwrap_or_else(|_| serde_json::Value::String(value.trim().into()));
+        map.insert(name.into(), parsed);
+        let s: Settings = serde_json::from_value(serde_json::Value::Object(map))
+            .map_err(|e| Error::Settings(format!("{name} = {value}: {e}")))?;
+        s.validate()?;
+        Ok(s)
+    }
+
     /// Checks the values that do not depend on the device.
     pub fn validate(&self) -> Result<()> {
         let side = |what: &str, v: u32| -> Result<()> {
@@ -335,6 +366,33 @@ mod tests {
         assert!(e.contains("JSON object") && e.contains("array"), "{e}");
         let s = Settings::from_json("{\"height\": 100}").unwrap();
         assert_eq!((s.width, s.height), (Settings::default().width, 100));
+    }
+
+    #[test]
+    fn with_field_sets_one_field_or_names_the_problem() {
+        let d = Settings::default();
+        let s = d.with_field("max_bounces", "2").unwrap();
+        assert_eq!(
+            s,
+            Settings {
+                max_bounces: 2,
+                ..d.clone()
+            }
+        );
+        assert_eq!(d.with_field("mode", "rt").unwrap().mode, Mode::Rt);
+        assert_eq!(d.with_field("ssr_stride", "2.5").unwrap().ssr_stride, 2.5);
+        assert!(d.with_field("shadow_rays", "true").unwrap().shadow_rays);
+        for (name, value, says) in [
+            ("bounces", "2", "unknown setting 'bounces'"),
+            ("max_bounces", "many", "max_bounces"),
+            ("max_bounces", "0", "max_bounces 0"),
+            ("mode", "shiny", "mode"),
+            ("width", "-3", "width"),
+        ] {
+            let e = d.with_field(name, value).unwrap_err().to_string();
+            assert!(e.contains(says), "{name} = {value}: {e}");
+        }
+        assert_eq!(Settings::field_names().len(), 24);
     }
 
     #[test]

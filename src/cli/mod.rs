@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod compare;
+pub mod demo;
 pub mod render;
 
 use anyhow::{Context as _, Result};
@@ -153,7 +154,7 @@ pub fn check_validation(ctx: &Context) -> Result<()> {
     Ok(())
 }
 
-fn validation_from_env() -> bool {
+pub fn validation_from_env() -> bool {
     std::env::var("SPECULUM_VALIDATION").is_ok_and(|v| !v.is_empty() && v != "0")
 }
 

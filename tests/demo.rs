@@ -1,0 +1,333 @@
+//! The windowed demo, driven by scripts under an X server (Xvfb), with validation on.
+//! Its own test binary (`harness = false`): winit allows one event loop per process on
+//! the main thread, so each case runs the `speculum` binary as a child.
+//!
+//! Uses `$DISPLAY` when it names a working server, else starts `Xvfb`; when neither is
+//! possible every case is skipped with a message saying so (exit 0).
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// An X server for the cases: the caller's, or an Xvfb this test started.
+struct Display {
+    name: String,
+    xvfb: Option<Child>,
+}
+
+impl Drop for Display {
+    fn drop(&mut self) {
+        if let Some(x) = &mut self.xvfb {
+            let _ = x.kill();
+            let _ = x.wait();
+        }
+    }
+}
+
+fn display_works(name: &str) -> bool {
+    // An X server listens on /tmp/.X11-unix/X<n> for display :<n>.
+    let n = name.trim_start_matches(':').split('.').next().unwrap_or("");
+    Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
+}
+
+fn find_display() -> Result<Display, String> {
+    if let Ok(name) = std::env::var("DISPLAY") {
+        if display_works(&name) {
+            return Ok(Display { name, xvfb: None });
+        }
+    }
+    for n in 90..110 {
+        let name = format!(":{n}");
+        if display_works(&name) || Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+            continue;
+        }
+        let child = Command::new("Xvfb")
+            .args([name.as_str(), "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .map_err(|e| format!("cannot start Xvfb ({e}); install xvfb"))?;
+        let display = Display {
+            name: name.clone(),
+            xvfb: Some(child),
+        };
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(10) {
+            if display_works(&name) {
+                return Ok(display);
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        return Err(format!("Xvfb {name} did not start within 10 s"));
+    }
+    Err("no free X display number in :90..:109".into())
+}
+
+struct Run {
+    ok: bool,
+    stderr: String,
+    stdout: String,
+}
+
+/// Runs `speculum demo --validation` with `args` on `display`.
+fn demo(display: &Display, args: &[&str]) -> Run {
+    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
+        .arg("demo")
+        .arg("--validation")
+        .args(args)
+        .env("DISPLAY", &display.name)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("runs the speculum binary");
+    Run {
+        ok: out.status.success(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+    }
+}
+
+/// The run succeeded and the validation layer said nothing (leaked objects at exit
+/// included: they are reported when the device is destroyed).
+fn assert_clean(run: &Run, what: &str) {
+    assert!(run.ok, "{what} failed:\n{}", run.stderr);
+    let messages: Vec<&str> = run.stderr.lines().filter(|l| l.contains("[vulkan")).collect();
+    assert!(
+        messages.is_empty(),
+        "{what}: validation messages:\n{}",
+        messages.join("\n")
+    );
+}
+
+fn script(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn png(path: &Path) -> image::RgbaImage {
+    speculum::metrics::load_rgba(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Every mode in turn, a screenshot in each; the hybrid one is what `speculum render`
+/// makes of the same view and settings.
+fn modes_match_render(display: &Display, dir: &Path) {
+    let mut text = String::from("wait 2\n");
+    for k in 1..=5 {
+        text += &format!("key {k}\nwait 2\nscreenshot {}/mode{k}.png\n", dir.display());
+    }
+    text += &format!("key 3\nkey f\nwait 2\nscreenshot {}/failmask.png\n", dir.display());
+    let s = script(dir, "modes.txt", &text);
+    let run = demo(
+        display,
+        &[
+            "--scene",
+            "mirrors",
+            "--width",
+            "320",
+            "--height",
+            "180",
+            "--script",
+            s.to_str().unwrap(),
+        ],
+    );
+    assert_clean(&run, "the modes script");
+    let shots: Vec<image::RgbaImage> = (1..=5).map(|k| png(&dir.join(format!("mode{k}.png")))).collect();
+    for (k, shot) in shots.iter().enumerate() {
+        assert_eq!(shot.dimensions(), (320, 180), "mode {}", k + 1);
+        let meta = json(&dir.join(format!("mode{}.json", k + 1)));
+        let want = speculum::settings::Mode::ALL[k].name();
+        assert_eq!(meta["mode"], want);
+    }
+    for a in 0..5 {
+        for b in a + 1..5 {
+            // ssr and hybrid agree where SSR answers; every other pair differs widely.
+            assert!(shots[a] != shots[b], "modes {} and {} look the same", a + 1, b + 1);
+        }
+    }
+    assert!(
+        png(&dir.join("failmask.png")) != shots[2],
+        "the fail-mask view differs from the frame"
+    );
+
+    let meta = json(&dir.join("mode3.json"));
+    let v = |key: &str| {
+        let a = meta["camera"][key].as_array().unwrap();
+        format!("{},{},{}", a[0], a[1], a[2])
+    };
+    let out = dir.join("render_hybrid.png");
+    let r = Command::new(env!("CARGO_BIN_EXE_speculum"))
+        .args([
+            "render", "--scene", "mirrors", "--mode", "hybrid", "--width", "320", "--height", "180",
+        ])
+        .args(["--frames", "1", "--warmup", "0", "--quiet"])
+        .arg(format!("--camera-pos={}", v("position")))
+        .arg(format!("--camera-target={}", v("target")))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let c = speculum::metrics::compare_files(&dir.join("mode3.png"), &out).unwrap();
+    println!(
+        "demo hybrid screenshot vs render: SSIM {:.5}, RMSE {:.5}",
+        c.ssim, c.rmse
+    );
+    assert!(c.ssim >= 0.99, "SSIM {} against render", c.ssim);
+}
+
+/// 50 resizes to random sizes (1x1 among them) and 10 minimize/restore cycles, then
+/// a screenshot that is not blank; no validation message throughout.
+fn resize_storm(display: &Display, dir: &Path) {
+    let mut rng = 0x2545F491u32;
+    let mut next = |n: u32| {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        rng % n
+    };
+    let mut text = String::from("wait 2\n");
+    for i in 0..50 {
+        let (w, h) = if i % 10 == 3 {
+            (1, 1)
+        } else {
+            (1 + next(700), 1 + next(500))
+        };
+        text += &format!("resize {w} {h}\nwait {}\n", 1 + next(2));
+        if i % 5 == 0 {
+            text += "minimize\nwait 2\nrestore\nwait 1\n";
+        }
+    }
+    text += &format!("resize 400 240\nwait 3\nscreenshot {}/storm.png\n", dir.display());
+    let s = script(dir, "storm.txt", &text);
+    let run = demo(
+        display,
+        &[
+            "--width",
+            "320",
+            "--height",
+            "180",
+            "--script",
+            s.to_str().unwrap(),
+            "--verbose",
+        ],
+    );
+    assert_clean(&run, "the resize storm");
+    let recreations = run.stderr.lines().filter(|l| l.contains("demo: swapchain ")).count();
+    assert!(
+        recreations >= 30,
+        "only {recreations} swapchain recreations:\n{}",
+        run.stderr
+    );
+    let shot = png(&dir.join("storm.png"));
+    assert_eq!(shot.dimensions(), (400, 240));
+    let luma: Vec<f64> = speculum::metrics::luma(shot.as_raw());
+    let mean = luma.iter().sum::<f64>() / luma.len() as f64;
+    let var = luma.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / luma.len() as f64;
+    assert!(
+        mean > 0.05 && var > 1e-3,
+        "blank screenshot: mean {mean}, variance {var}"
+    );
+}
+
+/// The HUD's setting path (`set`): bounces, SSR budget and resolution change the image.
+fn settings_change_the_image(display: &Display, dir: &Path) {
+    let d = dir.display();
+    let text = format!(
+        "wait 2\nscreenshot {d}/base.png\nset max_bounces 1\nwait 2\nscreenshot {d}/bounces.png\n\
+         set max_bounces 3\nset ssr_max_steps 4\nwait 2\nscreenshot {d}/steps.png\n\
+         set ssr_max_steps 64\nset width 240\nwait 2\nscreenshot {d}/width.png\n\
+         save-settings {d}/saved.json\n"
+    );
+    let s = script(dir, "settings.txt", &text);
+    let run = demo(
+        display,
+        &[
+            "--scene",
+            "mirrors",
+            "--width",
+            "320",
+            "--height",
+            "180",
+            "--script",
+            s.to_str().unwrap(),
+        ],
+    );
+    assert_clean(&run, "the settings script");
+    let base = png(&dir.join("base.png"));
+    assert!(png(&dir.join("bounces.png")) != base, "max_bounces changes the image");
+    assert!(png(&dir.join("steps.png")) != base, "ssr_max_steps changes the image");
+    assert_eq!(
+        png(&dir.join("width.png")).dimensions(),
+        (240, 180),
+        "the width changes the size"
+    );
+    let saved = std::fs::read_to_string(dir.join("saved.json")).unwrap();
+    let s = speculum::Settings::from_json(&saved).unwrap();
+    assert_eq!(
+        (s.width, s.max_bounces, s.ssr_max_steps),
+        (240, 3, 64),
+        "save-settings writes what render reads"
+    );
+}
+
+/// A bad script is refused with its line before a window opens; a bad setting in it
+/// fails the run when its step comes, naming the setting; a missing script is named.
+fn bad_scripts_are_refused(display: &Display, dir: &Path) {
+    for (text, says) in [
+        ("wait 2\njump 3\n", "script line 2"),
+        ("wait 2\nset max_bounces 0\n", "max_bounces 0"),
+        ("wait 2\nset no_such_setting 1\n", "unknown setting"),
+    ] {
+        let s = script(dir, "bad.txt", text);
+        let run = demo(
+            display,
+            &["--width", "160", "--height", "90", "--script", s.to_str().unwrap()],
+        );
+        assert!(!run.ok, "{text:?} ran");
+        assert!(run.stderr.contains(says), "{text:?}: {}", run.stderr);
+    }
+    let run = demo(display, &["--script", "/no/such/script.txt"]);
+    assert!(!run.ok && run.stderr.contains("demo script"), "{}", run.stderr);
+    let _ = run.stdout;
+}
+
+/// One case: a display and a folder of its own.
+type Case = fn(&Display, &Path);
+
+fn main() {
+    // `cargo test -- --list` and filters: this binary has one test.
+    let args: Vec<String> = std::env::args().collect();
+    if args.iter().any(|a| a == "--list") {
+        println!("demo: test");
+        return;
+    }
+    let display = match find_display() {
+        Ok(d) => d,
+        Err(why) => {
+            println!("demo tests skipped: no X server ({why})");
+            return;
+        }
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, Case); 4] = [
+        ("modes_match_render", modes_match_render),
+        ("resize_storm", resize_storm),
+        ("settings_change_the_image", settings_change_the_image),
+        ("bad_scripts_are_refused", bad_scripts_are_refused),
+    ];
+    let filter: Vec<&String> = args.iter().skip(1).filter(|a| !a.starts_with('-')).collect();
+    for (name, case) in cases {
+        if !filter.is_empty() && !filter.iter().any(|f| name.contains(f.as_str())) {
+            continue;
+        }
+        let start = Instant::now();
+        let sub = dir.path().join(name);
+        std::fs::create_dir_all(&sub).unwrap();
+        case(&display, &sub);
+        println!("test demo::{name} ... ok ({:.1} s)", start.elapsed().as_secs_f64());
+    }
+}

@@ -104,6 +104,17 @@ fn script(dir: &Path, name: &str, text: &str) -> PathBuf {
     p
 }
 
+/// Writes `text` as a script, runs the demo on it with `args`, and checks the run is
+/// clean; its output.
+fn scripted(display: &Display, dir: &Path, what: &str, text: &str, args: &[&str]) -> Run {
+    let s = script(dir, &format!("{what}.txt"), text);
+    let mut all = args.to_vec();
+    all.extend(["--script", s.to_str().unwrap()]);
+    let run = demo(display, &all);
+    assert_clean(&run, what);
+    run
+}
+
 fn png(path: &Path) -> image::RgbaImage {
     speculum::metrics::load_rgba(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
@@ -120,21 +131,13 @@ fn modes_match_render(display: &Display, dir: &Path) {
         text += &format!("key {k}\nwait 2\nscreenshot {}/mode{k}.png\n", dir.display());
     }
     text += &format!("key 3\nkey f\nwait 2\nscreenshot {}/failmask.png\n", dir.display());
-    let s = script(dir, "modes.txt", &text);
-    let run = demo(
+    scripted(
         display,
-        &[
-            "--scene",
-            "mirrors",
-            "--width",
-            "320",
-            "--height",
-            "180",
-            "--script",
-            s.to_str().unwrap(),
-        ],
+        dir,
+        "modes",
+        &text,
+        &["--scene", "mirrors", "--width", "320", "--height", "180"],
     );
-    assert_clean(&run, "the modes script");
     let shots: Vec<image::RgbaImage> = (1..=5).map(|k| png(&dir.join(format!("mode{k}.png")))).collect();
     for (k, shot) in shots.iter().enumerate() {
         assert_eq!(shot.dimensions(), (320, 180), "mode {}", k + 1);
@@ -202,20 +205,13 @@ fn resize_storm(display: &Display, dir: &Path) {
         }
     }
     text += &format!("resize 400 240\nwait 3\nscreenshot {}/storm.png\n", dir.display());
-    let s = script(dir, "storm.txt", &text);
-    let run = demo(
+    let run = scripted(
         display,
-        &[
-            "--width",
-            "320",
-            "--height",
-            "180",
-            "--script",
-            s.to_str().unwrap(),
-            "--verbose",
-        ],
+        dir,
+        "storm",
+        &text,
+        &["--width", "320", "--height", "180", "--verbose"],
     );
-    assert_clean(&run, "the resize storm");
     let recreations = run.stderr.lines().filter(|l| l.contains("demo: swapchain ")).count();
     assert!(
         recreations >= 30,
@@ -242,21 +238,13 @@ fn settings_change_the_image(display: &Display, dir: &Path) {
          set ssr_max_steps 64\nset width 240\nwait 2\nscreenshot {d}/width.png\n\
          save-settings {d}/saved.json\n"
     );
-    let s = script(dir, "settings.txt", &text);
-    let run = demo(
+    scripted(
         display,
-        &[
-            "--scene",
-            "mirrors",
-            "--width",
-            "320",
-            "--height",
-            "180",
-            "--script",
-            s.to_str().unwrap(),
-        ],
+        dir,
+        "settings",
+        &text,
+        &["--scene", "mirrors", "--width", "320", "--height", "180"],
     );
-    assert_clean(&run, "the settings script");
     let base = png(&dir.join("base.png"));
     assert!(png(&dir.join("bounces.png")) != base, "max_bounces changes the image");
     assert!(png(&dir.join("steps.png")) != base, "ssr_max_steps changes the image");
@@ -272,6 +260,39 @@ fn settings_change_the_image(display: &Display, dir: &Path) {
         (240, 3, 64),
         "save-settings writes what render reads"
     );
+}
+
+/// A dynamic scene: paused it holds still, `.` steps it once, Backspace restarts it.
+fn animation_controls(display: &Display, dir: &Path) {
+    let d = dir.display();
+    let text = format!(
+        "wait 4\nkey space\nwait 2\nscreenshot {d}/a.png\nwait 2\nscreenshot {d}/b.png\nkey .\nwait 2\n\
+         screenshot {d}/c.png\nkey backspace\nwait 2\nscreenshot {d}/d.png\n"
+    );
+    scripted(
+        display,
+        dir,
+        "animation",
+        &text,
+        &["--scene", "drop", "--width", "240", "--height", "135"],
+    );
+    let steps = |n: &str| json(&dir.join(format!("{n}.json")))["sim_steps"].as_u64().unwrap();
+    assert!(
+        steps("a") >= 4 && steps("b") == steps("a"),
+        "paused: {} then {}",
+        steps("a"),
+        steps("b")
+    );
+    assert!(
+        png(&dir.join("a.png")) == png(&dir.join("b.png")),
+        "a paused scene holds still"
+    );
+    assert_eq!(steps("c"), steps("b") + 1, "one step");
+    assert!(
+        png(&dir.join("c.png")) != png(&dir.join("b.png")),
+        "a step moves the bodies"
+    );
+    assert_eq!(steps("d"), 0, "restarted (and still paused)");
 }
 
 /// A bad script is refused with its line before a window opens; a bad setting in it
@@ -313,10 +334,11 @@ fn main() {
         }
     };
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, Case); 4] = [
+    let cases: [(&str, Case); 5] = [
         ("modes_match_render", modes_match_render),
         ("resize_storm", resize_storm),
         ("settings_change_the_image", settings_change_the_image),
+        ("animation_controls", animation_controls),
         ("bad_scripts_are_refused", bad_scripts_are_refused),
     ];
     let filter: Vec<&String> = args.iter().skip(1).filter(|a| !a.starts_with('-')).collect();

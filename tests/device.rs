@@ -100,9 +100,9 @@ fn pipeline_push_type_must_match_the_shader() {
     let shader = speculum::shaders::COMPOSE_COMP;
     let err = Pipeline::compute::<[u32; 2]>(&ctx, "test.compose", shader)
         .err()
-        .expect("8 B of push constants for a 16 B block must be refused");
+        .expect("8 B of push constants for a 20 B block must be refused");
     let msg = err.to_string();
-    assert!(msg.contains("16 B") && msg.contains("8 B"), "{msg}");
+    assert!(msg.contains("20 B") && msg.contains("8 B"), "{msg}");
     assert!(Pipeline::compute::<speculum::passes::compose::ComposePush>(&ctx, "test.compose", shader).is_ok());
     assert!(Pipeline::compute::<()>(&ctx, "test.light", speculum::shaders::LIGHT_DIRECT_COMP).is_ok());
     common::assert_no_validation_messages(&ctx);

@@ -78,9 +78,11 @@ fn rgb(c: [u8; 3]) -> Color32 {
 pub fn draw(ctx: &egui::Context, info: &HudInfo<'_>) -> Vec<Request> {
     let mut out = Vec::new();
     let mut s = info.settings.clone();
+    let screen = ctx.content_rect();
     egui::Window::new("Speculum")
         .default_pos([8.0, 8.0])
         .default_width(330.0)
+        .default_height((screen.height() - 24.0).max(120.0))
         .resizable(true)
         .vscroll(true)
         .show(ctx, |ui| {

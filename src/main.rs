@@ -1,5 +1,5 @@
 //! The `speculum` command line: `render` (headless, the default), `demo` (the window),
-//! `bench`, `compare`, `settings` and `devices`. Each command lives in `cli/`.
+//! `tune` and `plot`, `bench`, `compare`, `settings` and `devices`. Each command lives in `cli/`.
 
 mod cli;
 
@@ -29,6 +29,10 @@ enum Command {
     Render(Box<RenderArgs>),
     /// Open a window: the scene live, with a HUD of timings and every setting.
     Demo(Box<cli::demo::DemoArgs>),
+    /// Sweep settings against rt: points.csv/json, the Pareto front, pareto.png, best.json.
+    Tune(Box<cli::tune::TuneArgs>),
+    /// Draw a tune sweep's plot again from its points.csv.
+    Plot(cli::tune::PlotArgs),
     /// List the Vulkan devices, in the order --device INDEX counts them.
     Devices,
     /// SSIM (on luma; Gaussian 11x11, sigma 1.5) and RMSE (RGB, [0, 1]) of two PNGs.
@@ -107,6 +111,8 @@ fn main() {
         None => cli::render::run(RenderArgs::defaults()),
         Some(Command::Render(args)) => cli::render::run(*args),
         Some(Command::Demo(args)) => cli::demo::run(*args),
+        Some(Command::Tune(args)) => cli::tune::run(*args),
+        Some(Command::Plot(args)) => cli::tune::plot(args),
         Some(Command::Devices) => devices(),
         Some(Command::Compare(args)) => cli::compare::run(args),
         Some(Command::Bench(command)) => cli::bench::run(command),

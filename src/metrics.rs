@@ -188,6 +188,27 @@ pub fn check_same_size(
     Ok(())
 }
 
+/// Mean NVIDIA FLIP error (Andersson et al. 2020; the `nv-flip` crate, which builds
+/// NVIDIA's C++ implementation) of `test` against `reference`, both tightly packed
+/// RGBA8 (sRGB) of `w` x `h`, alpha ignored, at FLIP's default 67 pixels per degree
+/// (a 0.7 m wide monitor of 3840 pixels seen from 0.7 m). 0 for identical images, at
+/// most 1.
+pub fn flip_mean(test: &[u8], reference: &[u8], w: u32, h: u32) -> Result<f64> {
+    let n = (w as usize) * (h as usize) * 4;
+    if n == 0 || test.len() != n || reference.len() != n {
+        return Err(Error::Input(format!(
+            "FLIP: images of {} and {} bytes, not {w}x{h} RGBA8",
+            test.len(),
+            reference.len()
+        )));
+    }
+    let rgb = |rgba: &[u8]| -> Vec<u8> { rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect() };
+    let r = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(reference));
+    let t = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(test));
+    let map = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    Ok(nv_flip::FlipPool::from_image(&map).mean() as f64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

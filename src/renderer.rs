@@ -7,6 +7,13 @@
 //! `light.direct` → (by mode) `ssr.classify` → `ssr.trace` → `ssr.compact` →
 //! `rt.reflect` → `reflect.merge` → `compose`. The static BVH is built once, when the
 //! renderer is created; the dynamic one every frame, over that frame's geometry.
+//!
+//! Frames in flight: `render_frame` submits and waits (the headless path);
+//! `record_frame` records into a caller's command buffer with a frame slot (its own
+//! timestamp queries and pose staging) and `frame_finished` reads the slot back after
+//! the caller's fence, so several frames can be on the queue at once (the demo's two).
+//! The screen-sized images are shared by all slots: each pass's entry barriers order
+//! a frame after the one submitted before it on the queue.
 
 use crate::error::{Result, VkContext};
 use crate::gpu_types::{FrameUniforms, GpuMaterial};

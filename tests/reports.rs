@@ -287,3 +287,39 @@ fn compare_report_follows_the_schema_and_thresholds_fail() {
         assert!(stderr.contains(flag) && stderr.lines().count() == 1, "{stderr}");
     }
 }
+
+/// FLIP: identical images score 0; NVIDIA's reference pair scores what FLIP's own
+/// command-line tool prints for it (0.133285, within 1e-4); more noise scores more.
+#[test]
+fn flip_matches_the_reference_implementation() {
+    let load = |name: &str| {
+        speculum::metrics::load_rgba(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/data/flip")
+                .join(name),
+        )
+        .unwrap()
+    };
+    let (r, t) = (load("tree-ref.png"), load("tree-test.png"));
+    let (w, h) = r.dimensions();
+    let same = speculum::metrics::flip_mean(r.as_raw(), r.as_raw(), w, h).unwrap();
+    assert_eq!(same, 0.0);
+    let pair = speculum::metrics::flip_mean(t.as_raw(), r.as_raw(), w, h).unwrap();
+    assert!((pair - 0.133285).abs() < 1e-4, "FLIP of the reference pair: {pair}");
+    let noisy = |amount: u8| -> Vec<u8> {
+        let mut rng = 7u32;
+        r.as_raw()
+            .iter()
+            .map(|&v| {
+                rng = rng.wrapping_mul(1664525).wrapping_add(1013904223);
+                v.saturating_add(((rng >> 24) as u8) % amount.max(1))
+            })
+            .collect()
+    };
+    let (a, b) = (
+        speculum::metrics::flip_mean(&noisy(8), r.as_raw(), w, h).unwrap(),
+        speculum::metrics::flip_mean(&noisy(64), r.as_raw(), w, h).unwrap(),
+    );
+    assert!(0.0 < a && a < b && b < 1.0, "noise 8: {a}, noise 64: {b}");
+    assert!(speculum::metrics::flip_mean(&[0; 8], &[0; 4], 1, 1).is_err());
+}

@@ -5,7 +5,7 @@
 set -euo pipefail
 
 SPECULUM_PACKAGES=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers
-  libshaderc-dev glslang-dev glslang-tools spirv-tools xvfb xauth)
+  libshaderc-dev glslang-dev glslang-tools spirv-tools xvfb xauth fonts-dejavu-core)
 
 speculum_install_packages() {
   local missing=()

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod compare;
 pub mod demo;
 pub mod render;
+pub mod tune;
 
 use anyhow::{Context as _, Result};
 use clap::Args;

@@ -1,0 +1,209 @@
+//! `speculum tune` (a settings sweep against `rt`) and `speculum plot` (its plot
+//! again, from the CSV). See `speculum::tune`.
+
+use super::{progress, GpuArgs, Text};
+use anyhow::Result;
+use clap::Args;
+use speculum::output::{Batch, Kind};
+use speculum::tune::{self, sweep::Sweep, PointResult, DEFAULT_KEY};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+#[derive(Args, Clone, Debug)]
+pub struct TuneArgs {
+    /// Sweep file (TOML; see the README's "Tuning"); optional with --axis.
+    pub sweep: Option<PathBuf>,
+    /// An axis from the command line, `field=v1,v2,...` (replaces the file's axis of
+    /// that name); repeatable.
+    #[arg(long)]
+    pub axis: Vec<String>,
+    /// Output folder (created if needed): points.csv, points.json, pareto.png, best.json.
+    #[arg(long, default_value = "tune")]
+    pub out: PathBuf,
+    /// Quality floor for best.json: the fastest point with at least this SSIM vs rt.
+    #[arg(long, default_value_t = 0.99)]
+    pub min_ssim: f64,
+    /// Skip the points already in OUT/points.csv (same scene and axis values).
+    #[arg(long)]
+    pub resume: bool,
+    /// No progress bar and no text output.
+    #[arg(long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+#[derive(Args, Clone, Debug)]
+pub struct PlotArgs {
+    /// A points.csv written by `speculum tune`.
+    pub csv: PathBuf,
+    /// The plot to write.
+    #[arg(long, default_value = "pareto.png")]
+    pub out: PathBuf,
+}
+
+fn write_outputs(
+    dir: &Path,
+    axes: &[String],
+    results: &mut [PointResult],
+    min_ssim: f64,
+    sweep: Option<&Sweep>,
+) -> Result<Option<String>> {
+    tune::mark_pareto(results);
+    let best = tune::best(results, min_ssim);
+    let mut batch = Batch::default();
+    batch.add(&dir.join("points.csv"), tune::to_csv(axes, results).into_bytes());
+    batch.add(
+        &dir.join("points.json"),
+        speculum::report::to_json(&results).into_bytes(),
+    );
+    batch.add(&dir.join("pareto.png"), tune::plot::pareto_png(results)?);
+    if let (Some(key), Some(sweep)) = (&best, sweep) {
+        let settings = if key == DEFAULT_KEY {
+            sweep.base.clone()
+        } else {
+            let mut s = sweep.base.clone();
+            for (n, v) in &results.iter().find(|r| &r.key == key).expect("best is a result").values {
+                s = s.with_field(n, v)?;
+            }
+            s
+        };
+        batch.add(
+            &dir.join("best.json"),
+            speculum::report::to_json(&settings).into_bytes(),
+        );
+    }
+    batch.commit()?;
+    Ok(best)
+}
+
+pub fn run(args: TuneArgs) -> Result<()> {
+    // Everything that can be known before the GPU is touched is checked here.
+    let (text, what) = match &args.sweep {
+        Some(p) => (
+            std::fs::read_to_string(p).map_err(|source| speculum::Error::Io {
+                what: "sweep file",
+                path: p.clone(),
+                source,
+            })?,
+            p.display().to_string(),
+        ),
+        None => (String::new(), "(command line)".to_string()),
+    };
+    let sweep = Sweep::parse(&text, &what, &args.axis)?;
+    if !(0.0..=1.0).contains(&args.min_ssim) {
+        anyhow::bail!(speculum::Error::Input(format!(
+            "--min-ssim {} is outside 0..=1",
+            args.min_ssim
+        )));
+    }
+    for s in &sweep.scenes {
+        if s.contains(',') || s.contains('"') {
+            anyhow::bail!(speculum::Error::Input(format!(
+                "scene '{s}': names in a sweep cannot hold commas or quotes"
+            )));
+        }
+    }
+    speculum::metrics::check_size(sweep.base.width, sweep.base.height)?;
+    tune::plot::check_font()?;
+    speculum::output::check_dir(&args.out)?;
+    let points = sweep.points()?;
+    let axes: Vec<String> = sweep.axes.iter().map(|(n, _)| n.clone()).collect();
+    let csv_path = args.out.join("points.csv");
+    let mut results: Vec<PointResult> = Vec::new();
+    if args.resume && csv_path.exists() {
+        let (old_axes, old) =
+            tune::from_csv(
+                &std::fs::read_to_string(&csv_path).map_err(|source| speculum::Error::Io {
+                    what: "points CSV",
+                    path: csv_path.clone(),
+                    source,
+                })?,
+            )?;
+        if old_axes != axes {
+            anyhow::bail!(speculum::Error::Input(format!(
+                "--resume: {} has axes {old_axes:?}, this sweep {axes:?}",
+                csv_path.display()
+            )));
+        }
+        results = old;
+    }
+    let scenes: Vec<_> = sweep
+        .scenes
+        .iter()
+        .map(|s| super::ViewArgs::default().load(s).map(|scene| (s.clone(), scene)))
+        .collect::<Result<_>>()?;
+    let mut todo: Vec<(String, Vec<(String, tune::sweep::Point)>)> = Vec::new();
+    let done: HashSet<(String, String)> = results.iter().map(|r| (r.scene.clone(), r.key.clone())).collect();
+    for (name, _) in &scenes {
+        let mut list = vec![(DEFAULT_KEY.to_string(), tune::default_point(&sweep))];
+        list.extend(points.iter().map(|p| (p.key(), p.clone())));
+        list.retain(|(k, _)| !done.contains(&(name.clone(), k.clone())));
+        todo.push((name.clone(), list));
+    }
+    let total: usize = todo.iter().map(|(_, l)| l.len()).sum();
+    let out = Text::new(&[], args.quiet);
+    out.line(format_args!(
+        "tune: {} points x {} scene(s) (+ default), {} to measure, {}x{}; {} already in {}",
+        points.len(),
+        scenes.len(),
+        total,
+        sweep.base.width,
+        sweep.base.height,
+        results.len(),
+        csv_path.display()
+    ));
+    let ctx = args.gpu.context()?;
+    std::fs::create_dir_all(&args.out).map_err(|e| speculum::Error::Output {
+        path: args.out.clone(),
+        detail: e.to_string(),
+    })?;
+    let bar = progress(total as u64, "tune", args.quiet);
+    for ((name, scene), (_, list)) in scenes.iter().zip(&todo) {
+        tune::measure_scene(&ctx, scene, name, &sweep, list, &mut |r| {
+            bar.inc(1);
+            results.push(r);
+            // The CSV is rewritten after every point, so an interrupted sweep resumes.
+            speculum::output::write_atomic(&csv_path, tune::to_csv(&axes, &results).as_bytes())
+        })?;
+    }
+    bar.finish_and_clear();
+    let best = write_outputs(&args.out, &axes, &mut results, args.min_ssim, Some(&sweep))?;
+    let front = results.iter().filter(|r| r.pareto_ssim).count();
+    out.line(format_args!(
+        "{} points measured on {}; {front} on the time/SSIM front",
+        results.len(),
+        ctx.device_name
+    ));
+    let ratio = |key: &str| {
+        let rs: Vec<&PointResult> = results.iter().filter(|r| r.key == key).collect();
+        rs.iter().map(|r| r.frame_over_rt.median).sum::<f64>() / rs.len().max(1) as f64
+    };
+    match &best {
+        Some(key) => out.line(format_args!(
+            "best with SSIM >= {}: {key} (frame/rt {:.3}; default {:.3}: {:.2}x faster) -> {}",
+            args.min_ssim,
+            ratio(key),
+            ratio(DEFAULT_KEY),
+            ratio(DEFAULT_KEY) / ratio(key).max(1e-9),
+            args.out.join("best.json").display()
+        )),
+        None => out.line(format_args!("no point reaches SSIM {} (no best.json)", args.min_ssim)),
+    }
+    out.line(format_args!("wrote {}", args.out.display()));
+    super::check_validation(&ctx)
+}
+
+pub fn plot(args: PlotArgs) -> Result<()> {
+    speculum::output::check(&args.out, Kind::Png)?;
+    tune::plot::check_font()?;
+    let text = std::fs::read_to_string(&args.csv).map_err(|source| speculum::Error::Io {
+        what: "points CSV",
+        path: args.csv.clone(),
+        source,
+    })?;
+    let (_, results) = tune::from_csv(&text)?;
+    speculum::output::write_atomic(&args.out, &tune::plot::pareto_png(&results)?)?;
+    println!("wrote {}", args.out.display());
+    Ok(())
+}

@@ -26,6 +26,10 @@ pub struct TuneArgs {
     /// Skip the points already in OUT/points.csv (same scene and axis values).
     #[arg(long)]
     pub resume: bool,
+    /// Rounds that time the best point against the base settings again, alternating,
+    /// for a speedup the choice of the best does not bias (0: skip).
+    #[arg(long, default_value_t = 9)]
+    pub confirm: u32,
     /// No progress bar and no text output.
     #[arg(long)]
     pub quiet: bool,
@@ -40,6 +44,17 @@ pub struct PlotArgs {
     /// The plot to write.
     #[arg(long, default_value = "pareto.png")]
     pub out: PathBuf,
+}
+
+/// The settings of result `key` (the base settings with its axis values).
+fn settings_of(sweep: &Sweep, results: &[PointResult], key: &str) -> Result<speculum::Settings> {
+    let mut s = sweep.base.clone();
+    if key != DEFAULT_KEY {
+        for (n, v) in &results.iter().find(|r| r.key == key).expect("a measured key").values {
+            s = s.with_field(n, v)?;
+        }
+    }
+    Ok(s)
 }
 
 fn write_outputs(
@@ -59,15 +74,7 @@ fn write_outputs(
     );
     batch.add(&dir.join("pareto.png"), tune::plot::pareto_png(results)?);
     if let (Some(key), Some(sweep)) = (&best, sweep) {
-        let settings = if key == DEFAULT_KEY {
-            sweep.base.clone()
-        } else {
-            let mut s = sweep.base.clone();
-            for (n, v) in &results.iter().find(|r| &r.key == key).expect("best is a result").values {
-                s = s.with_field(n, v)?;
-            }
-            s
-        };
+        let settings = settings_of(sweep, results, key)?;
         batch.add(
             &dir.join("best.json"),
             speculum::report::to_json(&settings).into_bytes(),
@@ -180,14 +187,25 @@ pub fn run(args: TuneArgs) -> Result<()> {
         rs.iter().map(|r| r.frame_over_rt.median).sum::<f64>() / rs.len().max(1) as f64
     };
     match &best {
-        Some(key) => out.line(format_args!(
-            "best with SSIM >= {}: {key} (frame/rt {:.3}; default {:.3}: {:.2}x faster) -> {}",
-            args.min_ssim,
-            ratio(key),
-            ratio(DEFAULT_KEY),
-            ratio(DEFAULT_KEY) / ratio(key).max(1e-9),
-            args.out.join("best.json").display()
-        )),
+        Some(key) => {
+            out.line(format_args!(
+                "best with SSIM >= {}: {key} (frame/rt {:.3}; default {:.3}) -> {}",
+                args.min_ssim,
+                ratio(key),
+                ratio(DEFAULT_KEY),
+                args.out.join("best.json").display()
+            ));
+            if args.confirm > 0 && key != DEFAULT_KEY {
+                let candidate = settings_of(&sweep, &results, key)?;
+                for (name, scene) in &scenes {
+                    let s = tune::confirm(&ctx, scene, &sweep, &candidate, args.confirm)?;
+                    out.line(format_args!(
+                        "  confirmed on {name} ({} alternating rounds): default / best frame time {:.3} (p10 {:.3}, p90 {:.3})",
+                        s.samples, s.median, s.p10, s.p90
+                    ));
+                }
+            }
+        }
         None => out.line(format_args!("no point reaches SSIM {} (no best.json)", args.min_ssim)),
     }
     out.line(format_args!("wrote {}", args.out.display()));

@@ -234,6 +234,32 @@ pub fn measure_scene(
     Ok(())
 }
 
+/// The speedup of `candidate` over the base settings on `scene`, measured again in
+/// `rounds` rounds that alternate the two (after one warm-up round): per round, the
+/// base settings' frame time over the candidate's. A sweep's best point is the
+/// smallest of many noisy medians, so its own figure is biased low; this one is not.
+pub fn confirm(ctx: &Arc<Context>, scene: &Scene, sweep: &Sweep, candidate: &Settings, rounds: u32) -> Result<Stat> {
+    let mut a = Renderer::new(ctx, scene, candidate)?;
+    let mut b = Renderer::new(ctx, scene, &sweep.base)?;
+    let ms = |t: Vec<(&'static str, f64)>| {
+        t.iter()
+            .find(|(n, _)| *n == crate::renderer::FRAME)
+            .map_or(0.0, |x| x.1)
+    };
+    let mut ratios = Vec::new();
+    for round in 0..=rounds {
+        if scene.is_dynamic() {
+            a.reset_simulation()?;
+            b.reset_simulation()?;
+        }
+        let (ta, tb) = (ms(a.render_frame()?), ms(b.render_frame()?));
+        if round > 0 {
+            ratios.push(tb / ta.max(1e-9));
+        }
+    }
+    Stat::of(&ratios).ok_or_else(|| Error::Input("confirm: no rounds".into()))
+}
+
 /// The fixed columns of `points.csv`, before the axes and the passes.
 const HEAD: [&str; 2] = ["scene", "key"];
 const STATS: [&str; 13] = [

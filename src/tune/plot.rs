@@ -64,6 +64,9 @@ fn panel(
         .configure_mesh()
         .x_desc("frame time / rt frame time")
         .y_desc(y_name)
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .x_label_formatter(&|v| format!("{v:.2}"))
+        .light_line_style(WHITE)
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(plot_err)?;

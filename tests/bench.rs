@@ -134,3 +134,144 @@ fn small_dynamic_benchmark_is_valid() {
     assert!(points[1].dynamic_triangles > 2 * points[0].dynamic_triangles);
     common::assert_no_validation_messages(&ctx);
 }
+
+fn speculum_bin(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_speculum"))
+        .args(args)
+        .env("SPECULUM_VALIDATION", "1")
+        .output()
+        .expect("runs the speculum binary")
+}
+
+/// `bench suite --quick` runs every case with every scope timed; compared with itself
+/// it finds no regression; a baseline doctored to make one pass 2x faster flags that
+/// pass (and exits 1 with --fail-on-regression); a bad baseline is refused.
+#[test]
+fn the_quick_suite_runs_and_compares_with_a_baseline() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("suite.json");
+    let md = dir.path().join("suite.md");
+    let (j, m) = (json.to_str().unwrap(), md.to_str().unwrap());
+    let out = speculum_bin(&[
+        "bench",
+        "suite",
+        "--quick",
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--json",
+        j,
+        "--markdown",
+        m,
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["kind"], "bench.suite");
+    assert_eq!(report["suite_version"], speculum::bench::suite::SUITE_VERSION);
+    assert_eq!(report["validation_messages"], 0);
+    let ids: Vec<&str> = report["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["id"].as_str().unwrap())
+        .collect();
+    let want: Vec<String> = speculum::bench::suite::cases(true).iter().map(|c| c.id()).collect();
+    assert_eq!(ids, want);
+    for c in report["cases"].as_array().unwrap() {
+        let whole = if c["kind"] == "lbvh" { "lbvh" } else { "frame" };
+        let s = &c["passes_ms"][whole];
+        assert_eq!(s["samples"], 3, "{}", c["id"]);
+        assert!(s["median"].as_f64().unwrap() > 0.0 && s["p10"].as_f64() <= s["p90"].as_f64());
+    }
+    assert!(
+        report["cases"][1]["passes_ms"]["rt.reflect"]["median"]
+            .as_f64()
+            .unwrap()
+            > 0.0,
+        "hybrid traces"
+    );
+    assert!(
+        report["cases"][0]["passes_ms"].get("rt.reflect").is_none(),
+        "ssr does not"
+    );
+    assert!(std::fs::read_to_string(&md)
+        .unwrap()
+        .contains("| room/hybrid/480x270 |"));
+
+    // The run against itself: every ratio 1, nothing flagged.
+    let again = dir.path().join("again.md");
+    let compare = |baseline: &str, md: &std::path::Path| {
+        speculum_bin(&[
+            "bench",
+            "suite",
+            "--compare",
+            j,
+            "--baseline",
+            baseline,
+            "--fail-on-regression",
+            "--markdown",
+            md.to_str().unwrap(),
+            "--quiet",
+        ])
+    };
+    let out = compare(j, &again);
+    assert!(
+        out.status.success(),
+        "self-comparison: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&again).unwrap();
+    assert!(
+        text.lines().count() > 20 && !text.contains("Regression") && !text.contains("Faster"),
+        "{text}"
+    );
+
+    // A baseline whose gbuffer on room/hybrid took half the time: that pass regressed.
+    let mut doctored = report.clone();
+    let g = &mut doctored["cases"][1]["passes_ms"]["gbuffer"];
+    for k in ["median", "p10", "p90"] {
+        g[k] = serde_json::json!(g[k].as_f64().unwrap() / 2.0);
+    }
+    let doctored_path = dir.path().join("doctored.json");
+    std::fs::write(&doctored_path, serde_json::to_string(&doctored).unwrap()).unwrap();
+    let flagged = dir.path().join("flagged.md");
+    let out = compare(doctored_path.to_str().unwrap(), &flagged);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("room/hybrid/480x270 gbuffer"), "{err}");
+    let text = std::fs::read_to_string(&flagged).unwrap();
+    let regressions: Vec<&str> = text.lines().filter(|l| l.contains("Regression")).collect();
+    assert_eq!(regressions.len(), 1, "{text}");
+    // And a fresh run against the first, with a generous band, runs the comparison.
+    let out = speculum_bin(&[
+        "bench",
+        "suite",
+        "--quick",
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--baseline",
+        j,
+        "--threshold",
+        "3",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        regressions[0].starts_with("| room/hybrid/480x270 | gbuffer |"),
+        "{text}"
+    );
+
+    // Bad baselines: named, before any GPU work.
+    for (content, says) in [("{}", "not a bench suite report"), ("[1", "not JSON")] {
+        let bad = dir.path().join("bad.json");
+        std::fs::write(&bad, content).unwrap();
+        let out = speculum_bin(&["bench", "suite", "--quick", "--baseline", bad.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains(says), "{err}");
+    }
+}

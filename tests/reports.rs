@@ -241,6 +241,18 @@ fn bench_reports_follow_the_schema() {
         dir.path(),
     );
     check_header(&lbvh, "bench.lbvh", true);
+    let suite = speculum(
+        &[
+            "bench", "suite", "--quick", "--frames", "1", "--warmup", "0", "--json", "r.json",
+        ],
+        dir.path(),
+    );
+    check_header(&suite, "bench.suite", true);
+    for c in suite["cases"].as_array().unwrap() {
+        for (pass, s) in c["passes_ms"].as_object().unwrap() {
+            check_stat(s, pass);
+        }
+    }
     assert!(lbvh["settings"].is_null() && lbvh["options"]["repeats"] == 2);
     let case = &lbvh["cases"][0];
     for k in ["build_ms", "refit_ms"] {

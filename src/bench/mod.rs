@@ -5,6 +5,7 @@ pub mod dynamic;
 pub mod lbvh;
 pub mod modes;
 pub mod reflect;
+pub mod suite;
 
 use crate::error::Result;
 use crate::renderer::{Renderer, FRAME};

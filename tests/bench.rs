@@ -26,6 +26,8 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         rays: 4096,
         check_rays: 500,
         bits: MortonBits::Bits30,
+        file_rays: None,
+        keep_hits: false,
     };
     let c = run_case(&ctx, "soup-5000", &v, &i, &opts, &mut || {}).unwrap();
     assert!(c.valid, "{c:?}");
@@ -274,4 +276,97 @@ fn the_quick_suite_runs_and_compares_with_a_baseline() {
         assert_eq!(out.status.code(), Some(1), "{err}");
         assert!(err.contains(says), "{err}");
     }
+}
+
+/// `bench lbvh --rays-file --dump-rays --dump-hits`: the file's rays come back byte for
+/// byte, and their hits (t and triangle in the soup's order, misses as +inf and
+/// 0xFFFFFFFF) are what brute force over the same soup finds.
+#[test]
+fn lbvh_traces_a_rays_file_and_dumps_its_hits() {
+    use speculum::bench::rays_file::{read_hits, write_rays};
+    use speculum::gpu_types::Ray;
+    let n = 700u32;
+    let (v, i) = random_soup(n as usize, 1.0, default_size(n as usize), n as u64);
+    let mut rng = 99u64;
+    let mut r = || {
+        rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((rng >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    };
+    let size = default_size(n as usize);
+    let rays: Vec<Ray> = (0..3000)
+        .map(|k| {
+            let o = [r() * size * 1.5, r() * size * 1.5, r() * size * 1.5];
+            let d = [r(), r(), r() + 0.01];
+            Ray {
+                origin: o,
+                dir: d,
+                tmin: 0.0,
+                tmax: if k % 3 == 0 { 0.5 * size } else { f32::INFINITY },
+            }
+        })
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let (rf, dr, dh) = (
+        dir.path().join("rays.bin"),
+        dir.path().join("out_rays.bin"),
+        dir.path().join("hits.bin"),
+    );
+    std::fs::write(&rf, write_rays(&rays)).unwrap();
+    let out = speculum_bin(&[
+        "bench",
+        "lbvh",
+        "--tris",
+        &n.to_string(),
+        "--repeats",
+        "1",
+        "--rays",
+        "1024",
+        "--check-rays",
+        "200",
+        "--rays-file",
+        rf.to_str().unwrap(),
+        "--dump-rays",
+        dr.to_str().unwrap(),
+        "--dump-hits",
+        dh.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        std::fs::read(&dr).unwrap(),
+        std::fs::read(&rf).unwrap(),
+        "the rays come back as given"
+    );
+    let hits = read_hits(&std::fs::read(&dh).unwrap(), "hits").unwrap();
+    assert_eq!(hits.len(), rays.len());
+    let (mut hit, mut miss) = (0, 0);
+    for (k, (ray, &(t, tri))) in rays.iter().zip(&hits).enumerate() {
+        let want = speculum::cpu_ref::trace::brute_force(ray, &v, &i);
+        if want.prim == speculum::shader_defines::BVH_INVALID {
+            assert_eq!((t, tri), (f32::INFINITY, u32::MAX), "ray {k}: a miss");
+            miss += 1;
+        } else {
+            let close = (t - want.t).abs() <= 1e-5 * t.abs().max(1.0);
+            assert!(close, "ray {k}: t {t} vs {}", want.t);
+            assert!(tri == want.prim || close, "ray {k}");
+            assert!(tri < n);
+            hit += 1;
+        }
+    }
+    assert!(hit > 300 && miss > 300, "{hit} hits, {miss} misses");
+    // A malformed rays file is refused before GPU work, and dumps need one case.
+    std::fs::write(&rf, [0u8; 33]).unwrap();
+    let out = speculum_bin(&["bench", "lbvh", "--tris", "100", "--rays-file", rf.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("32-byte rays"));
+    let out = speculum_bin(&[
+        "bench",
+        "lbvh",
+        "--tris",
+        "100",
+        "200",
+        "--dump-hits",
+        dh.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("single case"));
 }

@@ -341,7 +341,19 @@ fn main() {
         ("animation_controls", animation_controls),
         ("bad_scripts_are_refused", bad_scripts_are_refused),
     ];
-    let filter: Vec<&String> = args.iter().skip(1).filter(|a| !a.starts_with('-')).collect();
+    // Names to run (libtest's filters); options and their values are ignored.
+    let mut filter: Vec<&String> = Vec::new();
+    let mut skip_value = false;
+    for a in args.iter().skip(1) {
+        if std::mem::take(&mut skip_value) {
+            continue;
+        }
+        if a.starts_with('-') {
+            skip_value = matches!(a.as_str(), "--test-threads" | "--skip" | "--format" | "--color");
+            continue;
+        }
+        filter.push(a);
+    }
     for (name, case) in cases {
         if !filter.is_empty() && !filter.iter().any(|f| name.contains(f.as_str())) {
             continue;

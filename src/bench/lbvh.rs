@@ -31,6 +31,13 @@ pub struct Options {
     /// Rays of each set checked against the CPU.
     pub check_rays: u32,
     pub bits: MortonBits,
+    /// Rays from a file (`--rays-file`), traced as a third set.
+    #[serde(skip)]
+    pub file_rays: Option<Vec<Ray>>,
+    /// Keep the hits of the file's rays (or, without a file, of the incoherent set)
+    /// for `--dump-hits`.
+    #[serde(skip)]
+    pub keep_hits: bool,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -76,6 +83,11 @@ pub struct CaseReport {
     pub cpu_sah_build_ms: f64,
     pub coherent: RaySetReport,
     pub incoherent: RaySetReport,
+    /// The rays of `--rays-file`, when given.
+    pub file: Option<RaySetReport>,
+    /// The traced rays and their hits kept for `--dump-rays` / `--dump-hits`.
+    #[serde(skip)]
+    pub kept: Option<(Vec<Ray>, Vec<Hit>)>,
     /// The BVH passed every invariant after the timed builds.
     pub invariants_ok: bool,
     pub invariant_error: Option<String>,
@@ -241,19 +253,19 @@ pub fn run_case(
         let r = crate::cpu_ref::lbvh::bounds(v, i).1;
         (r.lo, r.hi)
     };
-    let ray_set = |rays: Vec<Ray>| -> Result<RaySetReport> {
+    let ray_set = |rays: &[Ray]| -> Result<(RaySetReport, Vec<Hit>)> {
         let mut times = Vec::new();
         let mut hits = Vec::new();
         for rep in 0..=opts.repeats {
-            let (h, ms) = tracer.trace(&rays, scene, false)?;
+            let (h, ms) = tracer.trace(rays, scene, false)?;
             if rep > 0 {
                 times.push(ms);
             }
             hits = h;
         }
         let trace_ms = Stat::of(&times).expect("repeats > 0");
-        let (mismatches, ties) = check_hits(&rays, &hits, &cpu, v, i, opts.check_rays);
-        Ok(RaySetReport {
+        let (mismatches, ties) = check_hits(rays, &hits, &cpu, v, i, opts.check_rays);
+        let report = RaySetReport {
             rays: rays.len() as u32,
             trace_ms,
             mrays_per_s: rays.len() as f64 / (trace_ms.median * 1e3),
@@ -261,13 +273,26 @@ pub fn run_case(
             checked: opts.check_rays.min(rays.len() as u32),
             mismatches,
             ties,
-        })
+        };
+        Ok((report, hits))
     };
-    let coherent = ray_set(coherent_rays(lo, hi, opts.rays))?;
-    let incoherent = ray_set(incoherent_rays(lo, hi, opts.rays, 7))?;
+    let coherent = ray_set(&coherent_rays(lo, hi, opts.rays))?.0;
+    let incoherent_set = incoherent_rays(lo, hi, opts.rays, 7);
+    let (incoherent, incoherent_hits) = ray_set(&incoherent_set)?;
+    let (file, kept) = match &opts.file_rays {
+        Some(rays) => {
+            let (report, hits) = ray_set(rays)?;
+            (Some(report), opts.keep_hits.then(|| (rays.clone(), hits)))
+        }
+        None => (None, opts.keep_hits.then_some((incoherent_set, incoherent_hits))),
+    };
 
     let invariants_ok = invariants.is_ok();
-    let valid = invariants_ok && coherent.mismatches == 0 && incoherent.mismatches == 0 && build_ms.median.is_finite();
+    let valid = invariants_ok
+        && coherent.mismatches == 0
+        && incoherent.mismatches == 0
+        && file.as_ref().is_none_or(|f| f.mismatches == 0)
+        && build_ms.median.is_finite();
     Ok(CaseReport {
         name: name.into(),
         triangles: n,
@@ -285,6 +310,8 @@ pub fn run_case(
         cpu_sah_build_ms,
         coherent,
         incoherent,
+        file,
+        kept,
         invariants_ok,
         invariant_error: invariants.err(),
         valid,

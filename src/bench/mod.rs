@@ -4,6 +4,7 @@
 pub mod dynamic;
 pub mod lbvh;
 pub mod modes;
+pub mod rays_file;
 pub mod reflect;
 pub mod suite;
 

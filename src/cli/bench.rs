@@ -156,6 +156,18 @@ pub struct LbvhArgs {
     /// Rays of each set checked against the CPU reference.
     #[arg(long, default_value_t = 2000)]
     pub check_rays: u32,
+    /// Also trace (time and check) these rays: 32 bytes each, little-endian f32
+    /// ox,oy,oz,dx,dy,dz,tmin,tmax, no header.
+    #[arg(long)]
+    pub rays_file: Option<PathBuf>,
+    /// Write the traced rays in that format (the --rays-file rays, else the
+    /// incoherent set), to trace them with another tracer; needs a single case.
+    #[arg(long)]
+    pub dump_rays: Option<PathBuf>,
+    /// Write their hits: 8 bytes each, f32 t and u32 triangle (in file order after fan
+    /// triangulation), a miss as (+inf, 0xFFFFFFFF); needs a single case.
+    #[arg(long)]
+    pub dump_hits: Option<PathBuf>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -421,11 +433,33 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
     } else {
         MortonBits::Bits30
     };
+    let file_rays = match &args.rays_file {
+        Some(p) => {
+            let bytes = std::fs::read(p).map_err(|source| speculum::Error::Io {
+                what: "rays file",
+                path: p.clone(),
+                source,
+            })?;
+            Some(speculum::bench::rays_file::read_rays(&bytes, &p.display().to_string())?)
+        }
+        None => None,
+    };
+    let dumping = args.dump_rays.is_some() || args.dump_hits.is_some();
+    for p in [&args.dump_rays, &args.dump_hits].into_iter().flatten() {
+        if p.as_os_str() == "-" {
+            anyhow::bail!(speculum::Error::Input(
+                "--dump-rays/--dump-hits write binary files: give a path, not -".into()
+            ));
+        }
+        speculum::output::check(p, Kind::Json)?;
+    }
     let opts = Options {
         repeats: args.repeats,
         rays: args.rays.max(1),
         check_rays: args.check_rays,
         bits,
+        file_rays,
+        keep_hits: dumping,
     };
     let mut tris = args.tris.clone();
     if tris.is_empty() && args.scene.is_empty() {
@@ -452,6 +486,12 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
         // The model alone: a floor would be triangles the benchmark did not ask for.
         let scene = speculum::scene::load_with(name, speculum::scene::Floor::None)?;
         inputs.push((scene.name.clone(), scene.vertices, scene.indices));
+    }
+    if dumping && inputs.len() != 1 {
+        anyhow::bail!(speculum::Error::Input(format!(
+            "--dump-rays/--dump-hits need a single case (one --tris or one --scene), not {}",
+            inputs.len()
+        )));
     }
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
@@ -496,9 +536,33 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
                 }
             ));
         });
+        if let Some(f) = &case.file {
+            bar.suspend(|| {
+                text.line(format_args!(
+                    "{:<14} rays file: {} rays, {} ({:.1} Mrays/s), {:.1}% hit, {} of {} checked differ",
+                    "",
+                    f.rays,
+                    cell(Some(f.trace_ms)),
+                    f.mrays_per_s,
+                    100.0 * f.hit_fraction,
+                    f.mismatches,
+                    f.checked
+                ))
+            });
+        }
         cases.push(case);
     }
     bar.finish_and_clear();
+    if let Some((rays, hits)) = cases.first().and_then(|c| c.kept.as_ref()) {
+        let mut out = speculum::output::Batch::default();
+        if let Some(p) = &args.dump_rays {
+            out.add(p, speculum::bench::rays_file::write_rays(rays));
+        }
+        if let Some(p) = &args.dump_hits {
+            out.add(p, speculum::bench::rays_file::write_hits(hits));
+        }
+        out.commit()?;
+    }
     let valid = cases.iter().all(|c| c.valid);
     let report = Report {
         header: Header::new("bench.lbvh", Some(&ctx), None),

@@ -86,6 +86,24 @@ pub enum Error {
 /// Shorthand used throughout the crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// The bytes of file `path`, or `Error::Io` naming it as `what` ("scene file", ...).
+pub fn read_file(path: &std::path::Path, what: &'static str) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|source| Error::Io {
+        what,
+        path: path.into(),
+        source,
+    })
+}
+
+/// The text of file `path`, or `Error::Io` naming it as `what`.
+pub fn read_text(path: &std::path::Path, what: &'static str) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| Error::Io {
+        what,
+        path: path.into(),
+        source,
+    })
+}
+
 /// Attaches the name of the Vulkan call to a `vk::Result`.
 pub(crate) trait VkContext<T> {
     fn vk(self, what: &'static str) -> Result<T>;

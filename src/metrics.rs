@@ -122,11 +122,7 @@ pub fn compare_rgba8(a: &[u8], b: &[u8], w: u32, h: u32) -> Result<Comparison> {
 
 /// Loads an image file as RGBA8.
 pub fn load_rgba(p: &std::path::Path) -> Result<image::RgbaImage> {
-    let bytes = std::fs::read(p).map_err(|source| Error::Io {
-        what: "image",
-        path: p.into(),
-        source,
-    })?;
+    let bytes = crate::error::read_file(p, "image")?;
     Ok(image::load_from_memory(&bytes)
         .map_err(|e| Error::BadAsset {
             what: "image",

@@ -674,11 +674,6 @@ impl Renderer {
         Ok(())
     }
 
-    /// Frames that may be in flight at once.
-    pub fn frames_in_flight(&self) -> usize {
-        self.slots.len()
-    }
-
     /// Whether the scene moves (has bodies): each frame then advances it by `sim_dt`.
     pub fn is_dynamic(&self) -> bool {
         self.dynamic.is_some()

@@ -188,6 +188,24 @@ pub(crate) fn check_hits(
     (mismatches, ties)
 }
 
+/// One whole build of `geometry` into `bvh` (the `BUILD` scope around its stages),
+/// submitted and waited for; its GPU milliseconds per scope.
+pub fn timed_build(
+    ctx: &Arc<Context>,
+    timer: &mut GpuTimer,
+    builder: &LbvhBuilder,
+    geometry: Geometry<'_>,
+    bvh: &Bvh,
+) -> Result<Vec<(&'static str, f64)>> {
+    ctx.one_shot(|cmd| {
+        timer.reset(cmd);
+        timer.begin(cmd, BUILD);
+        builder.record_build(cmd, timer, geometry, bvh);
+        timer.end(cmd, BUILD);
+    })?;
+    timer.results()
+}
+
 /// Benchmarks one triangle set.
 pub fn run_case(
     ctx: &Arc<Context>,
@@ -214,14 +232,9 @@ pub fn run_case(
     let mut stages = Timings::default();
     let mut refits = Vec::new();
     for rep in 0..=opts.repeats {
-        ctx.one_shot(|cmd| {
-            timer.reset(cmd);
-            timer.begin(cmd, BUILD);
-            builder.record_build(cmd, &mut timer, geometry, &bvh);
-            timer.end(cmd, BUILD);
-        })?;
+        let times = timed_build(ctx, &mut timer, &builder, geometry, &bvh)?;
         if rep > 0 {
-            stages.add_frame(&timer.results()?);
+            stages.add_frame(&times);
         }
         ctx.one_shot(|cmd| {
             timer.reset(cmd);

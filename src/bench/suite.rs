@@ -13,7 +13,7 @@
 //! least `threshold`), and a ratio above 1 + band is a regression, below 1 / (1 +
 //! band) an improvement (`Faster`); passes under 0.05 ms in both runs are not compared.
 
-use super::lbvh::{BUILD, STAGES};
+use super::lbvh::{timed_build, BUILD, STAGES};
 use crate::error::{Error, Result};
 use crate::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
 use crate::report::{Header, Stat};
@@ -196,14 +196,9 @@ pub fn run_case(
             let mut timer = GpuTimer::new(ctx, 8)?;
             let mut timings = Timings::default();
             for rep in 0..warmup.max(1) + frames {
-                ctx.one_shot(|cmd| {
-                    timer.reset(cmd);
-                    timer.begin(cmd, BUILD);
-                    builder.record_build(cmd, &mut timer, geometry, &bvh);
-                    timer.end(cmd, BUILD);
-                })?;
+                let times = timed_build(ctx, &mut timer, &builder, geometry, &bvh)?;
                 if rep >= warmup.max(1) {
-                    timings.add_frame(&timer.results()?);
+                    timings.add_frame(&times);
                 }
                 tick();
             }

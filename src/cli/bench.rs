@@ -194,11 +194,7 @@ fn suite(args: SuiteArgs) -> Result<()> {
     }
     check_outputs(&[(c.json.as_deref(), Kind::Json), (args.markdown.as_deref(), Kind::Json)])?;
     let read = |p: &PathBuf, what: &'static str| -> Result<suite::Baseline> {
-        let text = std::fs::read_to_string(p).map_err(|source| speculum::Error::Io {
-            what,
-            path: p.clone(),
-            source,
-        })?;
+        let text = speculum::error::read_text(p, what)?;
         Ok(suite::read_baseline(&text, &p.display().to_string())?)
     };
     let baseline = args.baseline.as_ref().map(|p| read(p, "baseline")).transpose()?;
@@ -209,11 +205,8 @@ fn suite(args: SuiteArgs) -> Result<()> {
         let text = Text::new(&[args.markdown.as_deref()], c.quiet);
         text.line(format_args!("{md}"));
         if let Some(path) = &args.markdown {
-            if path.as_os_str() == "-" {
-                print!("{md}");
-            } else {
-                speculum::output::write_atomic(path, md.as_bytes())?;
-            }
+            // `-` is standard output (write_atomic's rule).
+            speculum::output::write_atomic(path, md.as_bytes())?;
         }
         return regressions(&cmp, args.fail_on_regression);
     }
@@ -261,11 +254,8 @@ fn suite(args: SuiteArgs) -> Result<()> {
         super::write_report(path, &report, &text)?;
     }
     if let Some(path) = &args.markdown {
-        if path.as_os_str() == "-" {
-            print!("{md}");
-        } else {
-            speculum::output::write_atomic(path, md.as_bytes())?;
-        }
+        // `-` is standard output (write_atomic's rule).
+        speculum::output::write_atomic(path, md.as_bytes())?;
     }
     super::check_validation(&ctx)?;
     match &comparison {
@@ -435,11 +425,7 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
     };
     let file_rays = match &args.rays_file {
         Some(p) => {
-            let bytes = std::fs::read(p).map_err(|source| speculum::Error::Io {
-                what: "rays file",
-                path: p.clone(),
-                source,
-            })?;
+            let bytes = speculum::error::read_file(p, "rays file")?;
             Some(speculum::bench::rays_file::read_rays(&bytes, &p.display().to_string())?)
         }
         None => None,

@@ -67,11 +67,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
     }
     let steps = match (&args.script, args.frames) {
         (Some(path), _) => {
-            let text = std::fs::read_to_string(path).map_err(|source| speculum::Error::Io {
-                what: "demo script",
-                path: path.clone(),
-                source,
-            })?;
+            let text = speculum::error::read_text(path, "demo script")?;
             script::parse(&text)?
         }
         (None, Some(n)) => {

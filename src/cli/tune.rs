@@ -62,7 +62,7 @@ fn write_outputs(
     axes: &[String],
     results: &mut [PointResult],
     min_ssim: f64,
-    sweep: Option<&Sweep>,
+    sweep: &Sweep,
 ) -> Result<Option<String>> {
     tune::mark_pareto(results);
     let best = tune::best(results, min_ssim);
@@ -73,7 +73,7 @@ fn write_outputs(
         speculum::report::to_json(&results).into_bytes(),
     );
     batch.add(&dir.join("pareto.png"), tune::plot::pareto_png(results)?);
-    if let (Some(key), Some(sweep)) = (&best, sweep) {
+    if let Some(key) = &best {
         let settings = settings_of(sweep, results, key)?;
         batch.add(
             &dir.join("best.json"),
@@ -87,14 +87,7 @@ fn write_outputs(
 pub fn run(args: TuneArgs) -> Result<()> {
     // Everything that can be known before the GPU is touched is checked here.
     let (text, what) = match &args.sweep {
-        Some(p) => (
-            std::fs::read_to_string(p).map_err(|source| speculum::Error::Io {
-                what: "sweep file",
-                path: p.clone(),
-                source,
-            })?,
-            p.display().to_string(),
-        ),
+        Some(p) => (speculum::error::read_text(p, "sweep file")?, p.display().to_string()),
         None => (String::new(), "(command line)".to_string()),
     };
     let sweep = Sweep::parse(&text, &what, &args.axis)?;
@@ -119,14 +112,7 @@ pub fn run(args: TuneArgs) -> Result<()> {
     let csv_path = args.out.join("points.csv");
     let mut results: Vec<PointResult> = Vec::new();
     if args.resume && csv_path.exists() {
-        let (old_axes, old) =
-            tune::from_csv(
-                &std::fs::read_to_string(&csv_path).map_err(|source| speculum::Error::Io {
-                    what: "points CSV",
-                    path: csv_path.clone(),
-                    source,
-                })?,
-            )?;
+        let (old_axes, old) = tune::from_csv(&speculum::error::read_text(&csv_path, "points CSV")?)?;
         if old_axes != axes {
             anyhow::bail!(speculum::Error::Input(format!(
                 "--resume: {} has axes {old_axes:?}, this sweep {axes:?}",
@@ -175,7 +161,7 @@ pub fn run(args: TuneArgs) -> Result<()> {
         })?;
     }
     bar.finish_and_clear();
-    let best = write_outputs(&args.out, &axes, &mut results, args.min_ssim, Some(&sweep))?;
+    let best = write_outputs(&args.out, &axes, &mut results, args.min_ssim, &sweep)?;
     let front = results.iter().filter(|r| r.pareto_ssim).count();
     out.line(format_args!(
         "{} points measured on {}; {front} on the time/SSIM front",
@@ -215,11 +201,7 @@ pub fn run(args: TuneArgs) -> Result<()> {
 pub fn plot(args: PlotArgs) -> Result<()> {
     speculum::output::check(&args.out, Kind::Png)?;
     tune::plot::check_font()?;
-    let text = std::fs::read_to_string(&args.csv).map_err(|source| speculum::Error::Io {
-        what: "points CSV",
-        path: args.csv.clone(),
-        source,
-    })?;
+    let text = speculum::error::read_text(&args.csv, "points CSV")?;
     let (_, results) = tune::from_csv(&text)?;
     speculum::output::write_atomic(&args.out, &tune::plot::pareto_png(&results)?)?;
     println!("wrote {}", args.out.display());

@@ -501,11 +501,7 @@ impl SceneFile {
 
 /// Reads and builds a scene file.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        what: "scene file",
-        path: path.into(),
-        source,
-    })?;
+    let text = crate::error::read_text(path, "scene file")?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     SceneFile::parse(path, &text)?.build(path, &dir)
 }

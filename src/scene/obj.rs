@@ -174,11 +174,7 @@ fn check_mtl_colors(bytes: &[u8], path: &Path) -> Result<()> {
 
 /// Loads an OBJ file (and the MTL files it names) as a scene.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = std::fs::read(path).map_err(|source| Error::Io {
-        what: "OBJ file",
-        path: path.into(),
-        source,
-    })?;
+    let text = crate::error::read_file(path, "OBJ file")?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let options = tobj::LoadOptions {
         triangulate: true,

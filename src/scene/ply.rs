@@ -14,11 +14,7 @@ use std::path::Path;
 
 /// Loads a PLY file as a scene with the camera framing it.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        what: "PLY file",
-        path: path.into(),
-        source,
-    })?;
+    let bytes = crate::error::read_file(path, "PLY file")?;
     let bad = |detail: String| Error::BadAsset {
         what: "PLY file",
         path: path.into(),

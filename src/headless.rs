@@ -8,7 +8,7 @@ use crate::renderer::{Renderer, FRAME};
 use crate::report::{Header, PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
-use crate::vk::{Context, Timings};
+use crate::vk::{Context, TimingCheck, Timings};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -55,6 +55,8 @@ pub struct TimingsReport {
     pub ssim_vs_rt: Option<f64>,
     pub rmse_vs_rt: Option<f64>,
     pub rt_frame_ms: Option<Stat>,
+    /// The self-check of every measured frame, the reference's included (`vk::timing`).
+    pub timing: TimingCheck,
 }
 
 /// A finished headless render.
@@ -112,6 +114,8 @@ pub struct FrameRecord<'a> {
     pub index: u32,
     /// The frame's time per scope (ms; `sim.rigid` is CPU wall clock).
     pub times: &'a [(&'static str, f64)],
+    /// Why this frame's timings failed their self-check; `None` when they passed.
+    pub timing_problem: Option<&'a str>,
     pub rgba: &'a [u8],
     pub dynamic_triangles: u32,
     pub rt_pixel_fraction: f64,
@@ -163,9 +167,9 @@ pub fn render_frames(
     for index in 0..plan.frames {
         let times = renderer.render_frame()?;
         tick();
-        timings.add_frame(&times);
+        timings.add(&times);
         if let Some(r) = &mut reference {
-            ref_timings.add_frame(&r.render_frame()?);
+            ref_timings.add(&r.render_frame()?);
             tick();
         }
         if let Some(hook) = on_frame.as_mut() {
@@ -181,7 +185,8 @@ pub fn render_frames(
             };
             hook(FrameRecord {
                 index,
-                times: &times,
+                times: &times.scopes,
+                timing_problem: times.problem.as_deref(),
                 rgba: &rgba,
                 dynamic_triangles: renderer.dynamic_triangles(),
                 rt_pixel_fraction: renderer.reflection_stats()?.rt_pixel_fraction(),
@@ -221,6 +226,7 @@ pub fn render_frames(
         ssim_vs_rt: ssim,
         rmse_vs_rt: rmse,
         rt_frame_ms,
+        timing: crate::bench::check_all(&[timings, ref_timings]),
     };
     Ok(Rendered {
         report,

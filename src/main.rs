@@ -77,12 +77,14 @@ fn devices() -> Result<()> {
             Err(why) => format!("unusable: {why}"),
         };
         println!(
-            "{}: {} ({}, Vulkan {}.{}) {usable}",
+            "{}: {} ({}, Vulkan {}.{}.{}, driver {}) {usable}",
             d.index,
             d.name,
             d.kind_name(),
             ash::vk::api_version_major(d.api_version),
-            ash::vk::api_version_minor(d.api_version)
+            ash::vk::api_version_minor(d.api_version),
+            ash::vk::api_version_patch(d.api_version),
+            d.driver
         );
     }
     Ok(())

@@ -32,7 +32,7 @@ use crate::scene::{texture, Camera, Light, Scene, Sky};
 use crate::settings::{Mode, Settings};
 use crate::sim::rigid::RigidWorld;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, GpuTimer, Image, Sampler};
+use crate::vk::{Buffer, Context, GpuTimer, Image, Sampler, TimerReadout, Wall};
 use ash::vk;
 use glam::{Mat4, Vec3};
 use std::sync::Arc;
@@ -713,10 +713,11 @@ impl Renderer {
         Ok(())
     }
 
-    /// Records, submits and waits for one frame; returns its time per scope (ms). A
-    /// dynamic scene first advances by one time step (`sim.rigid`, CPU wall clock):
-    /// frame k after a reset shows the world at time (k + 1) x `sim_dt`.
-    pub fn render_frame(&mut self) -> Result<Vec<(&'static str, f64)>> {
+    /// Records, submits and waits for one frame; returns its time per scope (ms) with
+    /// their self-check against the wall clock from submit to fence. A dynamic scene
+    /// first advances by one time step (`sim.rigid`, CPU wall clock): frame k after a
+    /// reset shows the world at time (k + 1) x `sim_dt`.
+    pub fn render_frame(&mut self) -> Result<TimerReadout> {
         let device = self.ctx.device.clone();
         let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         unsafe {
@@ -729,8 +730,13 @@ impl Renderer {
         }
         self.record_frame(self.cmd, 0);
         unsafe { device.end_command_buffer(self.cmd) }.vk("vkEndCommandBuffer")?;
+        let submitted = std::time::Instant::now();
         self.ctx.submit_and_wait(self.cmd)?;
-        self.frame_finished(0)
+        let wall = Wall {
+            ms: submitted.elapsed().as_secs_f64() * 1e3,
+            tight: self.ctx.device_type == vk::PhysicalDeviceType::CPU,
+        };
+        self.read_frame(0, Some(wall))
     }
 
     /// Records one frame into `cmd` (begun, not ended), with frame slot `slot`'s
@@ -766,10 +772,15 @@ impl Renderer {
     }
 
     /// After the frame recorded with `slot` has finished on the GPU: its time per
-    /// scope (ms). The first frame after a rebuild of a refit BVH also makes the refit
-    /// schedule here, from the built tree (waiting for the GPU: every frame recorded
-    /// without a schedule rebuilds, so the tree then is the last one built).
-    pub fn frame_finished(&mut self, slot: usize) -> Result<Vec<(&'static str, f64)>> {
+    /// scope (ms), self-checked without a wall clock (the window's frames overlap). The
+    /// first frame after a rebuild of a refit BVH also makes the refit schedule here,
+    /// from the built tree (waiting for the GPU: every frame recorded without a
+    /// schedule rebuilds, so the tree then is the last one built).
+    pub fn frame_finished(&mut self, slot: usize) -> Result<TimerReadout> {
+        self.read_frame(slot, None)
+    }
+
+    fn read_frame(&mut self, slot: usize, wall: Option<Wall>) -> Result<TimerReadout> {
         if let Some(d) = &mut self.dynamic {
             if d.refit && d.schedule.is_none() {
                 unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
@@ -777,9 +788,9 @@ impl Renderer {
             }
         }
         let s = &mut self.slots[slot];
-        let mut times = s.timer.results()?;
+        let mut times = s.timer.read(wall)?;
         if let Some(ms) = s.sim_ms.take() {
-            times.push((SIM_RIGID, ms));
+            times.scopes.push((SIM_RIGID, ms));
         }
         Ok(times)
     }

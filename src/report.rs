@@ -210,6 +210,9 @@ pub struct FrameLine {
     /// With `--reference`: against the same frame in `rt` mode; `null` without.
     pub ssim: Option<f64>,
     pub rmse: Option<f64>,
+    /// Why the frame's timings failed their self-check (`vk::timing`); `null` when
+    /// they passed.
+    pub timing_problem: Option<String>,
 }
 
 impl FrameLine {
@@ -224,6 +227,7 @@ impl FrameLine {
             rt_pixel_fraction: r.rt_pixel_fraction,
             ssim: r.vs_rt.map(|c| c.ssim),
             rmse: r.vs_rt.map(|c| c.rmse),
+            timing_problem: r.timing_problem.map(str::to_string),
         }
     }
 }

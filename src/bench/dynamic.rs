@@ -20,7 +20,7 @@ use crate::report::{Header, Stat};
 use crate::scene::Scene;
 use crate::settings::Settings;
 use crate::shader_defines::BVH_INVALID;
-use crate::vk::{Context, GpuTimer};
+use crate::vk::{Context, GpuTimer, TimingCheck};
 use crate::Renderer;
 use serde::Serialize;
 use std::sync::Arc;
@@ -48,15 +48,17 @@ pub struct DynamicPoint {
     pub refit_over_rebuild: f64,
     pub rt_reflect_ms: Stat,
     pub frame_ms: Stat,
-    /// Wall-clock ms (median of 3; upload and readback included, alike for both) to
-    /// trace `rays` random rays at the last frame through the BVH rebuilt that frame,
-    /// and through one built at the first measured frame and refit since.
+    /// GPU ms (`rt.trace`, median of 3) to trace `rays` random rays at the last frame
+    /// through the BVH rebuilt that frame, and through one built at the first measured
+    /// frame and refit since.
     pub trace_rebuilt_ms: f64,
     pub trace_refit_ms: f64,
     pub rays: u32,
     /// Sampled rays whose hits differ from the CPU BVH's (beyond genuine ties), both
     /// BVHs together; 0 when valid.
     pub mismatches: u32,
+    /// The self-check of every timed frame, refit and traversal (`vk::timing`).
+    pub timing: TimingCheck,
     pub valid: bool,
 }
 
@@ -102,6 +104,7 @@ pub fn run_point(
         tick();
     }
     r.reset_simulation()?;
+    let mut timing = TimingCheck::default();
     let builder = LbvhBuilder::new(ctx)?;
     let mut timer = GpuTimer::new(ctx, 8)?;
     let tris = r.dynamic_triangles();
@@ -110,6 +113,7 @@ pub fn run_point(
     let mut aged_schedule = None;
     for k in 0..frames {
         let times = r.render_frame()?;
+        timing.add(times.problem.as_deref());
         tick();
         let get = |name: &str| times.iter().find(|(n, _)| *n == name).map_or(0.0, |t| t.1);
         let traceable = r.dynamic_traceable().expect("a dynamic scene");
@@ -122,15 +126,11 @@ pub fn run_point(
         }
         // The refit a frame would do instead (its schedule made outside the timing).
         let schedule = RefitSchedule::of(ctx, traceable.bvh)?;
-        ctx.one_shot(|cmd| {
-            timer.reset(cmd);
-            builder.record_refit_scheduled(cmd, &mut timer, traceable.geometry, traceable.bvh, &schedule);
+        let refit = timer.one_shot(|cmd, timer| {
+            builder.record_refit_scheduled(cmd, timer, traceable.geometry, traceable.bvh, &schedule)
         })?;
-        let refit = timer
-            .results()?
-            .iter()
-            .find(|(n, _)| *n == lbvh::REFIT)
-            .map_or(f64::NAN, |t| t.1);
+        timing.add(refit.problem.as_deref());
+        let refit = refit.get(lbvh::REFIT).unwrap_or(f64::NAN);
         let rebuild: f64 = BUILD.iter().map(|s| get(s)).sum();
         for (s, v) in series.iter_mut().zip([
             get(SIM_RIGID),
@@ -159,31 +159,28 @@ pub fn run_point(
     });
     let ray_set = incoherent_rays(lo, hi, rays, 41);
     let tracer = TracePass::new(ctx)?;
-    let through = |bvh: &Bvh| -> Result<(Vec<Hit>, f64)> {
+    let mut through = |bvh: &Bvh| -> Result<(Vec<Hit>, f64)> {
         let t = Traceable {
             bvh,
             geometry: fresh.geometry,
         };
-        // Wall clock of the whole call (upload, traversal, readback), the median of
-        // three: lavapipe's timestamps around this one dispatch read implausibly low
-        // (0.1 ms for 65,536 rays that take tens of ms), so they are not used here.
-        let mut walls = Vec::new();
+        // The median of three traversals, each self-checked against its wall clock.
+        let mut times = Vec::new();
         let mut hits = Vec::new();
         for _ in 0..3 {
-            let start = std::time::Instant::now();
-            hits = tracer
-                .trace(
-                    &ray_set,
-                    TraceScene {
-                        static_bvh: None,
-                        dynamic_bvh: Some(t),
-                    },
-                    false,
-                )?
-                .0;
-            walls.push(start.elapsed().as_secs_f64() * 1e3);
+            let readout;
+            (hits, readout) = tracer.trace(
+                &ray_set,
+                TraceScene {
+                    static_bvh: None,
+                    dynamic_bvh: Some(t),
+                },
+                false,
+            )?;
+            timing.add(readout.problem.as_deref());
+            times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
         }
-        let ms = stat(&walls).median;
+        let ms = stat(&times).median;
         // Dynamic hits carry bit 31; the CPU BVH numbers the same triangles plainly.
         let plain = hits
             .into_iter()
@@ -223,6 +220,7 @@ pub fn run_point(
         trace_refit_ms,
         rays,
         mismatches,
+        timing,
         valid: mismatches == 0 && frame_ms.median.is_finite() && trace_rebuilt_ms > 0.0,
     })
 }

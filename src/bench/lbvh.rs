@@ -14,7 +14,7 @@ use crate::passes::lbvh::{self, Bvh, Geometry, LbvhBuilder, MortonBits};
 use crate::passes::rt_trace::{TracePass, TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
 use crate::shader_defines::BVH_INVALID;
-use crate::vk::{Buffer, Context, GpuTimer, Timings};
+use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use ash::vk;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
@@ -91,6 +91,8 @@ pub struct CaseReport {
     /// The BVH passed every invariant after the timed builds.
     pub invariants_ok: bool,
     pub invariant_error: Option<String>,
+    /// The self-check of every timed build, refit and ray batch (`vk::timing`).
+    pub timing: TimingCheck,
     pub valid: bool,
 }
 
@@ -189,21 +191,18 @@ pub(crate) fn check_hits(
 }
 
 /// One whole build of `geometry` into `bvh` (the `BUILD` scope around its stages),
-/// submitted and waited for; its GPU milliseconds per scope.
+/// submitted and waited for; its GPU milliseconds per scope, self-checked.
 pub fn timed_build(
-    ctx: &Arc<Context>,
     timer: &mut GpuTimer,
     builder: &LbvhBuilder,
     geometry: Geometry<'_>,
     bvh: &Bvh,
-) -> Result<Vec<(&'static str, f64)>> {
-    ctx.one_shot(|cmd| {
-        timer.reset(cmd);
+) -> Result<TimerReadout> {
+    timer.one_shot(|cmd, timer| {
         timer.begin(cmd, BUILD);
         builder.record_build(cmd, timer, geometry, bvh);
         timer.end(cmd, BUILD);
-    })?;
-    timer.results()
+    })
 }
 
 /// Benchmarks one triangle set.
@@ -231,20 +230,20 @@ pub fn run_case(
     let mut timer = GpuTimer::new(ctx, 8)?;
     let mut stages = Timings::default();
     let mut refits = Vec::new();
+    let mut timing = TimingCheck::default();
     for rep in 0..=opts.repeats {
-        let times = timed_build(ctx, &mut timer, &builder, geometry, &bvh)?;
+        let times = timed_build(&mut timer, &builder, geometry, &bvh)?;
         if rep > 0 {
-            stages.add_frame(&times);
+            stages.add(&times);
         }
-        ctx.one_shot(|cmd| {
-            timer.reset(cmd);
-            builder.record_refit(cmd, &mut timer, geometry, &bvh);
-        })?;
+        let refit = timer.one_shot(|cmd, timer| builder.record_refit(cmd, timer, geometry, &bvh))?;
         if rep > 0 {
-            refits.push(timer.results()?.first().map_or(f64::NAN, |r| r.1));
+            refits.push(refit.first().map_or(f64::NAN, |r| r.1));
+            timing.add(refit.problem.as_deref());
         }
         tick();
     }
+    timing.merge(stages.check());
     let stages_ms = PassTimes::of_scopes(&stages, &STAGES);
     let build_ms = stages.samples(BUILD).and_then(Stat::of).expect("repeats > 0");
 
@@ -266,13 +265,14 @@ pub fn run_case(
         let r = crate::cpu_ref::lbvh::bounds(v, i).1;
         (r.lo, r.hi)
     };
-    let ray_set = |rays: &[Ray]| -> Result<(RaySetReport, Vec<Hit>)> {
+    let mut ray_set = |rays: &[Ray]| -> Result<(RaySetReport, Vec<Hit>)> {
         let mut times = Vec::new();
         let mut hits = Vec::new();
         for rep in 0..=opts.repeats {
-            let (h, ms) = tracer.trace(rays, scene, false)?;
+            let (h, readout) = tracer.trace(rays, scene, false)?;
             if rep > 0 {
-                times.push(ms);
+                times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
+                timing.add(readout.problem.as_deref());
             }
             hits = h;
         }
@@ -327,6 +327,7 @@ pub fn run_case(
         kept,
         invariants_ok,
         invariant_error: invariants.err(),
+        timing,
         valid,
     })
 }

@@ -10,13 +10,21 @@ pub mod suite;
 
 use crate::error::Result;
 use crate::renderer::{Renderer, FRAME};
-use crate::vk::Timings;
+use crate::vk::{TimingCheck, Timings};
 
 /// Per-renderer timings of an interleaved run: every scope, and the frame times in
 /// round order (to form per-round ratios, which cancel drift between rounds).
 pub struct Interleaved {
     pub timings: Vec<Timings>,
     pub frames: Vec<Vec<f64>>,
+}
+
+/// The self-checks of several renderers' timings together.
+pub fn check_all(timings: &[Timings]) -> TimingCheck {
+    timings.iter().fold(TimingCheck::default(), |mut all, t| {
+        all.merge(t.check());
+        all
+    })
 }
 
 /// Called after every frame a long run renders (for a progress bar).
@@ -33,7 +41,7 @@ pub fn interleave(renderers: &mut [Renderer], warmup: u32, rounds: u32, tick: Ti
             tick();
             if round >= warmup {
                 frames[i].push(t.iter().find(|(k, _)| *k == FRAME).map_or(f64::NAN, |s| s.1));
-                timings[i].add_frame(&t);
+                timings[i].add(&t);
             }
         }
     }

@@ -11,7 +11,7 @@ use crate::metrics::compare_rgba8;
 use crate::report::{Header, PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
-use crate::vk::Context;
+use crate::vk::{Context, TimingCheck};
 use crate::Renderer;
 use serde::Serialize;
 use std::sync::Arc;
@@ -32,6 +32,8 @@ pub struct ModeResult {
     /// Against the `rt` image of the same run.
     pub ssim_vs_rt: f64,
     pub rmse_vs_rt: f64,
+    /// The self-check of this mode's measured frames (`vk::timing`).
+    pub timing: TimingCheck,
 }
 
 /// Every mode of one scene.
@@ -92,6 +94,7 @@ pub fn run(
             rt_pixel_fraction: stats.rt_pixel_fraction(),
             ssim_vs_rt: quality.ssim,
             rmse_vs_rt: quality.rmse,
+            timing: timings[i].check().clone(),
         });
     }
     let by = |m: Mode| &modes[Mode::ALL.iter().position(|&x| x == m).expect("every mode is measured")];

@@ -16,7 +16,7 @@ use crate::renderer::Renderer;
 use crate::report::{Header, PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
-use crate::vk::Context;
+use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
 use std::sync::Arc;
 
@@ -48,6 +48,8 @@ pub struct SplitReport {
     /// The `rt` mode frame for comparison.
     pub rt_frame_ms: Stat,
     pub points: Vec<SplitPoint>,
+    /// The self-check of every measured frame, all renderers together (`vk::timing`).
+    pub timing: TimingCheck,
     pub valid: bool,
 }
 
@@ -123,6 +125,7 @@ pub fn run(
         reflective_pixels: rt_reflective,
         rt_frame_ms,
         points,
+        timing: super::check_all(&timings),
         valid: same_reflective && monotonic && all_at_end,
     })
 }

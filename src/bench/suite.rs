@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
 use crate::report::{Header, Stat};
 use crate::settings::{Mode, Settings};
-use crate::vk::{Buffer, Context, GpuTimer, Timings};
+use crate::vk::{Buffer, Context, GpuTimer, TimingCheck, Timings};
 use crate::Renderer;
 use ash::vk;
 use serde::Serialize;
@@ -100,6 +100,8 @@ pub struct CaseResult {
     pub passes_ms: BTreeMap<String, Stat>,
     /// The scopes in order (JSON objects keep no order).
     pub order: Vec<String>,
+    /// The self-check of every measured frame or build (`vk::timing`).
+    pub timing: TimingCheck,
 }
 
 /// The `bench suite` report.
@@ -164,7 +166,7 @@ pub fn run_case(
                 }
                 let t = r.render_frame()?;
                 if f >= warmup {
-                    timings.add_frame(&t);
+                    timings.add(&t);
                 }
                 tick();
             }
@@ -178,6 +180,7 @@ pub fn run_case(
                 triangles: None,
                 passes_ms,
                 order,
+                timing: timings.check().clone(),
             })
         }
         Case::Lbvh { triangles } => {
@@ -196,9 +199,9 @@ pub fn run_case(
             let mut timer = GpuTimer::new(ctx, 8)?;
             let mut timings = Timings::default();
             for rep in 0..warmup.max(1) + frames {
-                let times = timed_build(ctx, &mut timer, &builder, geometry, &bvh)?;
+                let times = timed_build(&mut timer, &builder, geometry, &bvh)?;
                 if rep >= warmup.max(1) {
-                    timings.add_frame(&times);
+                    timings.add(&times);
                 }
                 tick();
             }
@@ -213,6 +216,7 @@ pub fn run_case(
                 triangles: Some(*triangles),
                 passes_ms,
                 order,
+                timing: timings.check().clone(),
             })
         }
     }
@@ -377,6 +381,18 @@ pub fn markdown(report: &SuiteReport, comparison: Option<&[Comparison]>) -> Stri
             passes.join(", ")
         );
     }
+    let invalid: Vec<String> = report
+        .cases
+        .iter()
+        .filter_map(|c| c.timing.warning().map(|w| format!("- {}: {w}\n", c.id)))
+        .collect();
+    let checked: u32 = report.cases.iter().map(|c| c.timing.checked).sum();
+    if invalid.is_empty() {
+        s += &format!("\nEvery timing self-checked ({checked} readouts agree).\n");
+    } else {
+        s += "\n**Timings that failed their self-check** (not to be trusted):\n";
+        s += &invalid.concat();
+    }
     if let Some(cmp) = comparison {
         s += "\n";
         s += &markdown_comparison(cmp);
@@ -428,6 +444,7 @@ mod tests {
             triangles: None,
             passes_ms: passes.iter().map(|(n, m)| (n.to_string(), stat(*m, 0.1))).collect(),
             order: passes.iter().map(|(n, _)| n.to_string()).collect(),
+            timing: TimingCheck::default(),
         }
     }
 

@@ -401,6 +401,9 @@ fn dynamic(args: DynamicArgs) -> Result<()> {
         report.triangle_growth,
         if report.valid { "valid" } else { "INVALID" }
     ));
+    let mut timing = speculum::vk::TimingCheck::default();
+    report.points.iter().for_each(|p| timing.merge(&p.timing));
+    text.line(format_args!("  {}", super::timing_note(&timing)));
     if let Some(path) = &c.json {
         super::write_report(path, &report, &text)?;
     }
@@ -513,7 +516,7 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
                 case.coherent.mrays_per_s,
                 case.incoherent.mrays_per_s,
                 if case.valid {
-                    "valid".to_string()
+                    format!("valid; {}", super::timing_note(&case.timing))
                 } else {
                     format!(
                         "INVALID: {:?} {} {} mismatches",
@@ -607,6 +610,7 @@ fn reflect(args: ReflectArgs) -> Result<()> {
             p.frame_over_rt.median
         ));
     }
+    text.line(format_args!("  {}", super::timing_note(&r.timing)));
     if let Some(path) = &c.json {
         super::write_report(path, &r, &text)?;
     }
@@ -687,4 +691,7 @@ fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str
         if r.ordered { "yes" } else { "NO" },
         if r.valid { "valid" } else { "INVALID" }
     ));
+    let mut timing = speculum::vk::TimingCheck::default();
+    r.modes.iter().for_each(|m| timing.merge(&m.timing));
+    text.line(format_args!("  {}", super::timing_note(&timing)));
 }

@@ -243,6 +243,14 @@ pub fn check_count(flag: &str, value: u32, min: u32) -> Result<()> {
 }
 
 /// `ms` as a table cell: a median with its p10–p90 spread.
+/// What a set of timings' self-check found, for text output.
+pub fn timing_note(check: &speculum::vk::TimingCheck) -> String {
+    match check.warning() {
+        None => format!("timings self-checked ({} readouts agree)", check.checked),
+        Some(w) => format!("TIMINGS INVALID: {w}"),
+    }
+}
+
 pub fn cell(stat: Option<speculum::report::Stat>) -> String {
     match stat {
         Some(s) => format!("{:.2} ({:.2}–{:.2})", s.median, s.p10, s.p90),

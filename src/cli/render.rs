@@ -210,6 +210,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             super::cell(Some(rt))
         ));
     }
+    text.line(format_args!("  {}", super::timing_note(&r.timing)));
     if let Some(n) = r.header.validation_messages {
         text.line(format_args!("  validation messages: {n}"));
     }

@@ -595,7 +595,7 @@ impl Demo {
             push(&mut self.gpu_ms, ms);
             self.summary.mode_frame_ms.entry(mode.name()).or_default().push(ms);
         }
-        push(&mut self.passes, times);
+        push(&mut self.passes, times.scopes);
         Ok(())
     }
 

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::gpu_types::{Hit, Ray};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource};
+use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource, TimerReadout};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -111,10 +111,10 @@ impl TracePass {
     }
 
     /// Uploads `rays`, traces them, and returns the hits and the GPU time of the
-    /// traversal in milliseconds.
-    pub fn trace(&self, rays: &[Ray], scene: TraceScene<'_>, any_hit: bool) -> Result<(Vec<Hit>, f64)> {
+    /// traversal (scope `NAME`, self-checked).
+    pub fn trace(&self, rays: &[Ray], scene: TraceScene<'_>, any_hit: bool) -> Result<(Vec<Hit>, TimerReadout)> {
         if rays.is_empty() {
-            return Ok((Vec::new(), 0.0));
+            return Ok((Vec::new(), TimerReadout::default()));
         }
         if scene.static_bvh.is_none() && scene.dynamic_bvh.is_none() {
             return Err(Error::Bvh("tracing needs at least one BVH".into()));
@@ -136,7 +136,7 @@ impl TracePass {
             MemoryLocation::GpuOnly,
         )?;
         let mut timer = GpuTimer::new(ctx, 1)?;
-        ctx.one_shot(|cmd| {
+        let readout = timer.one_shot(|cmd, timer| {
             // Poison: a hit the kernel fails to write cannot pass as a result.
             unsafe {
                 ctx.device
@@ -149,7 +149,6 @@ impl TracePass {
                 &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_WRITE)],
                 &[],
             );
-            timer.reset(cmd);
             timer.begin(cmd, NAME);
             let batch = RayBatch {
                 rays: &rays_buf,
@@ -160,7 +159,6 @@ impl TracePass {
             self.record(cmd, batch, scene);
             timer.end(cmd, NAME);
         })?;
-        let ms = timer.results()?.first().map_or(0.0, |r| r.1);
-        Ok((bytemuck::pod_collect_to_vec(&hits_buf.read()?), ms))
+        Ok((bytemuck::pod_collect_to_vec(&hits_buf.read()?), readout))
     }
 }

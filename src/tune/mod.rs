@@ -158,6 +158,7 @@ pub fn measure_scene(
         let mut r = renderer_for(ctx, scene, renderer.take(), &point.settings)?;
         let (w, h) = (point.settings.width, point.settings.height);
         let mut timings = crate::vk::Timings::default();
+        let mut reference_check = crate::vk::TimingCheck::default();
         let (mut frame, mut rt, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
         let (mut ssim, mut rmse, mut flip, mut traced) = (0.0, 0.0, 0.0, 0.0);
         let mut measured = 0u32;
@@ -172,7 +173,8 @@ pub fn measure_scene(
             frame.push(ms(&a));
             rt.push(ms(&b));
             ratio.push(ms(&a) / ms(&b).max(1e-9));
-            timings.add_frame(&a);
+            timings.add(&a);
+            reference_check.add(b.problem.as_deref());
             if compare {
                 let (img, reference_img) = (r.read_output()?, reference.read_output()?);
                 let c = compare_rgba8(&img, &reference_img, w, h)?;
@@ -202,6 +204,11 @@ pub fn measure_scene(
             for round in 0..sweep.rounds {
                 measure(&mut r, &mut reference, round + 1 == sweep.rounds)?;
             }
+        }
+        let mut check = timings.check().clone();
+        check.merge(&reference_check);
+        if let Some(w) = check.warning() {
+            return Err(Error::Input(format!("point {key}: {w}")));
         }
         let n = measured.max(1) as f64;
         let stat = |v: &[f64]| Stat::of(v).ok_or_else(|| Error::Input("no frames measured".into()));
@@ -252,7 +259,11 @@ pub fn confirm(ctx: &Arc<Context>, scene: &Scene, sweep: &Sweep, candidate: &Set
             a.reset_simulation()?;
             b.reset_simulation()?;
         }
-        let (ta, tb) = (ms(a.render_frame()?), ms(b.render_frame()?));
+        let (ra, rb) = (a.render_frame()?, b.render_frame()?);
+        if let Some(p) = ra.problem.as_ref().or(rb.problem.as_ref()) {
+            return Err(Error::Input(format!("confirm: timings cannot be trusted: {p}")));
+        }
+        let (ta, tb) = (ms(ra.scopes), ms(rb.scopes));
         if round > 0 {
             ratios.push(tb / ta.max(1e-9));
         }

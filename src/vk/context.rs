@@ -52,6 +52,9 @@ pub struct DeviceInfo {
     pub name: String,
     pub kind: vk::PhysicalDeviceType,
     pub api_version: u32,
+    /// The driver's name and version text (`VkPhysicalDeviceDriverProperties`), e.g.
+    /// "llvmpipe, Mesa 25.0.7 (LLVM 15.0.6)".
+    pub driver: String,
     /// `Err(reason)` when Speculum cannot run on it.
     pub usable: std::result::Result<(), String>,
 }
@@ -269,11 +272,21 @@ fn describe(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceI
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
             let usable = check_device(instance, pd).map(|_| ());
+            let mut driver = vk::PhysicalDeviceDriverProperties::default();
+            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+            unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+            let text =
+                |c: std::result::Result<&CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
             let info = DeviceInfo {
                 index,
                 name,
                 kind: props.device_type,
                 api_version: props.api_version,
+                driver: format!(
+                    "{}, {}",
+                    text(driver.driver_name_as_c_str()),
+                    text(driver.driver_info_as_c_str())
+                ),
                 usable,
             };
             (pd, info)

@@ -12,4 +12,4 @@ pub use buffer::Buffer;
 pub use context::{list_devices, Context, ContextDesc, DeviceInfo, Surface, WindowHandles};
 pub use image::{Image, Sampler};
 pub use pipeline::{GraphicsDesc, Groups, Pipeline, Resource, Shader};
-pub use timing::{GpuTimer, Timings};
+pub use timing::{GpuTimer, TimerReadout, TimingCheck, Timings, Wall};

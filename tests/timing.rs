@@ -1,0 +1,119 @@
+//! Timings that can be trusted: every scope of a real frame marks its place in the
+//! command stream, so the scopes nest, follow each other and fill the frame
+//! (`vk::timing::check_spans`). Without the barrier after each timestamp, lavapipe
+//! resolved `ssr.trace`'s first stamp after its own dispatch: the scope read ~0.1 ms and
+//! ~60 ms of work fell in the gap before it, which these tests catch.
+
+mod common;
+
+use ash::vk;
+use speculum::vk::GpuTimer;
+use speculum::{Renderer, Settings};
+
+/// Records, submits and waits for one frame through the window's path (no wall
+/// clock: only the scopes' own agreement is checked, whatever the machine's load).
+fn frame_readout(r: &mut Renderer, ctx: &speculum::vk::Context) -> speculum::vk::TimerReadout {
+    let cmd = ctx.allocate_command_buffer().unwrap();
+    let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+    unsafe { ctx.device.begin_command_buffer(cmd, &begin) }.unwrap();
+    r.record_frame(cmd, 0);
+    unsafe { ctx.device.end_command_buffer(cmd) }.unwrap();
+    ctx.submit_and_wait(cmd).unwrap();
+    ctx.free_command_buffer(cmd);
+    r.frame_finished(0).unwrap()
+}
+
+/// Every scope of `room` (SSR's indirect march included) and of `drop` (the sim and
+/// dynamic BVH scopes too) passes the self-check, in every reflecting mode, and the
+/// scopes the frame's work is in read what it costs: `ssr.trace` marches the whole
+/// screen, so it cannot read less than a tenth of `ssr.classify`.
+#[test]
+fn frame_scopes_nest_and_fill_the_frame() {
+    let ctx = common::context();
+    for name in ["room", "drop"] {
+        let scene = speculum::scene::load(name).unwrap();
+        for mode in [speculum::settings::Mode::Hybrid, speculum::settings::Mode::Rt] {
+            let settings = Settings {
+                width: 320,
+                height: 180,
+                mode,
+                ..Settings::default()
+            };
+            let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
+            for k in 0..3 {
+                let t = frame_readout(&mut r, &ctx);
+                assert_eq!(t.problem, None, "{name} {mode:?} frame {k}: {:?}", t.scopes);
+                let frame = t.get(speculum::renderer::FRAME).unwrap();
+                let inner: f64 = t
+                    .iter()
+                    .filter(|(n, _)| *n != speculum::renderer::FRAME && *n != "sim.rigid")
+                    .map(|s| s.1)
+                    .sum();
+                assert!(
+                    inner <= frame * 1.001 + 0.01 && inner > 0.5 * frame,
+                    "{name}: {inner} of {frame} ms"
+                );
+                if mode == speculum::settings::Mode::Hybrid {
+                    let (classify, trace) = (t.get("ssr.classify").unwrap(), t.get("ssr.trace").unwrap());
+                    assert!(
+                        trace > 0.1 * classify,
+                        "{name}: ssr.trace {trace} ms, ssr.classify {classify} ms"
+                    );
+                }
+            }
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The frame's wall clock from submit to fence bounds its `frame` scope from above on
+/// every device (`render_frame`'s check); a lone traversal dispatch (`rt.trace`, the
+/// scope that read 0.1 ms on lavapipe) and an LBVH build with its stages pass too.
+#[test]
+fn one_shot_scopes_pass_their_self_check() {
+    let ctx = common::context();
+    let scene = speculum::scene::load("room").unwrap();
+    let mut r = Renderer::new(
+        &ctx,
+        &scene,
+        &Settings {
+            width: 160,
+            height: 90,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    for _ in 0..2 {
+        let t = r.render_frame().unwrap();
+        // The CPU device's lower bound depends on the machine's load; the upper one not.
+        if let Some(p) = &t.problem {
+            assert!(p.contains("on a CPU device"), "{p}");
+        }
+    }
+    let (v, i) = speculum::scene::soup::random_soup(20_000, 1.0, 10.0, 5);
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let vertices = speculum::vk::Buffer::with_data(&ctx, "t.v", usage, bytemuck::cast_slice(&v)).unwrap();
+    let indices = speculum::vk::Buffer::with_data(&ctx, "t.i", usage, bytemuck::cast_slice(&i)).unwrap();
+    let geometry = speculum::passes::lbvh::Geometry {
+        vertices: &vertices,
+        indices: &indices,
+        tri_count: 20_000,
+    };
+    let builder = speculum::passes::lbvh::LbvhBuilder::new(&ctx).unwrap();
+    let bvh = speculum::passes::lbvh::Bvh::new(&ctx, 20_000, speculum::passes::lbvh::MortonBits::Bits30).unwrap();
+    let mut timer = GpuTimer::new(&ctx, 8).unwrap();
+    let build = speculum::bench::lbvh::timed_build(&mut timer, &builder, geometry, &bvh).unwrap();
+    assert_eq!(build.problem, None, "{:?}", build.scopes);
+    assert_eq!(build.len(), 6, "the build and its five stages: {:?}", build.scopes);
+    let (lo, hi) = (glam::Vec3::splat(-5.0), glam::Vec3::splat(5.0));
+    let rays = speculum::bench::lbvh::incoherent_rays(lo, hi, 50_000, 3);
+    let tracer = speculum::passes::rt_trace::TracePass::new(&ctx).unwrap();
+    let scene = speculum::passes::rt_trace::TraceScene {
+        static_bvh: Some(speculum::passes::rt_trace::Traceable { bvh: &bvh, geometry }),
+        dynamic_bvh: None,
+    };
+    let (_, t) = tracer.trace(&rays, scene, false).unwrap();
+    assert_eq!(t.problem, None);
+    assert!(t.get("rt.trace").unwrap() > 0.0, "{:?}", t.scopes);
+    common::assert_no_validation_messages(&ctx);
+}

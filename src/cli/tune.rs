@@ -155,6 +155,9 @@ pub fn run(args: TuneArgs) -> Result<()> {
     for ((name, scene), (_, list)) in scenes.iter().zip(&todo) {
         tune::measure_scene(&ctx, scene, name, &sweep, list, &mut |r| {
             bar.inc(1);
+            if let Some(w) = &r.timing_warning {
+                bar.suspend(|| eprintln!("warning: {} point {}: {w}", r.scene, r.key));
+            }
             results.push(r);
             // The CSV is rewritten after every point, so an interrupted sweep resumes.
             speculum::output::write_atomic(&csv_path, tune::to_csv(&axes, &results).as_bytes())

@@ -1,10 +1,15 @@
 //! Output files: checked before any GPU work, written whole or not at all.
 //!
-//! `check` refuses a path whose format Speculum cannot write (a `.jpg` for a PNG) or
-//! whose folder does not exist, so a long render never fails at its end; `write_atomic`
-//! writes a temporary file beside the target and renames it over the target, so a
-//! failure leaves no half-written or empty file behind. `-` means standard output for
-//! the JSON reports.
+//! `check` refuses a path whose format Speculum cannot write (a `.jpg` for a PNG), whose
+//! folder does not exist or cannot be written, or that names something other than a
+//! regular file (a folder, a device such as `/dev/full`, a FIFO, a socket), so a long
+//! render never fails at its end and never replaces what is not a file. A symlink is
+//! written through: its target (which must exist and be a regular file) gets the new
+//! contents and the link stays. `check_distinct` refuses two outputs of one run that
+//! name the same file, and an output that names one of the run's inputs.
+//! `write_atomic` writes a temporary file beside the target and renames it over the
+//! target, so a failure leaves no half-written or empty file behind. `-` means standard
+//! output for the JSON reports.
 
 use crate::error::{Error, Result};
 use std::io::Write;
@@ -38,12 +43,94 @@ pub fn check(path: &Path, kind: Kind) -> Result<()> {
     if path.file_name().is_none() {
         return Err(bad("not a file name".into()));
     }
-    let dir = folder(path);
+    let target = write_target(path)?;
+    let dir = folder(&target);
     if !dir.is_dir() {
         return Err(bad(format!("folder '{}' does not exist", dir.display())));
     }
-    if path.is_dir() {
-        return Err(bad("is a folder".into()));
+    probe_writable(&dir).map_err(|e| bad(format!("cannot write in folder '{}': {e}", dir.display())))
+}
+
+/// The file a write to `path` replaces: `path` itself, or, for a symlink, the file it
+/// leads to (which must exist). Refuses anything that exists and is not a regular
+/// file: outputs never replace a folder, a device, a FIFO or a socket.
+pub fn write_target(path: &Path) -> Result<PathBuf> {
+    let bad = |detail: String| Error::Output {
+        path: path.into(),
+        detail,
+    };
+    let target = match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(path)
+            .map_err(|e| bad(format!("a symlink whose target cannot be written through ({e})")))?,
+        _ => path.to_path_buf(),
+    };
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => Err(bad("is a folder".into())),
+        Ok(m) if !m.is_file() => Err(bad(format!(
+            "is not a regular file ({}): outputs only create or replace regular files",
+            file_kind(&m)
+        ))),
+        _ => Ok(target),
+    }
+}
+
+/// "a device", "a FIFO", ... for an existing path that is not a regular file or folder.
+fn file_kind(m: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = m.file_type();
+    if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a file"
+    }
+}
+
+/// Creates and removes a temporary file in `dir`: the folder is writable now (read-only
+/// mounts, permissions and immutable folders all answer here, before any GPU work).
+fn probe_writable(dir: &Path) -> std::io::Result<()> {
+    let probe = dir.join(format!(".speculum-probe.{}.tmp", std::process::id()));
+    std::fs::OpenOptions::new().write(true).create_new(true).open(&probe)?;
+    std::fs::remove_file(&probe)
+}
+
+/// The identity of an output or input path for collision checks: `-` for standard
+/// output, else the absolute path of the file it reads or replaces (symlinks resolved,
+/// `./` and `..` gone), whether or not it exists yet.
+fn identity(path: &Path) -> PathBuf {
+    if path == Path::new("-") {
+        return path.to_path_buf();
+    }
+    if let Ok(p) = std::fs::canonicalize(path) {
+        return p;
+    }
+    let dir = std::fs::canonicalize(folder(path)).unwrap_or_else(|_| folder(path));
+    match path.file_name() {
+        Some(name) => dir.join(name),
+        None => path.to_path_buf(),
+    }
+}
+
+/// Refuses two `outputs` (flag, path) of one run that name the same file (standard
+/// output counts once too), and an output that names one of the run's `inputs`.
+pub fn check_distinct(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Result<()> {
+    for (i, (flag, path)) in outputs.iter().enumerate() {
+        let id = identity(path);
+        if let Some((other, _)) = outputs[..i].iter().find(|(_, p)| identity(p) == id) {
+            return Err(Error::Output {
+                path: path.to_path_buf(),
+                detail: format!("{other} and {flag} name the same file: give each output its own"),
+            });
+        }
+        if let Some((input, _)) = inputs.iter().find(|(_, p)| *p != Path::new("-") && identity(p) == id) {
+            return Err(Error::Output {
+                path: path.to_path_buf(),
+                detail: format!("{flag} would overwrite the input {input}"),
+            });
+        }
     }
     Ok(())
 }
@@ -68,10 +155,7 @@ pub fn check_dir(dir: &Path) -> Result<()> {
         }
         parent
     };
-    let probe = existing.join(format!(".speculum-probe.{}.tmp", std::process::id()));
-    std::fs::write(&probe, b"").map_err(|e| bad(format!("cannot write there: {e}")))?;
-    let _ = std::fs::remove_file(&probe);
-    Ok(())
+    probe_writable(&existing).map_err(|e| bad(format!("cannot write there: {e}")))
 }
 
 fn folder(path: &Path) -> PathBuf {
@@ -92,8 +176,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         let mut out = std::io::stdout().lock();
         return out.write_all(bytes).and_then(|_| out.flush()).map_err(fail);
     }
-    let tmp = temporary(path);
-    let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
+    // Checked again at write time: what the path names may have changed since `check`.
+    let target = write_target(path)?;
+    let tmp = temporary(&target);
+    let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, &target));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -117,19 +203,29 @@ impl Batch {
     pub fn commit(self) -> Result<()> {
         let (stdout, files): (Vec<_>, Vec<_>) = self.files.into_iter().partition(|(p, _)| p == Path::new("-"));
         let mut written: Vec<(PathBuf, PathBuf)> = Vec::new();
+        let cleanup = |written: &[(PathBuf, PathBuf)]| {
+            for (t, _) in written {
+                let _ = std::fs::remove_file(t);
+            }
+        };
         for (path, bytes) in &files {
-            let tmp = temporary(path);
+            let target = match write_target(path) {
+                Ok(t) => t,
+                Err(e) => {
+                    cleanup(&written);
+                    return Err(e);
+                }
+            };
+            let tmp = temporary(&target);
             if let Err(e) = std::fs::write(&tmp, bytes) {
                 let _ = std::fs::remove_file(&tmp);
-                for (t, _) in &written {
-                    let _ = std::fs::remove_file(t);
-                }
+                cleanup(&written);
                 return Err(Error::Output {
                     path: path.clone(),
                     detail: e.to_string(),
                 });
             }
-            written.push((tmp, path.clone()));
+            written.push((tmp, target));
         }
         for (tmp, path) in written {
             std::fs::rename(&tmp, &path).map_err(|e| Error::Output {
@@ -167,6 +263,114 @@ mod tests {
         assert!(check(Path::new("-"), Kind::Json).is_ok());
         assert!(check(Path::new("-"), Kind::Png).is_err());
         assert!(check(dir.path(), Kind::Json).is_err(), "a folder is not a file");
+    }
+
+    #[test]
+    fn what_is_not_a_regular_file_is_never_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        for dev in ["/dev/null", "/dev/full"] {
+            let e = check(Path::new(dev), Kind::Json).unwrap_err().to_string();
+            assert!(e.contains("not a regular file (a device)"), "{e}");
+            assert!(write_atomic(Path::new(dev), b"x").is_err());
+            assert!(!std::fs::metadata(dev).unwrap().is_file(), "{dev} is still a device");
+        }
+        let fifo = dir.path().join("fifo");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success());
+        if made {
+            let e = check(&fifo, Kind::Json).unwrap_err().to_string();
+            assert!(e.contains("a FIFO"), "{e}");
+            assert!(write_atomic(&fifo, b"x").is_err());
+            use std::os::unix::fs::FileTypeExt;
+            assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+        } else {
+            eprintln!("SKIPPED: no mkfifo here, the FIFO case did not run");
+        }
+        let e = check(dir.path(), Kind::Json).unwrap_err().to_string();
+        assert!(e.contains("is a folder"), "{e}");
+    }
+
+    #[test]
+    fn a_symlink_is_written_through_and_stays_a_link() {
+        let dir = tempfile::tempdir().unwrap();
+        let (target, link) = (dir.path().join("real.json"), dir.path().join("link.json"));
+        std::fs::write(&target, b"old").unwrap();
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        check(&link, Kind::Json).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        // Through a batch too.
+        let mut batch = Batch::default();
+        batch.add(&link, b"batch".to_vec());
+        batch.commit().unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"batch");
+        // A link to a device is refused like the device; a dangling link is refused.
+        let to_dev = dir.path().join("dev.json");
+        std::os::unix::fs::symlink("/dev/full", &to_dev).unwrap();
+        assert!(check(&to_dev, Kind::Json).unwrap_err().to_string().contains("a device"));
+        let dangling = dir.path().join("dangling.json");
+        std::os::unix::fs::symlink(dir.path().join("nowhere/x.json"), &dangling).unwrap();
+        assert!(check(&dangling, Kind::Json)
+            .unwrap_err()
+            .to_string()
+            .contains("symlink"));
+    }
+
+    #[test]
+    fn outputs_that_name_the_same_file_or_an_input_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let a = d.join("a.png");
+        let dot = d.join(".").join("a.png");
+        let e = check_distinct(&[("--out", &a), ("--fail-mask", &dot)], &[]).unwrap_err();
+        assert!(
+            e.to_string().contains("--out and --fail-mask name the same file"),
+            "{e}"
+        );
+        let stdout = Path::new("-");
+        assert!(check_distinct(&[("--json", stdout), ("--markdown", stdout)], &[]).is_err());
+        std::fs::write(&a, b"input").unwrap();
+        let link = d.join("l.png");
+        std::os::unix::fs::symlink(&a, &link).unwrap();
+        let e = check_distinct(&[("--json", &link)], &[("image A", &a)]).unwrap_err();
+        assert!(
+            e.to_string().contains("--json would overwrite the input image A"),
+            "{e}"
+        );
+        check_distinct(
+            &[("--out", &a), ("--timings", &d.join("t.json")), ("--json", stdout)],
+            &[],
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn an_unwritable_folder_is_found_by_check() {
+        let dir = tempfile::tempdir().unwrap();
+        let ro = dir.path().join("ro");
+        std::fs::create_dir(&ro).unwrap();
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+        if probe_writable(&ro).is_ok() {
+            // Root writes through permissions: try an immutable folder instead.
+            let immutable = std::process::Command::new("chattr")
+                .arg("+i")
+                .arg(&ro)
+                .status()
+                .is_ok_and(|s| s.success());
+            if !immutable {
+                eprintln!("SKIPPED: as root, with no chattr +i here, no folder is unwritable");
+                return;
+            }
+        }
+        let e = check(&ro.join("a.png"), Kind::Png).unwrap_err().to_string();
+        assert!(e.contains("cannot write in folder"), "{e}");
+        let _ = std::process::Command::new("chattr").arg("-i").arg(&ro).status();
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
     }
 
     #[test]

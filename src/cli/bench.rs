@@ -192,7 +192,16 @@ fn suite(args: SuiteArgs) -> Result<()> {
             args.threshold
         )));
     }
-    check_outputs(&[(c.json.as_deref(), Kind::Json), (args.markdown.as_deref(), Kind::Json)])?;
+    check_outputs(
+        &[
+            ("--json", c.json.as_deref(), Kind::Json),
+            ("--markdown", args.markdown.as_deref(), Kind::Json),
+        ],
+        &[
+            ("--baseline", args.baseline.as_deref()),
+            ("--compare", args.compare.as_deref()),
+        ],
+    )?;
     let read = |p: &PathBuf, what: &'static str| -> Result<suite::Baseline> {
         let text = speculum::error::read_text(p, what)?;
         Ok(suite::read_baseline(&text, &p.display().to_string())?)
@@ -289,7 +298,10 @@ fn dynamic(args: DynamicArgs) -> Result<()> {
     check_count("--frames", args.frames, 1)?;
     check_count("--warmup", args.warmup, 0)?;
     check_count("--rays", args.rays, 1)?;
-    check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
+    check_outputs(
+        &[("--json", c.json.as_deref(), Kind::Json)],
+        &[("--settings", args.frame.settings.as_deref())],
+    )?;
     // Every body count's scene first: a bad one fails before any GPU work.
     if !args.bodies.is_empty() && !args.cloth_res.is_empty() {
         anyhow::bail!("give --bodies or --cloth-res, not both");
@@ -454,7 +466,16 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
     if tris.is_empty() && args.scene.is_empty() {
         tris = vec![10_000, 100_000, 1_000_000];
     }
-    check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
+    let mut inputs = vec![("--rays-file", args.rays_file.as_deref())];
+    inputs.extend(args.scene.iter().map(|s| ("--scene", super::input_file(s))));
+    check_outputs(
+        &[
+            ("--json", c.json.as_deref(), Kind::Json),
+            ("--dump-rays", args.dump_rays.as_deref(), Kind::Json),
+            ("--dump-hits", args.dump_hits.as_deref(), Kind::Json),
+        ],
+        &inputs,
+    )?;
     // Load every input first: a bad scene fails before any GPU work.
     let mut inputs = Vec::new();
     for &n in &tris {
@@ -570,7 +591,10 @@ fn reflect(args: ReflectArgs) -> Result<()> {
     let c = &args.common;
     let settings = args.frame.resolve()?;
     check_count("--frames", args.frames, 1)?;
-    check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
+    check_outputs(
+        &[("--json", c.json.as_deref(), Kind::Json)],
+        &[("--settings", args.frame.settings.as_deref())],
+    )?;
     let scene = args.view.load(&args.scene)?;
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
@@ -626,7 +650,10 @@ fn modes(args: ModesArgs) -> Result<()> {
     check_count("--warmup", args.warmup, 0)?;
     // SSIM against rt needs an image its window fits in: known before any GPU work.
     speculum::metrics::check_size(settings.width, settings.height)?;
-    check_outputs(&[(c.json.as_deref(), Kind::Json)])?;
+    check_outputs(
+        &[("--json", c.json.as_deref(), Kind::Json)],
+        &[("--settings", args.frame.settings.as_deref())],
+    )?;
     // Load every scene first: a bad one fails before any GPU work.
     let scenes = args
         .scene

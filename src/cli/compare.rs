@@ -51,7 +51,13 @@ pub fn run(args: CompareArgs) -> Result<()> {
             anyhow::bail!("{flag} must be a finite number");
         }
     }
-    check_outputs(&[(args.diff.as_deref(), Kind::Png), (args.json.as_deref(), Kind::Json)])?;
+    check_outputs(
+        &[
+            ("--diff", args.diff.as_deref(), Kind::Png),
+            ("--json", args.json.as_deref(), Kind::Json),
+        ],
+        &[("image A", Some(&args.a)), ("image B", Some(&args.b))],
+    )?;
     let (ia, ib) = (metrics::load_rgba(&args.a)?, metrics::load_rgba(&args.b)?);
     metrics::check_same_size(&args.a, &ia, &args.b, &ib)?;
     let c = metrics::compare_rgba8(ia.as_raw(), ib.as_raw(), ia.width(), ia.height())?;

@@ -170,14 +170,29 @@ pub fn load_settings(path: Option<&Path>) -> Result<Settings> {
     Settings::from_json(&text).with_context(|| format!("invalid settings file '{}'", path.display()))
 }
 
-/// Checks report and image outputs before any GPU work.
-pub fn check_outputs(outputs: &[(Option<&Path>, speculum::output::Kind)]) -> Result<()> {
-    for (path, kind) in outputs {
+/// Checks report and image outputs (flag, path, kind) before any GPU work: each as
+/// `output::check`, then that no two name the same file and none names one of the
+/// run's `inputs` (flag, path).
+pub fn check_outputs(
+    outputs: &[(&str, Option<&Path>, speculum::output::Kind)],
+    inputs: &[(&str, Option<&Path>)],
+) -> Result<()> {
+    for (_, path, kind) in outputs {
         if let Some(p) = path {
             speculum::output::check(p, *kind)?;
         }
     }
+    let named: Vec<(&str, &Path)> = outputs.iter().filter_map(|(f, p, _)| Some((*f, (*p)?))).collect();
+    let inputs: Vec<(&str, &Path)> = inputs.iter().filter_map(|(f, p)| Some((*f, (*p)?))).collect();
+    speculum::output::check_distinct(&named, &inputs)?;
     Ok(())
+}
+
+/// A `--scene` (or similar) argument as an input file: the path when it names an
+/// existing file, `None` for a built-in name.
+pub fn input_file(arg: &str) -> Option<&Path> {
+    let p = Path::new(arg);
+    p.is_file().then_some(p)
 }
 
 /// Writes a JSON report to `path` (`-`: stdout), atomically.

@@ -119,13 +119,19 @@ pub fn run(args: RenderArgs) -> Result<()> {
         speculum::output::check_dir(dir)?;
     }
     let reference_out = args.reference.then(|| reference_path(&args.out));
-    check_outputs(&[
-        (Some(&args.out), Kind::Png),
-        (reference_out.as_deref(), Kind::Png),
-        (args.fail_mask.as_deref(), Kind::Png),
-        (args.timings.as_deref(), Kind::Json),
-        (args.contact_sheet.as_deref(), Kind::Png),
-    ])?;
+    check_outputs(
+        &[
+            ("--out", Some(&args.out), Kind::Png),
+            ("--reference (its <out>_rt.png)", reference_out.as_deref(), Kind::Png),
+            ("--fail-mask", args.fail_mask.as_deref(), Kind::Png),
+            ("--timings", args.timings.as_deref(), Kind::Json),
+            ("--contact-sheet", args.contact_sheet.as_deref(), Kind::Png),
+        ],
+        &[
+            ("--scene", super::input_file(&args.scene)),
+            ("--settings", args.frame.settings.as_deref()),
+        ],
+    )?;
     let scene = args.view.load(&args.scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");

@@ -86,21 +86,66 @@ pub enum Error {
 /// Shorthand used throughout the crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
-/// The bytes of file `path`, or `Error::Io` naming it as `what` ("scene file", ...).
-pub fn read_file(path: &std::path::Path, what: &'static str) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|source| Error::Io {
-        what,
-        path: path.into(),
-        source,
-    })
+/// Size bounds of what Speculum reads, in bytes. An input beyond its kind's bound is
+/// refused before it is read, so an endless or huge input (`/dev/zero`, a wrong path)
+/// never fills memory; inputs must be regular files.
+pub mod bounds {
+    /// Scene files, settings files, sweep files, demo scripts, MTL files.
+    pub const TEXT: u64 = 16 << 20;
+    /// `tune`'s points CSV and `bench suite` baselines.
+    pub const TABLE: u64 = 256 << 20;
+    /// OBJ and PLY models (1.4M triangles, about lavapipe's limit, take ~100 MB as OBJ).
+    pub const MODEL: u64 = 1 << 30;
+    /// Textures and `compare`'s images (encoded).
+    pub const IMAGE: u64 = 256 << 20;
+    /// `bench lbvh --rays-file` (32 bytes a ray: 32M rays).
+    pub const RAYS: u64 = 1 << 30;
 }
 
-/// The text of file `path`, or `Error::Io` naming it as `what`.
-pub fn read_text(path: &std::path::Path, what: &'static str) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|source| Error::Io {
+/// The bytes of file `path`, or an error naming it as `what` ("scene file", ...): it
+/// must be a regular file of at most `max` bytes (see `bounds`).
+pub fn read_file(path: &std::path::Path, what: &'static str, max: u64) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let io = |source| Error::Io {
         what,
         path: path.into(),
         source,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    let refuse = |why: String| Error::Input(format!("{what} '{}': {why}", path.display()));
+    if !meta.is_file() {
+        let kind = if meta.is_dir() {
+            "a folder"
+        } else {
+            "a device, FIFO or socket"
+        };
+        return Err(refuse(format!("is {kind}, not a regular file")));
+    }
+    let too_big = |n: u64| {
+        refuse(format!(
+            "is {n} bytes, more than the {} MiB a {what} may have",
+            max >> 20
+        ))
+    };
+    if meta.len() > max {
+        return Err(too_big(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    // Bounded again while reading: the file may grow after its size was read.
+    file.take(max + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > max {
+        return Err(too_big(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// The text of file `path` (UTF-8), bounded as `read_file`.
+pub fn read_text(path: &std::path::Path, what: &'static str, max: u64) -> Result<String> {
+    String::from_utf8(read_file(path, what, max)?).map_err(|e| Error::Io {
+        what,
+        path: path.into(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
     })
 }
 

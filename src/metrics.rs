@@ -122,7 +122,7 @@ pub fn compare_rgba8(a: &[u8], b: &[u8], w: u32, h: u32) -> Result<Comparison> {
 
 /// Loads an image file as RGBA8.
 pub fn load_rgba(p: &std::path::Path) -> Result<image::RgbaImage> {
-    let bytes = crate::error::read_file(p, "image")?;
+    let bytes = crate::error::read_file(p, "image", crate::error::bounds::IMAGE)?;
     Ok(image::load_from_memory(&bytes)
         .map_err(|e| Error::BadAsset {
             what: "image",

@@ -203,7 +203,7 @@ fn suite(args: SuiteArgs) -> Result<()> {
         ],
     )?;
     let read = |p: &PathBuf, what: &'static str| -> Result<suite::Baseline> {
-        let text = speculum::error::read_text(p, what)?;
+        let text = speculum::error::read_text(p, what, speculum::error::bounds::TABLE)?;
         Ok(suite::read_baseline(&text, &p.display().to_string())?)
     };
     let baseline = args.baseline.as_ref().map(|p| read(p, "baseline")).transpose()?;
@@ -440,7 +440,7 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
     };
     let file_rays = match &args.rays_file {
         Some(p) => {
-            let bytes = speculum::error::read_file(p, "rays file")?;
+            let bytes = speculum::error::read_file(p, "rays file", speculum::error::bounds::RAYS)?;
             Some(speculum::bench::rays_file::read_rays(&bytes, &p.display().to_string())?)
         }
         None => None,

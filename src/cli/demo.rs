@@ -67,7 +67,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
     }
     let steps = match (&args.script, args.frames) {
         (Some(path), _) => {
-            let text = speculum::error::read_text(path, "demo script")?;
+            let text = speculum::error::read_text(path, "demo script", speculum::error::bounds::TEXT)?;
             script::parse(&text)?
         }
         (None, Some(n)) => {

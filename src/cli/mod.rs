@@ -165,8 +165,7 @@ pub fn load_settings(path: Option<&Path>) -> Result<Settings> {
     let Some(path) = path else {
         return Ok(Settings::default());
     };
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read settings file '{}'", path.display()))?;
+    let text = speculum::error::read_text(path, "settings file", speculum::error::bounds::TEXT)?;
     Settings::from_json(&text).with_context(|| format!("invalid settings file '{}'", path.display()))
 }
 

@@ -87,7 +87,10 @@ fn write_outputs(
 pub fn run(args: TuneArgs) -> Result<()> {
     // Everything that can be known before the GPU is touched is checked here.
     let (text, what) = match &args.sweep {
-        Some(p) => (speculum::error::read_text(p, "sweep file")?, p.display().to_string()),
+        Some(p) => (
+            speculum::error::read_text(p, "sweep file", speculum::error::bounds::TEXT)?,
+            p.display().to_string(),
+        ),
         None => (String::new(), "(command line)".to_string()),
     };
     let sweep = Sweep::parse(&text, &what, &args.axis)?;
@@ -112,7 +115,11 @@ pub fn run(args: TuneArgs) -> Result<()> {
     let csv_path = args.out.join("points.csv");
     let mut results: Vec<PointResult> = Vec::new();
     if args.resume && csv_path.exists() {
-        let (old_axes, old) = tune::from_csv(&speculum::error::read_text(&csv_path, "points CSV")?)?;
+        let (old_axes, old) = tune::from_csv(&speculum::error::read_text(
+            &csv_path,
+            "points CSV",
+            speculum::error::bounds::TABLE,
+        )?)?;
         if old_axes != axes {
             anyhow::bail!(speculum::Error::Input(format!(
                 "--resume: {} has axes {old_axes:?}, this sweep {axes:?}",
@@ -204,7 +211,7 @@ pub fn run(args: TuneArgs) -> Result<()> {
 pub fn plot(args: PlotArgs) -> Result<()> {
     speculum::output::check(&args.out, Kind::Png)?;
     tune::plot::check_font()?;
-    let text = speculum::error::read_text(&args.csv, "points CSV")?;
+    let text = speculum::error::read_text(&args.csv, "points CSV", speculum::error::bounds::TABLE)?;
     let (_, results) = tune::from_csv(&text)?;
     speculum::output::write_atomic(&args.out, &tune::plot::pareto_png(&results)?)?;
     println!("wrote {}", args.out.display());

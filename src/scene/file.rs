@@ -501,7 +501,7 @@ impl SceneFile {
 
 /// Reads and builds a scene file.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = crate::error::read_text(path, "scene file")?;
+    let text = crate::error::read_text(path, "scene file", crate::error::bounds::TEXT)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     SceneFile::parse(path, &text)?.build(path, &dir)
 }

@@ -174,7 +174,7 @@ fn check_mtl_colors(bytes: &[u8], path: &Path) -> Result<()> {
 
 /// Loads an OBJ file (and the MTL files it names) as a scene.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = crate::error::read_file(path, "OBJ file")?;
+    let text = crate::error::read_file(path, "OBJ file", crate::error::bounds::MODEL)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -188,8 +188,8 @@ pub fn load(path: &Path) -> Result<Scene> {
     let (models, materials) = tobj::load_obj_buf(&mut text.as_slice(), &options, |mtl: &Path| {
         let mtl_path: PathBuf = dir.join(mtl);
         mtl_files.borrow_mut().push(mtl_path.clone());
-        match std::fs::read(&mtl_path) {
-            Err(source) if source.kind() == std::io::ErrorKind::NotFound => {
+        match crate::error::read_file(&mtl_path, "MTL file", crate::error::bounds::TEXT) {
+            Err(Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
                 // A missing MTL is not fatal: its materials take the default.
                 missing_mtl.borrow_mut().push(format!(
                     "MTL file '{}' not found: the materials of '{}' are the default grey",
@@ -198,12 +198,8 @@ pub fn load(path: &Path) -> Result<Scene> {
                 ));
                 Err(tobj::LoadError::OpenFileFailed)
             }
-            Err(source) => {
-                mtl_failure.replace(Some(Error::Io {
-                    what: "MTL file",
-                    path: mtl_path,
-                    source,
-                }));
+            Err(e) => {
+                mtl_failure.replace(Some(e));
                 Err(tobj::LoadError::OpenFileFailed)
             }
             Ok(bytes) => check_mtl_colors(&bytes, &mtl_path)

@@ -14,7 +14,7 @@ use std::path::Path;
 
 /// Loads a PLY file as a scene with the camera framing it.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = crate::error::read_file(path, "PLY file")?;
+    let bytes = crate::error::read_file(path, "PLY file", crate::error::bounds::MODEL)?;
     let bad = |detail: String| Error::BadAsset {
         what: "PLY file",
         path: path.into(),

@@ -30,7 +30,7 @@ pub struct Texture {
 /// Reads and decodes a texture file. A missing or unreadable file is `Error::Io`; one
 /// that is not a PNG or JPEG, or does not decode, is `Error::BadAsset`.
 pub fn load(path: &Path) -> Result<Texture> {
-    let bytes = crate::error::read_file(path, "texture")?;
+    let bytes = crate::error::read_file(path, "texture", crate::error::bounds::IMAGE)?;
     decode(&bytes, &path.display().to_string()).map_err(|detail| Error::BadAsset {
         what: "texture",
         path: path.into(),

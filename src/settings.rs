@@ -273,9 +273,10 @@ impl Settings {
                 self.blur_radius, self.blur_band
             )));
         }
-        if self.ssr_stride.is_nan() || self.ssr_stride < 0.5 {
+        // Finite: an infinite stride would be written back as JSON `null`, unreadable.
+        if !(self.ssr_stride >= 0.5 && self.ssr_stride <= MAX_SIDE as f32) {
             return Err(Error::Settings(format!(
-                "ssr_stride {} must be at least 0.5 pixels",
+                "ssr_stride {} must be at least 0.5 and at most {MAX_SIDE} pixels",
                 self.ssr_stride
             )));
         }
@@ -381,6 +382,7 @@ mod tests {
         );
         assert_eq!(d.with_field("mode", "rt").unwrap().mode, Mode::Rt);
         assert_eq!(d.with_field("ssr_stride", "2.5").unwrap().ssr_stride, 2.5);
+        assert!(d.with_field("ssr_stride", "1e300").is_err(), "infinite as f32");
         assert!(d.with_field("shadow_rays", "true").unwrap().shadow_rays);
         for (name, value, says) in [
             ("bounces", "2", "unknown setting 'bounces'"),

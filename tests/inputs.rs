@@ -126,3 +126,244 @@ fn inputs_beyond_their_bound_are_refused_before_they_are_read() {
     assert_eq!(code, 1);
     assert!(!err.contains("more than"), "{err}");
 }
+
+/// A scene file whose camera, sun, sky or materials hold what the flags refuse is
+/// refused the same way (issue 20, class 6); out-of-range material factors are clamped
+/// with one warning, as MTL values are.
+#[test]
+fn scene_files_are_checked_like_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = |camera: &str, sun: &str, extra: &str, material: &str| {
+        format!(
+            "name = \"t\"\n[camera]\n{camera}\n[sun]\n{sun}\n{extra}\n[[materials]]\nname = \"m\"\n{material}\n\
+             [[instance]]\nplane = [4.0, 4.0]\nmaterial = \"m\"\n"
+        )
+    };
+    let cam = "position = [0.0, 2.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 50.0\nnear = 0.1\nfar = 50.0";
+    let sun = "direction = [0.3, 0.8, 0.4]\ncolor = [1.0, 1.0, 1.0]\nintensity = 3.0";
+    let mat = "base_color = [0.5, 0.5, 0.5]\nroughness = 0.2\nreflectivity = 0.5";
+    let cases: Vec<(String, &str)> = vec![
+        (
+            scene(&cam.replace("[0.0, 2.0, 5.0]", "[nan, 2.0, 5.0]"), sun, "", mat),
+            "not finite",
+        ),
+        (
+            scene(&cam.replace("[0.0, 2.0, 5.0]", "[inf, 2.0, 5.0]"), sun, "", mat),
+            "not finite",
+        ),
+        (
+            scene(&cam.replace("[0.0, 2.0, 5.0]", "[1e39, 2.0, 5.0]"), sun, "", mat),
+            "not finite",
+        ),
+        (
+            scene(&cam.replace("[0.0, 2.0, 5.0]", "[1e30, 2.0, 5.0]"), sun, "", mat),
+            "beyond 1e7 units",
+        ),
+        (
+            scene(&cam.replace("fov = 50.0", "fov = 0.0"), sun, "", mat),
+            "field of view 0 is outside",
+        ),
+        (
+            scene(&cam.replace("fov = 50.0", "fov = 180.0"), sun, "", mat),
+            "field of view 180 is outside",
+        ),
+        (
+            scene(&cam.replace("fov = 50.0", "fov = -5.0"), sun, "", mat),
+            "field of view -5 is outside",
+        ),
+        (
+            scene(&cam.replace("near = 0.1", "near = 0.0"), sun, "", mat),
+            "0 < near < far",
+        ),
+        (
+            scene(&cam.replace("far = 50.0", "far = inf"), sun, "", mat),
+            "0 < near < far",
+        ),
+        (
+            scene(cam, &sun.replace("[0.3, 0.8, 0.4]", "[0.0, 0.0, 0.0]"), "", mat),
+            "has no direction",
+        ),
+        (
+            scene(cam, &sun.replace("intensity = 3.0", "intensity = nan"), "", mat),
+            "sun intensity NaN",
+        ),
+        (
+            scene(
+                cam,
+                sun,
+                "[sky]\nzenith = [nan, 0.5, 0.5]\nhorizon = [0.5, 0.5, 0.5]",
+                mat,
+            ),
+            "sky zenith colour",
+        ),
+        (
+            scene(cam, sun, "", &format!("{mat}\nmetallic = nan")),
+            "must be finite numbers",
+        ),
+    ];
+    for (i, (text, needle)) in cases.iter().enumerate() {
+        let name = format!("s{i}.toml");
+        std::fs::write(d.join(&name), text).unwrap();
+        assert_refused(
+            &["render", "--scene", &name, "--width", "64", "--height", "48"],
+            d,
+            &[needle, &name],
+        );
+        assert_refused(
+            &["bench", "modes", "--scene", &name, "--width", "64", "--height", "48"],
+            d,
+            &[needle],
+        );
+    }
+    // Out-of-range factors: clamped, with one warning naming the material and file.
+    std::fs::write(
+        d.join("clamp.toml"),
+        scene(
+            cam,
+            sun,
+            "",
+            "base_color = [2.0, 0.5, 0.5]\nroughness = -1.0\nreflectivity = 5.0",
+        ),
+    )
+    .unwrap();
+    let (code, err) = speculum(
+        &[
+            "render",
+            "--scene",
+            "clamp.toml",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--frames",
+            "1",
+            "--quiet",
+        ],
+        d,
+    );
+    assert_eq!(code, 0, "{err}");
+    let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
+    assert_eq!(warnings.len(), 1, "{err}");
+    for n in [
+        "material 'm'",
+        "base colour red 2 clamped to 1",
+        "roughness -1 clamped to 0",
+        "reflectivity 5 clamped to 1",
+        "clamp.toml",
+    ] {
+        assert!(warnings[0].contains(n), "'{n}' not in {}", warnings[0]);
+    }
+    // The flags' own edge cases.
+    let small = ["--width", "64", "--height", "48"];
+    assert_refused(
+        &[&["render", "--fov", "1e-30"][..], &small].concat(),
+        d,
+        &["--fov 0.000000000000000000000000000001 is outside"],
+    );
+    assert_refused(
+        &[&["render", "--camera-pos", "1e30,1e30,1e30"][..], &small].concat(),
+        d,
+        &["beyond 1e7 units"],
+    );
+}
+
+/// Issue 20's smaller defects (class 8), each one line and exit 1.
+#[test]
+fn small_defects_give_clear_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Suite baselines: a wrong or missing schema, or no cases.
+    let base = |schema: &str, cases: &str| {
+        format!("{{{schema}\"kind\": \"bench.suite\", \"suite_version\": 1, \"cases\": [{cases}]}}")
+    };
+    let case =
+        "{\"id\": \"x\", \"passes_ms\": {\"frame\": {\"median\": 1.0, \"p10\": 1.0, \"p90\": 1.0, \"samples\": 1}}}";
+    for (name, text, needle) in [
+        ("b99.json", base("\"schema\": 99, ", case), "schema 99"),
+        ("bnone.json", base("", case), "schema missing"),
+        ("bempty.json", base("\"schema\": 1, ", ""), "no cases"),
+    ] {
+        std::fs::write(d.join(name), text).unwrap();
+        assert_refused(
+            &["bench", "suite", "--quick", "--compare", name, "--baseline", name],
+            d,
+            &[needle, name],
+        );
+    }
+    // A sweep file's TOML error is one line, with its line number.
+    std::fs::write(d.join("sweep.toml"), "scenes = [\"room\"]\n[axes\nx = 1\n").unwrap();
+    assert_refused(&["tune", "sweep.toml"], d, &["sweep file", "line 2"]);
+    assert_refused(&["bench", "lbvh", "--tris", "100", "--rays", "0"], d, &["--rays"]);
+    // A ray with tmin > tmax says so.
+    let ray: Vec<u8> = [0.0f32, 0.0, 0.0, 0.0, 0.0, 1.0, 5.0, 1.0]
+        .iter()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    std::fs::write(d.join("r.bin"), ray).unwrap();
+    assert_refused(
+        &["bench", "lbvh", "--tris", "100", "--rays-file", "r.bin"],
+        d,
+        &["ray 0", "tmin > tmax"],
+    );
+    // An OBJ with a byte that is not UTF-8 in a comment loads.
+    let mut obj = b"# caf\xe9 \xff\n".to_vec();
+    obj.extend_from_slice(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    std::fs::write(d.join("latin1.obj"), obj).unwrap();
+    let (code, err) = speculum(
+        &[
+            "render",
+            "--scene",
+            "latin1.obj",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--frames",
+            "1",
+            "--quiet",
+        ],
+        d,
+    );
+    assert_eq!(code, 0, "{err}");
+}
+
+/// Sizes that would exhaust memory or time are refused before anything is made
+/// (issue 20, class 7): a sphere tessellated 100,000 x 100,000, a sweep range of a
+/// billion steps, a grid of 10^10 points, more bodies than the device's buffers hold.
+#[test]
+fn sizes_are_bounded_before_anything_is_made() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("ball.toml"),
+        "[camera]\nposition = [0.0, 2.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 50.0\nnear = 0.1\nfar = 50.0\n\
+         [sun]\ndirection = [0.3, 0.8, 0.4]\ncolor = [1.0, 1.0, 1.0]\nintensity = 3.0\n\
+         [[materials]]\nname = \"m\"\nbase_color = [0.5, 0.5, 0.5]\nroughness = 0.5\n\
+         [[instance]]\nsphere = 1.0\nsegments = 100000\nrings = 100000\nmaterial = \"m\"\n",
+    )
+    .unwrap();
+    assert_refused(
+        &["render", "--scene", "ball.toml"],
+        d,
+        &["segments in 3..=1024", "ball.toml"],
+    );
+    std::fs::write(
+        d.join("sweep.toml"),
+        "scenes = [\"room\"]\n[axes]\nssr_stride = { min = 1, max = 16, steps = 1000000000 }\n",
+    )
+    .unwrap();
+    assert_refused(&["tune", "sweep.toml"], d, &["1000000000 steps", "100000 points"]);
+    std::fs::write(
+        d.join("grid.toml"),
+        "scenes = [\"room\"]\n[axes]\nssr_stride = { min = 1, max = 16, steps = 100000 }\n\
+         ssr_thickness = { min = 0.01, max = 1, steps = 100000 }\n",
+    )
+    .unwrap();
+    assert_refused(&["tune", "grid.toml"], d, &["a grid of 10000000000 points"]);
+    assert_refused(
+        &["render", "--scene", "stress", "--bodies", "5000"],
+        d,
+        &["--bodies 5000", "1..=4000"],
+    );
+}

@@ -37,9 +37,17 @@ pub fn read_rays(bytes: &[u8], what: &str) -> Result<Vec<Ray>> {
                 tmin: f[6],
                 tmax: f[7],
             };
-            let finite = f[..7].iter().all(|x| x.is_finite()) && !f[7].is_nan();
-            if !finite || f[3..6].iter().all(|x| *x == 0.0) || f[6] > f[7] {
-                return Err(bad(format!("ray {n} is not a ray: {f:?}")));
+            let why = if !f[..7].iter().all(|x| x.is_finite()) || f[7].is_nan() {
+                Some("a NaN or infinite origin, direction or tmin")
+            } else if f[3..6].iter().all(|x| *x == 0.0) {
+                Some("a zero direction")
+            } else if f[6] > f[7] {
+                Some("tmin > tmax")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(bad(format!("ray {n} is not a ray ({why}): {f:?}")));
             }
             Ok(ray)
         })

@@ -236,6 +236,17 @@ pub fn read_baseline(text: &str, what: &str) -> Result<Baseline> {
             v["kind"]
         )));
     }
+    if v["schema"] != crate::report::SCHEMA {
+        return Err(bad(format!(
+            "report schema {} (this is schema {}): run the baseline again",
+            if v["schema"].is_null() {
+                "missing".to_string()
+            } else {
+                v["schema"].to_string()
+            },
+            crate::report::SCHEMA
+        )));
+    }
     if v["suite_version"] != SUITE_VERSION {
         return Err(bad(format!(
             "suite version {} (this is version {SUITE_VERSION}): run the baseline again",
@@ -243,6 +254,9 @@ pub fn read_baseline(text: &str, what: &str) -> Result<Baseline> {
         )));
     }
     let cases = v["cases"].as_array().ok_or_else(|| bad("no cases array".into()))?;
+    if cases.is_empty() {
+        return Err(bad("no cases: nothing to compare against".into()));
+    }
     let mut out = Baseline::new();
     for c in cases {
         let id = c["id"].as_str().ok_or_else(|| bad("a case without an id".into()))?;
@@ -515,10 +529,13 @@ mod tests {
         for (text, says) in [
             ("nonsense", "not JSON"),
             ("{\"kind\": \"render\"}", "not a bench suite report"),
-            ("{\"kind\": \"bench.suite\", \"suite_version\": 0}", "suite version 0"),
-            ("{\"kind\": \"bench.suite\", \"suite_version\": 1}", "no cases"),
+            ("{\"kind\": \"bench.suite\", \"suite_version\": 1}", "schema missing"),
+            ("{\"kind\": \"bench.suite\", \"schema\": 99, \"suite_version\": 1}", "schema 99"),
+            ("{\"kind\": \"bench.suite\", \"schema\": 1, \"suite_version\": 0}", "suite version 0"),
+            ("{\"kind\": \"bench.suite\", \"schema\": 1, \"suite_version\": 1}", "no cases"),
+            ("{\"kind\": \"bench.suite\", \"schema\": 1, \"suite_version\": 1, \"cases\": []}", "no cases"),
             (
-                "{\"kind\": \"bench.suite\", \"suite_version\": 1, \"cases\": [{\"id\": \"a\", \"passes_ms\": {\"frame\": {\"median\": \"x\"}}}]}",
+                "{\"kind\": \"bench.suite\", \"schema\": 1, \"suite_version\": 1, \"cases\": [{\"id\": \"a\", \"passes_ms\": {\"frame\": {\"median\": \"x\"}}}]}",
                 "median is not a number",
             ),
         ] {

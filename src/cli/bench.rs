@@ -64,7 +64,7 @@ pub struct DynamicArgs {
     /// A scene with a [spawn] table (built-in, or a scene file).
     #[arg(long, default_value = "stress")]
     pub scene: String,
-    /// Body counts of a [spawn] scene, each measured in its own run (1..=20000;
+    /// Body counts of a [spawn] scene, each measured in its own run (1..=4000;
     /// default 10 100 1000).
     #[arg(long, num_args = 1..)]
     pub bodies: Vec<u32>,
@@ -433,6 +433,11 @@ fn valid_or_fail(valid: bool) -> Result<()> {
 fn lbvh(args: LbvhArgs) -> Result<()> {
     let c = &args.common;
     check_count("--repeats", args.repeats, 1)?;
+    if args.rays == 0 {
+        anyhow::bail!(speculum::Error::Input(
+            "--rays 0: each ray set needs at least one ray".into()
+        ));
+    }
     let bits = if args.bits == "63" {
         MortonBits::Bits63
     } else {
@@ -456,7 +461,7 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
     }
     let opts = Options {
         repeats: args.repeats,
-        rays: args.rays.max(1),
+        rays: args.rays,
         check_rays: args.check_rays,
         bits,
         file_rays,

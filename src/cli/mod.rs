@@ -86,7 +86,7 @@ pub struct ViewArgs {
     /// The floor a bare model (an .obj given as the scene) stands on [default: mirror].
     #[arg(long, value_enum)]
     pub floor: Option<speculum::scene::Floor>,
-    /// Bodies a scene with a [spawn] table drops (`stress`: 100 by default), 1..=20000.
+    /// Bodies a scene with a [spawn] table drops (`stress`: 100 by default), 1..=4000.
     #[arg(long)]
     pub bodies: Option<u32>,
 }
@@ -125,23 +125,18 @@ impl ViewArgs {
             cam.target = t;
         }
         if let Some(f) = self.fov {
-            if !(f > 0.0 && f < 180.0) {
-                anyhow::bail!("--fov {f} is outside (0, 180) degrees");
+            use speculum::scene::camera::MIN_FOV_DEG;
+            if !(MIN_FOV_DEG..180.0).contains(&f) {
+                anyhow::bail!("--fov {f} is outside [{MIN_FOV_DEG}, 180) degrees");
             }
             cam.fov_y_deg = f;
         }
-        let dir = cam.target - cam.position;
-        if dir.length() < 1e-6 * cam.position.length().max(1.0) {
-            anyhow::bail!("the camera's position and target are the same point ({})", cam.position);
-        }
-        if dir.normalize().cross(cam.up).length() < 1e-4 {
-            anyhow::bail!("the camera looks straight along its up axis (y): tilt --camera-target a little");
-        }
+        // The same checks as a scene file's camera and sun, with the same messages.
+        cam.check()
+            .map_err(|e| anyhow::anyhow!("{e} (with the --camera-*/--fov flags given)"))?;
         if let Some(d) = self.sun_dir {
-            if d.length() < 1e-6 {
-                anyhow::bail!("--sun-dir {d} has no direction");
-            }
-            scene.light.direction = d.normalize();
+            scene.light.direction = d.normalize_or_zero();
+            scene.light.check().map_err(|e| anyhow::anyhow!("--sun-dir: {e}"))?;
         }
         Ok(())
     }

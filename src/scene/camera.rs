@@ -16,7 +16,53 @@ pub struct Camera {
     pub far: f32,
 }
 
+/// The farthest a camera may stand from the origin (units): scenes are refused beyond
+/// this span too (f32 precision).
+pub const MAX_COORDINATE: f32 = 1e7;
+/// The narrowest vertical field of view (degrees): below it the projection degenerates.
+pub const MIN_FOV_DEG: f32 = 0.01;
+
 impl Camera {
+    /// What the passes rely on, whatever the camera came from (a scene file, a model's
+    /// default view, the command line): finite coordinates within `MAX_COORDINATE`, a
+    /// target apart from the position and off the up axis, a field of view in
+    /// [`MIN_FOV_DEG`, 180), 0 < near < far, both finite. The error is one sentence.
+    pub fn check(&self) -> Result<(), String> {
+        for (what, p) in [("position", self.position), ("target", self.target)] {
+            if !p.is_finite() {
+                return Err(format!("the camera {what} {p} is not finite"));
+            }
+            if p.abs().max_element() > MAX_COORDINATE {
+                return Err(format!(
+                    "the camera {what} {p} is beyond {MAX_COORDINATE:e} units from the origin (f32 precision)"
+                ));
+            }
+        }
+        if !(self.fov_y_deg >= MIN_FOV_DEG && self.fov_y_deg < 180.0) {
+            return Err(format!(
+                "the camera's field of view {} is outside [{MIN_FOV_DEG}, 180) degrees",
+                self.fov_y_deg
+            ));
+        }
+        if !(self.near > 0.0 && self.near.is_finite() && self.far.is_finite() && self.far > self.near) {
+            return Err(format!(
+                "the camera's near {} and far {} must be finite with 0 < near < far",
+                self.near, self.far
+            ));
+        }
+        let dir = self.target - self.position;
+        if dir.length() < 1e-6 * self.position.length().max(1.0) {
+            return Err(format!(
+                "the camera's position and target are the same point ({})",
+                self.position
+            ));
+        }
+        if !self.up.is_finite() || dir.normalize().cross(self.up.normalize_or_zero()).length() < 1e-4 {
+            return Err("the camera looks straight along its up axis (y): tilt its target a little".into());
+        }
+        Ok(())
+    }
+
     /// World → view (right-handed, looking down -z).
     pub fn view(&self) -> Mat4 {
         glam::camera::rh::view::look_at_mat4(self.position, self.target, self.up)

@@ -72,7 +72,7 @@ pub struct ClothDesc {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpawnDesc {
-    /// How many bodies (1..=20000).
+    /// How many bodies (1..=`MAX_BODIES`, 4000).
     pub count: u32,
     /// Ball radius, and 1/1.6 of the cubes' edge.
     pub size: f32,
@@ -202,7 +202,8 @@ pub struct Instance {
     /// A box of these full extents, centred.
     #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
     pub cuboid: Option<[f32; 3]>,
-    /// A UV sphere of this radius (`segments` around, `rings` pole to pole).
+    /// A UV sphere of this radius (`segments` around, 3..=1024, `rings` pole to pole,
+    /// 2..=512).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sphere: Option<f32>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -261,19 +262,28 @@ impl Instance {
     }
 }
 
-/// One line for a TOML error: the message and the line it is on.
-fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
+/// Most segments around and rings from pole to pole of a scene file's sphere.
+const MAX_SEGMENTS: u32 = 1024;
+const MAX_RINGS: u32 = 512;
+
+/// One line for a TOML error: the message and the line it is on (for scene and sweep
+/// files alike).
+pub(crate) fn toml_detail(text: &str, e: &toml::de::Error) -> String {
     let line = e
         .span()
         .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
     let message = e.message().trim().replace('\n', " ");
+    match line {
+        Some(l) => format!("line {l}: {message}"),
+        None => message,
+    }
+}
+
+fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
     Error::BadAsset {
         what: "scene file",
         path: path.into(),
-        detail: match line {
-            Some(l) => format!("line {l}: {message}"),
-            None => message,
-        },
+        detail: toml_detail(text, e),
     }
 }
 
@@ -306,7 +316,12 @@ impl SceneFile {
             if ids.iter().any(|(n, _)| n == &m.name) {
                 return Err(bad(format!("material '{}' is defined twice", m.name)));
             }
-            let mut material = Material::new(&m.name, m.base_color, m.roughness, m.reflectivity).metal(m.metallic);
+            let (mut material, note) = Material::new(&m.name, m.base_color, m.roughness, m.reflectivity)
+                .metal(m.metallic)
+                .clamped();
+            if let Some(note) = note {
+                b.warn(format!("{} in '{}'", note, path.display()));
+            }
             if let Some(file) = &m.texture {
                 material.texture = Some(b.texture(super::texture::load(&dir.join(file))?));
             }
@@ -352,7 +367,15 @@ impl SceneFile {
                 TriMesh::cuboid(Vec3::from(size))
             } else {
                 let r = inst.sphere.expect("one shape");
-                TriMesh::sphere(r, inst.segments.unwrap_or(48), inst.rings.unwrap_or(24))
+                let (segments, rings) = (inst.segments.unwrap_or(48), inst.rings.unwrap_or(24));
+                // Bounded before tessellating (2 x 1024 x 512 = 1M triangles at most).
+                if !(3..=MAX_SEGMENTS).contains(&segments) || !(2..=MAX_RINGS).contains(&rings) {
+                    return Err(bad(format!(
+                        "instance {}: a sphere takes segments in 3..={MAX_SEGMENTS} and rings in 2..={MAX_RINGS}, not {segments} and {rings}",
+                        i + 1
+                    )));
+                }
+                TriMesh::sphere(r, segments, rings)
             };
             let material = inst
                 .material
@@ -495,7 +518,11 @@ impl SceneFile {
                 horizon: Vec3::from(sky.horizon),
             });
         }
-        b.build()
+        // What the checks find is in this file: name it, not only the scene.
+        b.build().map_err(|e| match e {
+            Error::BadGeometry { detail, .. } => bad(detail),
+            e => e,
+        })
     }
 }
 

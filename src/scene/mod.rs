@@ -46,6 +46,45 @@ pub struct Material {
 }
 
 impl Material {
+    /// Every factor a finite number. (Out-of-range ones are clamped into [0, 1] on
+    /// the way to the GPU; the loaders say so in a warning.)
+    pub fn check(&self) -> std::result::Result<(), String> {
+        let finite = self.albedo.is_finite()
+            && self.roughness.is_finite()
+            && self.reflectivity.is_finite()
+            && self.metallic.is_finite();
+        if !finite {
+            return Err(format!(
+                "material '{}': base colour {}, roughness {}, reflectivity {} and metallic {} must be finite numbers",
+                self.name, self.albedo, self.roughness, self.reflectivity, self.metallic
+            ));
+        }
+        Ok(())
+    }
+
+    /// The material with every factor clamped into [0, 1], and a note of what changed
+    /// (`None` when nothing did). NaN is not clamped: `check` refuses it.
+    pub fn clamped(mut self) -> (Self, Option<String>) {
+        let mut notes = Vec::new();
+        let mut clamp = |what: &str, x: &mut f32| {
+            if *x < 0.0 || *x > 1.0 {
+                let c = x.clamp(0.0, 1.0);
+                notes.push(format!("{what} {x} clamped to {c}"));
+                *x = c;
+            }
+        };
+        let mut a = self.albedo.to_array();
+        for (i, c) in a.iter_mut().enumerate() {
+            clamp(["base colour red", "base colour green", "base colour blue"][i], c);
+        }
+        self.albedo = Vec3::from(a);
+        clamp("roughness", &mut self.roughness);
+        clamp("reflectivity", &mut self.reflectivity);
+        clamp("metallic", &mut self.metallic);
+        let note = (!notes.is_empty()).then(|| format!("material '{}': {}", self.name, notes.join(", ")));
+        (self, note)
+    }
+
     pub fn new(name: &str, albedo: [f32; 3], roughness: f32, reflectivity: f32) -> Self {
         Self {
             name: name.into(),
@@ -132,8 +171,11 @@ impl Body {
     }
 }
 
-/// Most bodies a scene may spawn (`Spawn::count`, `--bodies`).
-pub const MAX_BODIES: u32 = 20_000;
+/// Most bodies a scene may spawn (`Spawn::count`, `--bodies`): what lavapipe's
+/// 128 MiB `maxStorageBufferRange` holds. 4,000 bodies make about 1.9M dynamic
+/// triangles, whose BVH nodes take 124 MiB; 5,000 need 148 MiB (20,000, the old
+/// maximum, was refused by the device at buffer creation).
+pub const MAX_BODIES: u32 = 4_000;
 
 /// A grid of bodies a scene file asks for (`[spawn]`): the scalability test of the
 /// dynamic geometry (`stress`). Bodies alternate between balls of radius `size` and
@@ -218,11 +260,39 @@ pub struct Light {
     pub intensity: f32,
 }
 
+impl Light {
+    /// A finite direction that is not zero, a finite colour and intensity >= 0.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        if !self.direction.is_finite() || self.direction.length() < 1e-6 {
+            return Err(format!("the sun direction {} has no direction", self.direction));
+        }
+        if !(self.color.is_finite() && self.color.min_element() >= 0.0) {
+            return Err(format!("the sun colour {} must be finite and >= 0", self.color));
+        }
+        if !(self.intensity.is_finite() && self.intensity >= 0.0) {
+            return Err(format!("the sun intensity {} must be finite and >= 0", self.intensity));
+        }
+        Ok(())
+    }
+}
+
 /// Sky colours, also used as hemispherical ambient light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sky {
     pub zenith: Vec3,
     pub horizon: Vec3,
+}
+
+impl Sky {
+    /// Finite colours >= 0.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        for (what, c) in [("zenith", self.zenith), ("horizon", self.horizon)] {
+            if !(c.is_finite() && c.min_element() >= 0.0) {
+                return Err(format!("the sky {what} colour {c} must be finite and >= 0"));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A renderable scene.
@@ -379,6 +449,12 @@ impl SceneBuilder {
         self
     }
 
+    /// Adds a warning the scene's user sees (one line).
+    pub fn warn(&mut self, warning: String) -> &mut Self {
+        self.scene.warnings.push(warning);
+        self
+    }
+
     pub fn sky(&mut self, sky: Sky) -> &mut Self {
         self.scene.sky = sky;
         self
@@ -512,6 +588,14 @@ impl Scene {
         };
         if self.indices.is_empty() || self.vertices.is_empty() {
             return bad("the scene has no triangles".into());
+        }
+        // One check for the view, the sun, the sky and the materials, whatever they
+        // came from (the command line's flags go through the same ones).
+        self.camera.check().or_else(bad)?;
+        self.light.check().or_else(bad)?;
+        self.sky.check().or_else(bad)?;
+        for m in &self.materials {
+            m.check().or_else(bad)?;
         }
         if !self.indices.len().is_multiple_of(3) {
             return bad(format!(

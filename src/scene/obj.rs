@@ -172,9 +172,19 @@ fn check_mtl_colors(bytes: &[u8], path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// `bytes` as UTF-8, any invalid sequence replaced by U+FFFD (no copy when valid).
+fn utf8_lossy(bytes: Vec<u8>) -> Vec<u8> {
+    match String::from_utf8(bytes) {
+        Ok(s) => s.into_bytes(),
+        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned().into_bytes(),
+    }
+}
+
 /// Loads an OBJ file (and the MTL files it names) as a scene.
 pub fn load(path: &Path) -> Result<Scene> {
-    let text = crate::error::read_file(path, "OBJ file", crate::error::bounds::MODEL)?;
+    // OBJ is bytes: a comment (or a name) may hold anything, so bytes that are not
+    // UTF-8 become U+FFFD instead of failing tobj's line reader.
+    let text = utf8_lossy(crate::error::read_file(path, "OBJ file", crate::error::bounds::MODEL)?);
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -202,12 +212,13 @@ pub fn load(path: &Path) -> Result<Scene> {
                 mtl_failure.replace(Some(e));
                 Err(tobj::LoadError::OpenFileFailed)
             }
-            Ok(bytes) => check_mtl_colors(&bytes, &mtl_path)
+            Ok(bytes) => Ok(utf8_lossy(bytes))
+                .and_then(|bytes| check_mtl_colors(&bytes, &mtl_path).map(|_| bytes))
                 .map_err(|e| {
                     mtl_failure.replace(Some(e));
                     tobj::LoadError::MaterialParseError
                 })
-                .and_then(|_| tobj::load_mtl_buf(&mut bytes.as_slice()))
+                .and_then(|bytes| tobj::load_mtl_buf(&mut bytes.as_slice()))
                 .inspect_err(|e| {
                     if mtl_failure.borrow().is_some() {
                         return;

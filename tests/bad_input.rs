@@ -283,13 +283,8 @@ fn frame_counts_out_of_bounds() {
 
 /// Runs the binary with exactly `args` in `dir`; returns (success, stderr).
 fn run_raw(args: &[&str], dir: &Path) -> (bool, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(args)
-        .env("SPECULUM_VALIDATION", "1")
-        .current_dir(dir)
-        .output()
-        .expect("run speculum");
-    (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
+    let (code, stderr) = common::speculum_in(args, dir);
+    (code == 0, stderr)
 }
 
 /// Device limits are checked before any buffer is bound: a 6000x6000 frame (its pixel

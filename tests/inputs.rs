@@ -32,6 +32,9 @@ fn speculum(args: &[&str], dir: &Path) -> (i32, String) {
     }
 }
 
+/// A one-frame render, small and silent.
+const QUICK: [&str; 7] = ["--width", "64", "--height", "48", "--frames", "1", "--quiet"];
+
 fn assert_refused(args: &[&str], dir: &Path, needles: &[&str]) {
     let (code, stderr) = speculum(args, dir);
     let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
@@ -95,31 +98,31 @@ fn inputs_beyond_their_bound_are_refused_before_they_are_read() {
     sparse("big.json", speculum::error::bounds::TEXT + 1);
     sparse("big.png", speculum::error::bounds::IMAGE + 1);
     sparse("big.bin", speculum::error::bounds::RAYS + 32);
-    assert_refused(
-        &["render", "--scene", "big.toml"],
-        d,
-        &["scene file", "more than the 16 MiB"],
-    );
-    assert_refused(
-        &["render", "--scene", "big.obj"],
-        d,
-        &["OBJ file", "more than the 1024 MiB"],
-    );
-    assert_refused(
-        &["render", "--settings", "big.json"],
-        d,
-        &["settings file", "more than the 16 MiB"],
-    );
-    assert_refused(
-        &["compare", "big.png", "big.png"],
-        d,
-        &["image", "more than the 256 MiB"],
-    );
-    assert_refused(
-        &["bench", "lbvh", "--tris", "100", "--rays-file", "big.bin"],
-        d,
-        &["rays file", "more than"],
-    );
+    let small = ["--tris", "100", "--rays-file", "big.bin"];
+    for (args, needles) in [
+        (
+            &["render", "--scene", "big.toml"][..],
+            ["scene file", "more than the 16 MiB"],
+        ),
+        (
+            &["render", "--scene", "big.obj"][..],
+            ["OBJ file", "more than the 1024 MiB"],
+        ),
+        (
+            &["render", "--settings", "big.json"][..],
+            ["settings file", "more than the 16 MiB"],
+        ),
+        (
+            &["compare", "big.png", "big.png"][..],
+            ["image", "more than the 256 MiB"],
+        ),
+        (
+            &[&["bench", "lbvh"][..], &small].concat()[..],
+            ["rays file", "more than the 1024 MiB"],
+        ),
+    ] {
+        assert_refused(args, d, &needles);
+    }
     // At the bound itself a file is read (and then judged on its contents).
     sparse("edge.json", speculum::error::bounds::TEXT);
     let (code, err) = speculum(&["render", "--settings", "edge.json"], d);
@@ -143,65 +146,35 @@ fn scene_files_are_checked_like_flags() {
     let cam = "position = [0.0, 2.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov = 50.0\nnear = 0.1\nfar = 50.0";
     let sun = "direction = [0.3, 0.8, 0.4]\ncolor = [1.0, 1.0, 1.0]\nintensity = 3.0";
     let mat = "base_color = [0.5, 0.5, 0.5]\nroughness = 0.2\nreflectivity = 0.5";
-    let cases: Vec<(String, &str)> = vec![
-        (
-            scene(&cam.replace("[0.0, 2.0, 5.0]", "[nan, 2.0, 5.0]"), sun, "", mat),
-            "not finite",
-        ),
-        (
-            scene(&cam.replace("[0.0, 2.0, 5.0]", "[inf, 2.0, 5.0]"), sun, "", mat),
-            "not finite",
-        ),
-        (
-            scene(&cam.replace("[0.0, 2.0, 5.0]", "[1e39, 2.0, 5.0]"), sun, "", mat),
-            "not finite",
-        ),
-        (
-            scene(&cam.replace("[0.0, 2.0, 5.0]", "[1e30, 2.0, 5.0]"), sun, "", mat),
-            "beyond 1e7 units",
-        ),
-        (
-            scene(&cam.replace("fov = 50.0", "fov = 0.0"), sun, "", mat),
-            "field of view 0 is outside",
-        ),
-        (
-            scene(&cam.replace("fov = 50.0", "fov = 180.0"), sun, "", mat),
-            "field of view 180 is outside",
-        ),
-        (
-            scene(&cam.replace("fov = 50.0", "fov = -5.0"), sun, "", mat),
-            "field of view -5 is outside",
-        ),
-        (
-            scene(&cam.replace("near = 0.1", "near = 0.0"), sun, "", mat),
-            "0 < near < far",
-        ),
-        (
-            scene(&cam.replace("far = 50.0", "far = inf"), sun, "", mat),
-            "0 < near < far",
-        ),
-        (
-            scene(cam, &sun.replace("[0.3, 0.8, 0.4]", "[0.0, 0.0, 0.0]"), "", mat),
-            "has no direction",
-        ),
-        (
-            scene(cam, &sun.replace("intensity = 3.0", "intensity = nan"), "", mat),
-            "sun intensity NaN",
-        ),
-        (
-            scene(
-                cam,
-                sun,
-                "[sky]\nzenith = [nan, 0.5, 0.5]\nhorizon = [0.5, 0.5, 0.5]",
-                mat,
-            ),
-            "sky zenith colour",
-        ),
-        (
-            scene(cam, sun, "", &format!("{mat}\nmetallic = nan")),
-            "must be finite numbers",
-        ),
+    // (what to replace, with what, in the camera or the sun; the error it gives).
+    let camera = [
+        ("[0.0, 2.0, 5.0]", "[nan, 2.0, 5.0]", "not finite"),
+        ("[0.0, 2.0, 5.0]", "[inf, 2.0, 5.0]", "not finite"),
+        ("[0.0, 2.0, 5.0]", "[1e39, 2.0, 5.0]", "not finite"),
+        ("[0.0, 2.0, 5.0]", "[1e30, 2.0, 5.0]", "beyond 1e7 units"),
+        ("fov = 50.0", "fov = 0.0", "field of view 0 is outside"),
+        ("fov = 50.0", "fov = 180.0", "field of view 180 is outside"),
+        ("fov = 50.0", "fov = -5.0", "field of view -5 is outside"),
+        ("near = 0.1", "near = 0.0", "0 < near < far"),
+        ("far = 50.0", "far = inf", "0 < near < far"),
     ];
+    let sun_cases = [
+        ("[0.3, 0.8, 0.4]", "[0.0, 0.0, 0.0]", "has no direction"),
+        ("intensity = 3.0", "intensity = nan", "sun intensity NaN"),
+    ];
+    let mut cases: Vec<(String, &str)> = Vec::new();
+    for (from, to, needle) in camera {
+        cases.push((scene(&cam.replace(from, to), sun, "", mat), needle));
+    }
+    for (from, to, needle) in sun_cases {
+        cases.push((scene(cam, &sun.replace(from, to), "", mat), needle));
+    }
+    let sky = "[sky]\nzenith = [nan, 0.5, 0.5]\nhorizon = [0.5, 0.5, 0.5]";
+    cases.push((scene(cam, sun, sky, mat), "sky zenith colour"));
+    cases.push((
+        scene(cam, sun, "", &format!("{mat}\nmetallic = nan")),
+        "must be finite numbers",
+    ));
     for (i, (text, needle)) in cases.iter().enumerate() {
         let name = format!("s{i}.toml");
         std::fs::write(d.join(&name), text).unwrap();
@@ -227,21 +200,7 @@ fn scene_files_are_checked_like_flags() {
         ),
     )
     .unwrap();
-    let (code, err) = speculum(
-        &[
-            "render",
-            "--scene",
-            "clamp.toml",
-            "--width",
-            "64",
-            "--height",
-            "48",
-            "--frames",
-            "1",
-            "--quiet",
-        ],
-        d,
-    );
+    let (code, err) = speculum(&[&["render", "--scene", "clamp.toml"][..], &QUICK].concat(), d);
     assert_eq!(code, 0, "{err}");
     let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
     assert_eq!(warnings.len(), 1, "{err}");
@@ -310,21 +269,7 @@ fn small_defects_give_clear_lines() {
     let mut obj = b"# caf\xe9 \xff\n".to_vec();
     obj.extend_from_slice(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     std::fs::write(d.join("latin1.obj"), obj).unwrap();
-    let (code, err) = speculum(
-        &[
-            "render",
-            "--scene",
-            "latin1.obj",
-            "--width",
-            "64",
-            "--height",
-            "48",
-            "--frames",
-            "1",
-            "--quiet",
-        ],
-        d,
-    );
+    let (code, err) = speculum(&[&["render", "--scene", "latin1.obj"][..], &QUICK].concat(), d);
     assert_eq!(code, 0, "{err}");
 }
 

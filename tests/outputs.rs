@@ -8,19 +8,9 @@ use std::os::unix::fs::FileTypeExt;
 use std::path::Path;
 use std::process::Command;
 
-/// Runs `speculum ARGS` in `dir` with validation on; returns (exit code, stderr).
-fn speculum(args: &[&str], dir: &Path) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(args)
-        .env("SPECULUM_VALIDATION", "1")
-        .current_dir(dir)
-        .output()
-        .expect("run speculum");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+
+use common::speculum_in as speculum;
 
 /// Asserts a refusal before any GPU work: exit 1, one `error:` line holding `needles`.
 fn assert_refused(args: &[&str], dir: &Path, needles: &[&str]) {

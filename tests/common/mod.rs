@@ -111,3 +111,18 @@ pub fn rng(seed: u64) -> rand::rngs::StdRng {
     use rand::SeedableRng;
     rand::rngs::StdRng::seed_from_u64(seed)
 }
+
+/// Runs the `speculum` binary with exactly `args` in `dir`, validation on; returns
+/// (exit code, stderr).
+pub fn speculum_in(args: &[&str], dir: &std::path::Path) -> (i32, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_speculum"))
+        .args(args)
+        .env("SPECULUM_VALIDATION", "1")
+        .current_dir(dir)
+        .output()
+        .expect("run speculum");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}

@@ -312,3 +312,113 @@ fn sizes_are_bounded_before_anything_is_made() {
         &["--bodies 5000", "1..=4000"],
     );
 }
+
+/// A one-triangle glTF (`t.gltf` + `t.bin`) with the given accessors, buffer views,
+/// nodes and images; the defaults make a valid file.
+fn gltf(dir: &Path, name: &str, accessors: &str, views: &str, nodes: &str, extra: &str) {
+    let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    bin.extend([0u8, 0, 1, 0, 2, 0, 0, 0]);
+    std::fs::write(dir.join("t.bin"), &bin).unwrap();
+    let json = format!(
+        "{{\"asset\": {{\"version\": \"2.0\"}}, \"scene\": 0, \"scenes\": [{{\"nodes\": [0]}}], \"nodes\": {nodes},\
+         \"meshes\": [{{\"primitives\": [{{\"attributes\": {{\"POSITION\": 0}}, \"indices\": 1, \"material\": 0}}]}}],\
+         \"buffers\": [{{\"uri\": \"t.bin\", \"byteLength\": 44}}], \"bufferViews\": {views}, \"accessors\": {accessors}{extra}}}"
+    );
+    std::fs::write(dir.join(name), json).unwrap();
+}
+
+const VIEWS: &str =
+    "[{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 6}]";
+const POSITIONS: &str = "{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"min\": [0,0,0], \"max\": [1,1,0]}";
+const INDICES: &str = "{\"bufferView\": 1, \"componentType\": 5123, \"count\": 3, \"type\": \"SCALAR\"}";
+const NODES: &str = "[{\"mesh\": 0}]";
+const MATERIALS: &str = ", \"materials\": [{\"pbrMetallicRoughness\": {\"baseColorFactor\": [0.8, 0.8, 0.8, 1]}}]";
+
+/// glTF is checked before it is trusted (issue 20, class 5): what panicked inside the
+/// `gltf` crate or hung is one error line; a missing buffer names its file; a missing
+/// texture is a warning and the model renders untextured, as with OBJ.
+#[test]
+fn gltf_is_checked_before_it_is_trusted() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let accessors = |p: &str, i: &str| format!("[{p}, {i}]");
+    gltf(d, "ok.gltf", &accessors(POSITIONS, INDICES), VIEWS, NODES, MATERIALS);
+    let (code, err) = speculum(&[&["render", "--scene", "ok.gltf"][..], &QUICK].concat(), d);
+    assert_eq!(code, 0, "the valid file renders: {err}");
+    // (accessors, what the error says): an index out of range, an index accessor of
+    // floats, POSITION as VEC2 and as unsigned bytes.
+    let pos_vec2 = POSITIONS
+        .replace("VEC3", "VEC2")
+        .replace("[0,0,0]", "[0,0]")
+        .replace("[1,1,0]", "[1,1]");
+    let cases = [
+        (
+            accessors(POSITIONS, INDICES),
+            "POSITION\": 5",
+            "attribute Positions names accessor 5, but there are 2",
+        ),
+        (
+            accessors(POSITIONS, &INDICES.replace("5123", "5126")),
+            "",
+            "indices: accessor 1 is Scalar F32",
+        ),
+        (accessors(&pos_vec2, INDICES), "", "attributes[\"POSITION\"]"),
+        (
+            accessors(&POSITIONS.replace("5126", "5121"), INDICES),
+            "",
+            "Positions: accessor 0 is Vec3 U8",
+        ),
+    ];
+    for (i, (acc, to, needle)) in cases.iter().enumerate() {
+        let name = format!("bad{i}.gltf");
+        gltf(d, &name, acc, VIEWS, NODES, MATERIALS);
+        if !to.is_empty() {
+            let text = std::fs::read_to_string(d.join(&name))
+                .unwrap()
+                .replace("POSITION\": 0", to);
+            std::fs::write(d.join(&name), text).unwrap();
+        }
+        assert_refused(&["render", "--scene", &name], d, &[needle, &name]);
+    }
+    // byteStride smaller than the element.
+    let strided = VIEWS.replace("\"byteLength\": 36}", "\"byteLength\": 36, \"byteStride\": 4}");
+    gltf(
+        d,
+        "stride.gltf",
+        &accessors(POSITIONS, INDICES),
+        &strided,
+        NODES,
+        MATERIALS,
+    );
+    assert_refused(&["render", "--scene", "stride.gltf"], d, &["byteStride 4"]);
+    // A node that is its own descendant: refused at once, not walked forever.
+    gltf(
+        d,
+        "cycle.gltf",
+        &accessors(POSITIONS, INDICES),
+        VIEWS,
+        "[{\"mesh\": 0, \"children\": [1]}, {\"children\": [0]}]",
+        MATERIALS,
+    );
+    assert_refused(&["render", "--scene", "cycle.gltf"], d, &["cycle"]);
+    // A missing buffer file is named.
+    std::fs::write(
+        d.join("nobin.gltf"),
+        std::fs::read_to_string(d.join("ok.gltf"))
+            .unwrap()
+            .replace("t.bin", "missing.bin"),
+    )
+    .unwrap();
+    assert_refused(&["render", "--scene", "nobin.gltf"], d, &["missing.bin"]);
+    // A missing texture: one warning, and the model renders.
+    let textured = ", \"materials\": [{\"pbrMetallicRoughness\": {\"baseColorTexture\": {\"index\": 0}}}],\
+         \"textures\": [{\"source\": 0}], \"images\": [{\"uri\": \"gone.png\"}]";
+    gltf(d, "notex.gltf", &accessors(POSITIONS, INDICES), VIEWS, NODES, textured);
+    let (code, err) = speculum(&[&["render", "--scene", "notex.gltf"][..], &QUICK].concat(), d);
+    assert_eq!(code, 0, "{err}");
+    let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
+    assert!(warnings.len() == 1 && warnings[0].contains("image 0"), "{err}");
+}

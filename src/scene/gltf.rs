@@ -57,23 +57,262 @@ fn image_rgba8(data: &gltf::image::Data) -> Option<image::RgbaImage> {
     image::RgbaImage::from_raw(data.width, data.height, texels).filter(|i| i.width() > 0 && i.height() > 0)
 }
 
-/// Loads a glTF or GLB file as a scene with the camera framing it.
+/// Loads a glTF or GLB file as a scene with the camera framing it. The file is read
+/// bounded (`error::bounds::MODEL`), the document checked before anything walks it
+/// (`check_nodes`, `check_accessors`), and any panic left in the `gltf` crate becomes
+/// an error naming the file.
 pub fn load(path: &Path) -> Result<Scene> {
     let bad = |detail: String| Error::BadAsset {
         what: "glTF file",
         path: path.into(),
         detail,
     };
-    if !path.exists() {
-        return Err(Error::Io {
-            what: "glTF file",
-            path: path.into(),
-            source: std::io::Error::from(std::io::ErrorKind::NotFound),
-        });
+    let bytes = crate::error::read_file(path, "glTF file", crate::error::bounds::MODEL)?;
+    let base = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    // Indices first: the crate's own validation indexes with them unchecked.
+    let gltf::Gltf { document: doc, blob } =
+        guard(|| gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())).map_err(bad)?;
+    check_indices(&doc).map_err(bad)?;
+    let doc = guard(|| gltf::Document::from_json(doc.into_json()).map_err(|e| e.to_string())).map_err(bad)?;
+    check_nodes(&doc).map_err(bad)?;
+    check_buffer_files(&doc, &base)?;
+    let buffers = guard(|| gltf::import_buffers(&doc, Some(&base), blob).map_err(|e| e.to_string())).map_err(bad)?;
+    check_accessors(&doc, &buffers).map_err(bad)?;
+    guard(|| walk(path, &doc, &buffers, &base).map_err(|e| e.to_string())).map_err(|e| {
+        bad(e
+            .trim_start_matches(&format!("invalid glTF file '{}': ", path.display()))
+            .to_string())
+    })
+}
+
+/// Runs `f`, turning a panic inside it (the `gltf` crate's) into an error; the panic's
+/// message is not printed.
+fn guard<T>(f: impl FnOnce() -> std::result::Result<T, String>) -> std::result::Result<T, String> {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    std::panic::set_hook(hook);
+    result.unwrap_or_else(|p| {
+        let why = p
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| p.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(format!("the glTF reader failed on it ({why})"))
+    })
+}
+
+/// Every index the document holds names something that exists (the `gltf` crate's
+/// walk indexes with them unchecked and panics).
+fn check_indices(doc: &gltf::Document) -> std::result::Result<(), String> {
+    let j = doc.as_json();
+    let within = |what: String, i: usize, n: usize, of: &str| {
+        if i < n {
+            Ok(())
+        } else {
+            Err(format!("{what} names {of} {i}, but there are {n}"))
+        }
+    };
+    let (accessors, views, buffers) = (j.accessors.len(), j.buffer_views.len(), j.buffers.len());
+    for (mi, m) in j.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            let at = format!("mesh {mi} primitive {pi}");
+            for (semantic, a) in &p.attributes {
+                let name = match semantic {
+                    gltf::json::validation::Checked::Valid(s) => format!("{s:?}"),
+                    gltf::json::validation::Checked::Invalid => "(unknown)".into(),
+                };
+                within(format!("{at} attribute {name}"), a.value(), accessors, "accessor")?;
+            }
+            if let Some(a) = &p.indices {
+                within(format!("{at} indices"), a.value(), accessors, "accessor")?;
+            }
+            if let Some(m) = &p.material {
+                within(at.clone(), m.value(), j.materials.len(), "material")?;
+            }
+        }
     }
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| bad(e.to_string()))?;
-    let mut b = SceneBuilder::new(&path.display().to_string());
+    for (ai, a) in j.accessors.iter().enumerate() {
+        if let Some(v) = &a.buffer_view {
+            within(format!("accessor {ai}"), v.value(), views, "buffer view")?;
+        }
+    }
+    for (vi, v) in j.buffer_views.iter().enumerate() {
+        within(format!("buffer view {vi}"), v.buffer.value(), buffers, "buffer")?;
+    }
+    for (ni, n) in j.nodes.iter().enumerate() {
+        if let Some(m) = &n.mesh {
+            within(format!("node {ni}"), m.value(), j.meshes.len(), "mesh")?;
+        }
+        for c in n.children.iter().flatten() {
+            within(format!("node {ni}'s children"), c.value(), j.nodes.len(), "node")?;
+        }
+    }
+    for (si, sc) in j.scenes.iter().enumerate() {
+        for n in &sc.nodes {
+            within(format!("scene {si}"), n.value(), j.nodes.len(), "node")?;
+        }
+    }
+    for (ti, t) in j.textures.iter().enumerate() {
+        within(format!("texture {ti}"), t.source.value(), j.images.len(), "image")?;
+    }
+    Ok(())
+}
+
+/// The node graph is a forest: no node is its own descendant (the walk below would
+/// never end) and none has two parents.
+fn check_nodes(doc: &gltf::Document) -> std::result::Result<(), String> {
+    let n = doc.nodes().count();
+    let mut parent: Vec<Option<usize>> = vec![None; n];
+    for node in doc.nodes() {
+        for c in node.children() {
+            if let Some(p) = parent[c.index()] {
+                return Err(format!("node {} has two parents ({p} and {})", c.index(), node.index()));
+            }
+            parent[c.index()] = Some(node.index());
+        }
+    }
+    for start in 0..n {
+        let (mut at, mut steps) = (start, 0);
+        while let Some(p) = parent[at] {
+            (at, steps) = (p, steps + 1);
+            if steps > n {
+                return Err(format!(
+                    "node {start} is its own descendant: the node hierarchy has a cycle"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every external buffer file exists (named when missing) and is a regular file within
+/// the model bound, before the `gltf` crate reads it.
+fn check_buffer_files(doc: &gltf::Document, base: &Path) -> Result<()> {
+    for buffer in doc.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = buffer.source() {
+            if uri.starts_with("data:") {
+                continue;
+            }
+            let file = base.join(uri);
+            // Read bounded once here: a missing, special or huge file is named.
+            crate::error::read_file(&file, "glTF buffer", crate::error::bounds::MODEL)?;
+        }
+    }
+    Ok(())
+}
+
+/// Every primitive's accessors are of the types read here and lie within their buffer
+/// views and buffers: POSITION and NORMAL are float VEC3, texture coordinates VEC2
+/// (float, or normalized unsigned bytes or shorts), indices unsigned SCALAR; a view's
+/// stride is at least its element.
+fn check_accessors(doc: &gltf::Document, buffers: &[gltf::buffer::Data]) -> std::result::Result<(), String> {
+    use gltf::accessor::{DataType as D, Dimensions as Dim};
+    use gltf::Semantic as S;
+    for mesh in doc.meshes() {
+        for (p, prim) in mesh.primitives().enumerate() {
+            let at = |what: &str| format!("mesh {} primitive {p} {what}", mesh.index());
+            let mut list: Vec<(String, gltf::Accessor<'_>, &[Dim], &[D])> = Vec::new();
+            for (semantic, acc) in prim.attributes() {
+                let (dims, types): (&[Dim], &[D]) = match semantic {
+                    S::Positions | S::Normals => (&[Dim::Vec3], &[D::F32]),
+                    S::TexCoords(_) => (&[Dim::Vec2], &[D::F32, D::U8, D::U16]),
+                    _ => continue,
+                };
+                list.push((at(&format!("{semantic:?}")), acc, dims, types));
+            }
+            if let Some(acc) = prim.indices() {
+                list.push((at("indices"), acc, &[Dim::Scalar], &[D::U8, D::U16, D::U32]));
+            }
+            for (what, acc, dims, types) in list {
+                if !dims.contains(&acc.dimensions()) || !types.contains(&acc.data_type()) {
+                    return Err(format!(
+                        "{what}: accessor {} is {:?} {:?}, not {dims:?} of {types:?}",
+                        acc.index(),
+                        acc.dimensions(),
+                        acc.data_type()
+                    ));
+                }
+                let Some(view) = acc.view() else { continue };
+                let element = acc.size();
+                let stride = view.stride().unwrap_or(element);
+                if stride < element {
+                    return Err(format!(
+                        "{what}: buffer view {} has byteStride {stride}, smaller than its {element}-byte elements",
+                        view.index()
+                    ));
+                }
+                let need = match acc.count() {
+                    0 => 0,
+                    n => acc.offset() + stride * (n - 1) + element,
+                };
+                if need > view.length() {
+                    return Err(format!(
+                        "{what}: accessor {} needs {need} bytes of buffer view {}, which has {}",
+                        acc.index(),
+                        view.index(),
+                        view.length()
+                    ));
+                }
+                let have = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
+                if view.offset() + view.length() > have {
+                    return Err(format!(
+                        "{what}: buffer view {} ends at byte {}, past its buffer's {have}",
+                        view.index(),
+                        view.offset() + view.length()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An image in a file of its own is a regular file within the image bound (the `gltf`
+/// crate would read it whole, whatever it is).
+fn check_image_file(img: &gltf::Image<'_>, base: &Path) -> std::result::Result<(), String> {
+    match img.source() {
+        gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+            crate::error::read_file(&base.join(uri), "glTF image", crate::error::bounds::IMAGE)
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The checked document's default scene as a Speculum scene.
+fn walk(path: &Path, doc: &gltf::Document, buffers: &[gltf::buffer::Data], base: &Path) -> Result<Scene> {
+    let bad = |detail: String| Error::BadAsset {
+        what: "glTF file",
+        path: path.into(),
+        detail,
+    };
     let mut warnings = Vec::new();
+    // Images: one that cannot be read or decoded is a warning, its materials untextured
+    // (as a missing OBJ texture).
+    let images: Vec<Option<gltf::image::Data>> = doc
+        .images()
+        .map(|img| {
+            match check_image_file(&img, base).and_then(|_| {
+                gltf::image::Data::from_source(img.source(), Some(base), buffers).map_err(|e| e.to_string())
+            }) {
+                Ok(d) => Some(d),
+                Err(e) => {
+                    warnings.push(format!(
+                        "'{}' image {}: {e}: the materials that use it take their base colour factor alone",
+                        path.display(),
+                        img.index()
+                    ));
+                    None
+                }
+            }
+        })
+        .collect();
+    let mut b = SceneBuilder::new(&path.display().to_string());
     // glTF material index (None: the default material) → scene material and the
     // texture coordinate set its base colour texture uses.
     let mut ids: Vec<(Option<usize>, u32, u32)> = Vec::new();
@@ -104,12 +343,15 @@ pub fn load(path: &Path) -> Result<Scene> {
             let texture = match textures.iter().find(|(i, _)| *i == image) {
                 Some(&(_, t)) => t,
                 None => {
-                    let t = match images.get(image).and_then(image_rgba8) {
-                        Some(img) => Some(b.texture(Texture {
+                    let decoded = images.get(image).and_then(|d| d.as_ref());
+                    let t = match decoded.map(image_rgba8) {
+                        // Unreadable: already warned about above.
+                        None => None,
+                        Some(Some(img)) => Some(b.texture(Texture {
                             name: format!("{file} image {image}"),
                             image: img,
                         })),
-                        None => {
+                        Some(None) => {
                             warnings.push(format!(
                                 "image {image}: not 8- or 16-bit; material '{name}' uses its base colour factor alone"
                             ));

@@ -1,7 +1,7 @@
 //! Rust/GLSL shared structs: member names and byte offsets in the compiled SPIR-V
 //! (std430/std140 as glslang laid them out) equal the `#[repr(C)]` Rust offsets.
 
-use speculum::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex};
+use speculum::gpu_types::{BvhNode, FrameUniforms, GpuMaterial, GpuVertex, Hit, Ray};
 use speculum::passes::compose::ComposePush;
 use speculum::shaders;
 use speculum::vk::spirv::{reflect, words, Reflection};
@@ -63,6 +63,28 @@ fn material_layout_matches_glsl() {
         }),
     );
     assert_eq!(r.array_strides["Material"] as usize, size_of::<GpuMaterial>());
+}
+
+/// The tracer's structs (std430): `BvhNode` (32 bytes: both halves of the box with a
+/// link each), `Ray` and `Hit`, as `rt.trace` reads and writes them: offsets and strides.
+#[test]
+fn tracer_layouts_match_glsl() {
+    let r = reflected(shaders::RT_TRACE_COMP);
+    check(&r, "BvhNode", rust_layout!(BvhNode { lo, left, hi, right }));
+    check(
+        &r,
+        "Ray",
+        rust_layout!(Ray {
+            origin,
+            tmin,
+            dir,
+            tmax
+        }),
+    );
+    check(&r, "Hit", rust_layout!(Hit { t, prim, u, v }));
+    assert_eq!(r.array_strides["BvhNode"] as usize, size_of::<BvhNode>());
+    assert_eq!(r.array_strides["Ray"] as usize, size_of::<Ray>());
+    assert_eq!(r.array_strides["Hit"] as usize, size_of::<Hit>());
 }
 
 /// `FrameUniforms` (std140 uniform block) in every shader that declares it.

@@ -5,8 +5,8 @@
 
 mod common;
 
-use common::showcase;
-use glam::{IVec2, Vec3, Vec4Swizzles};
+use common::{pixel_of, showcase};
+use glam::{IVec2, Vec3};
 use speculum::scene::{load_with, Floor};
 use speculum::settings::Mode;
 use speculum::{Renderer, Settings};
@@ -20,13 +20,6 @@ fn shipped_showcase_is_the_generated_one() {
         shipped == showcase::glb(),
         "{SHOWCASE} is stale: run `cargo run --example showcase`"
     );
-}
-
-fn pixel_of(frame: &speculum::gpu_types::FrameUniforms, w: Vec3) -> IVec2 {
-    let c = frame.view_proj * w.extend(1.0);
-    let ndc = c.xy() / c.w;
-    let res = glam::Vec2::new(frame.resolution[0] as f32, frame.resolution[1] as f32);
-    ((ndc * 0.5 + 0.5) * res).floor().as_ivec2()
 }
 
 #[test]

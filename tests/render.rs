@@ -3,18 +3,9 @@
 
 mod common;
 
-use glam::{Mat4, Vec3, Vec4Swizzles};
+use glam::{Mat4, Vec3};
 use speculum::scene::{Camera, Light, Material, SceneBuilder, TriMesh};
 use speculum::{headless, Renderer, Settings};
-
-/// Pixel of world point `w` in a frame rendered with `frame`.
-fn pixel_of(frame: &speculum::gpu_types::FrameUniforms, w: Vec3) -> (usize, usize) {
-    let c = frame.view_proj * w.extend(1.0);
-    let ndc = c.xyz() / c.w;
-    let x = ((ndc.x * 0.5 + 0.5) * frame.resolution[0] as f32) as usize;
-    let y = ((ndc.y * 0.5 + 0.5) * frame.resolution[1] as f32) as usize;
-    (x, y)
-}
 
 fn luminance(c: [f32; 4]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
@@ -66,7 +57,8 @@ fn under_and_beside(with_box: bool) -> (f32, f32) {
     let lit = r.read_lit().unwrap();
     let frame = *r.uniforms();
     let at = |w: Vec3| {
-        let (x, y) = pixel_of(&frame, w);
+        let p = common::pixel_of(&frame, w);
+        let (x, y) = (p.x as usize, p.y as usize);
         luminance(lit[y * settings.width as usize + x])
     };
     let result = (at(Vec3::new(0.0, 0.0, 0.0)), at(Vec3::new(3.0, 0.0, 0.0)));

@@ -126,3 +126,13 @@ pub fn speculum_in(args: &[&str], dir: &std::path::Path) -> (i32, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// The pixel (x right, y down) that world point `w` lands on in a frame rendered with
+/// `frame`'s camera.
+pub fn pixel_of(frame: &speculum::gpu_types::FrameUniforms, w: glam::Vec3) -> glam::IVec2 {
+    use glam::Vec4Swizzles;
+    let c = frame.view_proj * w.extend(1.0);
+    let ndc = c.xy() / c.w;
+    let res = glam::Vec2::new(frame.resolution[0] as f32, frame.resolution[1] as f32);
+    ((ndc * 0.5 + 0.5) * res).floor().as_ivec2()
+}

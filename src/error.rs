@@ -102,40 +102,73 @@ pub mod bounds {
     pub const RAYS: u64 = 1 << 30;
 }
 
-/// The bytes of file `path`, or an error naming it as `what` ("scene file", ...): it
-/// must be a regular file of at most `max` bytes (see `bounds`).
-pub fn read_file(path: &std::path::Path, what: &'static str, max: u64) -> Result<Vec<u8>> {
-    use std::io::Read;
+/// What an existing path that is no regular file is, for messages: "a folder", "a
+/// device", "a FIFO", "a socket" (or "not a file").
+pub fn file_kind(m: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = m.file_type();
+    if t.is_dir() {
+        "a folder"
+    } else if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a file"
+    }
+}
+
+/// Opens file `path` for reading, or an error naming it as `what` ("scene file", ...):
+/// it must be a regular file of at most `max` bytes (see `bounds`). The open file and
+/// its size; a caller that only checks (a file another reader reads) drops the file.
+pub fn open_bounded(path: &std::path::Path, what: &'static str, max: u64) -> Result<(std::fs::File, u64)> {
     let io = |source| Error::Io {
         what,
         path: path.into(),
         source,
     };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let meta = file.metadata().map_err(io)?;
-    let refuse = |why: String| Error::Input(format!("{what} '{}': {why}", path.display()));
+    // The kind before opening: opening a FIFO for reading waits for a writer.
+    let meta = std::fs::metadata(path).map_err(io)?;
     if !meta.is_file() {
-        let kind = if meta.is_dir() {
-            "a folder"
-        } else {
-            "a device, FIFO or socket"
-        };
-        return Err(refuse(format!("is {kind}, not a regular file")));
+        return Err(refuse(
+            path,
+            what,
+            format!("is {}, not a regular file", file_kind(&meta)),
+        ));
     }
-    let too_big = |n: u64| {
-        refuse(format!(
-            "is {n} bytes, more than the {} MiB a {what} may have",
-            max >> 20
-        ))
-    };
     if meta.len() > max {
-        return Err(too_big(meta.len()));
+        return Err(too_big(path, what, meta.len(), max));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    Ok((std::fs::File::open(path).map_err(io)?, meta.len()))
+}
+
+fn refuse(path: &std::path::Path, what: &str, why: String) -> Error {
+    Error::Input(format!("{what} '{}': {why}", path.display()))
+}
+
+fn too_big(path: &std::path::Path, what: &str, n: u64, max: u64) -> Error {
+    refuse(
+        path,
+        what,
+        format!("is {n} bytes, more than the {} MiB a {what} may have", max >> 20),
+    )
+}
+
+/// The bytes of file `path`, bounded and checked as `open_bounded`.
+pub fn read_file(path: &std::path::Path, what: &'static str, max: u64) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let (file, len) = open_bounded(path, what, max)?;
+    let mut bytes = Vec::with_capacity(len as usize);
     // Bounded again while reading: the file may grow after its size was read.
-    file.take(max + 1).read_to_end(&mut bytes).map_err(io)?;
+    file.take(max + 1).read_to_end(&mut bytes).map_err(|source| Error::Io {
+        what,
+        path: path.into(),
+        source,
+    })?;
     if bytes.len() as u64 > max {
-        return Err(too_big(bytes.len() as u64));
+        return Err(too_big(path, what, bytes.len() as u64, max));
     }
     Ok(bytes)
 }

@@ -68,24 +68,9 @@ pub fn write_target(path: &Path) -> Result<PathBuf> {
         Ok(m) if m.is_dir() => Err(bad("is a folder".into())),
         Ok(m) if !m.is_file() => Err(bad(format!(
             "is not a regular file ({}): outputs only create or replace regular files",
-            file_kind(&m)
+            crate::error::file_kind(&m)
         ))),
         _ => Ok(target),
-    }
-}
-
-/// "a device", "a FIFO", ... for an existing path that is not a regular file or folder.
-fn file_kind(m: &std::fs::Metadata) -> &'static str {
-    use std::os::unix::fs::FileTypeExt;
-    let t = m.file_type();
-    if t.is_char_device() || t.is_block_device() {
-        "a device"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "not a file"
     }
 }
 

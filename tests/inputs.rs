@@ -83,6 +83,17 @@ fn endless_inputs_are_refused_as_not_regular_files() {
         d,
         &["baseline", device],
     );
+    // A FIFO: refused by its kind, not opened (opening one waits for a writer).
+    let fifo = d.join("fifo.toml");
+    if Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success()) {
+        assert_refused(
+            &["render", "--scene", "fifo.toml"],
+            d,
+            &["scene file", "a FIFO", device],
+        );
+    } else {
+        eprintln!("SKIPPED: no mkfifo here; the FIFO input case did not run");
+    }
 }
 
 #[test]

@@ -34,6 +34,15 @@ speculum_wants_backports_mesa() {
   dpkg --compare-versions "$v" lt 25
 }
 
+# Prints field $1 (URIs, Signed-By) of the first deb822 stanza of type deb whose
+# Suites include bookworm (nothing when that stanza lacks it).
+speculum_bookworm_field() {
+  # shellcheck disable=SC2046 # a list of files
+  awk -v field="$1" 'BEGIN{RS=""} /Suites:[^\n]*bookworm( |\n|$)/ && /Types:[^\n]*deb( |\n|$)/ {
+      if (match($0, field ": *[^ \n]+")) { s = substr($0, RSTART, RLENGTH); sub(field ": *", "", s); print s }
+      exit }' $(ls /etc/apt/sources.list.d/*.sources 2>/dev/null) /dev/null
+}
+
 # Adds a bookworm-backports source with the URI and keyring of the machine's own
 # bookworm source (deb822 or one-line format), when no source names backports yet.
 speculum_add_backports_source() {
@@ -42,16 +51,10 @@ speculum_add_backports_source() {
   [ -n "$files" ] || return 1
   # shellcheck disable=SC2086 # a list of files
   grep -qs 'bookworm-backports' $files && return 0
-  # deb822: the stanza whose Suites include bookworm.
-  # shellcheck disable=SC2086
-  uri=$(awk 'BEGIN{RS=""} /Suites:[^\n]*bookworm( |\n|$)/ && /Types:[^\n]*deb( |\n|$)/ {
-      if (match($0, /URIs: *[^ \n]+/)) { s = substr($0, RSTART, RLENGTH); sub(/URIs: */, "", s); print s; exit } }' \
-      $(ls /etc/apt/sources.list.d/*.sources 2>/dev/null) /dev/null)
+  # deb822: the first deb stanza whose Suites include bookworm; its keyring too.
+  uri=$(speculum_bookworm_field URIs)
   if [ -n "$uri" ]; then
-    # shellcheck disable=SC2046
-    keyring=$(awk 'BEGIN{RS=""} /Suites:[^\n]*bookworm( |\n|$)/ {
-        if (match($0, /Signed-By: *[^ \n]+/)) { s = substr($0, RSTART, RLENGTH); sub(/Signed-By: */, "", s); print s; exit } }' \
-        $(ls /etc/apt/sources.list.d/*.sources 2>/dev/null) /dev/null)
+    keyring=$(speculum_bookworm_field Signed-By)
   else
     # One-line format: deb [options] URI bookworm main ...
     # shellcheck disable=SC2086

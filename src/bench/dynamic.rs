@@ -115,7 +115,7 @@ pub fn run_point(
         let times = r.render_frame()?;
         timing.add(times.problem.as_deref());
         tick();
-        let get = |name: &str| times.iter().find(|(n, _)| *n == name).map_or(0.0, |t| t.1);
+        let get = |name: &str| times.get(name).unwrap_or(0.0);
         let traceable = r.dynamic_traceable().expect("a dynamic scene");
         if k == 0 {
             ctx.one_shot(|cmd| {

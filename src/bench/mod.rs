@@ -21,10 +21,7 @@ pub struct Interleaved {
 
 /// The self-checks of several renderers' timings together.
 pub fn check_all(timings: &[Timings]) -> TimingCheck {
-    timings.iter().fold(TimingCheck::default(), |mut all, t| {
-        all.merge(t.check());
-        all
-    })
+    timings.iter().map(Timings::check).collect()
 }
 
 /// Called after every frame a long run renders (for a progress bar).
@@ -40,7 +37,7 @@ pub fn interleave(renderers: &mut [Renderer], warmup: u32, rounds: u32, tick: Ti
             let t = r.render_frame()?;
             tick();
             if round >= warmup {
-                frames[i].push(t.iter().find(|(k, _)| *k == FRAME).map_or(f64::NAN, |s| s.1));
+                frames[i].push(t.get(FRAME).unwrap_or(f64::NAN));
                 timings[i].add(&t);
             }
         }

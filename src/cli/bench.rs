@@ -413,8 +413,7 @@ fn dynamic(args: DynamicArgs) -> Result<()> {
         report.triangle_growth,
         if report.valid { "valid" } else { "INVALID" }
     ));
-    let mut timing = speculum::vk::TimingCheck::default();
-    report.points.iter().for_each(|p| timing.merge(&p.timing));
+    let timing: speculum::vk::TimingCheck = report.points.iter().map(|p| &p.timing).collect();
     text.line(format_args!("  {}", super::timing_note(&timing)));
     if let Some(path) = &c.json {
         super::write_report(path, &report, &text)?;
@@ -723,7 +722,6 @@ fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str
         if r.ordered { "yes" } else { "NO" },
         if r.valid { "valid" } else { "INVALID" }
     ));
-    let mut timing = speculum::vk::TimingCheck::default();
-    r.modes.iter().for_each(|m| timing.merge(&m.timing));
+    let timing: speculum::vk::TimingCheck = r.modes.iter().map(|m| &m.timing).collect();
     text.line(format_args!("  {}", super::timing_note(&timing)));
 }

@@ -591,7 +591,7 @@ impl Demo {
         }
         let mode = slot.mode;
         let times = self.renderer.frame_finished(i)?;
-        if let Some(&(_, ms)) = times.iter().find(|(n, _)| *n == crate::renderer::FRAME) {
+        if let Some(ms) = times.get(crate::renderer::FRAME) {
             push(&mut self.gpu_ms, ms);
             self.summary.mode_frame_ms.entry(mode.name()).or_default().push(ms);
         }

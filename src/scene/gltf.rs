@@ -198,8 +198,8 @@ fn check_buffer_files(doc: &gltf::Document, base: &Path) -> Result<()> {
                 continue;
             }
             let file = base.join(uri);
-            // Read bounded once here: a missing, special or huge file is named.
-            crate::error::read_file(&file, "glTF buffer", crate::error::bounds::MODEL)?;
+            // A missing, special or huge file is named before the crate reads it.
+            crate::error::open_bounded(&file, "glTF buffer", crate::error::bounds::MODEL)?;
         }
     }
     Ok(())
@@ -276,7 +276,7 @@ fn check_accessors(doc: &gltf::Document, buffers: &[gltf::buffer::Data]) -> std:
 fn check_image_file(img: &gltf::Image<'_>, base: &Path) -> std::result::Result<(), String> {
     match img.source() {
         gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
-            crate::error::read_file(&base.join(uri), "glTF image", crate::error::bounds::IMAGE)
+            crate::error::open_bounded(&base.join(uri), "glTF image", crate::error::bounds::IMAGE)
                 .map(|_| ())
                 .map_err(|e| e.to_string())
         }

@@ -169,11 +169,7 @@ pub fn measure_scene(
         let mut measure = |r: &mut Renderer, reference: &mut Renderer, compare: bool| -> Result<()> {
             let a = r.render_frame()?;
             let b = reference.render_frame()?;
-            let ms = |t: &[(&str, f64)]| {
-                t.iter()
-                    .find(|(n, _)| *n == crate::renderer::FRAME)
-                    .map_or(0.0, |x| x.1)
-            };
+            let ms = |t: &crate::vk::TimerReadout| t.get(crate::renderer::FRAME).unwrap_or(0.0);
             frame.push(ms(&a));
             rt.push(ms(&b));
             ratio.push(ms(&a) / ms(&b).max(1e-9));
@@ -250,11 +246,7 @@ pub fn measure_scene(
 pub fn confirm(ctx: &Arc<Context>, scene: &Scene, sweep: &Sweep, candidate: &Settings, rounds: u32) -> Result<Stat> {
     let mut a = Renderer::new(ctx, scene, candidate)?;
     let mut b = Renderer::new(ctx, scene, &sweep.base)?;
-    let ms = |t: Vec<(&'static str, f64)>| {
-        t.iter()
-            .find(|(n, _)| *n == crate::renderer::FRAME)
-            .map_or(0.0, |x| x.1)
-    };
+    let ms = |t: &crate::vk::TimerReadout| t.get(crate::renderer::FRAME).unwrap_or(0.0);
     let mut ratios = Vec::new();
     for round in 0..=rounds {
         if scene.is_dynamic() {
@@ -263,7 +255,7 @@ pub fn confirm(ctx: &Arc<Context>, scene: &Scene, sweep: &Sweep, candidate: &Set
         }
         let (ra, rb) = (a.render_frame()?, b.render_frame()?);
         let trusted = ra.problem.is_none() && rb.problem.is_none();
-        let (ta, tb) = (ms(ra.scopes), ms(rb.scopes));
+        let (ta, tb) = (ms(&ra), ms(&rb));
         // A round whose timings fail their self-check is left out (an error when all are).
         if round > 0 && trusted {
             ratios.push(tb / ta.max(1e-9));

@@ -139,8 +139,8 @@ fn range_values(name: &str, min: f64, max: f64, steps: u32, log: bool) -> Result
     }
     // Bounded before any value is made: a sweep holds at most `MAX_POINTS` points.
     if steps as usize > MAX_POINTS {
-        return Err(Error::Settings(format!(
-            "axis {name}: {steps} steps, more than the {MAX_POINTS} points a sweep may hold"
+        return Err(bad(format!(
+            "{steps} steps, more than the {MAX_POINTS} points a sweep may hold"
         )));
     }
     if steps == 0 {

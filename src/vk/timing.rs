@@ -389,6 +389,16 @@ impl TimingCheck {
     }
 }
 
+/// Several checks as one (a report's cases or modes, renderers run together).
+impl<'a> FromIterator<&'a TimingCheck> for TimingCheck {
+    fn from_iter<I: IntoIterator<Item = &'a TimingCheck>>(checks: I) -> Self {
+        checks.into_iter().fold(TimingCheck::default(), |mut all, c| {
+            all.merge(c);
+            all
+        })
+    }
+}
+
 impl Timings {
     /// Adds one checked readout: its scopes (as `add_frame`) and its self-check.
     pub fn add(&mut self, readout: &TimerReadout) {

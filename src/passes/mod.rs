@@ -4,7 +4,7 @@
 //! outputs writable (the previous frame's readers done; attachments moved to their
 //! attachment layout) and ends with the barrier that makes them visible to the readers
 //! its documentation names. Storage images stay in `GENERAL` from creation
-//! (`Image::storage`), so compute passes need memory barriers only. `renderer.rs`
+//! (`Image::storage`), so compute passes need memory barriers only. `renderer/frame.rs`
 //! records only what spans passes (the uniform upload) and the timer scopes.
 
 pub mod compose;

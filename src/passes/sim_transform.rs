@@ -1,17 +1,81 @@
 //! `sim.transform`: writes the dynamic geometry's world-space vertex buffer from its
-//! object-space vertices and the bodies' poses, every frame of a dynamic scene.
+//! object-space vertices and the bodies' poses, every frame of a dynamic scene. The
+//! poses come from the host: `RigidBodies` keeps one staging buffer per frame slot (a
+//! frame in flight still copies from its own while the next one's are written), and
+//! `record_posed` copies the slot's poses in before the transform.
 
 use crate::error::Result;
 use crate::shader_defines::LBVH_WG;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
+use ash::vk;
+use glam::Mat4;
+use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub const NAME: &str = "sim.transform";
 
 /// The most dynamic vertices one dispatch covers (65535 workgroups of `LBVH_WG`).
 pub const MAX_VERTICES: u32 = 65535 * LBVH_WG;
+
+/// The rigid bodies on the GPU: their vertices in their own spaces (`GpuVertex`,
+/// `object` = the body), and their poses, written by the host per frame slot.
+pub struct RigidBodies {
+    ctx: Arc<Context>,
+    objects: Buffer,
+    poses: Buffer,
+    staging: Vec<Buffer>,
+    /// Vertices the transform moves.
+    pub vertex_count: u32,
+}
+
+impl RigidBodies {
+    /// The first `count` of `vertices` (at most `MAX_VERTICES`), those of `bodies`
+    /// bodies, with one frame slot.
+    pub fn new(
+        ctx: &Arc<Context>,
+        vertices: &[crate::gpu_types::GpuVertex],
+        count: u32,
+        bodies: usize,
+    ) -> Result<Self> {
+        let bytes = (bodies * std::mem::size_of::<Mat4>()) as u64;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let poses = storage | vk::BufferUsageFlags::TRANSFER_DST;
+        Ok(Self {
+            ctx: ctx.clone(),
+            objects: Buffer::with_data(ctx, "dynamic.objects", storage, bytemuck::cast_slice(vertices))?,
+            poses: Buffer::new(ctx, "dynamic.poses", bytes, poses, MemoryLocation::GpuOnly)?,
+            staging: vec![Self::staging(ctx, bytes)?],
+            vertex_count: count,
+        })
+    }
+
+    fn staging(ctx: &Arc<Context>, bytes: u64) -> Result<Buffer> {
+        let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+        Buffer::new(ctx, "dynamic.poses_staging", bytes, usage, MemoryLocation::CpuToGpu)
+    }
+
+    /// Frame slots (one staging buffer each); the GPU must be idle.
+    pub fn set_slots(&mut self, n: usize) -> Result<()> {
+        self.staging.truncate(n);
+        while self.staging.len() < n {
+            self.staging.push(Self::staging(&self.ctx, self.poses.size)?);
+        }
+        Ok(())
+    }
+
+    pub fn slots(&self) -> usize {
+        self.staging.len()
+    }
+
+    /// Writes `poses` (one per body) for the next frame recorded with `slot`, whose
+    /// previous frame must have finished.
+    pub fn write(&mut self, slot: usize, poses: &[Mat4]) {
+        let bytes: &[u8] = bytemuck::cast_slice(poses);
+        self.staging[slot].mapped_mut().expect("CpuToGpu is mapped")[..bytes.len()].copy_from_slice(bytes);
+    }
+}
 
 pub struct SimTransformPass {
     ctx: Arc<Context>,
@@ -26,11 +90,24 @@ impl SimTransformPass {
         })
     }
 
+    /// Records the copy of `slot`'s poses of `bodies` to the GPU, then the transform of
+    /// their vertices into `world` (as `record`).
+    pub fn record_posed(&self, cmd: vk::CommandBuffer, bodies: &RigidBodies, slot: usize, world: &Buffer) {
+        let d = &self.ctx.device;
+        // WAR: the previous frame's transform read the poses before they change.
+        barrier::global(d, cmd, access::COMPUTE_READ, access::TRANSFER_WRITE);
+        let region = vk::BufferCopy::default().size(bodies.poses.size);
+        unsafe { d.cmd_copy_buffer(cmd, bodies.staging[slot].raw, bodies.poses.raw, &[region]) };
+        // RAW: the transform reads the poses just copied.
+        barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ);
+        self.record(cmd, &bodies.objects, &bodies.poses, world, bodies.vertex_count);
+    }
+
     /// Records the transform of `count` vertices of `objects` (`GpuVertex`, `object` =
     /// the body) by `poses` (one `Mat4` per body, visible to compute reads) into
     /// `world`. `world` ends visible to its readers: the raster passes' vertex shaders
     /// and the compute passes (BVH build, traversal).
-    pub fn record(&self, cmd: ash::vk::CommandBuffer, objects: &Buffer, poses: &Buffer, world: &Buffer, count: u32) {
+    pub fn record(&self, cmd: vk::CommandBuffer, objects: &Buffer, poses: &Buffer, world: &Buffer, count: u32) {
         let d = &self.ctx.device;
         // WAR: the previous frame's reads of the world vertices (raster, BVH, traversal)
         // finish before they are overwritten.

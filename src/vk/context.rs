@@ -600,6 +600,26 @@ impl Context {
         unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
     }
 
+    /// Blocks until the device is idle (before resources a frame may still use change).
+    pub fn wait_idle(&self) -> Result<()> {
+        unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")
+    }
+
+    /// Resets `cmd` and records `record` into it, begun for one submission and ended.
+    pub fn rerecord(&self, cmd: vk::CommandBuffer, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        unsafe {
+            self.device
+                .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
+                .vk("vkResetCommandBuffer")?;
+            self.device
+                .begin_command_buffer(cmd, &begin)
+                .vk("vkBeginCommandBuffer")?;
+        }
+        record(cmd);
+        unsafe { self.device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")
+    }
+
     /// Submits `cmd` (already ended) and blocks until the GPU has finished it.
     pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<()> {
         let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;

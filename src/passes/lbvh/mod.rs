@@ -4,6 +4,7 @@
 //! or `lbvh.refit` alone when vertices moved but the triangles stayed the same.
 //! Node layout: `glsl/shared/bvh.glsl` (2N-1 nodes of 32 bytes, root at 0).
 
+pub mod dynamic;
 pub mod sort;
 
 use crate::aabb::{ordered_to_float, Aabb};

@@ -1,0 +1,354 @@
+//! The frame: DESIGN.md's table as data (`Row`, from which `SCOPES` comes) and as the
+//! function that records it (`Renderer::record`), every row visible and recorded in
+//! table order (`FrameRecorder` asserts it), each under its timer scope. Every pass's
+//! `record` places its own barriers (see `passes`); this file only does what spans
+//! passes: the uniform upload, which rows a mode runs, and the scopes.
+
+use super::{FrameSlot, Renderer};
+use crate::gpu_types::FrameUniforms;
+use crate::passes::compose::{self, ComposeInputs, ComposeMode};
+use crate::passes::lbvh::dynamic::DynamicBvh;
+use crate::passes::reflect_merge::{self, BlurParams};
+use crate::passes::rt_reflect::{self, ReflectInputs};
+use crate::passes::rt_trace::{TraceScene, Traceable};
+use crate::passes::ssr_trace::{self, SsrParams};
+use crate::passes::{gbuffer, light_direct, shadow_map, sim_cloth, sim_transform, ssr_compact, SceneGeometry};
+use crate::settings::Mode;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, GpuTimer};
+use ash::vk;
+
+/// Timer scope of the whole frame.
+pub const FRAME: &str = "frame";
+/// Timer scope of the per-frame uniform upload.
+pub const UNIFORMS: &str = "uniforms";
+/// The rigid bodies' time step on the CPU (wall clock, while the frame is recorded).
+pub const SIM_RIGID: &str = "sim.rigid";
+
+/// One row of the frame table (DESIGN.md), declared in frame order.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Row {
+    Uniforms,
+    SimRigid,
+    SimTransform,
+    SimCloth,
+    /// The dynamic BVH's rebuild or refit (`lbvh.*`; the static BVH is built once).
+    DynamicBvh,
+    ShadowMap,
+    GBuffer,
+    LightDirect,
+    SsrClassify,
+    SsrTrace,
+    SsrCompact,
+    RtReflect,
+    ReflectMerge,
+    Compose,
+}
+
+impl Row {
+    /// Every row, in frame order.
+    pub const ALL: [Row; 14] = [
+        Row::Uniforms,
+        Row::SimRigid,
+        Row::SimTransform,
+        Row::SimCloth,
+        Row::DynamicBvh,
+        Row::ShadowMap,
+        Row::GBuffer,
+        Row::LightDirect,
+        Row::SsrClassify,
+        Row::SsrTrace,
+        Row::SsrCompact,
+        Row::RtReflect,
+        Row::ReflectMerge,
+        Row::Compose,
+    ];
+
+    /// The timer scopes the row reports under (the dynamic BVH's stages each open
+    /// their own).
+    pub const fn scopes(self) -> &'static [&'static str] {
+        match self {
+            Row::Uniforms => &[UNIFORMS],
+            Row::SimRigid => &[SIM_RIGID],
+            Row::SimTransform => &[sim_transform::NAME],
+            Row::SimCloth => &[sim_cloth::NAME],
+            Row::DynamicBvh => &DynamicBvh::SCOPES,
+            Row::ShadowMap => &[shadow_map::NAME],
+            Row::GBuffer => &[gbuffer::NAME],
+            Row::LightDirect => &[light_direct::NAME],
+            Row::SsrClassify => &[ssr_trace::CLASSIFY_NAME],
+            Row::SsrTrace => &[ssr_trace::NAME],
+            Row::SsrCompact => &[ssr_compact::NAME],
+            Row::RtReflect => &[rt_reflect::NAME],
+            Row::ReflectMerge => &[reflect_merge::NAME],
+            Row::Compose => &[compose::NAME],
+        }
+    }
+
+    /// The row's one scope; rows with stages have none of their own.
+    fn scope(self) -> &'static str {
+        match self.scopes() {
+            [name] => name,
+            _ => panic!("frame row {self:?} has stages, not one scope"),
+        }
+    }
+}
+
+const SCOPE_COUNT: usize = {
+    let (mut n, mut i) = (1, 0);
+    while i < Row::ALL.len() {
+        assert!(Row::ALL[i] as usize == i, "Row::ALL is the declaration order");
+        n += Row::ALL[i].scopes().len();
+        i += 1;
+    }
+    n
+};
+
+/// Every timer scope a frame can have, in frame order (`FRAME` last), from the rows'
+/// scopes: the keys of every report's `passes_ms`, a pass a mode (or a static scene)
+/// does not run reported as `null`. All are GPU time but `sim.rigid`, the CPU's; the
+/// dynamic BVH's stages are `lbvh.*` (the static BVH's, built once, are reported apart).
+pub const SCOPES: [&str; SCOPE_COUNT] = {
+    let mut out = [FRAME; SCOPE_COUNT];
+    let (mut k, mut i) = (0, 0);
+    while i < Row::ALL.len() {
+        let scopes = Row::ALL[i].scopes();
+        let mut j = 0;
+        while j < scopes.len() {
+            out[k] = scopes[j];
+            k += 1;
+            j += 1;
+        }
+        i += 1;
+    }
+    out
+};
+
+/// Holds a frame to the table's order: a row after a later one panics.
+#[derive(Default)]
+struct RowOrder {
+    /// The index in `Row::ALL` the next row must be at or after.
+    next: usize,
+}
+
+impl RowOrder {
+    fn follow(&mut self, row: Row) {
+        assert!(
+            row as usize >= self.next,
+            "frame row {row:?} recorded out of table order"
+        );
+        self.next = row as usize + 1;
+    }
+}
+
+/// Records the rows of one frame into a command buffer in table order, each under its
+/// scope.
+struct FrameRecorder<'a> {
+    timer: &'a mut GpuTimer,
+    cmd: vk::CommandBuffer,
+    order: RowOrder,
+}
+
+impl<'a> FrameRecorder<'a> {
+    /// Starts the frame: the timer's queries reset, the `frame` scope open.
+    fn begin(timer: &'a mut GpuTimer, cmd: vk::CommandBuffer) -> Self {
+        timer.reset(cmd);
+        timer.begin(cmd, FRAME);
+        let order = RowOrder::default();
+        Self { timer, cmd, order }
+    }
+
+    /// Records `row` under its scope.
+    fn row<R>(&mut self, row: Row, record: impl FnOnce() -> R) -> R {
+        self.order.follow(row);
+        self.timer.scope(self.cmd, row.scope(), record)
+    }
+
+    /// Records a row whose stages open their own scopes on the timer it is given.
+    fn staged_row(&mut self, row: Row, record: impl FnOnce(&mut GpuTimer)) {
+        self.order.follow(row);
+        record(self.timer);
+    }
+
+    /// Runs a row on the host while the frame is recorded; its wall-clock milliseconds.
+    fn host_row(&mut self, row: Row, run: impl FnOnce()) -> f64 {
+        self.order.follow(row);
+        let start = std::time::Instant::now();
+        run();
+        start.elapsed().as_secs_f64() * 1e3
+    }
+
+    fn end(self) {
+        self.timer.end(self.cmd, FRAME);
+    }
+}
+
+impl Renderer {
+    /// Records one frame into `cmd` with frame slot `slot`: DESIGN.md's frame table,
+    /// row by row. A dynamic scene advances one time step unless it is paused.
+    pub(super) fn record(&mut self, cmd: vk::CommandBuffer, slot: usize) {
+        let advance = !self.paused || std::mem::take(&mut self.step_once);
+        let Self {
+            ctx,
+            settings: st,
+            scene,
+            frame_ubo: ubo,
+            uniforms,
+            shadow,
+            gbuffer,
+            light,
+            ssr,
+            compact,
+            rt,
+            merge,
+            compose,
+            static_bvh,
+            dynamic,
+            transform,
+            cloth,
+            builder,
+            slots,
+            fail_mask_view,
+            ..
+        } = self;
+        let FrameSlot { timer, sim_ms } = &mut slots[slot];
+        let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.targets);
+        let mut f = FrameRecorder::begin(timer, cmd);
+        f.row(Row::Uniforms, || upload_uniforms(d, cmd, ubo, uniforms));
+        if let Some(dy) = dynamic.as_mut().filter(|_| advance) {
+            *sim_ms = Some(f.host_row(Row::SimRigid, || dy.step(slot)));
+            if dy.rigid.vertex_count > 0 {
+                f.row(Row::SimTransform, || {
+                    transform.record_posed(cmd, &dy.rigid, slot, &dy.mesh.vertices)
+                });
+            }
+            if !dy.cloths.is_empty() {
+                f.row(Row::SimCloth, || {
+                    dy.cloths.iter().for_each(|c| cloth.record(cmd, c, &dy.mesh.vertices))
+                });
+            }
+            f.staged_row(Row::DynamicBvh, |timer| {
+                dy.bvh.record(cmd, timer, builder, dy.mesh.triangles())
+            });
+        }
+        let dynamic = dynamic.as_ref();
+        let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.mesh.geometry())
+            .chain(dynamic.map(|dy| dy.mesh.geometry()))
+            .collect();
+        f.row(Row::ShadowMap, || shadow.record(cmd, ubo, &geometries));
+        let surfaces = scene.surfaces(dynamic);
+        f.row(Row::GBuffer, || gbuffer.record(cmd, ubo, &surfaces, &geometries));
+        f.row(Row::LightDirect, || {
+            light.record(cmd, ubo, g, &shadow.map, &scene.materials)
+        });
+        let params = SsrParams::from_settings(st);
+        if mode.reflects() {
+            let mask_only = !mode.marches();
+            f.row(Row::SsrClassify, || ssr.classify(cmd, ubo, g, &params, mask_only));
+        }
+        if mode.marches() {
+            f.row(Row::SsrTrace, || {
+                ssr.trace(cmd, ubo, g, &light.lit, &scene.materials, &params)
+            });
+        }
+        if mode.traces() {
+            f.row(Row::SsrCompact, || compact.record(cmd, &ssr.out.mask));
+            let inputs = ReflectInputs {
+                frame: ubo,
+                gbuffer: g,
+                surfaces,
+                shadow_map: &shadow.map,
+                list: &compact.out,
+                scene: TraceScene {
+                    static_bvh: Some(Traceable {
+                        bvh: static_bvh,
+                        geometry: scene.mesh.triangles(),
+                    }),
+                    dynamic_bvh: dynamic.map(|dy| dy.traceable()),
+                },
+            };
+            f.row(Row::RtReflect, || {
+                rt.record(cmd, &inputs, st.max_bounces, st.shadow_rays)
+            });
+        }
+        if mode.reflects() {
+            // Seams exist only where both sources do.
+            let blur = BlurParams {
+                radius: if mode.has_seams() { st.blur_radius } else { 0 },
+                band: st.blur_band,
+            };
+            let (mask, ssr_color) = (&ssr.out.mask, &ssr.out.color);
+            f.row(Row::ReflectMerge, || {
+                let traced = mode.traces();
+                merge.record(cmd, ubo, g, mask, ssr_color, &rt.color, traced, st.reflective_min, blur)
+            });
+        }
+        let inputs = ComposeInputs {
+            frame: ubo,
+            hdr: &light.lit,
+            reflection: merge.reflection(),
+            gbuffer: g,
+            materials: &scene.materials,
+            fail_mask: &ssr.out.mask,
+            reflective_min: st.reflective_min,
+        };
+        let compose_mode = match mode {
+            Mode::Raster => ComposeMode::Plain,
+            _ if *fail_mask_view => ComposeMode::FailMask,
+            Mode::Provenance => ComposeMode::Provenance,
+            Mode::Ssr | Mode::Hybrid | Mode::Rt => ComposeMode::Reflect,
+        };
+        f.row(Row::Compose, || compose.record(cmd, &inputs, st.exposure, compose_mode));
+        f.end();
+    }
+}
+
+/// Writes this frame's uniforms: spans passes, since every pass reads them.
+fn upload_uniforms(d: &ash::Device, cmd: vk::CommandBuffer, ubo: &Buffer, uniforms: &FrameUniforms) {
+    // WAR: the previous frame's shader reads of the uniforms finish before they change.
+    barrier::global(d, cmd, access::ANY_SHADER_READ, access::TRANSFER_WRITE);
+    unsafe { d.cmd_update_buffer(cmd, ubo.raw, 0, bytemuck::bytes_of(uniforms)) };
+    // RAW: every pass below reads the uniforms just written.
+    barrier::global(d, cmd, access::TRANSFER_WRITE, access::ANY_SHADER_READ);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scopes are the rows' scopes in frame order, each once, `frame` last.
+    #[test]
+    fn scopes_are_the_rows_in_order() {
+        let rows: Vec<&str> = Row::ALL.iter().flat_map(|r| r.scopes().iter().copied()).collect();
+        assert_eq!(SCOPES[..SCOPES.len() - 1], rows[..]);
+        assert_eq!(SCOPES.last(), Some(&FRAME));
+        let mut unique = SCOPES.to_vec();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), SCOPES.len(), "a scope named twice");
+        assert_eq!(SCOPES[..2], [UNIFORMS, SIM_RIGID]);
+    }
+
+    /// A frame may skip rows but never go back up the table.
+    #[test]
+    #[should_panic(expected = "out of table order")]
+    fn a_row_before_one_recorded_panics() {
+        let mut order = RowOrder::default();
+        order.follow(Row::Uniforms);
+        order.follow(Row::GBuffer);
+        order.follow(Row::Compose);
+        order.follow(Row::ShadowMap);
+    }
+
+    /// Skipping rows (a static scene, a mode without reflections) is allowed; a row
+    /// recorded twice is not.
+    #[test]
+    fn rows_may_be_skipped_not_repeated() {
+        let mut order = RowOrder::default();
+        for row in [Row::Uniforms, Row::ShadowMap, Row::GBuffer, Row::Compose] {
+            order.follow(row);
+        }
+        let again = std::panic::catch_unwind(move || order.follow(Row::Compose));
+        assert!(again.is_err());
+    }
+}

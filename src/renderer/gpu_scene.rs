@@ -1,0 +1,207 @@
+//! The scene on the GPU: its static meshes, materials and textures, and the moving
+//! geometry of a scene with bodies (their simulation, the world-space vertices the
+//! `sim.*` passes write, and the BVH over them). Everything is relative to the
+//! renderer's origin (`view::render_origin`).
+
+use crate::error::Result;
+use crate::gpu_types::{GpuMaterial, GpuVertex};
+use crate::passes::lbvh::dynamic::DynamicBvh;
+use crate::passes::lbvh::Geometry;
+use crate::passes::rt_trace::Traceable;
+use crate::passes::sim_cloth::ClothState;
+use crate::passes::sim_transform::{self, RigidBodies};
+use crate::passes::{SceneGeometry, Surfaces};
+use crate::scene::{texture, Scene};
+use crate::settings::Settings;
+use crate::sim::rigid::RigidWorld;
+use crate::vk::{Buffer, Context, Image, Sampler};
+use ash::vk;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// Indexed triangles on the GPU, as the raster passes draw them and the BVH builder and
+/// traversal read them: world-space vertices (relative to the renderer's origin), their
+/// texture coordinates, indices.
+pub(super) struct MeshBuffers {
+    pub vertices: Buffer,
+    pub uvs: Buffer,
+    pub indices: Buffer,
+    pub index_count: u32,
+}
+
+impl MeshBuffers {
+    /// `vertices` (already made) with `uvs` and `indices` uploaded beside them.
+    fn new(ctx: &Arc<Context>, name: &str, vertices: Buffer, uvs: &[[f32; 2]], indices: &[u32]) -> Result<Self> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            vertices,
+            uvs: Buffer::with_data(ctx, &format!("{name}.uvs"), storage, bytemuck::cast_slice(uvs))?,
+            indices: Buffer::with_data(
+                ctx,
+                &format!("{name}.indices"),
+                vk::BufferUsageFlags::INDEX_BUFFER | storage,
+                bytemuck::cast_slice(indices),
+            )?,
+            index_count: indices.len() as u32,
+        })
+    }
+
+    pub fn geometry(&self) -> SceneGeometry<'_> {
+        SceneGeometry {
+            vertices: &self.vertices,
+            uvs: &self.uvs,
+            indices: &self.indices,
+            index_count: self.index_count,
+        }
+    }
+
+    /// The triangles as the BVH builder and the traversal read them.
+    pub fn triangles(&self) -> Geometry<'_> {
+        Geometry {
+            vertices: &self.vertices,
+            indices: &self.indices,
+            tri_count: self.index_count / 3,
+        }
+    }
+}
+
+/// The scene's static buffers and textures on the GPU.
+pub(super) struct SceneBuffers {
+    pub mesh: MeshBuffers,
+    pub materials: Buffer,
+    textures: Image,
+    texture_sampler: Sampler,
+}
+
+impl SceneBuffers {
+    /// Uploads `scene`'s static geometry moved by `-origin`, its materials and textures.
+    pub fn upload(ctx: &Arc<Context>, scene: &Scene, origin: Vec3) -> Result<Self> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let materials: Vec<GpuMaterial> = scene.materials.iter().map(|m| m.gpu()).collect();
+        let shifted;
+        let vertices = if origin == Vec3::ZERO {
+            &scene.vertices
+        } else {
+            shifted = scene
+                .vertices
+                .iter()
+                .map(|v| GpuVertex {
+                    position: (Vec3::from(v.position) - origin).to_array(),
+                    ..*v
+                })
+                .collect::<Vec<_>>();
+            &shifted
+        };
+        let vertices = Buffer::with_data(ctx, "scene.vertices", storage, bytemuck::cast_slice(vertices))?;
+        Ok(Self {
+            mesh: MeshBuffers::new(ctx, "scene", vertices, &scene.uvs, &scene.indices)?,
+            materials: Buffer::with_data(ctx, "scene.materials", storage, bytemuck::cast_slice(&materials))?,
+            textures: upload_textures(ctx, scene)?,
+            texture_sampler: Sampler::trilinear_repeat(ctx, "scene.texture_sampler")?,
+        })
+    }
+
+    /// The surfaces, with the dynamic geometry's texture coordinates when there is any.
+    pub fn surfaces<'a>(&'a self, dynamic: Option<&'a DynamicGeometry>) -> Surfaces<'a> {
+        Surfaces {
+            materials: &self.materials,
+            uvs: [&self.mesh.uvs, dynamic.map_or(&self.mesh.uvs, |d| &d.mesh.uvs)],
+            textures: &self.textures,
+            sampler: &self.texture_sampler,
+        }
+    }
+}
+
+/// The scene's textures as one array texture (`scene::texture`): layers of the largest
+/// texture's power-of-two size (capped by `texture::LAYER_MAX` and the device), each
+/// with its mip chain; one white 1x1 layer when the scene has none.
+fn upload_textures(ctx: &Arc<Context>, scene: &Scene) -> Result<Image> {
+    let max = texture::LAYER_MAX.min(1 << ctx.limits.max_image_dimension2_d.ilog2());
+    let (size, chains) = texture::layers(&scene.textures, max);
+    let chains: Vec<Vec<&[u8]>> = chains
+        .iter()
+        .map(|chain| chain.iter().map(|level| level.as_raw().as_slice()).collect())
+        .collect();
+    Image::texture_array(ctx, "scene.textures", size, &chains)
+}
+
+/// The moving geometry of a scene with bodies: its simulation (`sim.rigid` on the
+/// host), the rigid bodies' vertices and poses (`sim.transform`), the cloths
+/// (`sim.cloth`), the world-space vertices those two write, and the BVH over them.
+pub(super) struct DynamicGeometry {
+    pub world: RigidWorld,
+    pub rigid: RigidBodies,
+    /// The world-space vertices `sim.transform` and `sim.cloth` write.
+    pub mesh: MeshBuffers,
+    pub cloths: Vec<ClothState>,
+    pub bvh: DynamicBvh,
+}
+
+impl DynamicGeometry {
+    /// The dynamic geometry of `scene`, simulated relative to `origin` (the renderer's),
+    /// its initial poses written for the first frame.
+    pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, origin: Vec3) -> Result<Self> {
+        let meshes = scene.dynamic_meshes();
+        let vertex_count = meshes.rigid_vertices as u32;
+        ctx.check_limit(
+            || "the dynamic geometry".to_string(),
+            vertex_count as u64,
+            "vertices",
+            "sim.transform's dispatch (65535 workgroups)",
+            sim_transform::MAX_VERTICES as u64,
+        )?;
+        let tris = (meshes.indices.len() / 3) as u32;
+        let world_vertices = Buffer::new(
+            ctx,
+            "dynamic.vertices",
+            std::mem::size_of_val(meshes.vertices.as_slice()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
+        let mut cloths = Vec::new();
+        let mut base = vertex_count;
+        for c in &scene.cloths {
+            cloths.push(ClothState::new(ctx, c, settings.sim_dt, base, origin)?);
+            base += c.resolution * c.resolution;
+        }
+        // Refit (cloth only, unless `cloth_rebuild`): rigid bodies move too far apart.
+        let refit = scene.bodies.is_empty() && !settings.cloth_rebuild;
+        let mut dynamic = Self {
+            world: RigidWorld::relative_to(scene, settings.sim_dt, origin)?,
+            rigid: RigidBodies::new(ctx, &meshes.vertices, vertex_count, scene.bodies.len())?,
+            mesh: MeshBuffers::new(ctx, "dynamic", world_vertices, &meshes.uvs, &meshes.indices)?,
+            cloths,
+            bvh: DynamicBvh::new(ctx, tris, refit, settings.refit_rebuild_every)?,
+        };
+        dynamic.rigid.write(0, &dynamic.world.poses());
+        Ok(dynamic)
+    }
+
+    /// Back to the initial state: the world, the cloths, and a fresh build next frame.
+    pub fn reset(&mut self) -> Result<()> {
+        self.world.reset();
+        let poses = self.world.poses();
+        for slot in 0..self.rigid.slots() {
+            self.rigid.write(slot, &poses);
+        }
+        for c in &self.cloths {
+            c.reset()?;
+        }
+        self.bvh.reset();
+        Ok(())
+    }
+
+    pub fn traceable(&self) -> Traceable<'_> {
+        Traceable {
+            bvh: &self.bvh.bvh,
+            geometry: self.mesh.triangles(),
+        }
+    }
+
+    /// One `sim.rigid` step, its poses written for the frame recorded with `slot`
+    /// (whose previous frame has finished: nothing reads its staging poses).
+    pub fn step(&mut self, slot: usize) {
+        self.world.step();
+        self.rigid.write(slot, &self.world.poses());
+    }
+}

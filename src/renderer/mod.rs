@@ -1,0 +1,444 @@
+//! Owns the passes and the scene on the GPU, and records frames (`frame.rs`: the frame
+//! table as data and the function that records it; `view.rs`: camera, light and origin
+//! maths; `gpu_scene.rs`: the scene's buffers and the moving geometry).
+//!
+//! Frame: `uniforms` → (a dynamic scene: `sim.rigid` on the CPU, `sim.transform`,
+//! `sim.cloth`, the dynamic BVH's `lbvh.*`) → `shadow.map` → `gbuffer` →
+//! `light.direct` → (by mode) `ssr.classify` → `ssr.trace` → `ssr.compact` →
+//! `rt.reflect` → `reflect.merge` → `compose`. The static BVH is built once, when the
+//! renderer is created; the dynamic one every frame, over that frame's geometry.
+//!
+//! Frames in flight: `render_frame` submits and waits (the headless path);
+//! `record_frame` records into a caller's command buffer with a frame slot (its own
+//! timestamp queries and pose staging) and `frame_finished` reads the slot back after
+//! the caller's fence, so several frames can be on the queue at once (the demo's two).
+//! The screen-sized images are shared by all slots: each pass's entry barriers order
+//! a frame after the one submitted before it on the queue.
+
+mod frame;
+mod gpu_scene;
+mod view;
+
+pub use frame::{Row, FRAME, SCOPES, SIM_RIGID, UNIFORMS};
+pub use view::{frame_uniforms, render_origin, View};
+
+use crate::error::Result;
+use crate::gpu_types::FrameUniforms;
+use crate::passes::compose::ComposePass;
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::lbvh::{Bvh, LbvhBuilder, MortonBits};
+use crate::passes::light_direct::{self, LightDirectPass};
+use crate::passes::reflect_merge::MergePass;
+use crate::passes::rt_reflect::RtReflectPass;
+use crate::passes::rt_trace::Traceable;
+use crate::passes::shadow_map::ShadowMapPass;
+use crate::passes::sim_cloth::ClothPass;
+use crate::passes::sim_transform::SimTransformPass;
+use crate::passes::ssr_compact::CompactPass;
+use crate::passes::ssr_trace::SsrPass;
+use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
+use crate::scene::{Camera, Scene};
+use crate::settings::{Mode, Settings};
+use crate::vk::{Buffer, Context, GpuTimer, Image, TimerReadout, Wall};
+use ash::vk;
+use glam::Vec3;
+use gpu_scene::{DynamicGeometry, SceneBuffers};
+use std::sync::Arc;
+
+/// What one frame in flight owns: its timestamp queries and the host's step time.
+struct FrameSlot {
+    timer: GpuTimer,
+    /// Wall-clock milliseconds of the `sim.rigid` step recorded into this slot's frame.
+    sim_ms: Option<f64>,
+}
+
+impl FrameSlot {
+    fn new(ctx: &Arc<Context>) -> Result<Self> {
+        Ok(Self {
+            timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
+            sim_ms: None,
+        })
+    }
+}
+
+fn extent(settings: &Settings) -> vk::Extent2D {
+    vk::Extent2D {
+        width: settings.width,
+        height: settings.height,
+    }
+}
+
+pub struct Renderer {
+    ctx: Arc<Context>,
+    /// World position of the renderer's origin (`render_origin`): the G-buffer, the
+    /// BVHs and `uniforms()` are relative to it.
+    origin: Vec3,
+    settings: Settings,
+    view: View,
+    scene: SceneBuffers,
+    frame_ubo: Buffer,
+    uniforms: FrameUniforms,
+    pub shadow: ShadowMapPass,
+    pub gbuffer: GBufferPass,
+    pub light: LightDirectPass,
+    pub ssr: SsrPass,
+    pub compact: CompactPass,
+    pub rt: RtReflectPass,
+    pub merge: MergePass,
+    pub compose: ComposePass,
+    /// BVH over the scene's (static) triangles, built at creation.
+    pub static_bvh: Bvh,
+    /// GPU milliseconds per stage of the static BVH build.
+    pub static_bvh_build: Vec<(&'static str, f64)>,
+    /// What moves, when the scene has bodies.
+    dynamic: Option<DynamicGeometry>,
+    transform: SimTransformPass,
+    cloth: ClothPass,
+    builder: LbvhBuilder,
+    /// One per frame that may be in flight (`set_frames_in_flight`); `render_frame`
+    /// uses the first.
+    slots: Vec<FrameSlot>,
+    /// Paint the fail mask instead of the frame (`set_fail_mask_view`).
+    fail_mask_view: bool,
+    /// Hold a dynamic scene still (`set_paused`); `step_once` advances one frame.
+    paused: bool,
+    step_once: bool,
+    cmd: vk::CommandBuffer,
+}
+
+impl Renderer {
+    /// Uploads the scene and creates every pass at the settings' resolution.
+    pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings) -> Result<Self> {
+        settings.validate()?;
+        scene.validate()?;
+        crate::limits::check_frame(ctx, settings)?;
+        // Every pass works relative to `origin` (see `render_origin`).
+        let origin = render_origin(scene);
+        let scene_buffers = SceneBuffers::upload(ctx, scene, origin)?;
+        let frame_ubo = Buffer::new(
+            ctx,
+            "frame.uniforms",
+            std::mem::size_of::<FrameUniforms>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
+        // The static BVH, once: the scene has no dynamic geometry yet.
+        let static_bvh = Bvh::new(ctx, scene_buffers.mesh.index_count / 3, MortonBits::Bits30)?;
+        let mut build_timer = GpuTimer::new(ctx, 8)?;
+        let builder = LbvhBuilder::new(ctx)?;
+        ctx.one_shot(|cmd| {
+            build_timer.reset(cmd);
+            builder.record_build(cmd, &mut build_timer, scene_buffers.mesh.triangles(), &static_bvh);
+        })?;
+        let static_bvh_build = build_timer.results()?;
+        let dynamic = if scene.is_dynamic() {
+            Some(DynamicGeometry::new(ctx, scene, settings, origin)?)
+        } else {
+            None
+        };
+        let extent = extent(settings);
+        let view = View::of(scene).relative_to(origin);
+        Ok(Self {
+            origin,
+            ctx: ctx.clone(),
+            settings: settings.clone(),
+            view,
+            scene: scene_buffers,
+            frame_ubo,
+            uniforms: view.uniforms(settings),
+            shadow: ShadowMapPass::new(ctx, settings.shadow_map_size, settings.shadow_slope_bias)?,
+            gbuffer: GBufferPass::new(ctx, extent)?,
+            light: LightDirectPass::new(ctx, extent)?,
+            ssr: SsrPass::new(ctx, extent)?,
+            compact: CompactPass::new(ctx, extent)?,
+            rt: RtReflectPass::new(ctx, extent)?,
+            merge: MergePass::new(ctx, extent)?,
+            compose: ComposePass::new(ctx, extent)?,
+            static_bvh,
+            static_bvh_build,
+            dynamic,
+            transform: SimTransformPass::new(ctx)?,
+            cloth: ClothPass::new(ctx)?,
+            builder,
+            slots: vec![FrameSlot::new(ctx)?],
+            fail_mask_view: false,
+            paused: false,
+            step_once: false,
+            cmd: ctx.allocate_command_buffer()?,
+        })
+    }
+
+    /// World position of the origin the renderer works relative to.
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// The uniforms the next frame uses.
+    pub fn uniforms(&self) -> &FrameUniforms {
+        &self.uniforms
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Renders at a new resolution from the next frame on: every screen-sized image and
+    /// list is recreated (the static BVH and the shadow map are kept). Waits for the GPU.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<()> {
+        self.set_settings(Settings {
+            width,
+            height,
+            ..self.settings.clone()
+        })
+    }
+
+    /// Whether `settings` differ from the current ones in a field only a new renderer
+    /// can apply: the time step and BVH policy of a dynamic scene (its simulation is
+    /// made with them). Every other field `set_settings` applies in place.
+    pub fn needs_new_renderer(&self, settings: &Settings) -> bool {
+        let s = &self.settings;
+        self.is_dynamic()
+            && (s.sim_dt != settings.sim_dt
+                || s.cloth_rebuild != settings.cloth_rebuild
+                || s.refit_rebuild_every != settings.refit_rebuild_every)
+    }
+
+    /// Applies `settings` from the next frame on, after checking them (nothing changes
+    /// when they are refused): a new resolution recreates every screen-sized image and
+    /// list, a new shadow-map size or slope bias the shadow map (both wait for the
+    /// GPU); the other fields are read as each frame is recorded. The fields of
+    /// `needs_new_renderer` are refused here.
+    pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
+        settings.validate()?;
+        crate::limits::check_frame(&self.ctx, &settings)?;
+        if self.needs_new_renderer(&settings) {
+            return Err(crate::Error::Settings(
+                "sim_dt, cloth_rebuild and refit_rebuild_every of a dynamic scene need a new renderer".into(),
+            ));
+        }
+        let old = &self.settings;
+        if (old.width, old.height) != (settings.width, settings.height) {
+            self.ctx.wait_idle()?;
+            let e = extent(&settings);
+            self.gbuffer.resize(e)?;
+            self.light.resize(e)?;
+            self.ssr.resize(e)?;
+            self.compact.resize(e)?;
+            self.rt.resize(e)?;
+            self.merge.resize(e)?;
+            self.compose.resize(e)?;
+        }
+        if (old.shadow_map_size, old.shadow_slope_bias) != (settings.shadow_map_size, settings.shadow_slope_bias) {
+            self.ctx.wait_idle()?;
+            self.shadow = ShadowMapPass::new(&self.ctx, settings.shadow_map_size, settings.shadow_slope_bias)?;
+        }
+        self.settings = settings;
+        self.uniforms = self.view.uniforms(&self.settings);
+        Ok(())
+    }
+
+    /// The camera, in world space.
+    pub fn camera(&self) -> Camera {
+        let mut c = self.view.camera;
+        c.position += self.origin;
+        c.target += self.origin;
+        c
+    }
+
+    /// Views the scene through `camera` (world space) from the next frame on.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.view.camera = Camera {
+            position: camera.position - self.origin,
+            target: camera.target - self.origin,
+            ..camera
+        };
+        self.uniforms = self.view.uniforms(&self.settings);
+    }
+
+    /// Paints each reflective pixel by its fail-mask reason instead of the frame (as
+    /// `--fail-mask` images do), in the modes that reflect; `raster` has no fail mask
+    /// and is shown as it is.
+    pub fn set_fail_mask_view(&mut self, on: bool) {
+        self.fail_mask_view = on;
+    }
+
+    /// Whether the fail-mask view is on (`set_fail_mask_view`).
+    pub fn fail_mask_view(&self) -> bool {
+        self.fail_mask_view
+    }
+
+    /// Frames that may be in flight at once (the demo's 2): each gets its own
+    /// timestamp queries and pose staging, indexed by `slot` in `record_frame`.
+    pub fn set_frames_in_flight(&mut self, n: usize) -> Result<()> {
+        let n = n.max(1);
+        self.ctx.wait_idle()?;
+        self.slots.truncate(n);
+        while self.slots.len() < n {
+            self.slots.push(FrameSlot::new(&self.ctx)?);
+        }
+        if let Some(d) = &mut self.dynamic {
+            d.rigid.set_slots(n)?;
+        }
+        Ok(())
+    }
+
+    /// Whether the scene moves (has bodies): each frame then advances it by `sim_dt`.
+    pub fn is_dynamic(&self) -> bool {
+        self.dynamic.is_some()
+    }
+
+    /// Time steps the dynamic scene has taken since its initial state (0 for a static one).
+    pub fn sim_steps(&self) -> u64 {
+        self.dynamic.as_ref().map_or(0, |d| d.world.steps())
+    }
+
+    /// Triangles of the dynamic geometry (0 for a static scene).
+    pub fn dynamic_triangles(&self) -> u32 {
+        self.dynamic.as_ref().map_or(0, |d| d.bvh.bvh.tri_count)
+    }
+
+    /// The dynamic BVH and the world-space geometry it was built over in the last
+    /// frame (relative to `origin()`), for tracing it apart (tests, benchmarks).
+    pub fn dynamic_traceable(&self) -> Option<Traceable<'_>> {
+        self.dynamic.as_ref().map(|d| d.traceable())
+    }
+
+    /// The last frame's world-space dynamic vertices (relative to `origin()`), read back.
+    pub fn read_dynamic_vertices(&self) -> Result<Option<Vec<crate::gpu_types::GpuVertex>>> {
+        self.dynamic
+            .as_ref()
+            .map(|d| Ok(bytemuck::pod_collect_to_vec(&d.mesh.vertices.read()?)))
+            .transpose()
+    }
+
+    /// Puts a dynamic scene back to its initial state: the next frame is its first
+    /// time step again. Nothing changes for a static scene.
+    pub fn reset_simulation(&mut self) -> Result<()> {
+        if let Some(d) = &mut self.dynamic {
+            self.ctx.wait_idle()?;
+            d.reset()?;
+        }
+        Ok(())
+    }
+
+    /// Records, submits and waits for one frame; returns its time per scope (ms) with
+    /// their self-check against the wall clock from submit to fence. A dynamic scene
+    /// first advances by one time step (`sim.rigid`, CPU wall clock): frame k after a
+    /// reset shows the world at time (k + 1) x `sim_dt`.
+    pub fn render_frame(&mut self) -> Result<TimerReadout> {
+        let (ctx, cmd) = (self.ctx.clone(), self.cmd);
+        ctx.rerecord(cmd, |cmd| self.record(cmd, 0))?;
+        let submitted = std::time::Instant::now();
+        self.ctx.submit_and_wait(self.cmd)?;
+        let wall = Wall {
+            ms: submitted.elapsed().as_secs_f64() * 1e3,
+            tight: self.ctx.device_type == vk::PhysicalDeviceType::CPU,
+        };
+        self.read_frame(0, Some(wall))
+    }
+
+    /// Records one frame into `cmd` (begun, not ended), with frame slot `slot`'s
+    /// queries and staging: a dynamic scene first advances by one time step. The
+    /// caller submits it, and must have seen the slot's previous frame finish (a
+    /// fence) before; several slots' frames may be in flight on the queue at once.
+    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
+        self.record(cmd, slot);
+    }
+
+    /// Holds a dynamic scene still from the next frame on (its geometry and BVH stay
+    /// as the last frame left them), or lets it move again.
+    pub fn set_paused(&mut self, paused: bool) {
+        self.paused = paused;
+    }
+
+    /// Whether the dynamic scene is held still.
+    pub fn paused(&self) -> bool {
+        self.paused
+    }
+
+    /// While paused, advances the next frame by one time step.
+    pub fn step_once(&mut self) {
+        self.step_once = true;
+    }
+
+    /// After the frame recorded with `slot` has finished on the GPU: its time per
+    /// scope (ms), self-checked without a wall clock (the window's frames overlap). The
+    /// first frame after a rebuild of a refit BVH also makes the refit schedule here,
+    /// from the built tree (waiting for the GPU: every frame recorded without a
+    /// schedule rebuilds, so the tree then is the last one built).
+    pub fn frame_finished(&mut self, slot: usize) -> Result<TimerReadout> {
+        self.read_frame(slot, None)
+    }
+
+    fn read_frame(&mut self, slot: usize, wall: Option<Wall>) -> Result<TimerReadout> {
+        if let Some(d) = &mut self.dynamic {
+            d.bvh.after_frame()?;
+        }
+        let s = &mut self.slots[slot];
+        let mut times = s.timer.read(wall)?;
+        if let Some(ms) = s.sim_ms.take() {
+            times.scopes.push((SIM_RIGID, ms));
+        }
+        Ok(times)
+    }
+
+    /// Switches the reflection mode for the next frames (for reference renders).
+    pub fn set_mode(&mut self, mode: Mode) {
+        self.settings.mode = mode;
+    }
+
+    /// Per pixel of the last frame: whether it reflects, and its fail-mask bits (0 in
+    /// `raster` mode). A readback, for stats, debug images and tests.
+    pub fn reflection_maps(&self) -> Result<ReflectionMaps> {
+        let normal = crate::cpu_ref::rgba16f_to_f32(&self.read_target(&self.gbuffer.targets.normal)?);
+        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.targets.material)?);
+        let min = self.settings.reflective_min;
+        let reflective = normal
+            .iter()
+            .zip(&material)
+            .map(|(n, &m)| m != crate::shader_defines::MATERIAL_NONE && n[3] > min)
+            .collect();
+        let mask = if self.settings.mode == Mode::Raster {
+            vec![0; material.len()]
+        } else {
+            bytemuck::pod_collect_to_vec(&self.ssr.out.mask.read(vk::ImageLayout::GENERAL)?)
+        };
+        Ok(ReflectionMaps {
+            reflective,
+            mask,
+            traced: self.settings.mode.traces(),
+        })
+    }
+
+    /// Reflective pixels and failed (ray-traced) pixels of the last frame, counted from
+    /// the G-buffer and the fail mask (a readback: for stats and tests).
+    pub fn reflection_stats(&self) -> Result<ReflectionStats> {
+        Ok(self.reflection_maps()?.stats())
+    }
+
+    /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).
+    pub fn read_output(&self) -> Result<Vec<u8>> {
+        self.compose.ldr.read(vk::ImageLayout::GENERAL)
+    }
+
+    /// The last frame's lit HDR image as RGBA f32.
+    pub fn read_lit(&self) -> Result<Vec<[f32; 4]>> {
+        let raw = self.light.lit.read(vk::ImageLayout::GENERAL)?;
+        debug_assert_eq!(light_direct::FORMAT, vk::Format::R32G32B32A32_SFLOAT);
+        Ok(bytemuck::pod_collect_to_vec(&raw))
+    }
+
+    /// Reads a G-buffer (or shadow map) image left in `SHADER_READ_ONLY_OPTIMAL`.
+    pub fn read_target(&self, image: &Image) -> Result<Vec<u8>> {
+        image.read(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.ctx.device.device_wait_idle();
+        }
+        self.ctx.free_command_buffer(self.cmd);
+    }
+}

@@ -87,7 +87,6 @@ fn transform_matches_cpu_reference() {
     for v in &gpu[count..count + 5] {
         assert_eq!((v.material, v.object), (0xdead, 0xbeef));
     }
-    common::assert_no_validation_messages(&ctx);
 }
 
 /// `sim.cloth` against `cpu_ref::cloth`: a 23x23 sheet with its corners pinned, its
@@ -186,5 +185,4 @@ fn cloth_steps_match_cpu_reference() {
     // The sheet moved.
     let start = cloth.particles();
     assert!((Vec3::from(cpu[n / 2].pos) - Vec3::from(start[n / 2].pos)).length() > 0.01);
-    common::assert_no_validation_messages(&ctx);
 }

@@ -148,7 +148,6 @@ fn closest_hits_equal_brute_force() {
         let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
         assert!(ties <= rays.len() / 1000, "{ties} ties");
     }
-    common::assert_no_validation_messages(&ctx);
 }
 
 /// Static and dynamic BVHs traced together equal brute force over both triangle sets
@@ -198,7 +197,6 @@ fn static_and_dynamic_bvhs_together() {
         gpu.iter().any(|h| h.prim != BVH_INVALID && h.prim & 0x8000_0000 == 0),
         "some hits are static"
     );
-    common::assert_no_validation_messages(&ctx);
 }
 
 /// Any-hit (shadow rays) reports a hit exactly when closest-hit finds one, and the hit
@@ -233,7 +231,6 @@ fn any_hit_agrees_on_occlusion() {
         }
     }
     assert!(occluded > 1000 && occluded < 9000, "{occluded}");
-    common::assert_no_validation_messages(&ctx);
 }
 
 /// After moving the vertices, a refit BVH gives exactly the hits of a fresh build.
@@ -284,7 +281,6 @@ fn refit_traces_like_a_fresh_build() {
         .unwrap();
     assert_eq!(a, f);
     assert!(a.iter().filter(|h| h.prim != BVH_INVALID).count() > 4000);
-    common::assert_no_validation_messages(&ctx);
 }
 
 /// After `drop`'s bodies have moved for 30 frames, the renderer's dynamic BVH (rebuilt
@@ -346,5 +342,4 @@ fn the_moved_dynamic_bvh_equals_brute_force() {
     let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, (p & 0x7fff_ffff) as usize));
     let hits = gpu.iter().filter(|h| h.prim != BVH_INVALID).count();
     assert!(hits > 3000 && ties <= rays.len() / 1000, "{hits} hits, {ties} ties");
-    common::assert_no_validation_messages(&ctx);
 }

@@ -6,6 +6,11 @@
 use std::path::Path;
 use std::process::Command;
 
+/// The tests here run one at a time: the sweep's timings (and its confirmation, which
+/// fails when no round's timings pass their self-check) are only trustworthy when no
+/// other lavapipe process takes the cores between a scope's stamps.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 fn speculum(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_speculum"))
         .args(args)
@@ -33,6 +38,7 @@ fn rows(dir: &Path) -> Vec<Vec<String>> {
 
 #[test]
 fn a_small_sweep_writes_its_outputs_and_resumes() {
+    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
     let sweep = dir.path().join("sweep.toml");
     std::fs::write(&sweep, SWEEP).unwrap();
@@ -133,6 +139,7 @@ fn a_small_sweep_writes_its_outputs_and_resumes() {
 
 #[test]
 fn bad_sweeps_and_csvs_are_refused_before_any_gpu_work() {
+    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
     for (text, says) in [
         ("[axes]\nmax_bounce = [1, 2]\n", "unknown setting 'max_bounce'"),

@@ -1,4 +1,5 @@
-//! Shared test helpers: a validated context and the zero-message check.
+//! Shared test helpers: a validated context that checks for validation messages when
+//! dropped, random inputs, the binary runner.
 #![allow(dead_code)]
 
 pub mod showcase;
@@ -7,22 +8,41 @@ use speculum::vk::{Context, ContextDesc};
 use std::sync::Arc;
 
 /// A context with validation and synchronization validation on (always, in tests).
-pub fn context() -> Arc<Context> {
-    Context::new(&ContextDesc {
-        validation: true,
-        device: std::env::var("SPECULUM_TEST_DEVICE").ok(),
-        ..Default::default()
-    })
-    .expect("a Vulkan device with validation layers (run tools/test, which installs them)")
+pub fn context() -> GpuTest {
+    GpuTest(
+        Context::new(&ContextDesc {
+            validation: true,
+            device: std::env::var("SPECULUM_TEST_DEVICE").ok(),
+            ..Default::default()
+        })
+        .expect("a Vulkan device with validation layers (run tools/test, which installs them)"),
+    )
 }
 
-/// Fails the test if the validation layer reported anything.
-pub fn assert_no_validation_messages(ctx: &Context) {
-    assert_eq!(
-        ctx.validation_messages(),
-        0,
-        "validation messages were reported (see stderr)"
-    );
+/// A test's GPU context, which fails the test when it is dropped if the validation
+/// layer reported anything in the test's life (wgpu's `#[gpu_test]` idea: no test can
+/// forget to check). Locals declared after it are dropped first, so messages from
+/// their destruction count too. Derefs to the context.
+pub struct GpuTest(Arc<Context>);
+
+impl std::ops::Deref for GpuTest {
+    type Target = Arc<Context>;
+    fn deref(&self) -> &Arc<Context> {
+        &self.0
+    }
+}
+
+impl Drop for GpuTest {
+    fn drop(&mut self) {
+        // A test already failing is not failed twice (that would abort the run).
+        if !std::thread::panicking() {
+            assert_eq!(
+                self.0.validation_messages(),
+                0,
+                "validation messages were reported (see stderr)"
+            );
+        }
+    }
 }
 
 /// `n` random G-buffer material ids below `ids`, each `MATERIAL_NONE` (sky) with

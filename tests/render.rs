@@ -61,8 +61,7 @@ fn under_and_beside(with_box: bool) -> (f32, f32) {
         let (x, y) = (p.x as usize, p.y as usize);
         luminance(lit[y * settings.width as usize + x])
     };
-    let result = (at(Vec3::new(0.0, 0.0, 0.0)), at(Vec3::new(3.0, 0.0, 0.0)));
-    result
+    (at(Vec3::new(0.0, 0.0, 0.0)), at(Vec3::new(3.0, 0.0, 0.0)))
 }
 
 /// A point straight under an occluder (sun overhead) is much darker than a lit point;

@@ -123,6 +123,31 @@ fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// A window shot (the swapchain image copied out after the blit) with the HUD hidden
+/// is the frame itself, pixel for pixel: the blit at the same size copies, and the
+/// copy's channel order is undone; with the HUD shown it differs.
+fn window_shot_is_the_frame(display: &Display, dir: &Path) {
+    let d = dir.display();
+    let text = format!(
+        "wait 2\nwindow-shot {d}/with_hud.png\nwait 1\nkey h\nwait 2\nscreenshot {d}/frame.png\n\
+         window-shot {d}/window.png\nwait 2\n"
+    );
+    scripted(
+        display,
+        dir,
+        "window_shot",
+        &text,
+        &["--scene", "room", "--width", "320", "--height", "180"],
+    );
+    let (frame, window) = (png(&dir.join("frame.png")), png(&dir.join("window.png")));
+    assert_eq!(window.dimensions(), (320, 180));
+    assert!(frame == window, "the window shot without the HUD is not the frame");
+    assert!(
+        png(&dir.join("with_hud.png")) != frame,
+        "the HUD is not in the window shot"
+    );
+}
+
 /// Every mode in turn, a screenshot in each; the hybrid one is what `speculum render`
 /// makes of the same view and settings.
 fn modes_match_render(display: &Display, dir: &Path) {
@@ -334,8 +359,9 @@ fn main() {
         }
     };
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, Case); 5] = [
+    let cases: [(&str, Case); 6] = [
         ("modes_match_render", modes_match_render),
+        ("window_shot_is_the_frame", window_shot_is_the_frame),
         ("resize_storm", resize_storm),
         ("settings_change_the_image", settings_change_the_image),
         ("animation_controls", animation_controls),

@@ -3,10 +3,10 @@
 //! UI pass, through the same paths as keys and scripts.
 
 use super::script::Action;
-use super::swapchain::present_mode_name;
 use crate::reflection_maps::{ReflectionStats, FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
 use crate::settings::{Mode, Settings};
+use crate::vk::swapchain::present_mode_name;
 use ash::vk;
 use egui::{Color32, RichText};
 

@@ -2,9 +2,9 @@
 //! `Renderer` the headless path uses records its passes into the frame slot's command
 //! buffer, the result is blitted into the swapchain image and the HUD (egui) drawn
 //! over it. Two frames are in flight: each slot has its command buffer, fence and
-//! "image acquired" semaphore, and the renderer its timestamp queries and pose
-//! staging (`Renderer::set_frames_in_flight`); each swapchain image has its "rendered"
-//! semaphore.
+//! "image acquired" semaphore (`vk::FrameSync`), and the renderer its timestamp
+//! queries and pose staging (`Renderer::set_frames_in_flight`); each swapchain image
+//! has its "rendered" semaphore (`vk::Swapchain`).
 //!
 //! Keys, mouse and scripts go through one set of `Action`s and one settings path
 //! (`Demo::apply_settings`), so what a script does is what a person does.
@@ -12,13 +12,13 @@
 pub mod camera;
 pub mod hud;
 pub mod script;
-pub mod swapchain;
 
-use crate::error::{Error, Result, VkContext};
+use crate::error::{Error, Result};
 use crate::reflection_maps::ReflectionStats;
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
-use crate::vk::{Context, ContextDesc, WindowHandles};
+use crate::vk::swapchain::{self, present_mode_name};
+use crate::vk::{Acquired, Buffer, Context, ContextDesc, FrameSync, Swapchain, WindowHandles};
 use crate::Renderer;
 use ash::vk;
 use camera::FlyCamera;
@@ -28,7 +28,6 @@ use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use swapchain::{present_mode_name, Swapchain};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
@@ -154,11 +153,8 @@ impl ApplicationHandler for App {
     }
 }
 
-/// One frame in flight.
+/// What the demo keeps per frame in flight (`FrameSync` has its Vulkan side).
 struct Slot {
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
-    acquired: vk::Semaphore,
     /// A frame was submitted with this slot and its timings not read yet.
     pending: bool,
     /// The mode it was rendered in (for the per-mode frame times).
@@ -180,8 +176,8 @@ struct Demo {
     renderer: Renderer,
     hud: Hud,
     swapchain: Option<Swapchain>,
+    sync: FrameSync,
     slots: Vec<Slot>,
-    pool: vk::CommandPool,
     ctx: Arc<Context>,
     window: Window,
 
@@ -220,7 +216,7 @@ struct Demo {
     /// A window shot asked for: copied out of the next drawn frame.
     window_shot: Option<PathBuf>,
     /// The copy in flight: its path, buffer, size and slot.
-    shot_copy: Option<(PathBuf, crate::vk::Buffer, vk::Extent2D, vk::Format, usize)>,
+    shot_copy: Option<(PathBuf, Buffer, vk::Extent2D, usize)>,
 }
 
 fn window_size(window: &Window) -> (u32, u32) {
@@ -264,37 +260,13 @@ impl Demo {
         let present_modes = swapchain::supported_present_modes(&ctx)?;
         let swapchain = Swapchain::new(&ctx, (w, h), config.present_mode, None)?;
         let format = swapchain.as_ref().map_or(vk::Format::B8G8R8A8_UNORM, |s| s.format);
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(ctx.queue_family)
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        let pool = unsafe { ctx.device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
-        let mut slots = Vec::new();
-        for i in 0..FRAMES_IN_FLIGHT {
-            let info = vk::CommandBufferAllocateInfo::default()
-                .command_pool(pool)
-                .level(vk::CommandBufferLevel::PRIMARY)
-                .command_buffer_count(1);
-            let cmd = unsafe { ctx.device.allocate_command_buffers(&info) }.vk("vkAllocateCommandBuffers")?[0];
-            let fence = unsafe {
-                ctx.device.create_fence(
-                    &vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED),
-                    None,
-                )
-            }
-            .vk("vkCreateFence")?;
-            let acquired = unsafe { ctx.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
-                .vk("vkCreateSemaphore")?;
-            ctx.set_name(acquired, &format!("demo.acquired[{i}]"));
-            ctx.set_name(cmd, &format!("demo.frame[{i}]"));
-            slots.push(Slot {
-                cmd,
-                fence,
-                acquired,
-                pending: false,
-                mode: settings.mode,
-                free: Vec::new(),
-            });
-        }
+        let sync = FrameSync::new(&ctx, FRAMES_IN_FLIGHT)?;
+        let slot = || Slot {
+            pending: false,
+            mode: settings.mode,
+            free: Vec::new(),
+        };
+        let slots = (0..FRAMES_IN_FLIGHT).map(|_| slot()).collect();
         let egui_ctx = egui::Context::default();
         let max_side = ctx.limits.max_image_dimension2_d as usize;
         let state = egui_winit::State::new(
@@ -332,8 +304,8 @@ impl Demo {
                 visible: true,
             },
             swapchain,
+            sync,
             slots,
-            pool,
             ctx,
             window,
             scene: config.scene,
@@ -570,7 +542,7 @@ impl Demo {
 
     /// Waits for every frame in flight and takes their timings.
     fn drain(&mut self) -> Result<()> {
-        unsafe { self.ctx.device.device_wait_idle() }.vk("vkDeviceWaitIdle")?;
+        self.ctx.wait_idle()?;
         for i in 0..self.slots.len() {
             self.finish_slot(i)?;
         }
@@ -635,9 +607,7 @@ impl Demo {
     /// One frame: the renderer's passes, the blit, the HUD, the present.
     fn draw(&mut self) -> Result<()> {
         let i = (self.frame % self.slots.len() as u64) as usize;
-        let d = self.ctx.device.clone();
-        let fence = self.slots[i].fence;
-        unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+        self.sync.wait(i)?;
         self.finish_slot(i)?;
         if self.minimized() {
             self.summary.skipped += 1;
@@ -650,199 +620,70 @@ impl Demo {
             self.summary.skipped += 1;
             return Ok(());
         };
-        let ctx = self.ctx.clone();
-        let surface = ctx.surface.as_ref().expect("a window context");
-        let acquired = self.slots[i].acquired;
-        let image = match unsafe {
-            surface
-                .swapchain
-                .acquire_next_image(sc.raw, u64::MAX, acquired, vk::Fence::null())
-        } {
-            Ok((image, suboptimal)) => {
+        let image = match self.sync.acquire(i, sc)? {
+            Acquired::Image { index, suboptimal } => {
                 self.recreate |= suboptimal;
-                image as usize
+                index
             }
-            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => {
+            Acquired::OutOfDate => {
                 self.recreate = true;
                 self.summary.skipped += 1;
                 return Ok(());
             }
-            Err(result) => {
-                return Err(Error::Vulkan {
-                    what: "vkAcquireNextImageKHR",
-                    result,
-                })
-            }
         };
-        // The camera moves by the time since the last frame.
+        self.advance_camera();
+        if self.stats.is_none() || self.frame.is_multiple_of(STATS_EVERY) {
+            self.refresh_stats()?;
+        }
+        let primitives = self.run_hud(i)?;
+        let Some(sc) = &self.swapchain else { return Ok(()) };
+        let shot = match self.window_shot.take() {
+            Some(path) => Some((sc.shot_buffer(&path.display().to_string())?, path)),
+            None => None,
+        };
+        let cmd = self.sync.begin(i)?;
+        self.slots[i].mode = self.renderer.settings().mode;
+        self.renderer.record_frame(cmd, i);
+        sc.record_blit(cmd, image, &self.renderer.compose.ldr);
+        if let Some(primitives) = &primitives {
+            let ppp = self.hud.ctx.pixels_per_point();
+            let hud = &mut self.hud.renderer;
+            sc.record_overlay(cmd, image, || hud.cmd_draw(cmd, sc.extent, ppp, primitives))
+                .map_err(|e| Error::Window(format!("HUD draw: {e}")))?;
+        }
+        sc.record_finish(cmd, image, shot.as_ref().map(|s| &s.0));
+        self.recreate |= self.sync.submit_present(i, sc, image)?;
+        self.shot_copy = shot.map(|(buffer, path)| (path, buffer, sc.extent, i));
+        self.slots[i].pending = true;
+        self.rendered_since_change = true;
+        self.frame += 1;
+        self.summary.frames += 1;
+        self.save_window_shot()
+    }
+
+    /// The camera moves by the time since the last frame.
+    fn advance_camera(&mut self) {
         let now = Instant::now();
         let dt = now.duration_since(self.last_frame).as_secs_f64();
         self.last_frame = now;
         push(&mut self.wall_ms, dt * 1e3);
         self.camera.update(dt as f32);
         self.renderer.set_camera(self.camera.camera());
-        if self.stats.is_none() || self.frame.is_multiple_of(STATS_EVERY) {
-            self.refresh_stats()?;
-        }
-        let primitives = self.run_hud(i)?;
-        let Some(sc) = &self.swapchain else { return Ok(()) };
-        let (cmd, target, view, extent) = (self.slots[i].cmd, sc.images[image], sc.views[image], sc.extent);
-        unsafe {
-            d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
-                .vk("vkResetCommandBuffer")?;
-            d.begin_command_buffer(
-                cmd,
-                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-            )
-            .vk("vkBeginCommandBuffer")?;
-        }
-        self.slots[i].mode = self.renderer.settings().mode;
-        self.renderer.record_frame(cmd, i);
-        let ldr = &self.renderer.compose.ldr;
-        record_blit(&d, cmd, ldr.raw, ldr.extent, target, extent);
-        if let Some(primitives) = &primitives {
-            let color = [vk::RenderingAttachmentInfo::default()
-                .image_view(view)
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::LOAD)
-                .store_op(vk::AttachmentStoreOp::STORE)];
-            let rendering = vk::RenderingInfo::default()
-                .render_area(vk::Rect2D {
-                    offset: vk::Offset2D::default(),
-                    extent,
-                })
-                .layer_count(1)
-                .color_attachments(&color);
-            unsafe { d.cmd_begin_rendering(cmd, &rendering) };
-            let ppp = self.hud.ctx.pixels_per_point();
-            self.hud
-                .renderer
-                .cmd_draw(cmd, extent, ppp, primitives)
-                .map_err(|e| Error::Window(format!("HUD draw: {e}")))?;
-            unsafe { d.cmd_end_rendering(cmd) };
-        }
-        let drawn = (
-            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+    }
+
+    /// Saves the window shot copied out of the frame just submitted (waits for it).
+    fn save_window_shot(&mut self) -> Result<()> {
+        let (Some((path, buffer, e, slot)), Some(sc)) = (self.shot_copy.take(), &self.swapchain) else {
+            return Ok(());
+        };
+        self.sync.wait(slot)?;
+        crate::headless::save_png(&path, &sc.rgba_of_shot(&buffer), e.width, e.height)?;
+        eprintln!(
+            "demo: saved the window ({}x{}) to {}",
+            e.width,
+            e.height,
+            path.display()
         );
-        let present = (
-            vk::PipelineStageFlags2::NONE,
-            vk::AccessFlags2::NONE,
-            vk::ImageLayout::PRESENT_SRC_KHR,
-        );
-        match self.window_shot.take() {
-            Some(path) if sc.readable => {
-                let bytes = extent.width as u64 * extent.height as u64 * 4;
-                let buffer = crate::vk::Buffer::new(
-                    &self.ctx,
-                    "demo.window_shot",
-                    bytes,
-                    vk::BufferUsageFlags::TRANSFER_DST,
-                    gpu_allocator::MemoryLocation::GpuToCpu,
-                )?;
-                let copying = (
-                    vk::PipelineStageFlags2::COPY,
-                    vk::AccessFlags2::TRANSFER_READ,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                );
-                image_barrier(&d, cmd, target, drawn, copying);
-                let region = vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    })
-                    .image_extent(vk::Extent3D {
-                        width: extent.width,
-                        height: extent.height,
-                        depth: 1,
-                    });
-                unsafe {
-                    d.cmd_copy_image_to_buffer(
-                        cmd,
-                        target,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        buffer.raw,
-                        &[region],
-                    )
-                };
-                // The host reads the copy after the slot's fence.
-                let host = [vk::MemoryBarrier2::default()
-                    .src_stage_mask(vk::PipelineStageFlags2::COPY)
-                    .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                    .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                    .dst_access_mask(vk::AccessFlags2::HOST_READ)];
-                unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&host)) };
-                image_barrier(&d, cmd, target, copying, present);
-                self.shot_copy = Some((path, buffer, extent, sc.format, i));
-            }
-            Some(path) => {
-                return Err(Error::Window(format!(
-                    "cannot save {}: this window's swapchain images cannot be copied from",
-                    path.display()
-                )))
-            }
-            None => image_barrier(&d, cmd, target, drawn, present),
-        }
-        unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
-        let rendered = sc.rendered[image];
-        let waits = [vk::SemaphoreSubmitInfo::default()
-            .semaphore(acquired)
-            .stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER | vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)];
-        let signals = [vk::SemaphoreSubmitInfo::default()
-            .semaphore(rendered)
-            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
-        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
-        let submit = [vk::SubmitInfo2::default()
-            .wait_semaphore_infos(&waits)
-            .command_buffer_infos(&cmds)
-            .signal_semaphore_infos(&signals)];
-        unsafe {
-            d.reset_fences(&[fence]).vk("vkResetFences")?;
-            d.queue_submit2(self.ctx.queue, &submit, fence).vk("vkQueueSubmit2")?;
-        }
-        self.slots[i].pending = true;
-        self.rendered_since_change = true;
-        let (chains, images, semaphores) = ([sc.raw], [image as u32], [rendered]);
-        let present = vk::PresentInfoKHR::default()
-            .wait_semaphores(&semaphores)
-            .swapchains(&chains)
-            .image_indices(&images);
-        match unsafe { surface.swapchain.queue_present(self.ctx.queue, &present) } {
-            Ok(suboptimal) => self.recreate |= suboptimal,
-            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => self.recreate = true,
-            Err(result) => {
-                return Err(Error::Vulkan {
-                    what: "vkQueuePresentKHR",
-                    result,
-                })
-            }
-        }
-        self.frame += 1;
-        self.summary.frames += 1;
-        if let Some((path, buffer, e, format, slot)) = self.shot_copy.take() {
-            let fence = self.slots[slot].fence;
-            unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")?;
-            // The same host read of GpuToCpu memory as Buffer::read's staging copy.
-            let mut rgba = buffer.mapped().expect("GpuToCpu is mapped").to_vec();
-            if format == vk::Format::B8G8R8A8_UNORM {
-                for px in rgba.chunks_exact_mut(4) {
-                    px.swap(0, 2);
-                }
-            }
-            for px in rgba.chunks_exact_mut(4) {
-                px[3] = 255;
-            }
-            crate::headless::save_png(&path, &rgba, e.width, e.height)?;
-            eprintln!(
-                "demo: saved the window ({}x{}) to {}",
-                e.width,
-                e.height,
-                path.display()
-            );
-        }
         Ok(())
     }
 
@@ -901,7 +742,7 @@ impl Demo {
             for delta in delta {
                 self.hud
                     .renderer
-                    .set_texture(self.ctx.queue, self.pool, *id, delta)
+                    .set_texture(self.ctx.queue, self.sync.pool(), *id, delta)
                     .map_err(|e| Error::Window(format!("HUD texture: {e}")))?;
             }
         }
@@ -1061,15 +902,6 @@ impl Demo {
     /// Waits for the GPU and destroys everything; the summary of the run.
     fn close(mut self) -> Summary {
         let _ = self.drain();
-        let d = &self.ctx.device;
-        unsafe {
-            for s in &self.slots {
-                d.destroy_fence(s.fence, None);
-                d.destroy_semaphore(s.acquired, None);
-            }
-            d.destroy_command_pool(self.pool, None);
-        }
-        self.slots.clear();
         self.summary.validation_messages = self.ctx.validation_messages();
         std::mem::take(&mut self.summary)
     }
@@ -1102,125 +934,4 @@ fn action_of(code: KeyCode) -> Option<Action> {
         _ => return None,
     };
     Action::from_key(name)
-}
-
-type Use = (vk::PipelineStageFlags2, vk::AccessFlags2, vk::ImageLayout);
-
-fn image_barrier(d: &ash::Device, cmd: vk::CommandBuffer, image: vk::Image, from: Use, to: Use) {
-    let b = [vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(from.0)
-        .src_access_mask(from.1)
-        .old_layout(from.2)
-        .dst_stage_mask(to.0)
-        .dst_access_mask(to.1)
-        .new_layout(to.2)
-        .image(image)
-        .subresource_range(swapchain::color_range())];
-    unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b)) };
-}
-
-/// Blits the frame (`compose`'s LDR image, `GENERAL`) into the swapchain image, scaled
-/// to it, and leaves that image ready to be drawn on and the frame `GENERAL` again.
-fn record_blit(
-    d: &ash::Device,
-    cmd: vk::CommandBuffer,
-    src: vk::Image,
-    src_extent: vk::Extent2D,
-    dst: vk::Image,
-    dst_extent: vk::Extent2D,
-) {
-    // The acquire semaphore is waited for at the transfer stage: the transition waits too.
-    image_barrier(
-        d,
-        cmd,
-        dst,
-        (
-            vk::PipelineStageFlags2::ALL_TRANSFER,
-            vk::AccessFlags2::NONE,
-            vk::ImageLayout::UNDEFINED,
-        ),
-        (
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::TRANSFER_WRITE,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-        ),
-    );
-    // The blit reads the frame in TRANSFER_SRC_OPTIMAL (the layout a driver may
-    // prefer), after compose's writes.
-    image_barrier(
-        d,
-        cmd,
-        src,
-        (
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
-            vk::AccessFlags2::SHADER_STORAGE_WRITE,
-            vk::ImageLayout::GENERAL,
-        ),
-        (
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::TRANSFER_READ,
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-        ),
-    );
-    let corner = |e: vk::Extent2D| vk::Offset3D {
-        x: e.width as i32,
-        y: e.height as i32,
-        z: 1,
-    };
-    let layers = vk::ImageSubresourceLayers {
-        aspect_mask: vk::ImageAspectFlags::COLOR,
-        mip_level: 0,
-        base_array_layer: 0,
-        layer_count: 1,
-    };
-    let region = [vk::ImageBlit2::default()
-        .src_subresource(layers)
-        .src_offsets([vk::Offset3D::default(), corner(src_extent)])
-        .dst_subresource(layers)
-        .dst_offsets([vk::Offset3D::default(), corner(dst_extent)])];
-    let filter = if src_extent == dst_extent {
-        vk::Filter::NEAREST
-    } else {
-        vk::Filter::LINEAR
-    };
-    let info = vk::BlitImageInfo2::default()
-        .src_image(src)
-        .src_image_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
-        .dst_image(dst)
-        .dst_image_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-        .regions(&region)
-        .filter(filter);
-    unsafe { d.cmd_blit_image2(cmd, &info) };
-    // Back to GENERAL once read, before anything else (the next compose, a readback)
-    // touches the frame.
-    image_barrier(
-        d,
-        cmd,
-        src,
-        (
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::NONE,
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-        ),
-        (
-            vk::PipelineStageFlags2::ALL_COMMANDS,
-            vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
-            vk::ImageLayout::GENERAL,
-        ),
-    );
-    image_barrier(
-        d,
-        cmd,
-        dst,
-        (
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::TRANSFER_WRITE,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-        ),
-        (
-            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-            vk::AccessFlags2::COLOR_ATTACHMENT_READ | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-        ),
-    );
 }

@@ -3,13 +3,17 @@
 pub mod barrier;
 pub mod buffer;
 pub mod context;
+pub mod frame_sync;
 pub mod image;
 pub mod pipeline;
 pub mod spirv;
+pub mod swapchain;
 pub mod timing;
 
 pub use buffer::Buffer;
 pub use context::{list_devices, Context, ContextDesc, DeviceInfo, Surface, WindowHandles};
+pub use frame_sync::{Acquired, FrameSync};
 pub use image::{Image, Sampler};
 pub use pipeline::{GraphicsDesc, Groups, Pipeline, Resource, Shader};
+pub use swapchain::Swapchain;
 pub use timing::{GpuTimer, TimerReadout, TimingCheck, Timings, Wall};

@@ -118,3 +118,13 @@ pub struct Hit {
 const _: () = assert!(std::mem::size_of::<BvhNode>() == 32);
 const _: () = assert!(std::mem::size_of::<Ray>() == 32);
 const _: () = assert!(std::mem::size_of::<Hit>() == 16);
+
+/// Decodes tightly packed RGBA16F texels.
+pub fn rgba16f_to_f32(raw: &[u8]) -> Vec<[f32; 4]> {
+    raw.chunks_exact(8)
+        .map(|t| {
+            let h = |i: usize| half::f16::from_le_bytes([t[2 * i], t[2 * i + 1]]).to_f32();
+            [h(0), h(1), h(2), h(3)]
+        })
+        .collect()
+}

@@ -1,17 +1,15 @@
 //! Headless rendering: warm-up frames, measured frames, per-scope statistics, and the
 //! `render --timings` report (schema: `report`).
 
-use crate::bench::Tick;
 use crate::error::{Error, Result};
 use crate::metrics::compare_rgba8;
 use crate::renderer::{Renderer, FRAME};
-use crate::report::{Header, PassTimes, Stat};
+use crate::report::{FrameRecord, Header, PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
 use crate::vk::{Context, TimingCheck, Timings};
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::path::Path;
 use std::sync::Arc;
 
 /// Most frames (measured, or warm-up) one run renders: enough for any measurement,
@@ -108,20 +106,8 @@ impl FramePlan {
     }
 }
 
-/// One measured frame, as `render`'s per-frame hook sees it (for `--sequence`).
-pub struct FrameRecord<'a> {
-    /// Measured frame number, from 0.
-    pub index: u32,
-    /// The frame's time per scope (ms; `sim.rigid` is CPU wall clock).
-    pub times: &'a [(&'static str, f64)],
-    /// Why this frame's timings failed their self-check; `None` when they passed.
-    pub timing_problem: Option<&'a str>,
-    pub rgba: &'a [u8],
-    pub dynamic_triangles: u32,
-    pub rt_pixel_fraction: f64,
-    /// With a reference: SSIM and RMSE against the same frame in `rt` mode.
-    pub vs_rt: Option<crate::metrics::Comparison>,
-}
+/// Called after every frame a long run renders (for a progress bar).
+pub type Tick<'a> = &'a mut dyn FnMut();
 
 /// Called with every measured frame; its error ends the render.
 pub type OnFrame<'a> = &'a mut dyn FnMut(FrameRecord<'_>) -> Result<()>;
@@ -226,7 +212,7 @@ pub fn render_frames(
         ssim_vs_rt: ssim,
         rmse_vs_rt: rmse,
         rt_frame_ms,
-        timing: crate::bench::check_all(&[timings, ref_timings]),
+        timing: Timings::check_all(&[timings, ref_timings]),
     };
     Ok(Rendered {
         report,
@@ -245,24 +231,4 @@ pub fn render(
     tick: Tick<'_>,
 ) -> Result<Rendered> {
     render_frames(ctx, scene, settings, plan, tick, None)
-}
-
-/// Tightly packed RGBA8 encoded as a PNG.
-pub fn png_bytes(rgba: &[u8], width: u32, height: u32) -> Result<Vec<u8>> {
-    let mut png = Vec::new();
-    image::write_buffer_with_format(
-        &mut std::io::Cursor::new(&mut png),
-        rgba,
-        width,
-        height,
-        image::ExtendedColorType::Rgba8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| Error::Input(format!("PNG encoding failed: {e}")))?;
-    Ok(png)
-}
-
-/// Writes tightly packed RGBA8 as a PNG, atomically (see `output::write_atomic`).
-pub fn save_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {
-    crate::output::write_atomic(path, &png_bytes(rgba, width, height)?)
 }

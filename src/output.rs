@@ -233,6 +233,26 @@ fn temporary(path: &Path) -> PathBuf {
     folder(path).join(format!(".{name}.{}.tmp", std::process::id()))
 }
 
+/// Tightly packed RGBA8 encoded as a PNG.
+pub fn png_bytes(rgba: &[u8], width: u32, height: u32) -> Result<Vec<u8>> {
+    let mut png = Vec::new();
+    image::write_buffer_with_format(
+        &mut std::io::Cursor::new(&mut png),
+        rgba,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| Error::Input(format!("PNG encoding failed: {e}")))?;
+    Ok(png)
+}
+
+/// Writes tightly packed RGBA8 as a PNG, atomically (see `output::write_atomic`).
+pub fn save_png(path: &Path, rgba: &[u8], width: u32, height: u32) -> Result<()> {
+    write_atomic(path, &png_bytes(rgba, width, height)?)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

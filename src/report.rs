@@ -216,7 +216,7 @@ pub struct FrameLine {
 }
 
 impl FrameLine {
-    pub fn of(r: &crate::headless::FrameRecord<'_>) -> Self {
+    pub fn of(r: &FrameRecord<'_>) -> Self {
         let get = |name: &str| r.times.iter().find(|(n, _)| *n == name).map(|t| t.1);
         Self {
             frame: r.index,
@@ -230,6 +230,21 @@ impl FrameLine {
             timing_problem: r.timing_problem.map(str::to_string),
         }
     }
+}
+
+/// One measured frame, as `render`'s per-frame hook sees it (for `--sequence`).
+pub struct FrameRecord<'a> {
+    /// Measured frame number, from 0.
+    pub index: u32,
+    /// The frame's time per scope (ms; `sim.rigid` is CPU wall clock).
+    pub times: &'a [(&'static str, f64)],
+    /// Why this frame's timings failed their self-check; `None` when they passed.
+    pub timing_problem: Option<&'a str>,
+    pub rgba: &'a [u8],
+    pub dynamic_triangles: u32,
+    pub rt_pixel_fraction: f64,
+    /// With a reference: SSIM and RMSE against the same frame in `rt` mode.
+    pub vs_rt: Option<crate::metrics::Comparison>,
 }
 
 /// A report as pretty JSON with a trailing newline.

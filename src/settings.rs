@@ -8,21 +8,14 @@ use serde::{Deserialize, Serialize};
 /// 512 MiB, within a single allocation on lavapipe (2 GiB) and common GPUs.
 pub const MAX_SIDE: u32 = 8192;
 
-/// What the renderer computes for reflections.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+/// What the renderer computes for reflections (`about` says what each mode is).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
-#[value(rename_all = "lowercase")]
 pub enum Mode {
-    /// No reflections: direct lighting only.
     Raster,
-    /// Screen-space reflections only; where SSR fails there is no reflection.
     Ssr,
-    /// The method: SSR first, the failed pixels ray traced, merged, seams blurred.
     Hybrid,
-    /// Every reflective pixel ray traced (the quality reference), same bounces.
     Rt,
-    /// Hybrid, with each pixel painted by its reflection's source: pink = ray traced,
-    /// blue = SSR, grey = no reflective surface.
     Provenance,
 }
 
@@ -56,6 +49,20 @@ impl Mode {
             Mode::Hybrid => "hybrid",
             Mode::Rt => "rt",
             Mode::Provenance => "provenance",
+        }
+    }
+
+    /// What the mode renders, in a line (the CLI's help, the HUD).
+    pub fn about(self) -> &'static str {
+        match self {
+            Mode::Raster => "No reflections: direct lighting only",
+            Mode::Ssr => "Screen-space reflections only; where SSR fails there is no reflection",
+            Mode::Hybrid => "The method: SSR first, the failed pixels ray traced, merged, seams blurred",
+            Mode::Rt => "Every reflective pixel ray traced (the quality reference), same bounces",
+            Mode::Provenance => {
+                "Hybrid, with each pixel painted by its reflection's source: pink = ray traced, blue = SSR, \
+                 grey = no reflective surface"
+            }
         }
     }
 }
@@ -402,5 +409,35 @@ mod tests {
         let s: Settings = serde_json::from_str(r#"{"width": 320, "pcf_radius": 2}"#).unwrap();
         assert_eq!((s.width, s.height, s.pcf_radius), (320, Settings::default().height, 2));
         assert!(serde_json::from_str::<Settings>(r#"{"widht": 320}"#).is_err());
+    }
+}
+
+/// SSR settings (see `Settings` for what each trades).
+#[derive(Clone, Copy, Debug)]
+pub struct SsrParams {
+    pub max_steps: u32,
+    pub stride: f32,
+    pub thickness: f32,
+    pub max_distance: f32,
+    pub edge_fade: f32,
+    pub min_confidence: f32,
+    pub reflective_min: f32,
+    /// Hits on surfaces more reflective than this fail (need the ray tracer's bounce).
+    pub recursion_min: f32,
+}
+
+impl SsrParams {
+    /// The SSR fields of the frame's settings.
+    pub fn from_settings(st: &Settings) -> Self {
+        Self {
+            max_steps: st.ssr_max_steps,
+            stride: st.ssr_stride,
+            thickness: st.ssr_thickness,
+            max_distance: st.ssr_max_distance,
+            edge_fade: st.ssr_edge_fade,
+            min_confidence: st.ssr_min_confidence,
+            reflective_min: st.reflective_min,
+            recursion_min: st.ssr_recursion_min.max(st.reflective_min),
+        }
     }
 }

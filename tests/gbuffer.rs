@@ -68,7 +68,7 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
     r.render_frame().unwrap();
     let t = &r.gbuffer.targets;
     let depth: Vec<f32> = bytemuck::cast_slice(&r.read_target(&t.depth).unwrap()).to_vec();
-    let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
+    let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
     let albedo = r.read_target(&t.albedo).unwrap();
     let material: Vec<u32> = bytemuck::cast_slice(&r.read_target(&t.material).unwrap()).to_vec();
     let frame = *r.uniforms();
@@ -239,7 +239,7 @@ fn bent_normals_never_mirror_below_the_surface() {
     r.render_frame().unwrap();
     let t = &r.gbuffer.targets;
     let depth: Vec<f32> = bytemuck::cast_slice(&r.read_target(&t.depth).unwrap()).to_vec();
-    let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
+    let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
     let frame = *r.uniforms();
     let (mut clamped, mut kept) = (0, 0);
     for (i, nr) in normal.iter().enumerate() {

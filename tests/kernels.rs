@@ -13,8 +13,8 @@ use glam::{IVec2, Vec3, Vec4Swizzles};
 use rand::Rng;
 use speculum::cpu_ref::{self, shading};
 use speculum::passes::compose::ComposePass;
-use speculum::passes::gbuffer::GBuffer;
 use speculum::passes::light_direct::LightDirectPass;
+use speculum::passes::GBuffer;
 use speculum::shader_defines::MATERIAL_NONE;
 use speculum::vk::{barrier, Image};
 

@@ -8,8 +8,8 @@ mod common;
 use ash::vk;
 use rand::Rng;
 use speculum::cpu_ref::{self, merge};
-use speculum::passes::gbuffer::GBuffer;
 use speculum::passes::reflect_merge::{BlurParams, MergePass};
+use speculum::passes::GBuffer;
 use speculum::shader_defines::{FAIL_BLEND, MATERIAL_NONE, SOURCE_NONE};
 use speculum::vk::{barrier, Image};
 
@@ -39,7 +39,7 @@ fn merge_and_seam_blur_match_cpu_reference() {
 
     let normal: Vec<[f32; 4]> = (0..n).map(|_| [0.0, 1.0, 0.0, rng.random_range(0.0..1.0)]).collect();
     let normal_bytes = cpu_ref::f32_to_rgba16f(&normal);
-    let normal = cpu_ref::rgba16f_to_f32(&normal_bytes); // what the GPU reads
+    let normal = speculum::gpu_types::rgba16f_to_f32(&normal_bytes); // what the GPU reads
     let material = common::random_material_ids(&mut rng, n, 0.1, 5);
     // Failed pixels in blobs of varying density, so seams are both long and ragged,
     // beside regions of one source only (SSR on the left, RT at the bottom) whose tiles

@@ -99,7 +99,7 @@ fn room_matches_golden_image() {
     let out = headless::render(&ctx, &scene, &settings, plan, &mut || {}).unwrap();
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(GOLDEN);
     if std::env::var("SPECULUM_BLESS").is_ok_and(|v| v == "1") {
-        headless::save_png(&path, &out.rgba, settings.width, settings.height).unwrap();
+        speculum::output::save_png(&path, &out.rgba, settings.width, settings.height).unwrap();
     }
     let golden = image::open(&path)
         .expect("golden image (SPECULUM_BLESS=1 writes it)")

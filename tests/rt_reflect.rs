@@ -114,7 +114,7 @@ fn reflected_paths_match_cpu_reference() {
             r.render_frame().unwrap();
         }
         let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.targets.depth).unwrap());
-        let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&r.gbuffer.targets.normal).unwrap());
+        let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.targets.normal).unwrap());
         let shadow: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.shadow.map).unwrap());
         let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.rt.color.read(general).unwrap());
         let reflective = r.reflection_maps().unwrap().reflective;

@@ -98,7 +98,7 @@ fn transform_matches_cpu_reference() {
 #[test]
 fn cloth_steps_match_cpu_reference() {
     use speculum::passes::sim_cloth::{ClothPass, ClothState};
-    use speculum::sim::cloth::{Cloth, Particle, Pins};
+    use speculum::scene::cloth::{Cloth, Particle, Pins};
     let ctx = common::context();
     let mut rng = common::rng(23);
     let cloth = Cloth {

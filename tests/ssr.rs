@@ -16,8 +16,9 @@ use ash::vk;
 use glam::IVec2;
 use rand::Rng;
 use speculum::cpu_ref::ssr::{self, Class};
-use speculum::passes::gbuffer::GBuffer;
-use speculum::passes::ssr_trace::{SsrParams, SsrPass};
+use speculum::passes::ssr_trace::SsrPass;
+use speculum::passes::GBuffer;
+use speculum::settings::SsrParams;
 use speculum::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
     FAIL_OUT_OF_STEPS, LIST_STRIPES, SSR_LIST_WG,
@@ -66,7 +67,7 @@ impl Fixture {
         shape(&mut g);
         // The normals as the GPU will read them (rounded through RGBA16F).
         g.normal_bytes = speculum::cpu_ref::f32_to_rgba16f(&g.normal);
-        g.normal = speculum::cpu_ref::rgba16f_to_f32(&g.normal_bytes);
+        g.normal = speculum::gpu_types::rgba16f_to_f32(&g.normal_bytes);
         let gb = GBuffer::new(ctx, extent).unwrap();
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
@@ -385,7 +386,7 @@ fn march_matches_cpu_on_room() {
     let frame = *r.uniforms();
     let t = &r.gbuffer.targets;
     let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.depth).unwrap());
-    let normal = speculum::cpu_ref::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
+    let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
     let lit = r.read_lit().unwrap();
     let general = vk::ImageLayout::GENERAL;
     let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.mask.read(general).unwrap());

@@ -114,8 +114,8 @@ fn one_shot_scopes_pass_their_self_check() {
     let (lo, hi) = (glam::Vec3::splat(-5.0), glam::Vec3::splat(5.0));
     let rays = speculum::bench::lbvh::incoherent_rays(lo, hi, 50_000, 3);
     let tracer = speculum::passes::rt_trace::TracePass::new(&ctx).unwrap();
-    let scene = speculum::passes::rt_trace::TraceScene {
-        static_bvh: Some(speculum::passes::rt_trace::Traceable { bvh: &bvh, geometry }),
+    let scene = speculum::passes::TraceScene {
+        static_bvh: Some(speculum::passes::Traceable { bvh: &bvh, geometry }),
         dynamic_bvh: None,
     };
     let (_, t) = tracer.trace(&rays, scene, false).unwrap();

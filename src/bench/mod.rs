@@ -10,7 +10,7 @@ pub mod suite;
 
 use crate::error::Result;
 use crate::renderer::{Renderer, FRAME};
-use crate::vk::{TimingCheck, Timings};
+use crate::vk::Timings;
 
 /// Per-renderer timings of an interleaved run: every scope, and the frame times in
 /// round order (to form per-round ratios, which cancel drift between rounds).
@@ -19,13 +19,7 @@ pub struct Interleaved {
     pub frames: Vec<Vec<f64>>,
 }
 
-/// The self-checks of several renderers' timings together.
-pub fn check_all(timings: &[Timings]) -> TimingCheck {
-    timings.iter().map(Timings::check).collect()
-}
-
-/// Called after every frame a long run renders (for a progress bar).
-pub type Tick<'a> = &'a mut dyn FnMut();
+pub use crate::headless::Tick;
 
 /// Renders one frame of each renderer in turn, `warmup` uncounted rounds and then
 /// `rounds` measured ones, so drift in the machine's speed falls on all of them alike.

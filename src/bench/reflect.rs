@@ -125,7 +125,7 @@ pub fn run(
         reflective_pixels: rt_reflective,
         rt_frame_ms,
         points,
-        timing: super::check_all(&timings),
+        timing: crate::vk::Timings::check_all(&timings),
         valid: same_reflective && monotonic && all_at_end,
     })
 }

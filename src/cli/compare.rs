@@ -70,7 +70,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     ));
     if let Some(path) = &args.diff {
         let heat = metrics::error_heatmap(ia.as_raw(), ib.as_raw());
-        speculum::headless::save_png(path, &heat, ia.width(), ia.height())?;
+        speculum::output::save_png(path, &heat, ia.width(), ia.height())?;
         text.line(format_args!("wrote {}", path.display()));
     }
     if let Some(path) = &args.json {

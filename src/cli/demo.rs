@@ -30,7 +30,7 @@ pub struct DemoArgs {
     #[arg(long, default_value = "room", help = super::render::scene_help())]
     pub scene: String,
     /// Reflection mode to start in [default: hybrid, or the settings file's].
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = super::choice(&Mode::ALL, Mode::name, Mode::about))]
     pub mode: Option<Mode>,
     /// Present mode; MAILBOX and IMMEDIATE fall back to FIFO where the surface lacks them.
     #[arg(long, value_enum, default_value = "fifo")]

@@ -10,6 +10,7 @@ pub mod tune;
 use anyhow::{Context as _, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use speculum::scene::Floor;
 use speculum::vk::{Context, ContextDesc};
 use speculum::Settings;
 use std::io::IsTerminal;
@@ -84,8 +85,8 @@ pub struct ViewArgs {
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub sun_dir: Option<glam::Vec3>,
     /// The floor a bare model (an .obj given as the scene) stands on [default: mirror].
-    #[arg(long, value_enum)]
-    pub floor: Option<speculum::scene::Floor>,
+    #[arg(long, value_parser = choice(&Floor::ALL, Floor::name, Floor::about))]
+    pub floor: Option<Floor>,
     /// Bodies a scene with a [spawn] table drops (`stress`: 100 by default), 1..=4000.
     #[arg(long)]
     pub bodies: Option<u32>,
@@ -265,4 +266,19 @@ pub fn cell(stat: Option<speculum::report::Stat>) -> String {
         Some(s) => format!("{:.2} ({:.2}–{:.2})", s.median, s.p10, s.p90),
         None => "-".into(),
     }
+}
+
+/// A parser for one of a library enum's values by name, each listed in `--help` with
+/// its line (the library's types do not derive clap's traits: the CLI is above them).
+pub fn choice<T: Copy + Send + Sync + 'static>(
+    all: &'static [T],
+    name: fn(T) -> &'static str,
+    about: fn(T) -> &'static str,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    let values = all.iter().map(move |&v| PossibleValue::new(name(v)).help(about(v)));
+    PossibleValuesParser::new(values).map(move |s| {
+        let found = all.iter().copied().find(|&v| name(v) == s);
+        found.expect("clap checked the value against the possible values")
+    })
 }

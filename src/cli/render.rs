@@ -23,7 +23,7 @@ pub struct RenderArgs {
     pub scene: String,
     /// Reflection mode [default: hybrid, or the settings file's]: `rt` traces every
     /// reflective pixel (the reference), `provenance` paints pixels by source.
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = super::choice(&Mode::ALL, Mode::name, Mode::about))]
     pub mode: Option<Mode>,
     /// Frames to measure (after the warm-up frames, which are not counted).
     #[arg(long, default_value_t = 10)]
@@ -147,9 +147,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         .map(|i| i * (plan.frames - 1) / (SHEET_FRAMES - 1))
         .collect();
     let wants_frames = args.sequence.is_some() || args.contact_sheet.is_some();
-    let mut hook = |f: headless::FrameRecord<'_>| -> speculum::error::Result<()> {
+    let mut hook = |f: speculum::report::FrameRecord<'_>| -> speculum::error::Result<()> {
         if args.sequence.is_some() {
-            frames_png.push(headless::png_bytes(f.rgba, w, h)?);
+            frames_png.push(speculum::output::png_bytes(f.rgba, w, h)?);
             lines += &serde_json::to_string(&speculum::report::FrameLine::of(&f)).expect("lines serialize");
             lines.push('\n');
         }
@@ -165,12 +165,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
     r.header.refresh_validation(&ctx);
     // Every output is written only after the whole render succeeded, all or none.
     let mut outputs = Batch::default();
-    outputs.add(&args.out, headless::png_bytes(&rendered.rgba, w, h)?);
+    outputs.add(&args.out, speculum::output::png_bytes(&rendered.rgba, w, h)?);
     if let (Some(path), Some(reference)) = (&reference_out, &rendered.reference_rgba) {
-        outputs.add(path, headless::png_bytes(reference, w, h)?);
+        outputs.add(path, speculum::output::png_bytes(reference, w, h)?);
     }
     if let Some(path) = &args.fail_mask {
-        outputs.add(path, headless::png_bytes(&rendered.fail_mask_rgba, w, h)?);
+        outputs.add(path, speculum::output::png_bytes(&rendered.fail_mask_rgba, w, h)?);
     }
     if let Some(path) = &args.timings {
         outputs.add(path, speculum::report::to_json(&r).into_bytes());
@@ -188,7 +188,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(path) = &args.contact_sheet {
         outputs.add(
             path,
-            headless::png_bytes(&side_by_side(&sheet, w, h), w * SHEET_FRAMES, h)?,
+            speculum::output::png_bytes(&side_by_side(&sheet, w, h), w * SHEET_FRAMES, h)?,
         );
     }
     outputs.commit()?;

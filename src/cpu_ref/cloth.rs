@@ -1,7 +1,7 @@
 //! Reference of the cloth kernels (`glsl/cloth_*.comp`, `glsl/shared/cloth.glsl`).
 
 use crate::gpu_types::GpuVertex;
-use crate::sim::cloth::{ClothPush, Particle};
+use crate::scene::cloth::{ClothPush, Particle};
 use glam::{IVec2, Vec3, Vec4};
 
 const NEIGHBOURS: [(i32, i32); 12] = [

@@ -21,16 +21,6 @@ pub fn albedo_texel(t: &[u8]) -> (glam::Vec3, f32) {
     (rgb, t[3] as f32 / 255.0)
 }
 
-/// Decodes tightly packed RGBA16F texels.
-pub fn rgba16f_to_f32(raw: &[u8]) -> Vec<[f32; 4]> {
-    raw.chunks_exact(8)
-        .map(|t| {
-            let h = |i: usize| half::f16::from_le_bytes([t[2 * i], t[2 * i + 1]]).to_f32();
-            [h(0), h(1), h(2), h(3)]
-        })
-        .collect()
-}
-
 /// Encodes RGBA f32 texels as tightly packed RGBA16F (round to nearest).
 pub fn f32_to_rgba16f(texels: &[[f32; 4]]) -> Vec<u8> {
     texels

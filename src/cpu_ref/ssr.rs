@@ -3,7 +3,7 @@
 
 use super::shading::world_from_depth;
 use crate::gpu_types::FrameUniforms;
-use crate::passes::ssr_trace::SsrParams;
+use crate::settings::SsrParams;
 use crate::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
     FAIL_OUT_OF_STEPS, MATERIAL_NONE, SSR_REFINE_STEPS,

@@ -141,7 +141,7 @@ impl Demo {
             return Ok(());
         };
         self.sync.wait(slot)?;
-        crate::headless::save_png(&path, &sc.rgba_of_shot(&buffer), e.width, e.height)?;
+        crate::output::save_png(&path, &sc.rgba_of_shot(&buffer), e.width, e.height)?;
         eprintln!(
             "demo: saved the window ({}x{}) to {}",
             e.width,

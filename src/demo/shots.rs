@@ -56,7 +56,7 @@ impl Demo {
             "sim_steps": self.renderer.sim_steps(),
         });
         let mut batch = crate::output::Batch::default();
-        batch.add(path, crate::headless::png_bytes(&rgba, s.width, s.height)?);
+        batch.add(path, crate::output::png_bytes(&rgba, s.width, s.height)?);
         batch.add(
             &path.with_extension("json"),
             serde_json::to_string_pretty(&json).expect("serializes").into_bytes(),

@@ -1,7 +1,7 @@
 //! `compose`: exposure, ACES tonemap and sRGB encoding of the HDR frame into the LDR
 //! image that is presented or saved. CPU reference: `cpu_ref::compose`.
 
-use super::gbuffer::GBuffer;
+use super::GBuffer;
 use crate::error::Result;
 use crate::shader_defines::{COMPOSE_FAIL_MASK, COMPOSE_PLAIN, COMPOSE_PROVENANCE, COMPOSE_REFLECT};
 use crate::shaders;

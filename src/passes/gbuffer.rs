@@ -2,7 +2,7 @@
 //! (the normal clamped so its mirror direction stays above the facet), base colour
 //! (textured, sRGB-encoded) + roughness and material id.
 
-use super::{set_viewport, SceneGeometry, Surfaces};
+use super::{set_viewport, GBuffer, SceneGeometry, Surfaces};
 use crate::error::Result;
 use crate::shader_defines::MATERIAL_NONE;
 use crate::shaders;
@@ -22,14 +22,6 @@ pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// Material index, `MATERIAL_NONE` where no geometry covers the pixel.
 pub const MATERIAL_FORMAT: vk::Format = vk::Format::R32_UINT;
-
-/// The G-buffer images; `SHADER_READ_ONLY_OPTIMAL` between frames.
-pub struct GBuffer {
-    pub depth: Image,
-    pub normal: Image,
-    pub albedo: Image,
-    pub material: Image,
-}
 
 impl GBuffer {
     /// Creates the targets. They accept transfers too, so tests can fill and read them.

@@ -1,7 +1,7 @@
 //! `light.direct`: deferred shading of the G-buffer with the sun, PCF-filtered shadow
 //! map and sky ambient, into an HDR image. CPU reference: `cpu_ref::shading`.
 
-use super::gbuffer::GBuffer;
+use super::GBuffer;
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::barrier::{self, access};

@@ -1,6 +1,7 @@
 //! One file per pass. A pass owns its pipeline and its output images and records its
 //! own commands; it knows nothing of the other passes beyond the names of its outputs'
-//! readers. Barrier rule: a pass's `record` begins with the barriers that make its
+//! readers: what passes hand each other (the G-buffer, the compacted pixel list, the
+//! scene a trace walks, the surfaces and geometry) is defined here, not in a pass. Barrier rule: a pass's `record` begins with the barriers that make its
 //! outputs writable (the previous frame's readers done; attachments moved to their
 //! attachment layout) and ends with the barrier that makes them visible to the readers
 //! its documentation names. Storage images stay in `GENERAL` from creation
@@ -20,7 +21,9 @@ pub mod sim_transform;
 pub mod ssr_compact;
 pub mod ssr_trace;
 
+use crate::vk::{Buffer, Image, Resource};
 use ash::vk;
+use lbvh::{Bvh, Geometry};
 
 /// Sets a full-target viewport and scissor (both are dynamic state).
 pub(crate) fn set_viewport(device: &ash::Device, cmd: vk::CommandBuffer, extent: vk::Extent2D) {
@@ -68,4 +71,58 @@ pub struct SceneGeometry<'a> {
     pub uvs: &'a crate::vk::Buffer,
     pub indices: &'a crate::vk::Buffer,
     pub index_count: u32,
+}
+
+/// The G-buffer images; `SHADER_READ_ONLY_OPTIMAL` between frames.
+pub struct GBuffer {
+    pub depth: Image,
+    pub normal: Image,
+    pub albedo: Image,
+    pub material: Image,
+}
+
+/// The compacted list and its size.
+pub struct CompactOutputs {
+    /// One `u32` per listed pixel: `x | y << 16`.
+    pub pixels: Buffer,
+    /// `[groups_x, groups_y, 1, count]`: a `VkDispatchIndirectCommand` for `RT_LIST_WG`-wide
+    /// workgroups (`list_groups`), then the number of listed pixels.
+    pub indirect: Buffer,
+    tile_counts: Buffer,
+    extent: vk::Extent2D,
+}
+
+/// One BVH and the triangles it was built over.
+#[derive(Clone, Copy)]
+pub struct Traceable<'a> {
+    pub bvh: &'a Bvh,
+    pub geometry: Geometry<'a>,
+}
+
+/// The BVHs a trace walks: the static one, the dynamic one, or both.
+#[derive(Clone, Copy, Default)]
+pub struct TraceScene<'a> {
+    pub static_bvh: Option<Traceable<'a>>,
+    pub dynamic_bvh: Option<Traceable<'a>>,
+}
+
+impl<'a> TraceScene<'a> {
+    /// The six traversal bindings of `glsl/shared/traverse.glsl` (static nodes,
+    /// vertices, indices, then dynamic) and the two triangle counts. A missing BVH is
+    /// bound to the other's buffers with a triangle count of 0.
+    pub fn bindings(&self) -> ([Resource<'a>; 6], u32, u32) {
+        let any = self.static_bvh.or(self.dynamic_bvh).expect("tracing needs a BVH");
+        let s = self.static_bvh.unwrap_or(any);
+        let d = self.dynamic_bvh.unwrap_or(any);
+        let resources = [
+            Resource::Buffer(&s.bvh.nodes),
+            Resource::Buffer(s.geometry.vertices),
+            Resource::Buffer(s.geometry.indices),
+            Resource::Buffer(&d.bvh.nodes),
+            Resource::Buffer(d.geometry.vertices),
+            Resource::Buffer(d.geometry.indices),
+        ];
+        let count = |b: Option<Traceable<'_>>| b.map_or(0, |b| b.geometry.tri_count);
+        (resources, count(self.static_bvh), count(self.dynamic_bvh))
+    }
 }

@@ -6,7 +6,7 @@
 //! as for one with work (it runs both sides of every branch), so the blur must not be
 //! dispatched over tiles it leaves unchanged.
 
-use super::gbuffer::GBuffer;
+use super::GBuffer;
 use crate::error::Result;
 use crate::shader_defines::WG_2D;
 use crate::shaders;

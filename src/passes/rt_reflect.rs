@@ -2,10 +2,8 @@
 //! and dynamic BVHs, shaded, with recursive bounces; an indirect dispatch sized by
 //! `ssr.compact`.
 
-use super::gbuffer::GBuffer;
-use super::rt_trace::TraceScene;
-use super::ssr_compact::CompactOutputs;
-use super::Surfaces;
+use super::GBuffer;
+use super::{CompactOutputs, Surfaces, TraceScene};
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::barrier::{self, access};

@@ -3,7 +3,7 @@
 //! `rt.reflect` walks the same BVHs with the same traversal (`glsl/shared/traverse.glsl`)
 //! from its own kernel, and binds them through `TraceScene::bindings`.
 
-use super::lbvh::{Bvh, Geometry};
+use super::TraceScene;
 use crate::error::{Error, Result};
 use crate::gpu_types::{Hit, Ray};
 use crate::shaders;
@@ -23,41 +23,6 @@ struct TracePush {
     static_tris: u32,
     dynamic_tris: u32,
     any_hit: u32,
-}
-
-/// One BVH and the triangles it was built over.
-#[derive(Clone, Copy)]
-pub struct Traceable<'a> {
-    pub bvh: &'a Bvh,
-    pub geometry: Geometry<'a>,
-}
-
-/// The BVHs a trace walks: the static one, the dynamic one, or both.
-#[derive(Clone, Copy, Default)]
-pub struct TraceScene<'a> {
-    pub static_bvh: Option<Traceable<'a>>,
-    pub dynamic_bvh: Option<Traceable<'a>>,
-}
-
-impl<'a> TraceScene<'a> {
-    /// The six traversal bindings of `glsl/shared/traverse.glsl` (static nodes,
-    /// vertices, indices, then dynamic) and the two triangle counts. A missing BVH is
-    /// bound to the other's buffers with a triangle count of 0.
-    pub fn bindings(&self) -> ([Resource<'a>; 6], u32, u32) {
-        let any = self.static_bvh.or(self.dynamic_bvh).expect("tracing needs a BVH");
-        let s = self.static_bvh.unwrap_or(any);
-        let d = self.dynamic_bvh.unwrap_or(any);
-        let resources = [
-            Resource::Buffer(&s.bvh.nodes),
-            Resource::Buffer(s.geometry.vertices),
-            Resource::Buffer(s.geometry.indices),
-            Resource::Buffer(&d.bvh.nodes),
-            Resource::Buffer(d.geometry.vertices),
-            Resource::Buffer(d.geometry.indices),
-        ];
-        let count = |b: Option<Traceable<'_>>| b.map_or(0, |b| b.geometry.tri_count);
-        (resources, count(self.static_bvh), count(self.dynamic_bvh))
-    }
 }
 
 /// Rays on the GPU and where their hits go.

@@ -3,8 +3,8 @@
 //! buffer). Each cloth owns two particle buffers (ping-pong) and its colliders.
 
 use crate::error::Result;
+use crate::scene::cloth::{Cloth, ClothPush, Particle};
 use crate::shaders;
-use crate::sim::cloth::{Cloth, ClothPush, Particle};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
 use ash::vk;

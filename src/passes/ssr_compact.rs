@@ -4,6 +4,7 @@
 //! Count per tile → scan (one workgroup) → scatter: no workgroup waits on another.
 //! CPU reference: `cpu_ref::compact`.
 
+use super::CompactOutputs;
 use crate::error::Result;
 use crate::shader_defines::{COMPACT_ITEMS, COMPACT_WG, WG_2D};
 use crate::shaders;
@@ -29,17 +30,6 @@ struct CompactPush {
     size: [u32; 2],
     num_tiles: u32,
     slots: u32,
-}
-
-/// The compacted list and its size.
-pub struct CompactOutputs {
-    /// One `u32` per listed pixel: `x | y << 16`.
-    pub pixels: Buffer,
-    /// `[groups_x, groups_y, 1, count]`: a `VkDispatchIndirectCommand` for `RT_LIST_WG`-wide
-    /// workgroups (`list_groups`), then the number of listed pixels.
-    pub indirect: Buffer,
-    tile_counts: Buffer,
-    extent: vk::Extent2D,
 }
 
 impl CompactOutputs {

@@ -3,9 +3,9 @@
 //! clears the rest; the march runs over that list by an indirect dispatch (the shape
 //! of FidelityFX SSSR), so pixels with nothing to march cost it nothing.
 
-use super::gbuffer::GBuffer;
+use super::GBuffer;
 use crate::error::Result;
-use crate::settings::Settings;
+use crate::settings::SsrParams;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
@@ -19,36 +19,6 @@ pub const CLASSIFY_NAME: &str = "ssr.classify";
 pub const COLOR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// The fail mask: `FAIL_*` bits per pixel, nonzero means "needs a ray".
 pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
-
-/// SSR settings (see `Settings` for what each trades).
-#[derive(Clone, Copy, Debug)]
-pub struct SsrParams {
-    pub max_steps: u32,
-    pub stride: f32,
-    pub thickness: f32,
-    pub max_distance: f32,
-    pub edge_fade: f32,
-    pub min_confidence: f32,
-    pub reflective_min: f32,
-    /// Hits on surfaces more reflective than this fail (need the ray tracer's bounce).
-    pub recursion_min: f32,
-}
-
-impl SsrParams {
-    /// The SSR fields of the frame's settings.
-    pub fn from_settings(st: &Settings) -> Self {
-        Self {
-            max_steps: st.ssr_max_steps,
-            stride: st.ssr_stride,
-            thickness: st.ssr_thickness,
-            max_distance: st.ssr_max_distance,
-            edge_fade: st.ssr_edge_fade,
-            min_confidence: st.ssr_min_confidence,
-            reflective_min: st.reflective_min,
-            recursion_min: st.ssr_recursion_min.max(st.reflective_min),
-        }
-    }
-}
 
 /// Push constants of `ssr_classify.comp`.
 #[repr(C)]

@@ -30,12 +30,12 @@ use crate::passes::lbvh::{Bvh, LbvhBuilder, MortonBits};
 use crate::passes::light_direct::{self, LightDirectPass};
 use crate::passes::reflect_merge::MergePass;
 use crate::passes::rt_reflect::RtReflectPass;
-use crate::passes::rt_trace::Traceable;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_compact::CompactPass;
 use crate::passes::ssr_trace::SsrPass;
+use crate::passes::Traceable;
 use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
 use crate::scene::{Camera, Scene};
 use crate::settings::{Mode, Settings};
@@ -390,7 +390,7 @@ impl Renderer {
     /// Per pixel of the last frame: whether it reflects, and its fail-mask bits (0 in
     /// `raster` mode). A readback, for stats, debug images and tests.
     pub fn reflection_maps(&self) -> Result<ReflectionMaps> {
-        let normal = crate::cpu_ref::rgba16f_to_f32(&self.read_target(&self.gbuffer.targets.normal)?);
+        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.targets.normal)?);
         let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.targets.material)?);
         let min = self.settings.reflective_min;
         let reflective = normal

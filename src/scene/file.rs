@@ -36,7 +36,7 @@ pub struct SceneFile {
     /// `count`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spawn: Option<SpawnDesc>,
-    /// Cloths (`sim::cloth`), simulated on the GPU.
+    /// Cloths (`scene::cloth`), simulated on the GPU.
     #[serde(default, rename = "cloth", skip_serializing_if = "Vec::is_empty")]
     pub cloths: Vec<ClothDesc>,
 }
@@ -54,7 +54,7 @@ pub struct ClothDesc {
     pub material: String,
     /// none (default), corners (of the first row) or edge (the first row).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub pins: Option<crate::sim::cloth::Pins>,
+    pub pins: Option<crate::scene::cloth::Pins>,
     /// Jacobi relaxation factor in (0, 1] (default 0.9).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<f32>,
@@ -450,11 +450,11 @@ impl SceneFile {
                 .find(|(n, _)| n == &c.material)
                 .map(|(_, id)| *id)
                 .ok_or_else(|| bad(format!("cloth {}: unknown material '{}'", i + 1, c.material)))?;
-            b.cloth(crate::sim::cloth::Cloth {
+            b.cloth(crate::scene::cloth::Cloth {
                 size: c.size,
                 resolution: c.resolution,
                 center: Vec3::from(c.center),
-                pins: c.pins.unwrap_or(crate::sim::cloth::Pins::None),
+                pins: c.pins.unwrap_or(crate::scene::cloth::Pins::None),
                 stiffness: c.stiffness.unwrap_or(0.9),
                 iterations: c.iterations.unwrap_or(16),
                 material,

@@ -9,6 +9,7 @@
 
 pub mod builtin;
 pub mod camera;
+pub mod cloth;
 pub mod file;
 pub mod geometry;
 pub mod gltf;
@@ -311,8 +312,8 @@ pub struct Scene {
     pub bodies: Vec<Body>,
     /// The grid of bodies the scene file asked for, if any (`set_spawn_count`).
     pub spawn: Option<Spawn>,
-    /// Cloths: dynamic geometry simulated on the GPU (`sim::cloth`).
-    pub cloths: Vec<crate::sim::cloth::Cloth>,
+    /// Cloths: dynamic geometry simulated on the GPU (`scene::cloth`).
+    pub cloths: Vec<crate::scene::cloth::Cloth>,
     /// Meshes of the bodies shaped by a model (`BodyShape::Mesh`), in their own space.
     pub body_meshes: Vec<TriMesh>,
     pub camera: Camera,
@@ -383,7 +384,7 @@ impl SceneBuilder {
     }
 
     /// Adds a cloth (dynamic geometry).
-    pub fn cloth(&mut self, cloth: crate::sim::cloth::Cloth) -> &mut Self {
+    pub fn cloth(&mut self, cloth: crate::scene::cloth::Cloth) -> &mut Self {
         self.scene.cloths.push(cloth);
         self
     }
@@ -683,7 +684,7 @@ impl Scene {
             }
         }
         for (i, c) in self.cloths.iter().enumerate() {
-            let max = crate::sim::cloth::MAX_RESOLUTION;
+            let max = crate::scene::cloth::MAX_RESOLUTION;
             if c.resolution < 2 || c.resolution > max {
                 return bad(format!("cloth {i}: resolution {} is outside 2..={max}", c.resolution));
             }
@@ -750,17 +751,36 @@ pub fn load_model(path: &std::path::Path) -> Result<Scene> {
     }
 }
 
-/// The ground a bare model (a model file given as the scene) stands on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
+/// The ground a bare model (a model file given as the scene) stands on (`about` says
+/// what each is).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Floor {
-    /// No floor: the model alone.
     None,
-    /// A mirror-like floor (the default), so the model has a reflection to show.
     #[default]
     Mirror,
-    /// A rough, non-reflective floor.
     Matte,
+}
+
+impl Floor {
+    pub const ALL: [Floor; 3] = [Floor::None, Floor::Mirror, Floor::Matte];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Floor::None => "none",
+            Floor::Mirror => "mirror",
+            Floor::Matte => "matte",
+        }
+    }
+
+    /// What the floor is, in a line (the CLI's help).
+    pub fn about(self) -> &'static str {
+        match self {
+            Floor::None => "No floor: the model alone",
+            Floor::Mirror => "A mirror-like floor (the default), so the model has a reflection to show",
+            Floor::Matte => "A rough, non-reflective floor",
+        }
+    }
 }
 
 /// Whether `name_or_path` names a model file (which stands on a `Floor`) rather than a

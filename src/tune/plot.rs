@@ -151,5 +151,5 @@ pub fn pareto_png(results: &[PointResult]) -> Result<Vec<u8>> {
         root.present().map_err(plot_err)?;
     }
     let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
-    crate::headless::png_bytes(&rgba, w, h)
+    crate::output::png_bytes(&rgba, w, h)
 }

@@ -5,7 +5,6 @@
 //! aspect taken from each image) are what passes use; `image`/`memory`/`record` build
 //! barriers one by one for `vk/` itself.
 
-use super::image::Image;
 use ash::vk;
 
 /// (stage, access) of one side of a barrier.
@@ -17,18 +16,28 @@ pub fn global(device: &ash::Device, cmd: vk::CommandBuffer, src: Scope, dst: Sco
     record(device, cmd, &[memory(src, dst)], &[]);
 }
 
+/// An image as `transition` sees it: its handle and aspect (`vk::Image`, the module
+/// above, implements it;
+/// the trait keeps this module below the image module).
+pub trait WholeImage {
+    fn handle_and_aspect(&self) -> (vk::Image, vk::ImageAspectFlags);
+}
+
 /// Records the layout transition `old` → `new` of every image in `images` (all mips and
 /// layers of each image's aspect), ordering `src` accesses before `dst` accesses.
-pub fn transition(
+pub fn transition<I: WholeImage>(
     device: &ash::Device,
     cmd: vk::CommandBuffer,
-    images: &[&Image],
+    images: &[&I],
     (src, dst): (Scope, Scope),
     (old, new): (vk::ImageLayout, vk::ImageLayout),
 ) {
     let barriers: Vec<_> = images
         .iter()
-        .map(|i| image(i.raw, i.aspect, src, dst, old, new))
+        .map(|i| {
+            let (raw, aspect) = i.handle_and_aspect();
+            image(raw, aspect, src, dst, old, new)
+        })
         .collect();
     record(device, cmd, &[], &barriers);
 }

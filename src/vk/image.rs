@@ -24,6 +24,12 @@ pub struct Image {
     allocation: Option<Allocation>,
 }
 
+impl barrier::WholeImage for Image {
+    fn handle_and_aspect(&self) -> (vk::Image, vk::ImageAspectFlags) {
+        (self.raw, self.aspect)
+    }
+}
+
 /// Bytes per texel of the formats Speculum uses.
 pub fn texel_bytes(format: vk::Format) -> u64 {
     match format {

@@ -411,6 +411,11 @@ impl Timings {
         &self.check
     }
 
+    /// The self-checks of several runs' timings together.
+    pub fn check_all(timings: &[Timings]) -> TimingCheck {
+        timings.iter().map(Timings::check).collect()
+    }
+
     /// Adds one frame's scopes (a scope seen twice in a frame is summed), unchecked.
     pub fn add_frame(&mut self, frame: &[(&'static str, f64)]) {
         let mut sums: BTreeMap<&'static str, f64> = BTreeMap::new();

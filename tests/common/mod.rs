@@ -85,7 +85,7 @@ pub fn random_gbuffer(rng: &mut impl rand::Rng, n: usize) -> RandomGBuffer {
         })
         .collect();
     let normal_bytes = speculum::cpu_ref::f32_to_rgba16f(&normal);
-    let normal = speculum::cpu_ref::rgba16f_to_f32(&normal_bytes);
+    let normal = speculum::gpu_types::rgba16f_to_f32(&normal_bytes);
     let material = random_material_ids(rng, n, 0.15, 4);
     RandomGBuffer {
         depth,

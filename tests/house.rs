@@ -1,0 +1,271 @@
+//! The house rules the compiler does not hold (DESIGN.md, "Layout"): every import in
+//! `src/` points down the layers, `vk/` has no import cycle, no pass imports another,
+//! and nothing on the frame path uses a CPU reference. Read from the source text:
+//! `crate::name` and `use crate::{...}` paths (`speculum::` in the binary), with
+//! comments and `#[cfg(test)]` modules left out. Run alone: `cargo test --test house`.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// The layers, lowest first: a module may import only modules of a lower layer.
+const LAYERS: &[&[&str]] = &[
+    &["error", "shader_defines", "shaders"],
+    &["gpu_types", "metrics", "output"],
+    &["aabb", "vk"],
+    &["settings", "scene"],
+    &["sim"],
+    &["cpu_ref", "passes"],
+    &["limits", "reflection_maps"],
+    &["renderer"],
+    &["report"],
+    &["headless"],
+    &["bench", "tune"],
+    &["demo"],
+    &["cli"],
+];
+
+/// The only modules that may use the CPU references (besides the tests): the frame
+/// never does.
+const CPU_REF_USERS: &[&str] = &["bench"];
+
+fn src() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// The code of a file without comments and without its `#[cfg(test)]` module.
+fn code(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap();
+    let text = text.split("#[cfg(test)]").next().unwrap();
+    text.lines()
+        .map(|l| match l.find("//") {
+            // Not a `//` inside a string literal ("http://" and the like).
+            Some(i) if l[..i].matches('"').count() % 2 == 0 => &l[..i],
+            _ => l,
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+fn ident(s: &str) -> &str {
+    let end = s.find(|c: char| !(c.is_alphanumeric() || c == '_')).unwrap_or(s.len());
+    &s[..end]
+}
+
+/// The first path segment after every `prefix::` in `code`, groups
+/// (`prefix::{a, b::c}`) read to their first segments.
+fn first_segments(code: &str, prefix: &str) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    let pat = format!("{prefix}::");
+    for (i, _) in code.match_indices(&pat) {
+        // `crate::` only as a path's start (not `foo_crate::`).
+        if code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_') {
+            continue;
+        }
+        let rest = &code[i + pat.len()..];
+        if let Some(group) = rest.strip_prefix('{') {
+            let mut depth = 0;
+            let mut item_start = true;
+            for (k, c) in group.char_indices() {
+                match c {
+                    '{' => depth += 1,
+                    '}' if depth == 0 => break,
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => item_start = true,
+                    c if item_start && !c.is_whitespace() => {
+                        item_start = false;
+                        out.insert(ident(&group[k..]).to_string());
+                    }
+                    _ => {}
+                }
+            }
+        } else {
+            out.insert(ident(rest).to_string());
+        }
+    }
+    out.remove("");
+    out.remove("self");
+    out
+}
+
+/// The top-level module a file of `src/` belongs to (`cli` for the binary's files).
+fn module_of(rel: &Path) -> String {
+    let first = rel.components().next().unwrap().as_os_str().to_str().unwrap();
+    match first {
+        "main.rs" | "cli" => "cli".into(),
+        f => f.trim_end_matches(".rs").into(),
+    }
+}
+
+/// Imports between top-level modules: (importer, imported) → a file that does it.
+fn module_imports() -> BTreeMap<(String, String), String> {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let mut edges = BTreeMap::new();
+    for f in files {
+        let rel = f.strip_prefix(src()).unwrap().to_path_buf();
+        if rel == Path::new("lib.rs") || rel == Path::new("shader_defines.rs") {
+            continue;
+        }
+        let from = module_of(&rel);
+        let code = code(&f);
+        let names = first_segments(&code, "crate")
+            .into_iter()
+            .chain(first_segments(&code, "speculum"));
+        for name in names {
+            // Re-exports at the crate root (`crate::Result`, `speculum::Renderer`).
+            let to = match name.as_str() {
+                "Error" | "Result" => "error".to_string(),
+                "Renderer" => "renderer".to_string(),
+                "Settings" => "settings".to_string(),
+                _ => name,
+            };
+            if to != from {
+                edges.entry((from.clone(), to)).or_insert(rel.display().to_string());
+            }
+        }
+    }
+    edges
+}
+
+fn layer(module: &str) -> usize {
+    LAYERS
+        .iter()
+        .position(|l| l.contains(&module))
+        .unwrap_or_else(|| panic!("module {module} is in no layer of tests/house.rs (add it)"))
+}
+
+#[test]
+fn every_import_points_down_the_layers() {
+    let edges = module_imports();
+    assert!(edges.len() > 40, "the scan found only {} imports", edges.len());
+    let wrong: Vec<String> = edges
+        .iter()
+        .filter(|((from, to), _)| layer(to) >= layer(from))
+        .map(|((from, to), file)| format!("{from} -> {to} (src/{file})"))
+        .collect();
+    assert!(
+        wrong.is_empty(),
+        "imports that do not point down:\n{}",
+        wrong.join("\n")
+    );
+}
+
+#[test]
+fn only_benchmarks_use_the_cpu_references() {
+    let wrong: Vec<String> = module_imports()
+        .iter()
+        .filter(|((from, to), _)| to == "cpu_ref" && !CPU_REF_USERS.contains(&from.as_str()))
+        .map(|((from, _), file)| format!("{from} (src/{file})"))
+        .collect();
+    assert!(wrong.is_empty(), "CPU references used by:\n{}", wrong.join("\n"));
+}
+
+/// Imports among the submodules of the folder `dir` (via `super::` and `crate::<top>::`):
+/// file stem → siblings it names.
+fn sibling_imports(dir: &str, top: &str) -> BTreeMap<String, BTreeSet<String>> {
+    let path = src().join(dir);
+    let mut files = Vec::new();
+    rust_files(&path, &mut files);
+    let stem = |p: &Path| {
+        let rel = p.strip_prefix(&path).unwrap();
+        let first = rel.components().next().unwrap().as_os_str().to_str().unwrap();
+        first.trim_end_matches(".rs").to_string()
+    };
+    let siblings: BTreeSet<String> = files.iter().map(|f| stem(f)).filter(|s| s != "mod").collect();
+    let mut out = BTreeMap::new();
+    for f in &files {
+        let me = stem(f);
+        if me == "mod" {
+            continue;
+        }
+        let code = code(f);
+        let mut named: BTreeSet<String> = first_segments(&code, &format!("crate::{top}"));
+        // `super::x` from a file directly in the folder names a sibling (or an item of
+        // mod.rs, which is not a sibling).
+        if f.parent() == Some(path.as_path()) {
+            named.extend(first_segments(&code, "super"));
+        }
+        let named: BTreeSet<String> = named.into_iter().filter(|n| siblings.contains(n) && *n != me).collect();
+        out.insert(me, named);
+    }
+    out
+}
+
+#[test]
+fn vk_has_no_import_cycle() {
+    let graph = sibling_imports("vk", "vk");
+    assert!(graph.len() >= 8, "vk/ has {} files", graph.len());
+    assert!(
+        graph.values().any(|n| !n.is_empty()),
+        "the scan found no imports in vk/"
+    );
+    // Depth-first search for a back edge.
+    fn visit(
+        n: &str,
+        g: &BTreeMap<String, BTreeSet<String>>,
+        state: &mut BTreeMap<String, u8>,
+        path: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
+        match state.get(n) {
+            Some(1) => {
+                let start = path.iter().position(|p| p == n).unwrap();
+                let mut cycle = path[start..].to_vec();
+                cycle.push(n.to_string());
+                return Some(cycle);
+            }
+            Some(_) => return None,
+            None => {}
+        }
+        state.insert(n.to_string(), 1);
+        path.push(n.to_string());
+        for m in g.get(n).into_iter().flatten() {
+            if let Some(c) = visit(m, g, state, path) {
+                return Some(c);
+            }
+        }
+        path.pop();
+        state.insert(n.to_string(), 2);
+        None
+    }
+    let mut state = BTreeMap::new();
+    for n in graph.keys() {
+        if let Some(cycle) = visit(n, &graph, &mut state, &mut Vec::new()) {
+            panic!("vk/ import cycle: {}", cycle.join(" -> "));
+        }
+    }
+}
+
+#[test]
+fn no_pass_imports_another() {
+    let graph = sibling_imports("passes", "passes");
+    assert!(graph.len() >= 12, "passes/ has {} files", graph.len());
+    let wrong: Vec<String> = graph
+        .iter()
+        .filter(|(_, named)| !named.is_empty())
+        .map(|(pass, named)| format!("{pass} -> {named:?}"))
+        .collect();
+    assert!(
+        wrong.is_empty(),
+        "passes that import other passes:\n{}",
+        wrong.join("\n")
+    );
+}
+
+/// The scanner itself: groups, nesting, and what is not a path start.
+#[test]
+fn the_scanner_reads_paths_and_groups() {
+    let code = "use crate::{a::b, c, d::{e, f}};\nlet x = crate::g::h(); my_crate::z; crate::{ i };";
+    let got: Vec<String> = first_segments(code, "crate").into_iter().collect();
+    assert_eq!(got, ["a", "c", "d", "g", "i"]);
+}

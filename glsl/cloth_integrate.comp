@@ -1,5 +1,6 @@
 #version 460
 // sim.cloth (integrate): Verlet with damping and gravity for every free particle.
+// CPU reference: cpu_ref::cloth::integrate (tests/sim.rs).
 #include "cloth.glsl"
 
 layout(local_size_x = LBVH_WG) in;

@@ -3,6 +3,7 @@
 // shear, bend), read from `src` and written to `dst`, then the colliders (spheres, the
 // floor plane) push the particle out. Each particle moves by the mean of its
 // constraints' corrections times the stiffness; pinned particles do not move.
+// CPU reference: cpu_ref::cloth::relax (tests/sim.rs).
 #include "cloth.glsl"
 
 layout(local_size_x = LBVH_WG) in;

@@ -1,6 +1,7 @@
 #version 460
 // sim.cloth (vertices): the cloth's vertices in the dynamic vertex buffer, from the
 // particles, with normals from the grid's central differences (one-sided at the edges).
+// CPU reference: cpu_ref::cloth::vertices (tests/sim.rs).
 #include "cloth.glsl"
 #include "types.glsl"
 

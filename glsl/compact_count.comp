@@ -1,5 +1,6 @@
 #version 460
 // ssr.compact, step 1 of 3: failed pixels per tile.
+// CPU reference: cpu_ref::compact::compact, the whole list (tests/compact.rs).
 layout(local_size_x = COMPACT_WG) in;
 
 layout(binding = 0, r32ui) uniform readonly uimage2D mask; // nonzero: the pixel needs a ray

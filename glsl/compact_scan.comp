@@ -1,6 +1,7 @@
 #version 460
 // ssr.compact, step 2 of 3: exclusive scan of the tile counts (one workgroup), the
 // total, and the indirect dispatch arguments of the pass that consumes the list.
+// CPU reference: cpu_ref::compact::compact, the whole list (tests/compact.rs).
 #include "compact.glsl"
 #define WG_SCAN_SIZE COMPACT_WG
 #include "wg_scan.glsl"

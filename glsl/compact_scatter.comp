@@ -1,5 +1,6 @@
 #version 460
 // ssr.compact, step 3 of 3: every failed pixel to its slot, in tile order (compact.glsl).
+// CPU reference: cpu_ref::compact::compact, the whole list (tests/compact.rs).
 #define WG_SCAN_SIZE COMPACT_WG
 #include "wg_scan.glsl"
 

@@ -3,6 +3,7 @@
 // triangles (the scene box). Workgroup reduction in shared memory, then one atomic
 // per value per workgroup on order-preserving uints. The output must be reset to
 // (min = 0xffffffff, max = 0) before the dispatch.
+// CPU reference: cpu_ref::lbvh::bounds (tests/lbvh.rs).
 #include "bvh.glsl"
 
 layout(local_size_x = LBVH_WG) in;

@@ -12,6 +12,7 @@
 // lockstep steps whose trip count is workgroup-uniform (a vote ends the loop), so
 // every memory barrier sits in uniform control flow: lavapipe 22.3 treats a memory
 // barrier in divergent flow like a workgroup barrier and loses invocations.
+// CPU reference: cpu_ref::lbvh::fit (tests/lbvh.rs).
 #include "bvh.glsl"
 
 layout(local_size_x = LBVH_WG) in;

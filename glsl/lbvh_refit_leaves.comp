@@ -1,5 +1,6 @@
 #version 460
 // lbvh.refit (scheduled), first pass: every leaf's box from its triangle.
+// CPU reference: cpu_ref::lbvh::fit, the scheduled refit as a whole (tests/lbvh.rs).
 #include "bvh.glsl"
 
 layout(local_size_x = LBVH_WG) in;

@@ -1,6 +1,7 @@
 #version 460
 // lbvh.refit (scheduled): the boxes of one height level of internal nodes (all their
 // children are done), each the union of its children's.
+// CPU reference: cpu_ref::lbvh::fit, the scheduled refit as a whole (tests/lbvh.rs).
 #include "bvh.glsl"
 
 layout(local_size_x = LBVH_WG) in;

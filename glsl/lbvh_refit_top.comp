@@ -2,6 +2,7 @@
 // lbvh.refit (scheduled), last pass: one workgroup refits every remaining level (each
 // at most REFIT_TOP_WG nodes: a level never holds more nodes than the one below it),
 // level by level, a workgroup barrier between levels.
+// CPU reference: cpu_ref::lbvh::fit, the scheduled refit as a whole (tests/lbvh.rs).
 #include "bvh.glsl"
 
 layout(local_size_x = REFIT_TOP_WG) in;

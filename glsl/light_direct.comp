@@ -1,5 +1,6 @@
 #version 460
 // light.direct: deferred shading of the G-buffer with the sun and its shadow map.
+// CPU reference: cpu_ref::shading::shade_direct with shadow_visibility (tests/kernels.rs).
 #include "shading.glsl"
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;

@@ -2,6 +2,7 @@
 // lbvh.sort, step 1 of 3 per pass: the digit histogram of each tile, written
 // digit-major (counts[digit * num_tiles + tile]) so that one exclusive scan of the
 // whole array gives every (digit, tile) its first output position.
+// CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
 #include "radix.glsl"
 
 layout(local_size_x = SORT_WG) in;

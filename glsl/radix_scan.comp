@@ -4,6 +4,7 @@
 // tile of SORT_WG * SORT_ITEMS keys: 4096 entries for 1M keys). Each invocation sums
 // a contiguous segment, the workgroup scans the segment sums, each segment is
 // rewritten with its offset. No workgroup waits on another.
+// CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
 #include "radix.glsl"
 #define WG_SCAN_SIZE SORT_WG
 #include "wg_scan.glsl"

@@ -5,6 +5,7 @@
 // for every (digit, invocation), how many keys of that digit come earlier in the tile.
 // Adding the scanned global offset of (digit, tile) gives each key its output slot,
 // in input order within equal digits: the sort is stable (LSD radix sort needs it).
+// CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
 #include "radix.glsl"
 #define WG_SCAN_SIZE SORT_WG
 #include "wg_scan.glsl"

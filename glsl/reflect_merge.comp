@@ -1,4 +1,5 @@
 #version 460
+// CPU reference: cpu_ref::merge::merge (tests/merge.rs).
 #extension GL_KHR_shader_subgroup_arithmetic : require
 // reflect.merge, step 1: each reflective pixel takes its reflection from SSR (where
 // SSR succeeded) or from the ray tracer (where it failed), labelled by source; a faded

@@ -1,4 +1,5 @@
 #version 460
+// CPU reference: cpu_ref::merge::active_tiles (tests/merge.rs).
 #extension GL_KHR_shader_subgroup_ballot : require
 // reflect.merge, step 2: which WG_2D x WG_2D tiles the seam blur works on. A tile is
 // *active* when the tiles within ceil(band / WG_2D) of it (the merge's per-tile source

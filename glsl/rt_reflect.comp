@@ -1,5 +1,5 @@
 #version 460
-// rt.trace (reflections): one invocation per pixel of the compacted list (indirect
+// rt.reflect: one invocation per pixel of the compacted list (indirect
 // dispatch). The reflected ray starts at the G-buffer position, walks the static and
 // dynamic BVHs, and the hit is shaded with the sun (shadow map lookup, or a shadow ray
 // when asked) and the sky ambient; while the hit is reflective the path continues,
@@ -10,6 +10,7 @@
 // Self-intersection: each origin is pushed off its surface along the normal by a
 // distance that grows with its distance from the camera (depth-buffer and float
 // error both grow with it), and the hit must be beyond tmin.
+// CPU reference: cpu_ref::reflect::reflected_radiance (tests/rt_reflect.rs).
 #include "shading.glsl"
 #include "surface.glsl"
 #define TRAVERSE_BINDING 8

@@ -1,4 +1,5 @@
 #version 460
+// CPU reference: cpu_ref::ssr::classify (tests/ssr.rs).
 #extension GL_KHR_shader_subgroup_ballot : require
 // ssr.classify: which pixels ssr.trace marches (after FidelityFX SSSR's classification).
 // A pixel with no reflective surface gets no reflection (fail mask 0); a reflective

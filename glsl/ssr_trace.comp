@@ -7,6 +7,7 @@
 // to the camera. Writes SSR colour + confidence and the fail mask (reason bits,
 // shader_defines.rs) of the listed pixels; nonzero sends the pixel to rt.trace
 // (FAIL_BLEND: a faded hit, kept and blended with the ray-traced colour by merge).
+// CPU reference: cpu_ref::ssr::march (tests/ssr.rs).
 #include "ssr.glsl"
 #include "shading.glsl"
 #include "pixel_list.glsl"

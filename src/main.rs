@@ -40,7 +40,8 @@ enum Command {
     /// GPU timing benchmarks (each also checks what it times).
     #[command(subcommand)]
     Bench(BenchCommand),
-    /// Print settings as JSON: the defaults, or a settings file's effective values.
+    /// Print settings as JSON (the defaults, or a settings file's effective values), or
+    /// the settings table.
     Settings(SettingsCommand),
 }
 
@@ -50,11 +51,19 @@ struct SettingsCommand {
     /// Print every setting with its default value.
     #[arg(long)]
     defaults: bool,
+    /// Print the settings table as Markdown: default, range, how a change applies and
+    /// what each setting trades (the README's list).
+    #[arg(long)]
+    list: bool,
     /// Print the effective settings of this file (its values, defaults for the rest).
     file: Option<std::path::PathBuf>,
 }
 
 fn settings(cmd: SettingsCommand) -> Result<()> {
+    if cmd.list {
+        print!("{}", speculum::settings::markdown_table());
+        return Ok(());
+    }
     let s = if cmd.defaults {
         Settings::default()
     } else {

@@ -84,7 +84,7 @@ fn dynamic_hybrid_matches_rt_on_every_frame() {
             let stats = hybrid.reflection_stats().unwrap();
             assert!(stats.reflective_pixels > 1000, "{name} frame {k}");
             let merged: Vec<[f32; 4]> =
-                bytemuck::pod_collect_to_vec(&hybrid.merge.reflection().read(ash::vk::ImageLayout::GENERAL).unwrap());
+                bytemuck::pod_collect_to_vec(&hybrid.merge.out.read(ash::vk::ImageLayout::GENERAL).unwrap());
             let reflective = hybrid.reflection_maps().unwrap().reflective;
             let holes = (0..merged.len())
                 .filter(|&i| reflective[i] && ![SOURCE_SSR, SOURCE_RT].contains(&(merged[i][3] as u32)))
@@ -108,20 +108,17 @@ fn sequences_write_every_frame_and_their_lines() {
     let dir = tempfile::tempdir().unwrap();
     let seq = dir.path().join("seq");
     let sheet = dir.path().join("sheet.png");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args([
-            "render", "--scene", "drop", "--frames", "7", "--warmup", "1", "--width", "64", "--height", "48",
-        ])
-        .args(["--reference", "--quiet", "--sequence"])
-        .arg(&seq)
-        .arg("--contact-sheet")
-        .arg(&sheet)
-        .arg("--out")
-        .arg(dir.path().join("last.png"))
-        .env("SPECULUM_VALIDATION", "1")
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = common::speculum([
+        "render", "--scene", "drop", "--frames", "7", "--warmup", "1", "--width", "64", "--height", "48",
+    ])
+    .args(["--reference", "--quiet", "--sequence"])
+    .arg(&seq)
+    .arg("--contact-sheet")
+    .arg(&sheet)
+    .arg("--out")
+    .arg(dir.path().join("last.png"))
+    .run();
+    assert!(out.ok(), "{}", out.stderr);
     let text = std::fs::read_to_string(seq.join("frames.jsonl")).unwrap();
     let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     assert_eq!(lines.len(), 7);

@@ -66,7 +66,7 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
     };
     let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
-    let t = &r.gbuffer.targets;
+    let t = &r.gbuffer.out;
     let depth: Vec<f32> = bytemuck::cast_slice(&r.read_target(&t.depth).unwrap()).to_vec();
     let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
     let albedo = r.read_target(&t.albedo).unwrap();
@@ -164,8 +164,8 @@ fn gbuffer_samples_textures_per_texel() {
     };
     let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
-    let albedo = r.read_target(&r.gbuffer.targets.albedo).unwrap();
-    let material: Vec<u32> = bytemuck::cast_slice(&r.read_target(&r.gbuffer.targets.material).unwrap()).to_vec();
+    let albedo = r.read_target(&r.gbuffer.out.albedo).unwrap();
+    let material: Vec<u32> = bytemuck::cast_slice(&r.read_target(&r.gbuffer.out.material).unwrap()).to_vec();
     let frame = *r.uniforms();
     let textures = TextureArray::new(&scene.textures, speculum::scene::texture::LAYER_MAX);
     let (mut checked, mut distinct) = (0, std::collections::HashSet::new());
@@ -237,7 +237,7 @@ fn bent_normals_never_mirror_below_the_surface() {
     };
     let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
-    let t = &r.gbuffer.targets;
+    let t = &r.gbuffer.out;
     let depth: Vec<f32> = bytemuck::cast_slice(&r.read_target(&t.depth).unwrap()).to_vec();
     let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
     let frame = *r.uniforms();

@@ -113,9 +113,9 @@ fn compose_matches_cpu_reference() {
     for mode in [ComposeMode::Plain, ComposeMode::Reflect] {
         // Poison the output so that unwritten texels cannot pass.
         let poison = vec![0x5au8; n * 4];
-        pass.ldr.write(&poison, vk::ImageLayout::GENERAL).unwrap();
+        pass.out.write(&poison, vk::ImageLayout::GENERAL).unwrap();
         ctx.one_shot(|cmd| pass.record(cmd, &inputs, exposure, mode)).unwrap();
-        let gpu = pass.ldr.read(vk::ImageLayout::GENERAL).unwrap();
+        let gpu = pass.out.read(vk::ImageLayout::GENERAL).unwrap();
         let mut worst = 0i32;
         for (i, t) in texels.iter().enumerate() {
             let mut hdr = *t;
@@ -148,10 +148,10 @@ fn compose_matches_cpu_reference() {
     }
     // The fail-mask view paints exactly what `--fail-mask` images (the CPU) do.
     let poison = vec![0x5au8; n * 4];
-    pass.ldr.write(&poison, vk::ImageLayout::GENERAL).unwrap();
+    pass.out.write(&poison, vk::ImageLayout::GENERAL).unwrap();
     ctx.one_shot(|cmd| pass.record(cmd, &inputs, exposure, ComposeMode::FailMask))
         .unwrap();
-    let gpu = pass.ldr.read(vk::ImageLayout::GENERAL).unwrap();
+    let gpu = pass.out.read(vk::ImageLayout::GENERAL).unwrap();
     let maps = speculum::reflection_maps::ReflectionMaps {
         reflective: (0..n)
             .map(|i| g.material[i] != MATERIAL_NONE && g.normal[i][3] > reflective_min)
@@ -216,7 +216,7 @@ fn light_direct_matches_cpu_reference() {
     let ubo = common::frame_ubo(&ctx, &frame);
     let (materials, materials_buffer) = common::random_materials(&ctx);
     let pass = LightDirectPass::new(&ctx, extent).unwrap();
-    pass.lit
+    pass.out
         .write(
             bytemuck::cast_slice(&vec![[POISON_F32; 4]; n]),
             vk::ImageLayout::GENERAL,
@@ -229,7 +229,7 @@ fn light_direct_matches_cpu_reference() {
         barrier::record(&ctx.device, cmd, &[b], &[]);
     })
     .unwrap();
-    let gpu: Vec<[f32; 4]> = bytemuck::cast_slice(&pass.lit.read(vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    let gpu: Vec<[f32; 4]> = bytemuck::cast_slice(&pass.out.read(vk::ImageLayout::GENERAL).unwrap()).to_vec();
 
     let map = shading::ShadowMap {
         size: 64,

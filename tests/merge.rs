@@ -8,7 +8,7 @@ mod common;
 use ash::vk;
 use rand::Rng;
 use speculum::cpu_ref::{self, merge};
-use speculum::passes::reflect_merge::{BlurParams, MergePass};
+use speculum::passes::reflect_merge::{BlurParams, MergeInputs, MergeParams, MergePass};
 use speculum::passes::GBuffer;
 use speculum::shader_defines::{FAIL_BLEND, MATERIAL_NONE, SOURCE_NONE};
 use speculum::vk::{barrier, Image};
@@ -106,30 +106,31 @@ fn merge_and_seam_blur_match_cpu_reference() {
         (3, 3, false),
     ] {
         let poison = vec![POISON; n];
-        pass.reflection().write(bytemuck::cast_slice(&poison), general).unwrap();
+        pass.out.write(bytemuck::cast_slice(&poison), general).unwrap();
         pass.scratch().write(bytemuck::cast_slice(&poison), general).unwrap();
         for b in pass.tile_buffers() {
             b.write(&vec![0xcdu8; b.size as usize]).unwrap();
         }
         ctx.one_shot(|cmd| {
-            let blur = BlurParams { radius, band };
-            pass.record(
-                cmd,
-                &ubo,
-                &gb,
-                &mask_img,
-                &ssr_img,
-                &rt_img,
+            let inputs = MergeInputs {
+                frame: &ubo,
+                gbuffer: &gb,
+                fail_mask: &mask_img,
+                ssr: &ssr_img,
+                rt: &rt_img,
+            };
+            let params = MergeParams {
                 rt_enabled,
                 reflective_min,
-                blur,
-            );
+                blur: BlurParams { radius, band },
+            };
+            pass.record(cmd, &inputs, params);
             // RAW: the readback copy sees the shader's writes.
             let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
             barrier::record(&ctx.device, cmd, &[b], &[]);
         })
         .unwrap();
-        let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&pass.reflection().read(general).unwrap());
+        let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&pass.out.read(general).unwrap());
 
         let merged: Vec<[f32; 4]> = (0..n)
             .map(|i| {

@@ -104,7 +104,7 @@ fn reflected_paths_match_cpu_reference() {
         let (w, h) = (settings.width as usize, settings.height as usize);
         let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
         let general = vk::ImageLayout::GENERAL;
-        r.rt.color
+        r.rt.out
             .write(bytemuck::cast_slice(&vec![POISON; w * h]), general)
             .unwrap();
         // A dynamic scene: the world after DROP_FRAMES time steps, bodies in the air
@@ -113,10 +113,10 @@ fn reflected_paths_match_cpu_reference() {
         for _ in 0..frames {
             r.render_frame().unwrap();
         }
-        let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.targets.depth).unwrap());
-        let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.targets.normal).unwrap());
-        let shadow: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.shadow.map).unwrap());
-        let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.rt.color.read(general).unwrap());
+        let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.out.depth).unwrap());
+        let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.out.normal).unwrap());
+        let shadow: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.shadow.out).unwrap());
+        let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.rt.out.read(general).unwrap());
         let reflective = r.reflection_maps().unwrap().reflective;
         let frame = *r.uniforms();
         let bvh = CpuBvh::build(&scene.vertices, &scene.indices);

@@ -384,7 +384,7 @@ fn march_matches_cpu_on_room() {
     let mut r = speculum::Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
     let frame = *r.uniforms();
-    let t = &r.gbuffer.targets;
+    let t = &r.gbuffer.out;
     let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.depth).unwrap());
     let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
     let lit = r.read_lit().unwrap();

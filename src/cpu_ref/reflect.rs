@@ -1,4 +1,4 @@
-//! Reference of `glsl/rt_reflect.comp` (rt.trace for reflections): one pixel's
+//! Reference of `glsl/rt_reflect.comp` (`rt.reflect`): one pixel's
 //! reflected path through the scene, shaded as the kernel shades it.
 
 use super::shading::{self, ShadowMap};

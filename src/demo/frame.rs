@@ -108,7 +108,7 @@ impl Demo {
         let cmd = self.sync.begin(i)?;
         self.slots[i].mode = self.renderer.settings().mode;
         self.renderer.record_frame(cmd, i);
-        sc.record_blit(cmd, image, &self.renderer.compose.ldr);
+        sc.record_blit(cmd, image, &self.renderer.compose.out);
         if let Some(primitives) = &primitives {
             let ppp = self.hud.ctx.pixels_per_point();
             let hud = &mut self.hud.renderer;

@@ -5,7 +5,7 @@
 use super::script::Action;
 use crate::reflection_maps::{ReflectionStats, FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
-use crate::settings::{Mode, Settings};
+use crate::settings::{Applies, Field, Hud, Mode, Settings, Value, FIELDS};
 use crate::vk::swapchain::present_mode_name;
 use ash::vk;
 use egui::{Color32, RichText};
@@ -302,118 +302,19 @@ fn settings_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: 
                 }
             }
         });
-    egui::ComboBox::from_label("shadow_map_size")
-        .selected_text(s.shadow_map_size.to_string())
-        .show_ui(ui, |ui| {
-            for size in [256, 512, 1024, 2048, 4096, 8192] {
-                ui.selectable_value(&mut s.shadow_map_size, size, size.to_string());
-            }
-        });
-    let max_pcf = crate::shader_defines::MAX_PCF_RADIUS;
-    ui.add(
-        egui::Slider::new(&mut s.pcf_radius, 0..=max_pcf)
-            .clamping(egui::SliderClamping::Edits)
-            .text("pcf_radius"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.shadow_bias, 0.0..=0.02)
-            .clamping(egui::SliderClamping::Edits)
-            .text("shadow_bias"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.shadow_slope_bias, 0.0..=8.0)
-            .clamping(egui::SliderClamping::Edits)
-            .text("shadow_slope_bias"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.exposure, 0.05..=8.0)
-            .logarithmic(true)
-            .clamping(egui::SliderClamping::Edits)
-            .text("exposure"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.ambient, 0.0..=2.0)
-            .clamping(egui::SliderClamping::Edits)
-            .text("ambient"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.reflective_min, 0.0..=1.0)
-            .clamping(egui::SliderClamping::Edits)
-            .text("reflective_min"),
-    );
-    ui.separator();
-    ui.add(
-        egui::Slider::new(&mut s.max_bounces, 1..=16)
-            .clamping(egui::SliderClamping::Edits)
-            .text("max_bounces"),
-    );
-    ui.checkbox(&mut s.shadow_rays, "shadow_rays (at ray-traced hits)");
-    ui.separator();
-    ui.add(
-        egui::Slider::new(&mut s.ssr_max_steps, 1..=512)
-            .logarithmic(true)
-            .clamping(egui::SliderClamping::Edits)
-            .text("ssr_max_steps"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.ssr_stride, 0.5..=32.0)
-            .logarithmic(true)
-            .clamping(egui::SliderClamping::Edits)
-            .text("ssr_stride"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.ssr_thickness, 0.0..=0.5)
-            .logarithmic(true)
-            .clamping(egui::SliderClamping::Edits)
-            .text("ssr_thickness"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.ssr_max_distance, 0.1..=50.0)
-            .logarithmic(true)
-            .clamping(egui::SliderClamping::Edits)
-            .text("ssr_max_distance"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.ssr_edge_fade, 0.0..=0.5)
-            .clamping(egui::SliderClamping::Edits)
-            .text("ssr_edge_fade"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.ssr_min_confidence, 0.0..=1.0)
-            .clamping(egui::SliderClamping::Edits)
-            .text("ssr_min_confidence"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.ssr_recursion_min, 0.0..=1.0)
-            .clamping(egui::SliderClamping::Edits)
-            .text("ssr_recursion_min"),
-    );
-    ui.add(
-        egui::Slider::new(&mut s.blur_radius, 0..=16)
-            .clamping(egui::SliderClamping::Edits)
-            .text("blur_radius"),
-    );
-    let band = crate::shader_defines::BLUR_MAX_EXTENT;
-    ui.add(
-        egui::Slider::new(&mut s.blur_band, 0..=band)
-            .clamping(egui::SliderClamping::Edits)
-            .text("blur_band"),
-    );
-    ui.separator();
-    ui.label("dynamic scenes (a change restarts the animation):");
-    ui.add(
-        egui::Slider::new(&mut s.sim_dt, 0.001..=0.1)
-            .logarithmic(true)
-            .clamping(egui::SliderClamping::Edits)
-            .text("sim_dt"),
-    );
-    ui.checkbox(&mut s.cloth_rebuild, "cloth_rebuild");
-    ui.add(
-        egui::Slider::new(&mut s.refit_rebuild_every, 1..=600)
-            .logarithmic(true)
-            .clamping(egui::SliderClamping::Edits)
-            .text("refit_rebuild_every"),
-    );
+    // The rest from the settings table, each with what it trades as its tooltip.
+    let mut dynamic_label = false;
+    for f in FIELDS {
+        if f.applies == Applies::NewRenderer && !dynamic_label {
+            ui.separator();
+            ui.label("dynamic scenes (a change restarts the animation):");
+            dynamic_label = true;
+        }
+        let trades = f.trades.split_whitespace().collect::<Vec<_>>().join(" ");
+        if let Some(v) = field_control(ui, f, (f.get)(s), &trades) {
+            (f.set)(s, v);
+        }
+    }
     if ui.button("defaults").clicked() {
         *s = Settings {
             width: s.width,
@@ -421,6 +322,44 @@ fn settings_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: 
             mode: s.mode,
             ..Settings::default()
         };
+    }
+}
+
+/// The HUD control of one setting (`Field::hud`); the new value when it was changed.
+fn field_control(ui: &mut egui::Ui, f: &Field, value: Value, trades: &str) -> Option<Value> {
+    let slider = |ui: &mut egui::Ui, s: egui::Slider<'_>, log: bool| {
+        ui.add(s.logarithmic(log).clamping(egui::SliderClamping::Edits).text(f.name))
+            .on_hover_text(trades)
+            .changed()
+    };
+    match (f.hud, value) {
+        (Hud::Slider { min, max, log }, Value::U32(mut v)) => {
+            slider(ui, egui::Slider::new(&mut v, min as u32..=max as u32), log).then_some(Value::U32(v))
+        }
+        (Hud::Slider { min, max, log }, Value::F32(mut v)) => {
+            slider(ui, egui::Slider::new(&mut v, min as f32..=max as f32), log).then_some(Value::F32(v))
+        }
+        (Hud::Checkbox, Value::Bool(mut v)) => ui
+            .checkbox(&mut v, f.name)
+            .on_hover_text(trades)
+            .changed()
+            .then_some(Value::Bool(v)),
+        (Hud::Choice(list), Value::U32(v)) => {
+            let mut picked = None;
+            egui::ComboBox::from_label(f.name)
+                .selected_text(v.to_string())
+                .show_ui(ui, |ui| {
+                    for &x in list {
+                        if ui.selectable_label(x == v, x.to_string()).clicked() {
+                            picked = Some(Value::U32(x));
+                        }
+                    }
+                })
+                .response
+                .on_hover_text(trades);
+            picked
+        }
+        _ => None,
     }
 }
 

@@ -73,7 +73,7 @@ pub struct ComposePass {
     pipeline: Pipeline,
     sampler: Sampler,
     /// The tonemapped frame; always `GENERAL`.
-    pub ldr: Image,
+    pub out: Image,
 }
 
 impl ComposePass {
@@ -82,12 +82,12 @@ impl ComposePass {
             ctx: ctx.clone(),
             pipeline: Pipeline::compute::<ComposePush>(ctx, NAME, shaders::COMPOSE_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "compose.sampler")?,
-            ldr: Image::storage(ctx, "compose.ldr", extent, FORMAT)?,
+            out: Image::storage(ctx, "compose.ldr", extent, FORMAT)?,
         })
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
-        self.ldr = Image::storage(&self.ctx, "compose.ldr", extent, FORMAT)?;
+        self.out = Image::storage(&self.ctx, "compose.ldr", extent, FORMAT)?;
         Ok(())
     }
 
@@ -96,7 +96,7 @@ impl ComposePass {
     /// readers: copies out of it (readbacks, a blit to a window).
     pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ComposeInputs<'_>, exposure: f32, mode: ComposeMode) {
         let d = &self.ctx.device;
-        let e = self.ldr.extent;
+        let e = self.out.extent;
         let push = ComposePush {
             size: [e.width, e.height],
             exposure,
@@ -110,7 +110,7 @@ impl ComposePass {
             &[
                 Resource::Buffer(inputs.frame),
                 Resource::StorageImage(inputs.hdr),
-                Resource::StorageImage(&self.ldr),
+                Resource::StorageImage(&self.out),
                 Resource::StorageImage(inputs.reflection),
                 Resource::Sampled(&inputs.gbuffer.normal, &self.sampler),
                 Resource::Sampled(&inputs.gbuffer.albedo, &self.sampler),

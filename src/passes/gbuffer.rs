@@ -1,6 +1,8 @@
 //! `gbuffer`: rasterizes the scene from the camera into depth, normal + reflectivity
 //! (the normal clamped so its mirror direction stays above the facet), base colour
 //! (textured, sRGB-encoded) + roughness and material id.
+//! No CPU reference of its own (a raster pass): `tests/gbuffer.rs` checks its targets
+//! against analytic ray casts of a plane and a sphere, and texels against the CPU lookup.
 
 use super::{set_viewport, GBuffer, SceneGeometry, Surfaces};
 use crate::error::Result;
@@ -46,7 +48,7 @@ impl GBuffer {
 pub struct GBufferPass {
     ctx: Arc<Context>,
     pipeline: Pipeline,
-    pub targets: GBuffer,
+    pub out: GBuffer,
 }
 
 impl GBufferPass {
@@ -65,13 +67,13 @@ impl GBufferPass {
         Ok(Self {
             ctx: ctx.clone(),
             pipeline,
-            targets: GBuffer::new(ctx, extent)?,
+            out: GBuffer::new(ctx, extent)?,
         })
     }
 
     /// Recreates the targets at a new size.
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
-        self.targets = GBuffer::new(&self.ctx, extent)?;
+        self.out = GBuffer::new(&self.ctx, extent)?;
         Ok(())
     }
 
@@ -86,8 +88,8 @@ impl GBufferPass {
     ) {
         use vk::ImageLayout as L;
         let device = &self.ctx.device;
-        let [normal, albedo, material] = self.targets.colors();
-        let depth_target = [&self.targets.depth];
+        let [normal, albedo, material] = self.out.colors();
+        let depth_target = [&self.out.depth];
         // WAR: the previous frame's compute reads finish before the targets are cleared.
         barrier::transition(
             device,
@@ -112,7 +114,7 @@ impl GBufferPass {
             },
         };
         let colors: Vec<_> = self
-            .targets
+            .out
             .colors()
             .iter()
             .zip([clear_float, clear_float, clear_none])
@@ -126,14 +128,14 @@ impl GBufferPass {
             })
             .collect();
         let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(self.targets.depth.view)
+            .image_view(self.out.depth.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::CLEAR)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue {
                 depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
             });
-        let extent = self.targets.depth.extent;
+        let extent = self.out.depth.extent;
         let info = vk::RenderingInfo::default()
             .render_area(vk::Rect2D {
                 offset: vk::Offset2D::default(),

@@ -20,7 +20,7 @@ pub struct LightDirectPass {
     pipeline: Pipeline,
     sampler: Sampler,
     /// Lit HDR colour (linear, `FORMAT`); always `GENERAL`.
-    pub lit: Image,
+    pub out: Image,
 }
 
 impl LightDirectPass {
@@ -29,12 +29,12 @@ impl LightDirectPass {
             ctx: ctx.clone(),
             pipeline: Pipeline::compute::<()>(ctx, NAME, shaders::LIGHT_DIRECT_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "light.sampler")?,
-            lit: Image::storage(ctx, "light.lit", extent, FORMAT)?,
+            out: Image::storage(ctx, "light.lit", extent, FORMAT)?,
         })
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
-        self.lit = Image::storage(&self.ctx, "light.lit", extent, FORMAT)?;
+        self.out = Image::storage(&self.ctx, "light.lit", extent, FORMAT)?;
         Ok(())
     }
 
@@ -53,7 +53,7 @@ impl LightDirectPass {
         let s = &self.sampler;
         // WAR: the previous frame's reads of `lit` finish before it is overwritten.
         barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
-        let e = self.lit.extent;
+        let e = self.out.extent;
         self.pipeline.dispatch(
             cmd,
             &[
@@ -63,7 +63,7 @@ impl LightDirectPass {
                 Resource::Sampled(&gbuffer.albedo, s),
                 Resource::Sampled(&gbuffer.material, s),
                 Resource::Sampled(shadow_map, s),
-                Resource::StorageImage(&self.lit),
+                Resource::StorageImage(&self.out),
                 Resource::Buffer(materials),
             ],
             &(),

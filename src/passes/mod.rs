@@ -1,12 +1,20 @@
 //! One file per pass. A pass owns its pipeline and its output images and records its
 //! own commands; it knows nothing of the other passes beyond the names of its outputs'
 //! readers: what passes hand each other (the G-buffer, the compacted pixel list, the
-//! scene a trace walks, the surfaces and geometry) is defined here, not in a pass. Barrier rule: a pass's `record` begins with the barriers that make its
-//! outputs writable (the previous frame's readers done; attachments moved to their
-//! attachment layout) and ends with the barrier that makes them visible to the readers
-//! its documentation names. Storage images stay in `GENERAL` from creation
-//! (`Image::storage`), so compute passes need memory barriers only. `renderer/frame.rs`
-//! records only what spans passes (the uniform upload) and the timer scopes.
+//! scene a trace walks, the surfaces and geometry) is defined here, not in a pass.
+//!
+//! One shape: `NAME` (its timer scope, the frame table's name for it), `new`,
+//! `record(cmd, inputs, params)` (resources first, an `…Inputs` struct when there are
+//! more than four; then the settings it reads), `resize` for screen-sized passes, and
+//! its result in `pub out`. Each pass's module doc names its CPU reference.
+//!
+//! Barrier rule: a pass's `record` begins with the barriers that make its outputs
+//! writable (the previous frame's readers done; attachments moved to their attachment
+//! layout) and ends with the barrier that makes them visible to the readers its
+//! documentation names. Storage images stay in `GENERAL` from creation
+//! (`Image::storage`), so compute passes need memory barriers only.
+//! `renderer/frame.rs` records only what spans passes (the uniform upload) and the
+//! timer scopes.
 
 pub mod compose;
 pub mod gbuffer;

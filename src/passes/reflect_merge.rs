@@ -5,6 +5,7 @@
 //! A full-screen dispatch costs lavapipe about as much for a pixel with nothing to do
 //! as for one with work (it runs both sides of every branch), so the blur must not be
 //! dispatched over tiles it leaves unchanged.
+//! CPU reference: `cpu_ref::merge` (`merge`, `active_tiles`, `seam_blur`; tests/merge.rs).
 
 use super::GBuffer;
 use crate::error::Result;
@@ -51,10 +52,8 @@ pub struct BlurParams {
     pub band: u32,
 }
 
-/// Images and per-tile buffers that depend on the resolution.
+/// The blur's working images and per-tile buffers, which depend on the resolution.
 struct Targets {
-    /// The merged (and seam-blurred) reflection; always `GENERAL`.
-    reflection: Image,
     /// The horizontal blur's output (written for active tiles only).
     scratch: Image,
     /// Per WG_2D x WG_2D tile: bit `1 << SOURCE_*` for each source it holds.
@@ -74,7 +73,6 @@ impl Targets {
         let tiles = (extent.width.div_ceil(WG_2D) * extent.height.div_ceil(WG_2D)) as u64;
         let buffer = |name, size| Buffer::device_list(ctx, name, size);
         Ok(Self {
-            reflection: Image::storage(ctx, "reflect.merged", extent, FORMAT)?,
             scratch: Image::storage(ctx, "reflect.scratch", extent, FORMAT)?,
             tile_sources: buffer("reflect.tile_sources", tiles * 4)?,
             tile_active: buffer("reflect.tile_active", tiles * 4)?,
@@ -92,6 +90,27 @@ pub struct MergePass {
     blur: Pipeline,
     sampler: Sampler,
     targets: Targets,
+    /// The merged, seam-blurred reflection (always `GENERAL`).
+    pub out: Image,
+}
+
+/// What `reflect.merge` reads: the frame uniforms, the G-buffer, the fail mask and both
+/// sources (`GENERAL`; the G-buffer read-only).
+pub struct MergeInputs<'a> {
+    pub frame: &'a Buffer,
+    pub gbuffer: &'a GBuffer,
+    pub fail_mask: &'a Image,
+    pub ssr: &'a Image,
+    pub rt: &'a Image,
+}
+
+/// How `reflect.merge` merges: whether the RT source was traced this frame, the
+/// reflectivity above which a pixel reflects, and the seam blur.
+#[derive(Clone, Copy, Debug)]
+pub struct MergeParams {
+    pub rt_enabled: bool,
+    pub reflective_min: f32,
+    pub blur: BlurParams,
 }
 
 impl MergePass {
@@ -103,12 +122,8 @@ impl MergePass {
             blur: Pipeline::compute::<BlurPush>(ctx, "reflect.blur", shaders::REFLECT_BLUR_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "reflect.sampler")?,
             targets: Targets::new(ctx, extent)?,
+            out: Image::storage(ctx, "reflect.merged", extent, FORMAT)?,
         })
-    }
-
-    /// The merged, seam-blurred reflection (always `GENERAL`).
-    pub fn reflection(&self) -> &Image {
-        &self.targets.reflection
     }
 
     /// The blur's intermediate image, for tests that poison it before a run.
@@ -137,27 +152,27 @@ impl MergePass {
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
         self.targets = Targets::new(&self.ctx, extent)?;
+        self.out = Image::storage(&self.ctx, "reflect.merged", extent, FORMAT)?;
         Ok(())
     }
 
-    /// Records merge + blur. Inputs in `GENERAL` (G-buffer read-only); `reflection`
-    /// ends visible to its reader, `compose`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &self,
-        cmd: vk::CommandBuffer,
-        frame: &Buffer,
-        gbuffer: &GBuffer,
-        fail_mask: &Image,
-        ssr: &Image,
-        rt: &Image,
-        rt_enabled: bool,
-        reflective_min: f32,
-        blur: BlurParams,
-    ) {
+    /// Records merge + blur; `out` ends visible to its reader, `compose`.
+    pub fn record(&self, cmd: vk::CommandBuffer, inputs: &MergeInputs<'_>, params: MergeParams) {
+        let MergeInputs {
+            frame,
+            gbuffer,
+            fail_mask,
+            ssr,
+            rt,
+        } = *inputs;
+        let MergeParams {
+            rt_enabled,
+            reflective_min,
+            blur,
+        } = params;
         let d = &self.ctx.device;
         let t = &self.targets;
-        let e = t.reflection.extent;
+        let e = self.out.extent;
         let s = &self.sampler;
         // merge → reflection, blur H → scratch, blur V → reflection.
         // WAR: the previous frame's tile pass reads of the tile bits finish before they
@@ -184,7 +199,7 @@ impl MergePass {
                 Resource::StorageImage(rt),
                 Resource::Sampled(&gbuffer.normal, s),
                 Resource::Sampled(&gbuffer.material, s),
-                Resource::StorageImage(&t.reflection),
+                Resource::StorageImage(&self.out),
                 Resource::Buffer(&t.tile_sources),
             ],
             &MergePush {
@@ -249,7 +264,7 @@ impl MergePass {
                 cmd,
                 &[
                     Resource::Buffer(frame),
-                    Resource::StorageImage(&t.reflection),
+                    Resource::StorageImage(&self.out),
                     Resource::StorageImage(&t.scratch),
                     Resource::Buffer(&t.tile_active),
                     Resource::Buffer(&t.tile_list),

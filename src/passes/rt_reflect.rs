@@ -1,6 +1,7 @@
 //! `rt.reflect`: the compacted pixels' reflection rays through the static
 //! and dynamic BVHs, shaded, with recursive bounces; an indirect dispatch sized by
 //! `ssr.compact`.
+//! CPU reference: `cpu_ref::reflect::reflected_radiance` (tests/rt_reflect.rs).
 
 use super::GBuffer;
 use super::{CompactOutputs, Surfaces, TraceScene};
@@ -30,7 +31,7 @@ pub struct RtReflectPass {
     sampler: Sampler,
     /// Reflected radiance of the listed pixels (others are left as they were); always
     /// `GENERAL`.
-    pub color: Image,
+    pub out: Image,
 }
 
 /// What the reflection tracer needs besides the G-buffer.
@@ -49,12 +50,12 @@ impl RtReflectPass {
             ctx: ctx.clone(),
             pipeline: Pipeline::compute::<ReflectPush>(ctx, NAME, shaders::RT_REFLECT_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "rt.sampler")?,
-            color: Image::storage(ctx, "rt.color", extent, FORMAT)?,
+            out: Image::storage(ctx, "rt.color", extent, FORMAT)?,
         })
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
-        self.color = Image::storage(&self.ctx, "rt.color", extent, FORMAT)?;
+        self.out = Image::storage(&self.ctx, "rt.color", extent, FORMAT)?;
         Ok(())
     }
 
@@ -82,7 +83,7 @@ impl RtReflectPass {
                 Resource::Sampled(inputs.shadow_map, s),
                 Resource::Buffer(&inputs.list.pixels),
                 Resource::Buffer(&inputs.list.indirect),
-                Resource::StorageImage(&self.color),
+                Resource::StorageImage(&self.out),
                 sn,
                 sv,
                 si,

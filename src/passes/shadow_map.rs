@@ -1,5 +1,7 @@
 //! `shadow.map`: depth-only raster of the scene from the directional light, into a
 //! square D32 map that `light.direct` filters with PCF.
+//! No CPU reference of its own (a raster pass): `cpu_ref::shading::shadow_visibility`
+//! reads the map it writes, and the shadow tests check it against a control scene.
 
 use super::{set_viewport, SceneGeometry};
 use crate::error::Result;
@@ -16,7 +18,7 @@ pub struct ShadowMapPass {
     ctx: Arc<Context>,
     pipeline: Pipeline,
     /// The shadow map; `SHADER_READ_ONLY_OPTIMAL` between frames.
-    pub map: Image,
+    pub out: Image,
 }
 
 impl ShadowMapPass {
@@ -49,7 +51,7 @@ impl ShadowMapPass {
         Ok(Self {
             ctx: ctx.clone(),
             pipeline,
-            map,
+            out: map,
         })
     }
 
@@ -63,12 +65,12 @@ impl ShadowMapPass {
         barrier::transition(
             device,
             cmd,
-            &[&self.map],
+            &[&self.out],
             (access::COMPUTE_READ, access::DEPTH_WRITE),
             (L::UNDEFINED, L::DEPTH_ATTACHMENT_OPTIMAL),
         );
         let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(self.map.view)
+            .image_view(self.out.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::CLEAR)
             .store_op(vk::AttachmentStoreOp::STORE)
@@ -78,12 +80,12 @@ impl ShadowMapPass {
         let info = vk::RenderingInfo::default()
             .render_area(vk::Rect2D {
                 offset: vk::Offset2D::default(),
-                extent: self.map.extent,
+                extent: self.out.extent,
             })
             .layer_count(1)
             .depth_attachment(&depth);
         unsafe { device.cmd_begin_rendering(cmd, &info) };
-        set_viewport(device, cmd, self.map.extent);
+        set_viewport(device, cmd, self.out.extent);
         for geometry in geometries {
             self.pipeline.bind(
                 cmd,
@@ -100,7 +102,7 @@ impl ShadowMapPass {
         barrier::transition(
             device,
             cmd,
-            &[&self.map],
+            &[&self.out],
             (access::DEPTH_WRITE, access::COMPUTE_READ),
             (L::DEPTH_ATTACHMENT_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
         );

@@ -2,6 +2,7 @@
 //! and the fail mask. The classification lists the pixels worth a march and fails or
 //! clears the rest; the march runs over that list by an indirect dispatch (the shape
 //! of FidelityFX SSSR), so pixels with nothing to march cost it nothing.
+//! CPU reference: `cpu_ref::ssr` (`classify`, `march`; tests/ssr.rs).
 
 use super::GBuffer;
 use crate::error::Result;
@@ -43,7 +44,7 @@ struct MarchPush {
 
 pub struct SsrOutputs {
     pub color: Image,
-    /// Fail reasons per pixel (`FAIL_*` bits); nonzero sends the pixel to rt.trace.
+    /// Fail reasons per pixel (`FAIL_*` bits); nonzero sends the pixel to rt.reflect.
     pub mask: Image,
     /// The pixels to march (packed x | y << 16), in no particular order.
     pub march_list: Buffer,

@@ -8,7 +8,7 @@ use super::{FrameSlot, Renderer};
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::{self, ComposeInputs, ComposeMode};
 use crate::passes::lbvh::dynamic::DynamicBvh;
-use crate::passes::reflect_merge::{self, BlurParams};
+use crate::passes::reflect_merge::{self, BlurParams, MergeInputs, MergeParams};
 use crate::passes::rt_reflect::{self, ReflectInputs};
 use crate::passes::ssr_trace;
 use crate::passes::{gbuffer, light_direct, shadow_map, sim_cloth, sim_transform, ssr_compact, SceneGeometry};
@@ -213,7 +213,7 @@ impl Renderer {
             ..
         } = self;
         let FrameSlot { timer, sim_ms } = &mut slots[slot];
-        let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.targets);
+        let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.out);
         let mut f = FrameRecorder::begin(timer, cmd);
         f.row(Row::Uniforms, || upload_uniforms(d, cmd, ubo, uniforms));
         if let Some(dy) = dynamic.as_mut().filter(|_| advance) {
@@ -240,7 +240,7 @@ impl Renderer {
         let surfaces = scene.surfaces(dynamic);
         f.row(Row::GBuffer, || gbuffer.record(cmd, ubo, &surfaces, &geometries));
         f.row(Row::LightDirect, || {
-            light.record(cmd, ubo, g, &shadow.map, &scene.materials)
+            light.record(cmd, ubo, g, &shadow.out, &scene.materials)
         });
         let params = SsrParams::from_settings(st);
         if mode.reflects() {
@@ -249,7 +249,7 @@ impl Renderer {
         }
         if mode.marches() {
             f.row(Row::SsrTrace, || {
-                ssr.trace(cmd, ubo, g, &light.lit, &scene.materials, &params)
+                ssr.trace(cmd, ubo, g, &light.out, &scene.materials, &params)
             });
         }
         if mode.traces() {
@@ -258,7 +258,7 @@ impl Renderer {
                 frame: ubo,
                 gbuffer: g,
                 surfaces,
-                shadow_map: &shadow.map,
+                shadow_map: &shadow.out,
                 list: &compact.out,
                 scene: TraceScene {
                     static_bvh: Some(Traceable {
@@ -278,16 +278,24 @@ impl Renderer {
                 radius: if mode.has_seams() { st.blur_radius } else { 0 },
                 band: st.blur_band,
             };
-            let (mask, ssr_color) = (&ssr.out.mask, &ssr.out.color);
-            f.row(Row::ReflectMerge, || {
-                let traced = mode.traces();
-                merge.record(cmd, ubo, g, mask, ssr_color, &rt.color, traced, st.reflective_min, blur)
-            });
+            let inputs = MergeInputs {
+                frame: ubo,
+                gbuffer: g,
+                fail_mask: &ssr.out.mask,
+                ssr: &ssr.out.color,
+                rt: &rt.out,
+            };
+            let params = MergeParams {
+                rt_enabled: mode.traces(),
+                reflective_min: st.reflective_min,
+                blur,
+            };
+            f.row(Row::ReflectMerge, || merge.record(cmd, &inputs, params));
         }
         let inputs = ComposeInputs {
             frame: ubo,
-            hdr: &light.lit,
-            reflection: merge.reflection(),
+            hdr: &light.out,
+            reflection: &merge.out,
             gbuffer: g,
             materials: &scene.materials,
             fail_mask: &ssr.out.mask,

@@ -38,7 +38,7 @@ use crate::passes::ssr_trace::SsrPass;
 use crate::passes::Traceable;
 use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
 use crate::scene::{Camera, Scene};
-use crate::settings::{Mode, Settings};
+use crate::settings::{Applies, Mode, Settings};
 use crate::vk::{Buffer, Context, GpuTimer, Image, TimerReadout, Wall};
 use ash::vk;
 use glam::Vec3;
@@ -193,31 +193,29 @@ impl Renderer {
     }
 
     /// Whether `settings` differ from the current ones in a field only a new renderer
-    /// can apply: the time step and BVH policy of a dynamic scene (its simulation is
-    /// made with them). Every other field `set_settings` applies in place.
+    /// can apply (`Applies::NewRenderer` in the settings table: the time step and BVH
+    /// policy of a dynamic scene, whose simulation is made with them). Every other
+    /// field `set_settings` applies in place.
     pub fn needs_new_renderer(&self, settings: &Settings) -> bool {
-        let s = &self.settings;
-        self.is_dynamic()
-            && (s.sim_dt != settings.sim_dt
-                || s.cloth_rebuild != settings.cloth_rebuild
-                || s.refit_rebuild_every != settings.refit_rebuild_every)
+        self.is_dynamic() && !self.settings.changed(settings, Applies::NewRenderer).is_empty()
     }
 
     /// Applies `settings` from the next frame on, after checking them (nothing changes
-    /// when they are refused): a new resolution recreates every screen-sized image and
-    /// list, a new shadow-map size or slope bias the shadow map (both wait for the
-    /// GPU); the other fields are read as each frame is recorded. The fields of
-    /// `needs_new_renderer` are refused here.
+    /// when they are refused), as the settings table says of each field that changed:
+    /// `Resize` recreates every screen-sized image and list, `ShadowMap` the shadow
+    /// map (both wait for the GPU); `NextFrame` fields are read as each frame is
+    /// recorded. The fields of `needs_new_renderer` are refused here.
     pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         settings.validate()?;
         crate::limits::check_frame(&self.ctx, &settings)?;
         if self.needs_new_renderer(&settings) {
-            return Err(crate::Error::Settings(
-                "sim_dt, cloth_rebuild and refit_rebuild_every of a dynamic scene need a new renderer".into(),
-            ));
+            let fields = self.settings.changed(&settings, Applies::NewRenderer).join(", ");
+            return Err(crate::Error::Settings(format!(
+                "{fields} of a dynamic scene need a new renderer"
+            )));
         }
         let old = &self.settings;
-        if (old.width, old.height) != (settings.width, settings.height) {
+        if !old.changed(&settings, Applies::Resize).is_empty() {
             self.ctx.wait_idle()?;
             let e = extent(&settings);
             self.gbuffer.resize(e)?;
@@ -228,7 +226,7 @@ impl Renderer {
             self.merge.resize(e)?;
             self.compose.resize(e)?;
         }
-        if (old.shadow_map_size, old.shadow_slope_bias) != (settings.shadow_map_size, settings.shadow_slope_bias) {
+        if !old.changed(&settings, Applies::ShadowMap).is_empty() {
             self.ctx.wait_idle()?;
             self.shadow = ShadowMapPass::new(&self.ctx, settings.shadow_map_size, settings.shadow_slope_bias)?;
         }
@@ -390,8 +388,8 @@ impl Renderer {
     /// Per pixel of the last frame: whether it reflects, and its fail-mask bits (0 in
     /// `raster` mode). A readback, for stats, debug images and tests.
     pub fn reflection_maps(&self) -> Result<ReflectionMaps> {
-        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.targets.normal)?);
-        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.targets.material)?);
+        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.out.normal)?);
+        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.out.material)?);
         let min = self.settings.reflective_min;
         let reflective = normal
             .iter()
@@ -418,12 +416,12 @@ impl Renderer {
 
     /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).
     pub fn read_output(&self) -> Result<Vec<u8>> {
-        self.compose.ldr.read(vk::ImageLayout::GENERAL)
+        self.compose.out.read(vk::ImageLayout::GENERAL)
     }
 
     /// The last frame's lit HDR image as RGBA f32.
     pub fn read_lit(&self) -> Result<Vec<[f32; 4]>> {
-        let raw = self.light.lit.read(vk::ImageLayout::GENERAL)?;
+        let raw = self.light.out.read(vk::ImageLayout::GENERAL)?;
         debug_assert_eq!(light_direct::FORMAT, vk::Format::R32G32B32A32_SFLOAT);
         Ok(bytemuck::pod_collect_to_vec(&raw))
     }

@@ -132,19 +132,125 @@ pub fn rng(seed: u64) -> rand::rngs::StdRng {
     rand::rngs::StdRng::seed_from_u64(seed)
 }
 
-/// Runs the `speculum` binary with exactly `args` in `dir`, validation on; returns
-/// (exit code, stderr).
+/// A run of the `speculum` binary, the one way tests run it: validation on
+/// (`SPECULUM_VALIDATION=1`), in the test's folder when `dir` is given, and killed
+/// with a failed test when it outlives its time limit (a hang or an unbounded read
+/// fails instead of stalling the suite).
+pub struct Speculum {
+    cmd: std::process::Command,
+    limit: std::time::Duration,
+    what: String,
+}
+
+/// `speculum ARGS`, to be run with `.run()` (more arguments, a folder, a time limit or
+/// environment first, as wanted).
+pub fn speculum<S: AsRef<std::ffi::OsStr>>(args: impl IntoIterator<Item = S>) -> Speculum {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_speculum"));
+    cmd.env("SPECULUM_VALIDATION", "1");
+    let mut run = Speculum {
+        cmd,
+        limit: std::time::Duration::from_secs(300),
+        what: String::new(),
+    };
+    run = run.args(args);
+    run
+}
+
+/// What a run printed and how it ended.
+pub struct Output {
+    /// The exit code (-1 when a signal ended it).
+    pub code: i32,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+impl Output {
+    pub fn ok(&self) -> bool {
+        self.code == 0
+    }
+}
+
+impl Speculum {
+    pub fn arg(mut self, a: impl AsRef<std::ffi::OsStr>) -> Self {
+        self.what += &format!(" {}", a.as_ref().to_string_lossy());
+        self.cmd.arg(a);
+        self
+    }
+
+    pub fn args<S: AsRef<std::ffi::OsStr>>(mut self, args: impl IntoIterator<Item = S>) -> Self {
+        for a in args {
+            self = self.arg(a);
+        }
+        self
+    }
+
+    /// Runs in `dir` (relative paths in the arguments are read there).
+    pub fn dir(mut self, dir: &std::path::Path) -> Self {
+        self.cmd.current_dir(dir);
+        self
+    }
+
+    pub fn env(mut self, key: &str, value: impl AsRef<std::ffi::OsStr>) -> Self {
+        self.cmd.env(key, value);
+        self
+    }
+
+    pub fn env_remove(mut self, key: &str) -> Self {
+        self.cmd.env_remove(key);
+        self
+    }
+
+    /// Fails the test when the run takes longer than `limit` (300 s unless set).
+    pub fn limit(mut self, limit: std::time::Duration) -> Self {
+        self.limit = limit;
+        self
+    }
+
+    /// Runs to the end (stdin closed), its output read as it comes.
+    pub fn run(mut self) -> Output {
+        use std::io::Read;
+        use std::process::Stdio;
+        let mut child = self
+            .cmd
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("runs the speculum binary");
+        // Both pipes drain on their own threads, so a chatty run cannot block on a full pipe.
+        let drain = |mut pipe: Box<dyn Read + Send>| {
+            std::thread::spawn(move || {
+                let mut bytes = Vec::new();
+                let _ = pipe.read_to_end(&mut bytes);
+                String::from_utf8_lossy(&bytes).into_owned()
+            })
+        };
+        let stdout = drain(Box::new(child.stdout.take().unwrap()));
+        let stderr = drain(Box::new(child.stderr.take().unwrap()));
+        let start = std::time::Instant::now();
+        let status = loop {
+            if let Some(status) = child.try_wait().unwrap() {
+                break status;
+            }
+            if start.elapsed() > self.limit {
+                let _ = child.kill();
+                let _ = child.wait();
+                panic!("speculum{} still running after {:?}", self.what, self.limit);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        };
+        Output {
+            code: status.code().unwrap_or(-1),
+            stdout: stdout.join().unwrap(),
+            stderr: stderr.join().unwrap(),
+        }
+    }
+}
+
+/// Runs the `speculum` binary with exactly `args` in `dir`; returns (exit code, stderr).
 pub fn speculum_in(args: &[&str], dir: &std::path::Path) -> (i32, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(args)
-        .env("SPECULUM_VALIDATION", "1")
-        .current_dir(dir)
-        .output()
-        .expect("run speculum");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let out = speculum(args).dir(dir).run();
+    (out.code, out.stderr)
 }
 
 /// The pixel (x right, y down) that world point `w` lands on in a frame rendered with

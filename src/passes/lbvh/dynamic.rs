@@ -2,6 +2,7 @@
 //! or refit (new boxes, same tree) while the topology holds — deforming cloth — and
 //! rebuilt all the same every `rebuild_every` frames, since a refit tree's boxes grow
 //! looser as the geometry drifts from where the tree was built.
+//! No kernel of its own: a policy over `LbvhBuilder`'s build and refit.
 
 use super::{Bvh, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
 use super::{BOUNDS, FIT, HIERARCHY, MORTON, REFIT, SORT};

@@ -3,6 +3,7 @@
 //! `lbvh.bounds` → `lbvh.morton` → `lbvh.sort` → `lbvh.hierarchy` → `lbvh.fit`,
 //! or `lbvh.refit` alone when vertices moved but the triangles stayed the same.
 //! Node layout: `glsl/shared/bvh.glsl` (2N-1 nodes of 32 bytes, root at 0).
+//! CPU reference: `cpu_ref::lbvh` (every stage exactly; tests/lbvh.rs).
 
 pub mod dynamic;
 pub mod sort;

@@ -1,5 +1,6 @@
 //! `lbvh.sort`: stable LSD radix sort of (key, value) pairs, 4 bits per pass, each pass
 //! count → scan → scatter (reduce-then-scan: no workgroup waits on another).
+//! CPU reference: `cpu_ref::lbvh::sort_pairs` (tests/lbvh.rs).
 
 use crate::error::{Error, Result};
 use crate::shader_defines::{SORT_BINS, SORT_ITEMS, SORT_RADIX_BITS, SORT_WG};

@@ -1,7 +1,14 @@
-//! The one settings struct shared by the CLI, the tests and (later) the demo, tuner
-//! and benchmarks. Every field says what it trades.
+//! The one settings struct shared by the CLI, the demo, the tuner, the benchmarks and
+//! the tests, declared as one table (`settings_table!` below): each field's type,
+//! default, range, what it trades, how the HUD shows it and how a change applies. The
+//! struct, `Default`, `validate`, `Renderer::set_settings`, the HUD's controls,
+//! `speculum settings --list` and the README's list all read that table.
+
+pub mod field;
 
 use crate::error::{Error, Result};
+use crate::shader_defines::{BLUR_MAX_EXTENT, MAX_PCF_RADIUS};
+pub use field::{Applies, Field, Hud, Range, Value};
 use serde::{Deserialize, Serialize};
 
 /// Largest render side Speculum accepts on any device: 8192 keeps every target under
@@ -78,111 +85,134 @@ impl std::str::FromStr for Mode {
     }
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct Settings {
+/// Declares `Settings`, its `Default` and `FIELDS` from one table: each field's
+/// documentation (what it trades), type, default, accepted range, HUD control and how a
+/// change applies.
+macro_rules! settings_table {
+    ($(
+        $(#[doc = $doc:literal])*
+        $name:ident: $ty:ty = $default:expr, $range:expr, $hud:expr, $applies:ident;
+    )*) => {
+        /// Every field says what it trades; `FIELDS` has the rest of the table.
+        #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+        #[serde(default, deny_unknown_fields)]
+        pub struct Settings {
+            $( $(#[doc = $doc])* pub $name: $ty, )*
+        }
+
+        impl Default for Settings {
+            fn default() -> Self {
+                Self { $( $name: $default, )* }
+            }
+        }
+
+        /// The settings table, in declaration order.
+        pub const FIELDS: &[Field] = &[$(
+            Field {
+                name: stringify!($name),
+                trades: concat!($($doc),*),
+                range: $range,
+                hud: $hud,
+                applies: Applies::$applies,
+                get: |s| Value::from(s.$name),
+                set: |s, v| s.$name = <$ty as field::FromValue>::from_value(v),
+            },
+        )*];
+    };
+}
+
+const ANY_F32: Range = Range::F32 {
+    min: 0.0,
+    max: f32::INFINITY,
+    open_min: false,
+};
+
+const fn slider(min: f64, max: f64) -> Hud {
+    Hud::Slider { min, max, log: false }
+}
+
+const fn log_slider(min: f64, max: f64) -> Hud {
+    Hud::Slider { min, max, log: true }
+}
+
+const fn u32s(min: u32, max: u32) -> Range {
+    Range::U32 { min, max }
+}
+
+settings_table! {
     /// Render width in pixels. Every screen-space pass scales with width × height.
-    pub width: u32,
+    width: u32 = 960, u32s(1, MAX_SIDE), Hud::Own, Resize;
     /// Render height in pixels.
-    pub height: u32,
+    height: u32 = 540, u32s(1, MAX_SIDE), Hud::Own, Resize;
     /// Shadow-map edge in texels: sharper shadow edges vs memory and `shadow.map` time.
-    pub shadow_map_size: u32,
+    shadow_map_size: u32 = 2048, u32s(1, MAX_SIDE), Hud::Choice(&[256, 512, 1024, 2048, 4096, 8192]), ShadowMap;
     /// PCF radius in shadow-map texels: softer, less aliased shadow edges vs
     /// (2r+2)^2 texel fetches per pixel in `light.direct`.
-    pub pcf_radius: u32,
+    pcf_radius: u32 = 1, u32s(0, MAX_PCF_RADIUS), slider(0.0, MAX_PCF_RADIUS as f64), NextFrame;
     /// Depth bias of the shadow compare, in light clip-space depth (fraction of the
     /// light's depth range): removes shadow acne vs detaches shadows from casters.
-    pub shadow_bias: f32,
+    shadow_bias: f32 = 0.0015, ANY_F32, slider(0.0, 0.02), NextFrame;
     /// Slope-scaled raster depth bias of `shadow.map`: less acne on surfaces at grazing
     /// light angles vs more peter-panning.
-    pub shadow_slope_bias: f32,
+    shadow_slope_bias: f32 = 1.5, ANY_F32, slider(0.0, 8.0), ShadowMap;
     /// Exposure multiplier before tonemapping (no time cost).
-    pub exposure: f32,
+    exposure: f32 = 1.0, ANY_F32, log_slider(0.05, 8.0), NextFrame;
     /// Strength of the sky's hemispherical ambient light (no time cost).
-    pub ambient: f32,
-    /// Reflection mode.
-    pub mode: Mode,
+    ambient: f32 = 0.35, ANY_F32, slider(0.0, 2.0), NextFrame;
+    /// What the frame's reflections come from: none, SSR, the hybrid, every pixel
+    /// traced (the reference), or the hybrid painted by source (`render --help` says
+    /// each).
+    mode: Mode = Mode::Hybrid, Range::Any, Hud::Own, NextFrame;
     /// Reflectivity above which a pixel gets a reflection: lower reflects more surfaces
     /// at more SSR and ray-tracing work.
-    pub reflective_min: f32,
-    /// Rays per reflection path in `rt.trace` (1 = a single reflection): more shows
+    reflective_min: f32 = 0.02, ANY_F32, slider(0.0, 1.0), NextFrame;
+    /// Rays per reflection path in `rt.reflect` (1 = a single reflection): more shows
     /// mirrors within mirrors, each bounce costs another traversal for paths still on a
     /// reflector.
-    pub max_bounces: u32,
+    max_bounces: u32 = 3, u32s(1, 16), slider(1.0, 16.0), NextFrame;
     /// SSR step budget per ray: more finds farther hits, at up to that many depth reads.
-    pub ssr_max_steps: u32,
+    ssr_max_steps: u32 = 64, u32s(1, 4096), log_slider(1.0, 512.0), NextFrame;
     /// SSR step length in pixels: longer reaches farther for the same budget but can
     /// step over objects thinner than a step (a hit is refined to the pixel by binary
     /// search inside its step).
-    pub ssr_stride: f32,
+    ssr_stride: f32 = 8.0, Range::F32 { min: 0.5, max: MAX_SIDE as f32, open_min: false }, log_slider(0.5, 32.0), NextFrame;
     /// Depth a surface is assumed to have, as a fraction of its distance along the view
     /// axis (so the same at any scene scale): thicker finds hits behind thin
     /// silhouettes but makes false hits behind objects.
-    pub ssr_thickness: f32,
+    ssr_thickness: f32 = 0.03, ANY_F32, log_slider(0.0, 0.5), NextFrame;
     /// Longest SSR ray, in multiples of the reflecting point's distance along the view
     /// axis (scale-free): longer finds farther hits at more steps.
-    pub ssr_max_distance: f32,
+    ssr_max_distance: f32 = 5.0, ANY_F32, log_slider(0.1, 50.0), NextFrame;
     /// Fraction of the screen's smaller side over which SSR confidence fades at the
     /// edges: larger hides the edge seam but sends more pixels to the ray tracer.
-    pub ssr_edge_fade: f32,
+    ssr_edge_fade: f32 = 0.05, ANY_F32, slider(0.0, 0.5), NextFrame;
     /// SSR hits below this confidence fail (go to the ray tracer): higher is cleaner
     /// and slower.
-    pub ssr_min_confidence: f32,
+    ssr_min_confidence: f32 = 0.3, ANY_F32, slider(0.0, 1.0), NextFrame;
     /// SSR hits on surfaces whose own mirror reflection, seen along the ray, weighs
     /// more than this (reflectivity x Fresnel, the largest channel) fail and go to the
     /// ray tracer (the screen holds no reflection of a reflection). Hits on weaker
     /// reflectors (a dielectric seen head-on reflects 4%) are kept without their own
     /// reflection: a lower value is closer to the reference, a higher one ray traces
     /// fewer pixels.
-    pub ssr_recursion_min: f32,
+    ssr_recursion_min: f32 = 0.2, ANY_F32, slider(0.0, 1.0), NextFrame;
     /// Seam blur radius in pixels (0: off): smoother SSR/RT transitions vs detail.
-    pub blur_radius: u32,
+    blur_radius: u32 = 3, u32s(0, 16), slider(0.0, 16.0), NextFrame;
     /// Half-width in pixels of the band around SSR/RT seams that the blur touches.
-    pub blur_band: u32,
+    blur_band: u32 = 3, u32s(0, BLUR_MAX_EXTENT), slider(0.0, BLUR_MAX_EXTENT as f64), NextFrame;
     /// Shadows at ray-traced hits from shadow rays (exact, one more traversal per hit)
     /// instead of the shadow map (cheap, limited by its resolution).
-    pub shadow_rays: bool,
+    shadow_rays: bool = false, Range::Any, Hud::Checkbox, NextFrame;
     /// Simulated seconds per rendered frame of a dynamic scene (a fixed step, so frame
     /// k is the same image in every run): smaller is smoother motion and more frames
     /// for the same animation.
-    pub sim_dt: f32,
+    sim_dt: f32 = 1.0 / 60.0, Range::F32 { min: 0.0, max: 1.0, open_min: true }, log_slider(0.001, 0.1), NewRenderer;
     /// Rebuild the dynamic BVH of a scene whose only dynamic geometry is cloth every
     /// frame instead of refitting it (refit is cheaper; its tree loosens as the cloth
     /// deforms).
-    pub cloth_rebuild: bool,
+    cloth_rebuild: bool = false, Range::Any, Hud::Checkbox, NewRenderer;
     /// When refitting, still rebuild every this many frames (1: always rebuild).
-    pub refit_rebuild_every: u32,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Self {
-            width: 960,
-            height: 540,
-            shadow_map_size: 2048,
-            pcf_radius: 1,
-            shadow_bias: 0.0015,
-            shadow_slope_bias: 1.5,
-            exposure: 1.0,
-            ambient: 0.35,
-            mode: Mode::Hybrid,
-            reflective_min: 0.02,
-            max_bounces: 3,
-            ssr_max_steps: 64,
-            ssr_stride: 8.0,
-            ssr_thickness: 0.03,
-            ssr_max_distance: 5.0,
-            ssr_edge_fade: 0.05,
-            ssr_min_confidence: 0.3,
-            ssr_recursion_min: 0.2,
-            blur_radius: 3,
-            blur_band: 3,
-            shadow_rays: false,
-            sim_dt: 1.0 / 60.0,
-            cloth_rebuild: false,
-            refit_rebuild_every: 60,
-        }
-    }
+    refit_rebuild_every: u32 = 60, u32s(1, u32::MAX), log_slider(1.0, 600.0), NewRenderer;
 }
 
 impl Settings {
@@ -210,10 +240,7 @@ impl Settings {
 
     /// The names of the fields, in declaration order.
     pub fn field_names() -> Vec<String> {
-        match serde_json::to_value(Settings::default()) {
-            Ok(serde_json::Value::Object(map)) => map.keys().cloned().collect(),
-            _ => unreachable!("Settings serialize to an object"),
-        }
+        FIELDS.iter().map(|f| f.name.to_string()).collect()
     }
 
     /// These settings with field `name` set to `value`, checked: the value is JSON
@@ -239,81 +266,53 @@ impl Settings {
         Ok(s)
     }
 
-    /// Checks the values that do not depend on the device.
+    /// Checks the values that do not depend on the device: each field against its
+    /// range in `FIELDS` (the resolution first, named as one).
     pub fn validate(&self) -> Result<()> {
-        let side = |what: &str, v: u32| -> Result<()> {
-            if v == 0 || v > MAX_SIDE {
-                return Err(Error::Settings(format!("{what} {v} is outside 1..={MAX_SIDE}")));
-            }
-            Ok(())
-        };
         if self.width == 0 || self.height == 0 || self.width > MAX_SIDE || self.height > MAX_SIDE {
             return Err(Error::Settings(format!(
                 "resolution {}x{} is outside 1x1..={MAX_SIDE}x{MAX_SIDE}",
                 self.width, self.height
             )));
         }
-        side("shadow_map_size", self.shadow_map_size)?;
-        if self.pcf_radius > crate::shader_defines::MAX_PCF_RADIUS {
-            return Err(Error::Settings(format!(
-                "pcf_radius {} is above the maximum {}",
-                self.pcf_radius,
-                crate::shader_defines::MAX_PCF_RADIUS
-            )));
+        match FIELDS.iter().find_map(|f| f.range.check(f.name, (f.get)(self))) {
+            Some(why) => Err(Error::Settings(why)),
+            None => Ok(()),
         }
-        if self.max_bounces == 0 || self.max_bounces > 16 {
-            return Err(Error::Settings(format!(
-                "max_bounces {} is outside 1..=16",
-                self.max_bounces
-            )));
-        }
-        if self.ssr_max_steps == 0 || self.ssr_max_steps > 4096 {
-            return Err(Error::Settings(format!(
-                "ssr_max_steps {} is outside 1..=4096",
-                self.ssr_max_steps
-            )));
-        }
-        let most = crate::shader_defines::BLUR_MAX_EXTENT;
-        if self.blur_radius > 16 || self.blur_band > most {
-            return Err(Error::Settings(format!(
-                "blur_radius {} / blur_band {} too large (16 / {most})",
-                self.blur_radius, self.blur_band
-            )));
-        }
-        // Finite: an infinite stride would be written back as JSON `null`, unreadable.
-        if !(self.ssr_stride >= 0.5 && self.ssr_stride <= MAX_SIDE as f32) {
-            return Err(Error::Settings(format!(
-                "ssr_stride {} must be at least 0.5 and at most {MAX_SIDE} pixels",
-                self.ssr_stride
-            )));
-        }
-        for (name, v) in [
-            ("reflective_min", self.reflective_min),
-            ("ssr_thickness", self.ssr_thickness),
-            ("ssr_max_distance", self.ssr_max_distance),
-            ("ssr_edge_fade", self.ssr_edge_fade),
-            ("ssr_min_confidence", self.ssr_min_confidence),
-            ("ssr_recursion_min", self.ssr_recursion_min),
-            ("shadow_bias", self.shadow_bias),
-            ("shadow_slope_bias", self.shadow_slope_bias),
-            ("exposure", self.exposure),
-            ("ambient", self.ambient),
-        ] {
-            if !v.is_finite() || v < 0.0 {
-                return Err(Error::Settings(format!("{name} {v} must be a finite number >= 0")));
-            }
-        }
-        if self.refit_rebuild_every == 0 {
-            return Err(Error::Settings("refit_rebuild_every must be at least 1".into()));
-        }
-        if !(self.sim_dt.is_finite() && self.sim_dt > 0.0 && self.sim_dt <= 1.0) {
-            return Err(Error::Settings(format!(
-                "sim_dt {} must be a time step in (0, 1] seconds",
-                self.sim_dt
-            )));
-        }
-        Ok(())
     }
+
+    /// The fields that differ from `new` and apply as `applies`.
+    pub fn changed(&self, new: &Settings, applies: Applies) -> Vec<&'static str> {
+        FIELDS
+            .iter()
+            .filter(|f| f.applies == applies && (f.get)(self) != (f.get)(new))
+            .map(|f| f.name)
+            .collect()
+    }
+}
+
+/// The settings table as Markdown (the README's list, `speculum settings --list`).
+pub fn markdown_table() -> String {
+    let defaults = Settings::default();
+    let mut out =
+        String::from("| setting | default | range | a change applies | what it trades |\n|---|---|---|---|---|\n");
+    for f in FIELDS {
+        let trades = f.trades.split_whitespace().collect::<Vec<_>>().join(" ");
+        let range = match (f.range, (f.get)(&defaults)) {
+            (Range::Any, Value::Mode(_)) => Mode::ALL.map(Mode::name).join(", "),
+            (Range::Any, Value::Bool(_)) => "true, false".into(),
+            (r, _) => r.describe(),
+        };
+        out += &format!(
+            "| `{}` | {} | {} | {} | {} |\n",
+            f.name,
+            (f.get)(&defaults),
+            range,
+            f.applies.describe(),
+            trades.replace('|', "\\|")
+        );
+    }
+    out
 }
 
 #[cfg(test)]
@@ -402,6 +401,49 @@ mod tests {
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
         assert_eq!(Settings::field_names().len(), 24);
+    }
+
+    /// The README's settings list is the table's (`speculum settings --list`).
+    #[test]
+    fn readme_lists_the_settings_table() {
+        let readme = include_str!("../../README.md");
+        let start = "<!-- settings --list -->\n";
+        let from = readme.find(start).expect("the README's settings list") + start.len();
+        let to = from + readme[from..].find("<!-- end -->").expect("the list's end marker");
+        assert_eq!(
+            readme[from..to],
+            markdown_table(),
+            "the README's settings list differs from `speculum settings --list`"
+        );
+        assert_eq!(markdown_table().lines().count(), FIELDS.len() + 2);
+    }
+
+    /// Every field's default is inside its range, and each range refuses a value just
+    /// outside it (so `validate` checks every field).
+    #[test]
+    fn every_field_is_checked_against_its_range() {
+        let d = Settings::default();
+        for f in FIELDS {
+            assert_eq!(f.range.check(f.name, (f.get)(&d)), None, "{} default", f.name);
+            let outside: Vec<Value> = match f.range {
+                Range::U32 { min, max } => {
+                    let below = min.checked_sub(1).map(Value::U32);
+                    let above = max.checked_add(1).map(Value::U32);
+                    below.into_iter().chain(above).collect()
+                }
+                Range::F32 { min, max, .. } => {
+                    let below = if min > 0.0 { min * 0.5 } else { -1.0 };
+                    [below, max * 2.0, f32::NAN].map(Value::F32).to_vec()
+                }
+                Range::Any => Vec::new(),
+            };
+            for v in outside {
+                let mut s = d.clone();
+                (f.set)(&mut s, v);
+                let e = s.validate().expect_err(f.name).to_string();
+                assert!(e.contains(f.name) || e.contains("resolution"), "{} = {v}: {e}", f.name);
+            }
+        }
     }
 
     #[test]

@@ -4,21 +4,17 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
 
 /// Runs `speculum render ARGS` with validation on; returns (success, stderr).
 fn run(args: &[&str], dir: &Path) -> (bool, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .arg("render")
+    let out = common::speculum(["render"])
         .args(args)
         .args(["--frames", "1", "--warmup", "0", "--width", "64", "--height", "48"])
         .arg("--out")
         .arg(dir.join("out.png"))
-        .env("SPECULUM_VALIDATION", "1")
-        .current_dir(dir)
-        .output()
-        .expect("run speculum");
-    (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
+        .dir(dir)
+        .run();
+    (out.ok(), out.stderr)
 }
 
 /// Asserts a clean failure whose error line contains every one of `needles`.
@@ -245,13 +241,11 @@ fn zero_and_absurd_resolutions() {
     let dir = tempfile::tempdir().unwrap();
     for (w, h) in [("0", "0"), ("100000", "100000"), ("640", "0")] {
         // Later flags win in clap: these override the helper's 64x48.
-        let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-            .args(["render", "--frames", "1", "--width", w, "--height", h])
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success());
+        let out = common::speculum(["render", "--frames", "1", "--width", w, "--height", h])
+            .dir(dir.path())
+            .run();
+        assert!(!out.ok());
+        let stderr = out.stderr;
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert!(stderr.contains(&format!("resolution {w}x{h}")), "{stderr}");
         assert!(!dir.path().join("frame.png").exists());
@@ -503,11 +497,7 @@ fn argument_errors_say_what_is_wrong_first() {
         );
     }
     // The mode's values are listed in the help.
-    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(["render", "--help"])
-        .output()
-        .unwrap();
-    let help = String::from_utf8_lossy(&out.stdout);
+    let help = common::speculum(["render", "--help"]).run().stdout;
     for word in [
         "raster",
         "hybrid",
@@ -535,17 +525,8 @@ fn compare_rejects_bad_images() {
         .unwrap();
     write(dir.path(), "junk.png", "not an image");
     let run = |b: &str| {
-        let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-            .arg("compare")
-            .arg(&a)
-            .arg(dir.path().join(b))
-            .output()
-            .unwrap();
-        (
-            out.status.success(),
-            String::from_utf8_lossy(&out.stderr).into_owned(),
-            String::from_utf8_lossy(&out.stdout).into_owned(),
-        )
+        let out = common::speculum(["compare"]).arg(&a).arg(dir.path().join(b)).run();
+        (out.ok(), out.stderr, out.stdout)
     };
     let (ok, _, stdout) = run("a.png");
     assert!(

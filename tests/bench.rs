@@ -133,12 +133,8 @@ fn small_dynamic_benchmark_is_valid() {
     assert!(points[1].dynamic_triangles > 2 * points[0].dynamic_triangles);
 }
 
-fn speculum_bin(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(args)
-        .env("SPECULUM_VALIDATION", "1")
-        .output()
-        .expect("runs the speculum binary")
+fn speculum_bin(args: &[&str]) -> common::Output {
+    common::speculum(args).run()
 }
 
 /// `bench suite --quick` runs every case with every scope timed; compared with itself
@@ -164,7 +160,7 @@ fn the_quick_suite_runs_and_compares_with_a_baseline() {
         m,
         "--quiet",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.ok(), "{}", out.stderr);
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(report["kind"], "bench.suite");
     assert_eq!(report["suite_version"], speculum::bench::suite::SUITE_VERSION);
@@ -215,11 +211,7 @@ fn the_quick_suite_runs_and_compares_with_a_baseline() {
         ])
     };
     let out = compare(j, &again);
-    assert!(
-        out.status.success(),
-        "self-comparison: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.ok(), "self-comparison: {}", out.stderr);
     let text = std::fs::read_to_string(&again).unwrap();
     assert!(
         text.lines().count() > 20 && !text.contains("Regression") && !text.contains("Faster"),
@@ -236,8 +228,8 @@ fn the_quick_suite_runs_and_compares_with_a_baseline() {
     std::fs::write(&doctored_path, serde_json::to_string(&doctored).unwrap()).unwrap();
     let flagged = dir.path().join("flagged.md");
     let out = compare(doctored_path.to_str().unwrap(), &flagged);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
+    let err = out.stderr;
+    assert_eq!(out.code, 1, "{err}");
     assert!(err.contains("room/hybrid/480x270 gbuffer"), "{err}");
     let text = std::fs::read_to_string(&flagged).unwrap();
     let regressions: Vec<&str> = text.lines().filter(|l| l.contains("Regression")).collect();
@@ -257,7 +249,7 @@ fn the_quick_suite_runs_and_compares_with_a_baseline() {
         "3",
         "--quiet",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.ok(), "{}", out.stderr);
     assert!(
         regressions[0].starts_with("| room/hybrid/480x270 | gbuffer |"),
         "{text}"
@@ -268,8 +260,8 @@ fn the_quick_suite_runs_and_compares_with_a_baseline() {
         let bad = dir.path().join("bad.json");
         std::fs::write(&bad, content).unwrap();
         let out = speculum_bin(&["bench", "suite", "--quick", "--baseline", bad.to_str().unwrap()]);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{err}");
+        let err = out.stderr;
+        assert_eq!(out.code, 1, "{err}");
         assert!(err.contains(says), "{err}");
     }
 }
@@ -327,7 +319,7 @@ fn lbvh_traces_a_rays_file_and_dumps_its_hits() {
         dh.to_str().unwrap(),
         "--quiet",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.ok(), "{}", out.stderr);
     assert_eq!(
         std::fs::read(&dr).unwrap(),
         std::fs::read(&rf).unwrap(),
@@ -353,8 +345,8 @@ fn lbvh_traces_a_rays_file_and_dumps_its_hits() {
     // A malformed rays file is refused before GPU work, and dumps need one case.
     std::fs::write(&rf, [0u8; 33]).unwrap();
     let out = speculum_bin(&["bench", "lbvh", "--tris", "100", "--rays-file", rf.to_str().unwrap()]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("32-byte rays"));
+    assert_eq!(out.code, 1);
+    assert!(out.stderr.contains("32-byte rays"));
     let out = speculum_bin(&[
         "bench",
         "lbvh",
@@ -364,5 +356,5 @@ fn lbvh_traces_a_rays_file_and_dumps_its_hits() {
         "--dump-hits",
         dh.to_str().unwrap(),
     ]);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("single case"));
+    assert!(out.stderr.contains("single case"));
 }

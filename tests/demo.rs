@@ -5,6 +5,8 @@
 //! Uses `$DISPLAY` when it names a working server, else starts `Xvfb`; when neither is
 //! possible every case is skipped with a message saying so (exit 0).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -71,18 +73,15 @@ struct Run {
 
 /// Runs `speculum demo --validation` with `args` on `display`.
 fn demo(display: &Display, args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .arg("demo")
-        .arg("--validation")
+    let out = common::speculum(["demo", "--validation"])
         .args(args)
         .env("DISPLAY", &display.name)
         .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("runs the speculum binary");
+        .run();
     Run {
-        ok: out.status.success(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        ok: out.ok(),
+        stderr: out.stderr,
+        stdout: out.stdout,
     }
 }
 
@@ -187,18 +186,16 @@ fn modes_match_render(display: &Display, dir: &Path) {
         format!("{},{},{}", a[0], a[1], a[2])
     };
     let out = dir.join("render_hybrid.png");
-    let r = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args([
-            "render", "--scene", "mirrors", "--mode", "hybrid", "--width", "320", "--height", "180",
-        ])
-        .args(["--frames", "1", "--warmup", "0", "--quiet"])
-        .arg(format!("--camera-pos={}", v("position")))
-        .arg(format!("--camera-target={}", v("target")))
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let r = common::speculum([
+        "render", "--scene", "mirrors", "--mode", "hybrid", "--width", "320", "--height", "180",
+    ])
+    .args(["--frames", "1", "--warmup", "0", "--quiet"])
+    .arg(format!("--camera-pos={}", v("position")))
+    .arg(format!("--camera-target={}", v("target")))
+    .arg("--out")
+    .arg(&out)
+    .run();
+    assert!(r.ok(), "{}", r.stderr);
     let c = speculum::metrics::compare_files(&dir.join("mode3.png"), &out).unwrap();
     println!(
         "demo hybrid screenshot vs render: SSIM {:.5}, RMSE {:.5}",

@@ -4,32 +4,17 @@
 //! at once with one line naming it, never read until memory runs out. Runs the real
 //! `speculum` binary, each run killed (and the test failed) after 30 s.
 
-use std::path::Path;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+mod common;
 
-/// Runs `speculum ARGS` in `dir`; returns (exit code, stderr), failing after 30 s.
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
+
+/// Runs `speculum ARGS` in `dir`; returns (exit code, stderr), failing after 30 s (an
+/// unbounded read would run on).
 fn speculum(args: &[&str], dir: &Path) -> (i32, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(args)
-        .current_dir(dir)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run speculum");
-    let start = Instant::now();
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            let mut err = String::new();
-            std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
-            return (status.code().unwrap_or(-1), err);
-        }
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            panic!("{args:?} still running after 30 s: an unbounded read?");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let out = common::speculum(args).dir(dir).limit(Duration::from_secs(30)).run();
+    (out.code, out.stderr)
 }
 
 /// A one-frame render, small and silent.

@@ -3,22 +3,17 @@
 //! apply), a `Stat` (median, p10, p90, samples) beside every timing, and `passes_ms`
 //! listing every scope of the frame. Runs each report kind through the real binary.
 
+mod common;
+
 use serde_json::Value;
 use std::path::Path;
-use std::process::Command;
 
 fn speculum(args: &[&str], dir: &Path) -> Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(args)
-        .env("SPECULUM_VALIDATION", "1")
-        .current_dir(dir)
-        .output()
-        .expect("run speculum");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{args:?}: {stderr}");
+    let out = common::speculum(args).dir(dir).run();
+    let stderr = &out.stderr;
+    assert!(out.ok(), "{args:?}: {stderr}");
     assert!(!stderr.contains("[vulkan"), "{args:?}: {stderr}");
-    let text =
-        std::fs::read_to_string(dir.join("r.json")).unwrap_or_else(|_| String::from_utf8_lossy(&out.stdout).into());
+    let text = std::fs::read_to_string(dir.join("r.json")).unwrap_or_else(|_| out.stdout.clone());
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}): {text}"))
 }
 
@@ -290,12 +285,9 @@ fn compare_report_follows_the_schema_and_thresholds_fail() {
     assert_ne!(diff.get_pixel(0, 31).0, [0, 0, 0, 255], "differing pixels are not");
     // A threshold that is not met fails with one line naming it.
     for (flag, v) in [("--min-ssim", "0.9999"), ("--max-rmse", "0.0001")] {
-        let out = Command::new(env!("CARGO_BIN_EXE_speculum"))
-            .args(["compare", a, b, flag, v])
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        let out = common::speculum(["compare", a, b, flag, v]).run();
+        let stderr = out.stderr;
+        assert_eq!(out.code, 1, "{stderr}");
         assert!(stderr.contains(flag) && stderr.lines().count() == 1, "{stderr}");
     }
 }

@@ -3,26 +3,22 @@
 //! brute-force check of its own numbers gives; `--resume` measures only new points;
 //! bad sweep files get one clear error.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
 
 /// The tests here run one at a time: the sweep's timings (and its confirmation, which
 /// fails when no round's timings pass their self-check) are only trustworthy when no
 /// other lavapipe process takes the cores between a scope's stamps.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
-fn speculum(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_speculum"))
-        .args(args)
-        .env("SPECULUM_VALIDATION", "1")
-        .output()
-        .expect("runs the speculum binary")
+fn speculum(args: &[&str]) -> common::Output {
+    common::speculum(args).run()
 }
 
-fn ok(out: &std::process::Output) -> String {
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(out.status.success(), "failed:\n{err}");
-    err + &String::from_utf8_lossy(&out.stdout)
+fn ok(out: &common::Output) -> String {
+    assert!(out.ok(), "failed:\n{}", out.stderr);
+    out.stderr.clone() + &out.stdout
 }
 
 const SWEEP: &str = "scene = \"room\"\nwidth = 64\nheight = 40\nrounds = 2\nwarmup = 0\n\
@@ -157,8 +153,8 @@ fn bad_sweeps_and_csvs_are_refused_before_any_gpu_work() {
             "--out",
             dir.path().join("o").to_str().unwrap(),
         ]);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{text:?}: {err}");
+        let err = out.stderr;
+        assert_eq!(out.code, 1, "{text:?}: {err}");
         assert!(err.contains(says), "{text:?}: {err}");
         assert_eq!(err.lines().filter(|l| l.starts_with("error:")).count(), 1, "{err}");
     }
@@ -170,6 +166,6 @@ fn bad_sweeps_and_csvs_are_refused_before_any_gpu_work() {
         "--out",
         dir.path().join("p.png").to_str().unwrap(),
     ]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("points CSV"));
+    assert_eq!(out.code, 1);
+    assert!(out.stderr.contains("points CSV"));
 }

@@ -81,35 +81,21 @@ pub enum Value {
     Mode(Mode),
 }
 
-impl From<u32> for Value {
-    fn from(v: u32) -> Self {
-        Value::U32(v)
-    }
-}
-impl From<f32> for Value {
-    fn from(v: f32) -> Self {
-        Value::F32(v)
-    }
-}
-impl From<bool> for Value {
-    fn from(v: bool) -> Self {
-        Value::Bool(v)
-    }
-}
-impl From<Mode> for Value {
-    fn from(v: Mode) -> Self {
-        Value::Mode(v)
-    }
-}
-
 /// The field's type back from a `Value` (`Field::set`); a value of another type is a
 /// bug in the caller.
 pub trait FromValue: Sized {
     fn from_value(v: Value) -> Self;
 }
 
-macro_rules! from_value {
+/// `Value` from a field's type and back.
+macro_rules! value_of {
     ($t:ty, $variant:ident) => {
+        impl From<$t> for Value {
+            fn from(v: $t) -> Self {
+                Value::$variant(v)
+            }
+        }
+
         impl FromValue for $t {
             fn from_value(v: Value) -> Self {
                 match v {
@@ -120,10 +106,10 @@ macro_rules! from_value {
         }
     };
 }
-from_value!(u32, U32);
-from_value!(f32, F32);
-from_value!(bool, Bool);
-from_value!(Mode, Mode);
+value_of!(u32, U32);
+value_of!(f32, F32);
+value_of!(bool, Bool);
+value_of!(Mode, Mode);
 
 impl std::fmt::Display for Value {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

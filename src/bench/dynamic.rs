@@ -12,7 +12,7 @@
 use super::lbvh::{check_hits, incoherent_rays};
 use crate::cpu_ref::trace::CpuBvh;
 use crate::error::Result;
-use crate::gpu_types::Hit;
+use crate::gpu_types::{Hit, Ray};
 use crate::passes::lbvh::{self, Bvh, LbvhBuilder, MortonBits, RefitSchedule};
 use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
@@ -84,6 +84,99 @@ fn stat(samples: &[f64]) -> Stat {
     Stat::of(samples).expect("at least one frame")
 }
 
+/// The hits of `rays` through the dynamic BVH `t` alone (triangle ids without the
+/// dynamic bit, as the CPU BVH numbers them) and the median of three traversals' ms,
+/// each self-checked against its wall clock.
+fn trace_median(
+    tracer: &TracePass,
+    rays: &[Ray],
+    t: Traceable<'_>,
+    timing: &mut TimingCheck,
+) -> Result<(Vec<Hit>, f64)> {
+    let mut times = Vec::new();
+    let mut hits = Vec::new();
+    for _ in 0..3 {
+        let readout;
+        let scene = TraceScene {
+            static_bvh: None,
+            dynamic_bvh: Some(t),
+        };
+        (hits, readout) = tracer.trace(rays, scene, false)?;
+        timing.add(readout.problem.as_deref());
+        times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
+    }
+    let ms = stat(&times).median;
+    let plain = hits
+        .into_iter()
+        .map(|h| Hit {
+            prim: if h.prim == BVH_INVALID {
+                h.prim
+            } else {
+                h.prim & 0x7fff_ffff
+            },
+            ..h
+        })
+        .collect();
+    Ok((plain, ms))
+}
+
+/// Per measured frame, the figures `measure_frames` lists.
+type Series = [Vec<f64>; 8];
+
+/// Renders `frames` frames of `r`: per frame the ms of `sim.rigid`, `sim.transform`,
+/// `sim.cloth`, the rebuild, the scheduled refit a frame would do instead (timed apart,
+/// its schedule made outside the timing), `rt.reflect`, the frame, and refit / rebuild;
+/// and a tree built at the first frame with its refit schedule, to refit at the end.
+fn measure_frames(
+    ctx: &Arc<Context>,
+    r: &mut Renderer,
+    frames: u32,
+    timing: &mut TimingCheck,
+    tick: super::Tick<'_>,
+) -> Result<(Series, (Bvh, RefitSchedule))> {
+    let builder = LbvhBuilder::new(ctx)?;
+    let mut timer = GpuTimer::new(ctx, 8)?;
+    // A tree built at the first measured frame and refit to the last: how a refit
+    // tree's traversal ages.
+    let aged = Bvh::new(ctx, r.dynamic_triangles(), MortonBits::Bits30)?;
+    let mut aged_schedule = None;
+    let mut series = Series::default();
+    for k in 0..frames {
+        let times = r.render_frame()?;
+        timing.add(times.problem.as_deref());
+        tick();
+        let get = |name: &str| times.get(name).unwrap_or(0.0);
+        let traceable = r.dynamic_traceable().expect("a dynamic scene");
+        if k == 0 {
+            ctx.one_shot(|cmd| {
+                timer.reset(cmd);
+                builder.record_build(cmd, &mut timer, traceable.geometry, &aged);
+            })?;
+            aged_schedule = Some(RefitSchedule::of(ctx, &aged)?);
+        }
+        let schedule = RefitSchedule::of(ctx, traceable.bvh)?;
+        let refit = timer.one_shot(|cmd, timer| {
+            builder.record_refit_scheduled(cmd, timer, traceable.geometry, traceable.bvh, &schedule)
+        })?;
+        timing.add(refit.problem.as_deref());
+        let refit = refit.get(lbvh::REFIT).unwrap_or(f64::NAN);
+        let rebuild: f64 = BUILD.iter().map(|s| get(s)).sum();
+        for (s, v) in series.iter_mut().zip([
+            get(SIM_RIGID),
+            get(crate::passes::sim_transform::NAME),
+            get(crate::passes::sim_cloth::NAME),
+            rebuild,
+            refit,
+            get(crate::passes::rt_reflect::NAME),
+            get(FRAME),
+            refit / rebuild,
+        ]) {
+            s.push(v);
+        }
+    }
+    Ok((series, (aged, aged_schedule.expect("frames > 0"))))
+}
+
 /// Measures `scene` (its bodies as given) for `frames` frames after `warmup`.
 pub fn run_point(
     ctx: &Arc<Context>,
@@ -106,48 +199,11 @@ pub fn run_point(
     }
     r.reset_simulation()?;
     let mut timing = TimingCheck::default();
-    let builder = LbvhBuilder::new(ctx)?;
-    let mut timer = GpuTimer::new(ctx, 8)?;
     let tris = r.dynamic_triangles();
-    let aged = Bvh::new(ctx, tris, MortonBits::Bits30)?;
-    let mut series: [Vec<f64>; 8] = Default::default();
-    let mut aged_schedule = None;
-    for k in 0..frames {
-        let times = r.render_frame()?;
-        timing.add(times.problem.as_deref());
-        tick();
-        let get = |name: &str| times.get(name).unwrap_or(0.0);
-        let traceable = r.dynamic_traceable().expect("a dynamic scene");
-        if k == 0 {
-            ctx.one_shot(|cmd| {
-                timer.reset(cmd);
-                builder.record_build(cmd, &mut timer, traceable.geometry, &aged);
-            })?;
-            aged_schedule = Some(RefitSchedule::of(ctx, &aged)?);
-        }
-        // The refit a frame would do instead (its schedule made outside the timing).
-        let schedule = RefitSchedule::of(ctx, traceable.bvh)?;
-        let refit = timer.one_shot(|cmd, timer| {
-            builder.record_refit_scheduled(cmd, timer, traceable.geometry, traceable.bvh, &schedule)
-        })?;
-        timing.add(refit.problem.as_deref());
-        let refit = refit.get(lbvh::REFIT).unwrap_or(f64::NAN);
-        let rebuild: f64 = BUILD.iter().map(|s| get(s)).sum();
-        for (s, v) in series.iter_mut().zip([
-            get(SIM_RIGID),
-            get(crate::passes::sim_transform::NAME),
-            get(crate::passes::sim_cloth::NAME),
-            rebuild,
-            refit,
-            get(crate::passes::rt_reflect::NAME),
-            get(FRAME),
-            refit / rebuild,
-        ]) {
-            s.push(v);
-        }
-    }
+    let (series, aged) = measure_frames(ctx, &mut r, frames, &mut timing, tick)?;
+    let (builder, mut timer) = (LbvhBuilder::new(ctx)?, GpuTimer::new(ctx, 8)?);
     let fresh = r.dynamic_traceable().expect("a dynamic scene");
-    let aged_schedule = aged_schedule.expect("frames > 0");
+    let (aged, aged_schedule) = aged;
     ctx.one_shot(|cmd| {
         timer.reset(cmd);
         builder.record_refit_scheduled(cmd, &mut timer, fresh.geometry, &aged, &aged_schedule);
@@ -160,41 +216,12 @@ pub fn run_point(
     });
     let ray_set = incoherent_rays(lo, hi, rays, 41);
     let tracer = TracePass::new(ctx)?;
-    let mut through = |bvh: &Bvh| -> Result<(Vec<Hit>, f64)> {
+    let mut through = |bvh: &Bvh| {
         let t = Traceable {
             bvh,
             geometry: fresh.geometry,
         };
-        // The median of three traversals, each self-checked against its wall clock.
-        let mut times = Vec::new();
-        let mut hits = Vec::new();
-        for _ in 0..3 {
-            let readout;
-            (hits, readout) = tracer.trace(
-                &ray_set,
-                TraceScene {
-                    static_bvh: None,
-                    dynamic_bvh: Some(t),
-                },
-                false,
-            )?;
-            timing.add(readout.problem.as_deref());
-            times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
-        }
-        let ms = stat(&times).median;
-        // Dynamic hits carry bit 31; the CPU BVH numbers the same triangles plainly.
-        let plain = hits
-            .into_iter()
-            .map(|h| Hit {
-                prim: if h.prim == BVH_INVALID {
-                    h.prim
-                } else {
-                    h.prim & 0x7fff_ffff
-                },
-                ..h
-            })
-            .collect();
-        Ok((plain, ms))
+        trace_median(&tracer, &ray_set, t, &mut timing)
     };
     let (rebuilt_hits, trace_rebuilt_ms) = through(fresh.bvh)?;
     let (refit_hits, trace_refit_ms) = through(&aged)?;

@@ -310,7 +310,7 @@ pub fn run_case(
     Ok(CaseReport {
         name: name.into(),
         triangles: n,
-        morton_bits: if opts.bits == MortonBits::Bits30 { 30 } else { 63 },
+        morton_bits: opts.bits.bits(),
         stages_ms,
         build_ms,
         mtris_per_s: n as f64 / (build_ms.median * 1e3),

@@ -144,9 +144,9 @@ pub struct LbvhArgs {
     /// Built-in scene names or .obj paths to benchmark as well.
     #[arg(long, num_args = 1..)]
     pub scene: Vec<String>,
-    /// Morton code width: 30 or 63 bits.
-    #[arg(long, default_value = "30", value_parser = ["30", "63"])]
-    pub bits: String,
+    /// Morton code width in bits.
+    #[arg(long, default_value = "30", value_parser = super::choice(&MortonBits::ALL, MortonBits::name, MortonBits::about))]
+    pub bits: MortonBits,
     /// Timed repetitions of each build and trace (medians are reported).
     #[arg(long, default_value_t = 5)]
     pub repeats: u32,
@@ -429,6 +429,9 @@ fn valid_or_fail(valid: bool) -> Result<()> {
     Ok(())
 }
 
+/// A benchmark case's triangles: its name, vertices and indices.
+type Case = (String, Vec<speculum::gpu_types::GpuVertex>, Vec<u32>);
+
 fn lbvh(args: LbvhArgs) -> Result<()> {
     let c = &args.common;
     check_count("--repeats", args.repeats, 1)?;
@@ -437,11 +440,6 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
             "--rays 0: each ray set needs at least one ray".into()
         ));
     }
-    let bits = if args.bits == "63" {
-        MortonBits::Bits63
-    } else {
-        MortonBits::Bits30
-    };
     let file_rays = match &args.rays_file {
         Some(p) => {
             let bytes = speculum::error::read_file(p, "rays file", speculum::error::bounds::RAYS)?;
@@ -462,14 +460,10 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
         repeats: args.repeats,
         rays: args.rays,
         check_rays: args.check_rays,
-        bits,
+        bits: args.bits,
         file_rays,
         keep_hits: dumping,
     };
-    let mut tris = args.tris.clone();
-    if tris.is_empty() && args.scene.is_empty() {
-        tris = vec![10_000, 100_000, 1_000_000];
-    }
     let mut inputs = vec![("--rays-file", args.rays_file.as_deref())];
     inputs.extend(args.scene.iter().map(|s| ("--scene", super::input_file(s))));
     check_outputs(
@@ -480,8 +474,69 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
         ],
         &inputs,
     )?;
-    // Load every input first: a bad scene fails before any GPU work.
-    let mut inputs = Vec::new();
+    let cases = lbvh_cases(&args)?;
+    if dumping && cases.len() != 1 {
+        anyhow::bail!(speculum::Error::Input(format!(
+            "--dump-rays/--dump-hits need a single case (one --tris or one --scene), not {}",
+            cases.len()
+        )));
+    }
+    let text = Text::new(&[c.json.as_deref()], c.quiet);
+    let ctx = c.gpu.context()?;
+    text.line(format_args!(
+        "LBVH on {} ({}-bit Morton, median (p10–p90) of {} runs, GPU ms)",
+        ctx.device_name,
+        args.bits.bits(),
+        opts.repeats
+    ));
+    let bar = progress(cases.len() as u64 * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
+    let mut results = Vec::new();
+    for (name, v, i) in &cases {
+        let case = run_case(&ctx, name, v, i, &opts, &mut || bar.inc(1))?;
+        bar.suspend(|| print_lbvh_case(&text, &case));
+        results.push(case);
+    }
+    bar.finish_and_clear();
+    if let Some(kept) = results.first().and_then(|c| c.kept.as_ref()) {
+        dump_rays(&args, kept)?;
+    }
+    let valid = results.iter().all(|c| c.valid);
+    let report = Report {
+        header: Header::new("bench.lbvh", Some(&ctx), None),
+        options: opts,
+        cases: results,
+        valid,
+    };
+    if let Some(path) = &c.json {
+        super::write_report(path, &report, &text)?;
+    }
+    super::check_validation(&ctx)?;
+    valid_or_fail(valid)
+}
+
+/// `--dump-rays` and `--dump-hits`: the single case's rays and hits, written together.
+fn dump_rays(
+    args: &LbvhArgs,
+    (rays, hits): &(Vec<speculum::gpu_types::Ray>, Vec<speculum::gpu_types::Hit>),
+) -> Result<()> {
+    let mut out = speculum::output::Batch::default();
+    if let Some(p) = &args.dump_rays {
+        out.add(p, speculum::bench::rays_file::write_rays(rays));
+    }
+    if let Some(p) = &args.dump_hits {
+        out.add(p, speculum::bench::rays_file::write_hits(hits));
+    }
+    Ok(out.commit()?)
+}
+
+/// Every case's triangles, loaded before any GPU work (a bad scene fails first): the
+/// soups of `--tris` (10K, 100K, 1M without `--tris` or `--scene`), then the scenes.
+fn lbvh_cases(args: &LbvhArgs) -> Result<Vec<Case>> {
+    let mut tris = args.tris.clone();
+    if tris.is_empty() && args.scene.is_empty() {
+        tris = vec![10_000, 100_000, 1_000_000];
+    }
+    let mut cases = Vec::new();
     for &n in &tris {
         if n == 0 {
             anyhow::bail!("--tris 0: a BVH needs at least one triangle");
@@ -494,101 +549,62 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
         }
         let size = speculum::scene::soup::default_size(n as usize);
         let (v, i) = speculum::scene::soup::random_soup(n as usize, 1.0, size, n as u64);
-        inputs.push((format!("soup-{n}"), v, i));
+        cases.push((format!("soup-{n}"), v, i));
     }
     for name in &args.scene {
         // The model alone: a floor would be triangles the benchmark did not ask for.
         let scene = speculum::scene::load_with(name, speculum::scene::Floor::None)?;
-        inputs.push((scene.name.clone(), scene.vertices, scene.indices));
+        cases.push((scene.name.clone(), scene.vertices, scene.indices));
     }
-    if dumping && inputs.len() != 1 {
-        anyhow::bail!(speculum::Error::Input(format!(
-            "--dump-rays/--dump-hits need a single case (one --tris or one --scene), not {}",
-            inputs.len()
-        )));
-    }
-    let text = Text::new(&[c.json.as_deref()], c.quiet);
-    let ctx = c.gpu.context()?;
+    Ok(cases)
+}
+
+/// One case's lines: the build and its stages, tree quality and trace rates with the
+/// checks, and the rays file's trace when there is one.
+fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
+    let stages: Vec<String> = STAGES
+        .iter()
+        .map(|s| format!("{} {:.3}", s.trim_start_matches("lbvh."), case.stages_ms.median(s)))
+        .collect();
     text.line(format_args!(
-        "LBVH on {} ({}-bit Morton, median (p10–p90) of {} runs, GPU ms)",
-        ctx.device_name, args.bits, opts.repeats
+        "{:<14} {:>9} tris  build {} ({:7.2} Mtris/s) [{}]  refit {}",
+        case.name,
+        case.triangles,
+        cell(Some(case.build_ms)),
+        case.mtris_per_s,
+        stages.join(", "),
+        cell(Some(case.refit_ms))
     ));
-    let bar = progress(inputs.len() as u64 * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
-    let mut cases = Vec::new();
-    for (name, v, i) in &inputs {
-        let case = run_case(&ctx, name, v, i, &opts, &mut || bar.inc(1))?;
-        let stages: Vec<String> = STAGES
-            .iter()
-            .map(|s| format!("{} {:.3}", s.trim_start_matches("lbvh."), case.stages_ms.median(s)))
-            .collect();
-        bar.suspend(|| {
-            text.line(format_args!(
-                "{:<14} {:>9} tris  build {} ({:7.2} Mtris/s) [{}]  refit {}",
-                case.name,
-                case.triangles,
-                cell(Some(case.build_ms)),
-                case.mtris_per_s,
-                stages.join(", "),
-                cell(Some(case.refit_ms))
-            ));
-            text.line(format_args!(
-                "{:<14} SAH {:.2} vs CPU binned {:.2} (ratio {:.3}); {:.1} B/tri; coherent {:.2} Mrays/s, incoherent {:.2} Mrays/s; {}",
-                "",
-                case.sah_lbvh,
-                case.sah_cpu_binned,
-                case.sah_ratio,
-                case.bytes_per_triangle,
-                case.coherent.mrays_per_s,
-                case.incoherent.mrays_per_s,
-                if case.valid {
-                    format!("valid; {}", super::timing_note(&case.timing))
-                } else {
-                    format!(
-                        "INVALID: {:?} {} {} mismatches",
-                        case.invariant_error, case.coherent.mismatches, case.incoherent.mismatches
-                    )
-                }
-            ));
-        });
-        if let Some(f) = &case.file {
-            bar.suspend(|| {
-                text.line(format_args!(
-                    "{:<14} rays file: {} rays, {} ({:.1} Mrays/s), {:.1}% hit, {} of {} checked differ",
-                    "",
-                    f.rays,
-                    cell(Some(f.trace_ms)),
-                    f.mrays_per_s,
-                    100.0 * f.hit_fraction,
-                    f.mismatches,
-                    f.checked
-                ))
-            });
-        }
-        cases.push(case);
-    }
-    bar.finish_and_clear();
-    if let Some((rays, hits)) = cases.first().and_then(|c| c.kept.as_ref()) {
-        let mut out = speculum::output::Batch::default();
-        if let Some(p) = &args.dump_rays {
-            out.add(p, speculum::bench::rays_file::write_rays(rays));
-        }
-        if let Some(p) = &args.dump_hits {
-            out.add(p, speculum::bench::rays_file::write_hits(hits));
-        }
-        out.commit()?;
-    }
-    let valid = cases.iter().all(|c| c.valid);
-    let report = Report {
-        header: Header::new("bench.lbvh", Some(&ctx), None),
-        options: opts,
-        cases,
-        valid,
+    let checks = if case.valid {
+        format!("valid; {}", super::timing_note(&case.timing))
+    } else {
+        format!(
+            "INVALID: {:?} {} {} mismatches",
+            case.invariant_error, case.coherent.mismatches, case.incoherent.mismatches
+        )
     };
-    if let Some(path) = &c.json {
-        super::write_report(path, &report, &text)?;
+    text.line(format_args!(
+        "{:<14} SAH {:.2} vs CPU binned {:.2} (ratio {:.3}); {:.1} B/tri; coherent {:.2} Mrays/s, incoherent {:.2} Mrays/s; {checks}",
+        "",
+        case.sah_lbvh,
+        case.sah_cpu_binned,
+        case.sah_ratio,
+        case.bytes_per_triangle,
+        case.coherent.mrays_per_s,
+        case.incoherent.mrays_per_s,
+    ));
+    if let Some(f) = &case.file {
+        text.line(format_args!(
+            "{:<14} rays file: {} rays, {} ({:.1} Mrays/s), {:.1}% hit, {} of {} checked differ",
+            "",
+            f.rays,
+            cell(Some(f.trace_ms)),
+            f.mrays_per_s,
+            100.0 * f.hit_fraction,
+            f.mismatches,
+            f.checked
+        ))
     }
-    super::check_validation(&ctx)?;
-    valid_or_fail(valid)
 }
 
 fn reflect(args: ReflectArgs) -> Result<()> {

@@ -143,6 +143,7 @@ fn boundary_gap(x: Vec2) -> f32 {
 /// `ssr_trace.comp` for listed pixel `p`: the reflected ray marched over the depth
 /// buffer by perspective-correct DDA (McGuire & Mara 2014), the hit refined by binary
 /// search and a secant, then judged (back face, reflective surface, confidence).
+// Long by design: it mirrors `ssr_trace.comp` line by line, so the two can be read side by side.
 pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: &SsrParams) -> March {
     let res = IVec2::new(frame.resolution[0] as i32, frame.resolution[1] as i32);
     let at = |q: IVec2| (q.y * res.x + q.x) as usize;

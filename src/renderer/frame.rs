@@ -187,6 +187,7 @@ impl<'a> FrameRecorder<'a> {
 impl Renderer {
     /// Records one frame into `cmd` with frame slot `slot`: DESIGN.md's frame table,
     /// row by row. A dynamic scene advances one time step unless it is paused.
+    // Long by design: it is DESIGN.md's frame table, every row in order; split, rows would hide.
     pub(super) fn record(&mut self, cmd: vk::CommandBuffer, slot: usize) {
         let advance = !self.paused || std::mem::take(&mut self.step_once);
         let Self {

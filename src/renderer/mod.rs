@@ -434,9 +434,7 @@ impl Renderer {
 
 impl Drop for Renderer {
     fn drop(&mut self) {
-        unsafe {
-            let _ = self.ctx.device.device_wait_idle();
-        }
+        let _ = self.ctx.wait_idle();
         self.ctx.free_command_buffer(self.cmd);
     }
 }

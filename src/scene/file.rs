@@ -300,204 +300,34 @@ impl SceneFile {
 
     /// Builds the scene; model paths resolve against `dir`, errors name `path`.
     pub fn build(&self, path: &Path, dir: &Path) -> Result<Scene> {
-        let bad = |detail: String| Error::BadAsset {
-            what: "scene file",
-            path: path.into(),
-            detail,
-        };
         let name = self.name.clone().unwrap_or_else(|| {
             path.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_else(|| "scene".into())
         });
-        let mut b = SceneBuilder::new(&name);
-        let mut ids = Vec::new();
-        for m in &self.materials {
-            if ids.iter().any(|(n, _)| n == &m.name) {
-                return Err(bad(format!("material '{}' is defined twice", m.name)));
-            }
-            let (mut material, note) = Material::new(&m.name, m.base_color, m.roughness, m.reflectivity)
-                .metal(m.metallic)
-                .clamped();
-            if let Some(note) = note {
-                b.warn(format!("{} in '{}'", note, path.display()));
-            }
-            if let Some(file) = &m.texture {
-                material.texture = Some(b.texture(super::texture::load(&dir.join(file))?));
-            }
-            let id = b.material(material);
-            ids.push((m.name.clone(), id));
-        }
-        let find = |i: usize, name: &str| {
-            ids.iter().find(|(n, _)| n == name).map(|(_, id)| *id).ok_or_else(|| {
-                let known: Vec<&str> = ids.iter().map(|(n, _)| n.as_str()).collect();
-                bad(format!(
-                    "instance {}: unknown material '{name}' (materials: {})",
-                    i + 1,
-                    known.join(", ")
-                ))
-            })
+        let mut build = Build {
+            path,
+            dir,
+            b: SceneBuilder::new(&name),
+            ids: Vec::new(),
         };
+        build.materials(&self.materials)?;
         if self.instances.is_empty() {
-            return Err(bad("no [[instance]]: the scene is empty".into()));
+            return Err(build.bad("no [[instance]]: the scene is empty".into()));
         }
         for (i, inst) in self.instances.iter().enumerate() {
-            let shapes = [
-                inst.plane.is_some(),
-                inst.cuboid.is_some(),
-                inst.sphere.is_some(),
-                inst.model.is_some(),
-            ];
-            if shapes.iter().filter(|s| **s).count() != 1 {
-                return Err(bad(format!(
-                    "instance {}: give exactly one of plane, box, sphere, model",
-                    i + 1
-                )));
-            }
-            let transform = inst.transform();
-            if let Some(model) = &inst.model {
-                let scene = super::load_model(&dir.join(model))?;
-                let material = inst.material.as_deref().map(|m| find(i, m)).transpose()?;
-                b.append(&scene, transform, material);
-                continue;
-            }
-            let mesh = if let Some([w, d]) = inst.plane {
-                TriMesh::quad(w, d)
-            } else if let Some(size) = inst.cuboid {
-                TriMesh::cuboid(Vec3::from(size))
-            } else {
-                let r = inst.sphere.expect("one shape");
-                let (segments, rings) = (inst.segments.unwrap_or(48), inst.rings.unwrap_or(24));
-                // Bounded before tessellating (2 x 1024 x 512 = 1M triangles at most).
-                if !(3..=MAX_SEGMENTS).contains(&segments) || !(2..=MAX_RINGS).contains(&rings) {
-                    return Err(bad(format!(
-                        "instance {}: a sphere takes segments in 3..={MAX_SEGMENTS} and rings in 2..={MAX_RINGS}, not {segments} and {rings}",
-                        i + 1
-                    )));
-                }
-                TriMesh::sphere(r, segments, rings)
-            };
-            let material = inst
-                .material
-                .as_deref()
-                .ok_or_else(|| bad(format!("instance {}: a primitive needs a material", i + 1)))?;
-            b.mesh(mesh, transform, find(i, material)?);
+            build.instance(i, inst)?;
         }
         for (i, body) in self.bodies.iter().enumerate() {
-            let shape = match (body.sphere, body.cuboid, &body.model) {
-                (Some(radius), None, None) => super::BodyShape::Sphere { radius },
-                (None, Some(size), None) => super::BodyShape::Cuboid { size: Vec3::from(size) },
-                (None, None, Some(model)) => {
-                    let hull = match body.collider.as_deref() {
-                        None | Some("hull") => true,
-                        Some("mesh") => false,
-                        Some(other) => {
-                            return Err(bad(format!(
-                                "body {}: collider '{other}' is neither hull nor mesh",
-                                i + 1
-                            )))
-                        }
-                    };
-                    let m = super::load_model(&dir.join(model))?;
-                    let scale = body.scale.unwrap_or(1.0);
-                    if !(scale.is_finite() && scale > 0.0) {
-                        return Err(bad(format!("body {}: scale {scale} must be > 0", i + 1)));
-                    }
-                    let (lo, hi) = m.bounds();
-                    let center = 0.5 * (lo + hi);
-                    let mesh = TriMesh {
-                        positions: m
-                            .vertices
-                            .iter()
-                            .map(|v| (Vec3::from(v.position) - center) * scale)
-                            .collect(),
-                        normals: m.vertices.iter().map(|v| Vec3::from(v.normal)).collect(),
-                        uvs: m.uvs.iter().map(|t| glam::Vec2::from(*t)).collect(),
-                        indices: m.indices.clone(),
-                    };
-                    let radius = mesh.positions.iter().map(|p| p.length()).fold(0.0f32, f32::max);
-                    super::BodyShape::Mesh {
-                        mesh: b.body_mesh(mesh),
-                        hull,
-                        radius,
-                    }
-                }
-                _ => return Err(bad(format!("body {}: give exactly one of sphere, box, model", i + 1))),
-            };
-            let material = ids
-                .iter()
-                .find(|(n, _)| n == &body.material)
-                .map(|(_, id)| *id)
-                .ok_or_else(|| bad(format!("body {}: unknown material '{}'", i + 1, body.material)))?;
-            let [x, y, z] = body.rotate.unwrap_or([0.0; 3]).map(f32::to_radians);
-            b.body(super::Body {
-                shape,
-                material,
-                density: body.density.unwrap_or(1000.0),
-                restitution: body.restitution.unwrap_or(0.4),
-                friction: body.friction.unwrap_or(0.5),
-                position: Vec3::from(body.translate),
-                rotation: glam::Quat::from_rotation_z(z)
-                    * glam::Quat::from_rotation_y(y)
-                    * glam::Quat::from_rotation_x(x),
-                velocity: Vec3::from(body.velocity.unwrap_or([0.0; 3])),
-                angular_velocity: Vec3::from(body.angular_velocity.unwrap_or([0.0; 3])),
-            });
+            build.body(i, body)?;
         }
         for (i, c) in self.cloths.iter().enumerate() {
-            let material = ids
-                .iter()
-                .find(|(n, _)| n == &c.material)
-                .map(|(_, id)| *id)
-                .ok_or_else(|| bad(format!("cloth {}: unknown material '{}'", i + 1, c.material)))?;
-            b.cloth(crate::scene::cloth::Cloth {
-                size: c.size,
-                resolution: c.resolution,
-                center: Vec3::from(c.center),
-                pins: c.pins.unwrap_or(crate::scene::cloth::Pins::None),
-                stiffness: c.stiffness.unwrap_or(0.9),
-                iterations: c.iterations.unwrap_or(16),
-                material,
-                spheres: c.spheres.iter().map(|s| glam::Vec4::from(*s)).collect(),
-                floor_y: c.floor.unwrap_or(0.0),
-            });
+            build.cloth(i, c)?;
         }
         if let Some(sp) = &self.spawn {
-            if sp.count == 0 || sp.count > super::MAX_BODIES {
-                return Err(bad(format!(
-                    "spawn: count {} is outside 1..={}",
-                    sp.count,
-                    super::MAX_BODIES
-                )));
-            }
-            if !(sp.size.is_finite() && sp.size > 0.0) {
-                return Err(bad(format!("spawn: size {} must be > 0", sp.size)));
-            }
-            let materials = sp
-                .materials
-                .iter()
-                .map(|name| {
-                    ids.iter()
-                        .find(|(n, _)| n == name)
-                        .map(|(_, id)| *id)
-                        .ok_or_else(|| bad(format!("spawn: unknown material '{name}'")))
-                })
-                .collect::<Result<Vec<u32>>>()?;
-            if materials.is_empty() {
-                return Err(bad("spawn: give at least one material".into()));
-            }
-            let spawn = super::Spawn {
-                count: sp.count,
-                size: sp.size,
-                center: Vec3::from(sp.center),
-                materials,
-            };
-            for body in spawn.bodies() {
-                b.body(body);
-            }
-            b.spawn(spawn);
+            build.spawn(sp)?;
         }
-        let c = &self.camera;
+        let (c, s, b) = (&self.camera, &self.sun, &mut build.b);
         b.camera(Camera {
             position: Vec3::from(c.position),
             target: Vec3::from(c.target),
@@ -506,7 +336,6 @@ impl SceneFile {
             near: c.near,
             far: c.far,
         });
-        let s = &self.sun;
         b.light(Light {
             direction: Vec3::from(s.direction),
             color: Vec3::from(s.color),
@@ -519,10 +348,222 @@ impl SceneFile {
             });
         }
         // What the checks find is in this file: name it, not only the scene.
-        b.build().map_err(|e| match e {
-            Error::BadGeometry { detail, .. } => bad(detail),
+        build.b.build().map_err(|e| match e {
+            Error::BadGeometry { detail, .. } => bad_file(path, detail),
             e => e,
         })
+    }
+}
+
+fn bad_file(path: &Path, detail: String) -> Error {
+    Error::BadAsset {
+        what: "scene file",
+        path: path.into(),
+        detail,
+    }
+}
+
+/// A scene file being built: the builder, and the materials by name so far.
+struct Build<'a> {
+    path: &'a Path,
+    dir: &'a Path,
+    b: SceneBuilder,
+    ids: Vec<(String, u32)>,
+}
+
+impl Build<'_> {
+    fn bad(&self, detail: String) -> Error {
+        bad_file(self.path, detail)
+    }
+
+    fn id(&self, name: &str) -> Option<u32> {
+        self.ids.iter().find(|(n, _)| n == name).map(|(_, id)| *id)
+    }
+
+    fn materials(&mut self, materials: &[MaterialDesc]) -> Result<()> {
+        for m in materials {
+            if self.id(&m.name).is_some() {
+                return Err(self.bad(format!("material '{}' is defined twice", m.name)));
+            }
+            let (mut material, note) = Material::new(&m.name, m.base_color, m.roughness, m.reflectivity)
+                .metal(m.metallic)
+                .clamped();
+            if let Some(note) = note {
+                self.b.warn(format!("{} in '{}'", note, self.path.display()));
+            }
+            if let Some(file) = &m.texture {
+                material.texture = Some(self.b.texture(super::texture::load(&self.dir.join(file))?));
+            }
+            let id = self.b.material(material);
+            self.ids.push((m.name.clone(), id));
+        }
+        Ok(())
+    }
+
+    fn instance(&mut self, i: usize, inst: &Instance) -> Result<()> {
+        let shapes = [
+            inst.plane.is_some(),
+            inst.cuboid.is_some(),
+            inst.sphere.is_some(),
+            inst.model.is_some(),
+        ];
+        if shapes.iter().filter(|s| **s).count() != 1 {
+            return Err(self.bad(format!(
+                "instance {}: give exactly one of plane, box, sphere, model",
+                i + 1
+            )));
+        }
+        let find = |name: &str| {
+            self.id(name).ok_or_else(|| {
+                let known: Vec<&str> = self.ids.iter().map(|(n, _)| n.as_str()).collect();
+                self.bad(format!(
+                    "instance {}: unknown material '{name}' (materials: {})",
+                    i + 1,
+                    known.join(", ")
+                ))
+            })
+        };
+        let transform = inst.transform();
+        if let Some(model) = &inst.model {
+            let scene = super::load_model(&self.dir.join(model))?;
+            let material = inst.material.as_deref().map(find).transpose()?;
+            self.b.append(&scene, transform, material);
+            return Ok(());
+        }
+        let mesh = if let Some([w, d]) = inst.plane {
+            TriMesh::quad(w, d)
+        } else if let Some(size) = inst.cuboid {
+            TriMesh::cuboid(Vec3::from(size))
+        } else {
+            let r = inst.sphere.expect("one shape");
+            let (segments, rings) = (inst.segments.unwrap_or(48), inst.rings.unwrap_or(24));
+            // Bounded before tessellating (2 x 1024 x 512 = 1M triangles at most).
+            if !(3..=MAX_SEGMENTS).contains(&segments) || !(2..=MAX_RINGS).contains(&rings) {
+                return Err(self.bad(format!(
+                    "instance {}: a sphere takes segments in 3..={MAX_SEGMENTS} and rings in 2..={MAX_RINGS}, not {segments} and {rings}",
+                    i + 1
+                )));
+            }
+            TriMesh::sphere(r, segments, rings)
+        };
+        let material = inst
+            .material
+            .as_deref()
+            .ok_or_else(|| self.bad(format!("instance {}: a primitive needs a material", i + 1)))?;
+        let material = find(material)?;
+        self.b.mesh(mesh, transform, material);
+        Ok(())
+    }
+
+    fn body(&mut self, i: usize, body: &BodyDesc) -> Result<()> {
+        let shape = match (body.sphere, body.cuboid, &body.model) {
+            (Some(radius), None, None) => super::BodyShape::Sphere { radius },
+            (None, Some(size), None) => super::BodyShape::Cuboid { size: Vec3::from(size) },
+            (None, None, Some(model)) => self.body_mesh(i, body, model)?,
+            _ => return Err(self.bad(format!("body {}: give exactly one of sphere, box, model", i + 1))),
+        };
+        let material = self
+            .id(&body.material)
+            .ok_or_else(|| self.bad(format!("body {}: unknown material '{}'", i + 1, body.material)))?;
+        let [x, y, z] = body.rotate.unwrap_or([0.0; 3]).map(f32::to_radians);
+        self.b.body(super::Body {
+            shape,
+            material,
+            density: body.density.unwrap_or(1000.0),
+            restitution: body.restitution.unwrap_or(0.4),
+            friction: body.friction.unwrap_or(0.5),
+            position: Vec3::from(body.translate),
+            rotation: glam::Quat::from_rotation_z(z) * glam::Quat::from_rotation_y(y) * glam::Quat::from_rotation_x(x),
+            velocity: Vec3::from(body.velocity.unwrap_or([0.0; 3])),
+            angular_velocity: Vec3::from(body.angular_velocity.unwrap_or([0.0; 3])),
+        });
+        Ok(())
+    }
+
+    /// A model body's shape: the model centred on its bounds and scaled, with a hull
+    /// or mesh collider.
+    fn body_mesh(&mut self, i: usize, body: &BodyDesc, model: &str) -> Result<super::BodyShape> {
+        let hull = match body.collider.as_deref() {
+            None | Some("hull") => true,
+            Some("mesh") => false,
+            Some(other) => return Err(self.bad(format!("body {}: collider '{other}' is neither hull nor mesh", i + 1))),
+        };
+        let m = super::load_model(&self.dir.join(model))?;
+        let scale = body.scale.unwrap_or(1.0);
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(self.bad(format!("body {}: scale {scale} must be > 0", i + 1)));
+        }
+        let (lo, hi) = m.bounds();
+        let center = 0.5 * (lo + hi);
+        let mesh = TriMesh {
+            positions: m
+                .vertices
+                .iter()
+                .map(|v| (Vec3::from(v.position) - center) * scale)
+                .collect(),
+            normals: m.vertices.iter().map(|v| Vec3::from(v.normal)).collect(),
+            uvs: m.uvs.iter().map(|t| glam::Vec2::from(*t)).collect(),
+            indices: m.indices.clone(),
+        };
+        let radius = mesh.positions.iter().map(|p| p.length()).fold(0.0f32, f32::max);
+        Ok(super::BodyShape::Mesh {
+            mesh: self.b.body_mesh(mesh),
+            hull,
+            radius,
+        })
+    }
+
+    fn cloth(&mut self, i: usize, c: &ClothDesc) -> Result<()> {
+        let material = self
+            .id(&c.material)
+            .ok_or_else(|| self.bad(format!("cloth {}: unknown material '{}'", i + 1, c.material)))?;
+        self.b.cloth(crate::scene::cloth::Cloth {
+            size: c.size,
+            resolution: c.resolution,
+            center: Vec3::from(c.center),
+            pins: c.pins.unwrap_or(crate::scene::cloth::Pins::None),
+            stiffness: c.stiffness.unwrap_or(0.9),
+            iterations: c.iterations.unwrap_or(16),
+            material,
+            spheres: c.spheres.iter().map(|s| glam::Vec4::from(*s)).collect(),
+            floor_y: c.floor.unwrap_or(0.0),
+        });
+        Ok(())
+    }
+
+    fn spawn(&mut self, sp: &SpawnDesc) -> Result<()> {
+        if sp.count == 0 || sp.count > super::MAX_BODIES {
+            return Err(self.bad(format!(
+                "spawn: count {} is outside 1..={}",
+                sp.count,
+                super::MAX_BODIES
+            )));
+        }
+        if !(sp.size.is_finite() && sp.size > 0.0) {
+            return Err(self.bad(format!("spawn: size {} must be > 0", sp.size)));
+        }
+        let materials = sp
+            .materials
+            .iter()
+            .map(|name| {
+                self.id(name)
+                    .ok_or_else(|| self.bad(format!("spawn: unknown material '{name}'")))
+            })
+            .collect::<Result<Vec<u32>>>()?;
+        if materials.is_empty() {
+            return Err(self.bad("spawn: give at least one material".into()));
+        }
+        let spawn = super::Spawn {
+            count: sp.count,
+            size: sp.size,
+            center: Vec3::from(sp.center),
+            materials,
+        };
+        for body in spawn.bodies() {
+            self.b.body(body);
+        }
+        self.b.spawn(spawn);
+        Ok(())
     }
 }
 

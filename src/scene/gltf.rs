@@ -286,41 +286,96 @@ fn check_image_file(img: &gltf::Image<'_>, base: &Path) -> std::result::Result<(
 
 /// The checked document's default scene as a Speculum scene.
 fn walk(path: &Path, doc: &gltf::Document, buffers: &[gltf::buffer::Data], base: &Path) -> Result<Scene> {
-    let bad = |detail: String| Error::BadAsset {
-        what: "glTF file",
-        path: path.into(),
-        detail,
-    };
     let mut warnings = Vec::new();
-    // Images: one that cannot be read or decoded is a warning, its materials untextured
-    // (as a missing OBJ texture).
-    let images: Vec<Option<gltf::image::Data>> = doc
-        .images()
+    let images = decode_images(path, doc, buffers, base, &mut warnings);
+    let mut w = Walk {
+        path,
+        buffers,
+        images,
+        b: SceneBuilder::new(&path.display().to_string()),
+        ids: Vec::new(),
+        textures: Vec::new(),
+        warnings,
+    };
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| w.bad("no scene".into()))?;
+    let mut stack: Vec<(gltf::Node<'_>, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        stack.extend(node.children().map(|c| (c, m)));
+        let Some(mesh) = node.mesh() else { continue };
+        for prim in mesh.primitives() {
+            w.primitive(&mesh, &prim, m)?;
+        }
+    }
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "gltf".into());
+    let mut scene = w.b.build()?;
+    let (lo, hi) = scene.bounds();
+    scene.camera = Camera::framing(lo, hi);
+    scene.name = name;
+    scene.warnings = w.warnings;
+    Ok(scene)
+}
+
+/// Every image decoded; one that cannot be read or decoded is a warning, its materials
+/// untextured (as a missing OBJ texture).
+fn decode_images(
+    path: &Path,
+    doc: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    base: &Path,
+    warnings: &mut Vec<String>,
+) -> Vec<Option<gltf::image::Data>> {
+    doc.images()
         .map(|img| {
-            match check_image_file(&img, base).and_then(|_| {
+            let decoded = check_image_file(&img, base).and_then(|_| {
                 gltf::image::Data::from_source(img.source(), Some(base), buffers).map_err(|e| e.to_string())
-            }) {
-                Ok(d) => Some(d),
-                Err(e) => {
+            });
+            decoded
+                .inspect_err(|e| {
                     warnings.push(format!(
                         "'{}' image {}: {e}: the materials that use it take their base colour factor alone",
                         path.display(),
                         img.index()
-                    ));
-                    None
-                }
-            }
+                    ))
+                })
+                .ok()
         })
-        .collect();
-    let mut b = SceneBuilder::new(&path.display().to_string());
-    // glTF material index (None: the default material) → scene material and the
-    // texture coordinate set its base colour texture uses.
-    let mut ids: Vec<(Option<usize>, u32, u32)> = Vec::new();
-    // glTF image index → scene texture (None: not usable, warned about once).
-    let mut textures: Vec<(usize, Option<u32>)> = Vec::new();
-    let file = path.display().to_string();
-    let mut material_id = |b: &mut SceneBuilder, warnings: &mut Vec<String>, m: gltf::Material<'_>| -> (u32, u32) {
-        if let Some(&(_, id, set)) = ids.iter().find(|(i, _, _)| *i == m.index()) {
+        .collect()
+}
+
+/// A glTF scene being walked into a scene builder.
+struct Walk<'a> {
+    path: &'a Path,
+    buffers: &'a [gltf::buffer::Data],
+    images: Vec<Option<gltf::image::Data>>,
+    b: SceneBuilder,
+    /// glTF material index (None: the default material) → scene material and the
+    /// texture coordinate set its base colour texture uses.
+    ids: Vec<(Option<usize>, u32, u32)>,
+    /// glTF image index → scene texture (None: not usable, warned about once).
+    textures: Vec<(usize, Option<u32>)>,
+    warnings: Vec<String>,
+}
+
+impl Walk<'_> {
+    fn bad(&self, detail: String) -> Error {
+        Error::BadAsset {
+            what: "glTF file",
+            path: self.path.into(),
+            detail,
+        }
+    }
+
+    /// The scene material of glTF material `m` (made on first use) and the texture
+    /// coordinate set of its base colour texture.
+    fn material(&mut self, m: gltf::Material<'_>) -> (u32, u32) {
+        if let Some(&(_, id, set)) = self.ids.iter().find(|(i, _, _)| *i == m.index()) {
             return (id, set);
         }
         let pbr = m.pbr_metallic_roughness();
@@ -339,103 +394,86 @@ fn walk(path: &Path, doc: &gltf::Document, buffers: &[gltf::buffer::Data], base:
         .metal(pbr.metallic_factor());
         let mut set = 0;
         if let Some(info) = pbr.base_color_texture() {
-            let image = info.texture().source().index();
-            let texture = match textures.iter().find(|(i, _)| *i == image) {
-                Some(&(_, t)) => t,
-                None => {
-                    let decoded = images.get(image).and_then(|d| d.as_ref());
-                    let t = match decoded.map(image_rgba8) {
-                        // Unreadable: already warned about above.
-                        None => None,
-                        Some(Some(img)) => Some(b.texture(Texture {
-                            name: format!("{file} image {image}"),
-                            image: img,
-                        })),
-                        Some(None) => {
-                            warnings.push(format!(
-                                "image {image}: not 8- or 16-bit; material '{name}' uses its base colour factor alone"
-                            ));
-                            None
-                        }
-                    };
-                    textures.push((image, t));
-                    t
-                }
-            };
-            material.texture = texture;
+            material.texture = self.texture(info.texture().source().index(), &name);
             set = info.tex_coord();
         }
-        let id = b.material(material);
-        ids.push((m.index(), id, set));
+        let id = self.b.material(material);
+        self.ids.push((m.index(), id, set));
         (id, set)
-    };
-    let scene = doc
-        .default_scene()
-        .or_else(|| doc.scenes().next())
-        .ok_or_else(|| bad("no scene".into()))?;
-    let mut stack: Vec<(gltf::Node<'_>, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
-    while let Some((node, parent)) = stack.pop() {
-        let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        stack.extend(node.children().map(|c| (c, m)));
-        let Some(mesh) = node.mesh() else { continue };
-        for prim in mesh.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                warnings.push(format!(
-                    "mesh '{}': a {:?} primitive is skipped (triangles only)",
-                    mesh.name().unwrap_or("(unnamed)"),
-                    prim.mode()
-                ));
-                continue;
-            }
-            let reader = prim.reader(|buf| buffers.get(buf.index()).map(|d| &d.0[..]));
-            let Some(positions) = reader.read_positions() else {
-                return Err(bad(format!(
-                    "mesh '{}' has no positions",
-                    mesh.name().unwrap_or("(unnamed)")
-                )));
-            };
-            let positions: Vec<Vec3> = positions.map(Vec3::from).collect();
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
-                None => (0..positions.len() as u32).collect(),
-            };
-            if let Some(&i) = indices.iter().find(|&&i| i as usize >= positions.len()) {
-                return Err(bad(format!("an index {i} is past the {} positions", positions.len())));
-            }
-            let (id, set) = material_id(&mut b, &mut warnings, prim.material());
-            let uvs: Vec<Vec2> = match reader.read_tex_coords(set) {
-                Some(t) => t.into_f32().map(Vec2::from).collect(),
-                None => Vec::new(),
-            };
-            if uvs.len() != positions.len() && !uvs.is_empty() {
-                return Err(bad(format!(
-                    "mesh '{}' has {} texture coordinates for {} positions",
-                    mesh.name().unwrap_or("(unnamed)"),
-                    uvs.len(),
-                    positions.len()
-                )));
-            }
-            let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
-            let tri = match normals {
-                Some(normals) if normals.len() == positions.len() => TriMesh {
-                    positions,
-                    normals: normals.into_iter().map(|n| n.normalize_or(Vec3::Y)).collect(),
-                    uvs,
-                    indices,
-                },
-                _ => smooth_normals(&positions, &uvs, &indices, CREASE_ANGLE_DEG),
-            };
-            b.mesh(tri, m, id);
-        }
     }
-    let name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "gltf".into());
-    let mut scene = b.build()?;
-    let (lo, hi) = scene.bounds();
-    scene.camera = Camera::framing(lo, hi);
-    scene.name = name;
-    scene.warnings = warnings;
-    Ok(scene)
+
+    /// The scene texture of glTF image `image` (made on first use), for material `name`.
+    fn texture(&mut self, image: usize, name: &str) -> Option<u32> {
+        if let Some(&(_, t)) = self.textures.iter().find(|(i, _)| *i == image) {
+            return t;
+        }
+        let decoded = self.images.get(image).and_then(|d| d.as_ref());
+        let t = match decoded.map(image_rgba8) {
+            // Unreadable: already warned about when decoded.
+            None => None,
+            Some(Some(img)) => Some(self.b.texture(Texture {
+                name: format!("{} image {image}", self.path.display()),
+                image: img,
+            })),
+            Some(None) => {
+                self.warnings.push(format!(
+                    "image {image}: not 8- or 16-bit; material '{name}' uses its base colour factor alone"
+                ));
+                None
+            }
+        };
+        self.textures.push((image, t));
+        t
+    }
+
+    /// One primitive of `mesh` placed by `m`: triangles only (others are skipped with a
+    /// warning), indices and texture coordinates checked, the file's normals or smooth
+    /// ones.
+    fn primitive(&mut self, mesh: &gltf::Mesh<'_>, prim: &gltf::Primitive<'_>, m: Mat4) -> Result<()> {
+        let mesh_name = mesh.name().unwrap_or("(unnamed)");
+        if prim.mode() != gltf::mesh::Mode::Triangles {
+            self.warnings.push(format!(
+                "mesh '{mesh_name}': a {:?} primitive is skipped (triangles only)",
+                prim.mode()
+            ));
+            return Ok(());
+        }
+        let buffers = self.buffers;
+        let reader = prim.reader(|buf| buffers.get(buf.index()).map(|d| &d.0[..]));
+        let Some(positions) = reader.read_positions() else {
+            return Err(self.bad(format!("mesh '{mesh_name}' has no positions")));
+        };
+        let positions: Vec<Vec3> = positions.map(Vec3::from).collect();
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..positions.len() as u32).collect(),
+        };
+        if let Some(&i) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(self.bad(format!("an index {i} is past the {} positions", positions.len())));
+        }
+        let (id, set) = self.material(prim.material());
+        let uvs: Vec<Vec2> = match reader.read_tex_coords(set) {
+            Some(t) => t.into_f32().map(Vec2::from).collect(),
+            None => Vec::new(),
+        };
+        if uvs.len() != positions.len() && !uvs.is_empty() {
+            return Err(self.bad(format!(
+                "mesh '{mesh_name}' has {} texture coordinates for {} positions",
+                uvs.len(),
+                positions.len()
+            )));
+        }
+        let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+        let tri = match normals {
+            Some(normals) if normals.len() == positions.len() => TriMesh {
+                positions,
+                normals: normals.into_iter().map(|n| n.normalize_or(Vec3::Y)).collect(),
+                uvs,
+                indices,
+            },
+            _ => smooth_normals(&positions, &uvs, &indices, CREASE_ANGLE_DEG),
+        };
+        self.b.mesh(tri, m, id);
+        Ok(())
+    }
 }

@@ -598,21 +598,41 @@ impl Scene {
         for m in &self.materials {
             m.check().or_else(bad)?;
         }
-        if !self.indices.len().is_multiple_of(3) {
+        self.check_mesh().or_else(bad)?;
+        for (i, b) in self.bodies.iter().enumerate() {
+            self.check_body(i, b).or_else(bad)?;
+        }
+        for (i, c) in self.cloths.iter().enumerate() {
+            self.check_cloth(i, c).or_else(bad)?;
+        }
+        let (lo, hi) = self.bounds();
+        if (hi - lo).max_element() > 1e7 {
             return bad(format!(
+                "the scene spans {:.3e} units; coordinates beyond 1e7 lose float precision",
+                (hi - lo).max_element()
+            ));
+        }
+        Ok(())
+    }
+
+    /// The triangles: whole, indexing their vertices, finite, with known materials and
+    /// textures.
+    fn check_mesh(&self) -> std::result::Result<(), String> {
+        if !self.indices.len().is_multiple_of(3) {
+            return Err(format!(
                 "{} indices is not a whole number of triangles",
                 self.indices.len()
             ));
         }
         if self.uvs.len() != self.vertices.len() {
-            return bad(format!(
+            return Err(format!(
                 "{} texture coordinates for {} vertices",
                 self.uvs.len(),
                 self.vertices.len()
             ));
         }
         if let Some(i) = self.uvs.iter().position(|uv| !uv.iter().all(|c| c.is_finite())) {
-            return bad(format!(
+            return Err(format!(
                 "vertex {i} has non-finite texture coordinates {:?}",
                 self.uvs[i]
             ));
@@ -622,7 +642,7 @@ impl Scene {
             .iter()
             .find(|m| m.texture.is_some_and(|t| t as usize >= self.textures.len()))
         {
-            return bad(format!(
+            return Err(format!(
                 "material '{}' uses texture {} but the scene has {}",
                 m.name,
                 m.texture.unwrap_or_default(),
@@ -630,7 +650,7 @@ impl Scene {
             ));
         }
         if let Some(i) = self.indices.iter().position(|&i| i as usize >= self.vertices.len()) {
-            return bad(format!(
+            return Err(format!(
                 "index {} at position {i} is past the {} vertices",
                 self.indices[i],
                 self.vertices.len()
@@ -638,84 +658,85 @@ impl Scene {
         }
         for (i, v) in self.vertices.iter().enumerate() {
             if !v.position.iter().chain(&v.normal).all(|c| c.is_finite()) {
-                return bad(format!("vertex {i} has a non-finite coordinate {:?}", v.position));
+                return Err(format!("vertex {i} has a non-finite coordinate {:?}", v.position));
             }
             if v.material as usize >= self.materials.len() {
-                return bad(format!(
+                return Err(format!(
                     "vertex {i} uses material {} but the scene has {}",
                     v.material,
                     self.materials.len()
                 ));
             }
         }
-        for (i, b) in self.bodies.iter().enumerate() {
-            let size_ok = match b.shape {
-                BodyShape::Sphere { radius } => radius.is_finite() && radius > 0.0,
-                BodyShape::Cuboid { size } => size.is_finite() && size.min_element() > 0.0,
-                BodyShape::Mesh { mesh, radius, .. } => {
-                    (mesh as usize) < self.body_meshes.len() && radius.is_finite() && radius > 0.0
-                }
-            };
-            if !size_ok {
-                return bad(format!(
-                    "body {i} has a zero, negative or non-finite size ({:?})",
-                    b.shape
-                ));
+        Ok(())
+    }
+
+    /// Body `i`: a positive, finite size, a known material, a finite state and
+    /// physical constants rapier accepts.
+    fn check_body(&self, i: usize, b: &Body) -> std::result::Result<(), String> {
+        let size_ok = match b.shape {
+            BodyShape::Sphere { radius } => radius.is_finite() && radius > 0.0,
+            BodyShape::Cuboid { size } => size.is_finite() && size.min_element() > 0.0,
+            BodyShape::Mesh { mesh, radius, .. } => {
+                (mesh as usize) < self.body_meshes.len() && radius.is_finite() && radius > 0.0
             }
-            if b.material as usize >= self.materials.len() {
-                return bad(format!(
-                    "body {i} uses material {} but the scene has {}",
-                    b.material,
-                    self.materials.len()
-                ));
-            }
-            let state_ok = b.position.is_finite()
-                && b.rotation.is_finite()
-                && b.velocity.is_finite()
-                && b.angular_velocity.is_finite();
-            if !state_ok {
-                return bad(format!("body {i} has a non-finite position, rotation or velocity"));
-            }
-            if !(b.density.is_finite() && b.density > 0.0) {
-                return bad(format!("body {i} has density {} (it must be > 0)", b.density));
-            }
-            if !(b.restitution.is_finite() && b.friction.is_finite() && b.restitution >= 0.0 && b.friction >= 0.0) {
-                return bad(format!("body {i} has a negative or non-finite restitution or friction"));
-            }
-        }
-        for (i, c) in self.cloths.iter().enumerate() {
-            let max = crate::scene::cloth::MAX_RESOLUTION;
-            if c.resolution < 2 || c.resolution > max {
-                return bad(format!("cloth {i}: resolution {} is outside 2..={max}", c.resolution));
-            }
-            if !(c.size.is_finite() && c.size > 0.0 && c.center.is_finite() && c.floor_y.is_finite()) {
-                return bad(format!(
-                    "cloth {i}: its size, centre or floor is not finite (size must be > 0)"
-                ));
-            }
-            if !(c.stiffness > 0.0 && c.stiffness <= 1.0) || c.iterations == 0 || c.iterations > 64 {
-                return bad(format!(
-                    "cloth {i}: stiffness {} must be in (0, 1] and iterations {} in 1..=64",
-                    c.stiffness, c.iterations
-                ));
-            }
-            if c.material as usize >= self.materials.len() {
-                return bad(format!(
-                    "cloth {i} uses material {} but the scene has {}",
-                    c.material,
-                    self.materials.len()
-                ));
-            }
-            if c.spheres.iter().any(|s| !s.is_finite() || s.w <= 0.0) {
-                return bad(format!("cloth {i}: a collider sphere is not finite or has radius <= 0"));
-            }
-        }
-        let (lo, hi) = self.bounds();
-        if (hi - lo).max_element() > 1e7 {
-            return bad(format!(
-                "the scene spans {:.3e} units; coordinates beyond 1e7 lose float precision",
-                (hi - lo).max_element()
+        };
+        if !size_ok {
+            return Err(format!(
+                "body {i} has a zero, negative or non-finite size ({:?})",
+                b.shape
             ));
+        }
+        if b.material as usize >= self.materials.len() {
+            return Err(format!(
+                "body {i} uses material {} but the scene has {}",
+                b.material,
+                self.materials.len()
+            ));
+        }
+        let state_ok = b.position.is_finite()
+            && b.rotation.is_finite()
+            && b.velocity.is_finite()
+            && b.angular_velocity.is_finite();
+        if !state_ok {
+            return Err(format!("body {i} has a non-finite position, rotation or velocity"));
+        }
+        if !(b.density.is_finite() && b.density > 0.0) {
+            return Err(format!("body {i} has density {} (it must be > 0)", b.density));
+        }
+        if !(b.restitution.is_finite() && b.friction.is_finite() && b.restitution >= 0.0 && b.friction >= 0.0) {
+            return Err(format!("body {i} has a negative or non-finite restitution or friction"));
+        }
+        Ok(())
+    }
+
+    /// Cloth `i`: a resolution, size and solver settings the GPU step handles, a known
+    /// material, finite colliders.
+    fn check_cloth(&self, i: usize, c: &cloth::Cloth) -> std::result::Result<(), String> {
+        let max = crate::scene::cloth::MAX_RESOLUTION;
+        if c.resolution < 2 || c.resolution > max {
+            return Err(format!("cloth {i}: resolution {} is outside 2..={max}", c.resolution));
+        }
+        if !(c.size.is_finite() && c.size > 0.0 && c.center.is_finite() && c.floor_y.is_finite()) {
+            return Err(format!(
+                "cloth {i}: its size, centre or floor is not finite (size must be > 0)"
+            ));
+        }
+        if !(c.stiffness > 0.0 && c.stiffness <= 1.0) || c.iterations == 0 || c.iterations > 64 {
+            return Err(format!(
+                "cloth {i}: stiffness {} must be in (0, 1] and iterations {} in 1..=64",
+                c.stiffness, c.iterations
+            ));
+        }
+        if c.material as usize >= self.materials.len() {
+            return Err(format!(
+                "cloth {i} uses material {} but the scene has {}",
+                c.material,
+                self.materials.len()
+            ));
+        }
+        if c.spheres.iter().any(|s| !s.is_finite() || s.w <= 0.0) {
+            return Err(format!("cloth {i}: a collider sphere is not finite or has radius <= 0"));
         }
         Ok(())
     }

@@ -180,12 +180,19 @@ fn utf8_lossy(bytes: Vec<u8>) -> Vec<u8> {
     }
 }
 
-/// Loads an OBJ file (and the MTL files it names) as a scene.
-pub fn load(path: &Path) -> Result<Scene> {
-    // OBJ is bytes: a comment (or a name) may hold anything, so bytes that are not
-    // UTF-8 become U+FFFD instead of failing tobj's line reader.
-    let text = utf8_lossy(crate::error::read_file(path, "OBJ file", crate::error::bounds::MODEL)?);
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+/// What tobj read of an OBJ file: its objects, its materials, the MTL files it named,
+/// and a warning per MTL file that was missing.
+struct Parsed {
+    models: Vec<tobj::Model>,
+    materials: Vec<tobj::Material>,
+    mtl_files: Vec<PathBuf>,
+    missing_mtl: Vec<String>,
+}
+
+/// Parses the OBJ `text` (of `path`), reading the MTL files it names from `dir`
+/// (bounded, their colours checked); a missing MTL file is a warning, any other MTL
+/// failure an error.
+fn parse(path: &Path, text: &[u8], dir: &Path) -> Result<Parsed> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -195,7 +202,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     let mtl_failure: RefCell<Option<Error>> = RefCell::new(None);
     let mtl_files: RefCell<Vec<PathBuf>> = RefCell::new(Vec::new());
     let missing_mtl: RefCell<Vec<String>> = RefCell::new(Vec::new());
-    let (models, materials) = tobj::load_obj_buf(&mut text.as_slice(), &options, |mtl: &Path| {
+    let (models, materials) = tobj::load_obj_buf(&mut &text[..], &options, |mtl: &Path| {
         let mtl_path: PathBuf = dir.join(mtl);
         mtl_files.borrow_mut().push(mtl_path.clone());
         match crate::error::read_file(&mtl_path, "MTL file", crate::error::bounds::TEXT) {
@@ -251,7 +258,21 @@ pub fn load(path: &Path) -> Result<Scene> {
             })
         }
     };
+    Ok(Parsed {
+        models,
+        materials,
+        mtl_files: mtl_files.into_inner(),
+        missing_mtl,
+    })
+}
 
+/// Loads an OBJ file (and the MTL files it names) as a scene.
+pub fn load(path: &Path) -> Result<Scene> {
+    // OBJ is bytes: a comment (or a name) may hold anything, so bytes that are not
+    // UTF-8 become U+FFFD instead of failing tobj's line reader.
+    let text = utf8_lossy(crate::error::read_file(path, "OBJ file", crate::error::bounds::MODEL)?);
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let parsed = parse(path, &text, &dir)?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -259,15 +280,14 @@ pub fn load(path: &Path) -> Result<Scene> {
     let mut b = SceneBuilder::new(&path.display().to_string());
     // tobj does not say which MTL file a material came from: name the one file, or the
     // OBJ when it names several.
-    let mtl_files = mtl_files.into_inner();
-    let mtl = match mtl_files.as_slice() {
+    let mtl = match parsed.mtl_files.as_slice() {
         [one] => one.clone(),
         _ => path.to_path_buf(),
     };
-    let mut warnings = missing_mtl;
+    let mut warnings = parsed.missing_mtl;
     let mut ids = Vec::new();
     let mut textures = Textures::default();
-    for m in &materials {
+    for m in &parsed.materials {
         // Textures resolve against the OBJ's folder.
         let texture = match m.diffuse_texture.as_deref().and_then(texture_file) {
             Some(file) => textures.get(&mut b, dir.join(file), &mut warnings)?,
@@ -278,58 +298,11 @@ pub fn load(path: &Path) -> Result<Scene> {
         warnings.extend(warning);
     }
     let mut default_material = None;
-    for model in &models {
-        let mesh = &model.mesh;
-        if mesh.indices.is_empty() {
+    for model in &parsed.models {
+        let Some(geometry) = object_mesh(path, model)? else {
             continue;
-        }
-        let positions: Vec<Vec3> = mesh
-            .positions
-            .chunks_exact(3)
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
-            .collect();
-        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(Error::BadGeometry {
-                source_name: path.display().to_string(),
-                detail: format!(
-                    "object '{}' vertex {i} has a non-finite coordinate {:?}",
-                    model.name, positions[i]
-                ),
-            });
-        }
-        let uvs: Vec<Vec2> = if mesh.texcoords.len() == 2 * positions.len() {
-            mesh.texcoords
-                .chunks_exact(2)
-                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
-                .collect()
-        } else {
-            Vec::new()
         };
-        if let Some(i) = uvs.iter().position(|t| !t.is_finite()) {
-            return Err(Error::BadGeometry {
-                source_name: path.display().to_string(),
-                detail: format!(
-                    "object '{}' vertex {i} has non-finite texture coordinates {:?}",
-                    model.name, uvs[i]
-                ),
-            });
-        }
-        let geometry = if mesh.normals.len() == mesh.positions.len() {
-            let normals = mesh
-                .normals
-                .chunks_exact(3)
-                .map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or(Vec3::Y))
-                .collect();
-            TriMesh {
-                positions,
-                normals,
-                uvs,
-                indices: mesh.indices.clone(),
-            }
-        } else {
-            smooth_normals(&positions, &uvs, &mesh.indices, CREASE_ANGLE_DEG)
-        };
-        let material = match mesh.material_id.and_then(|i| ids.get(i)) {
+        let material = match model.mesh.material_id.and_then(|i| ids.get(i)) {
             Some(&id) => id,
             None => *default_material.get_or_insert_with(|| b.material(Material::new("default", [0.8; 3], 0.8, 0.0))),
         };
@@ -347,6 +320,58 @@ pub fn load(path: &Path) -> Result<Scene> {
     scene.name = name;
     scene.warnings = warnings;
     Ok(scene)
+}
+
+/// One object's triangles (`None` when it has none): positions and texture coordinates
+/// checked finite, the file's normals or smooth ones within the crease angle.
+fn object_mesh(path: &Path, model: &tobj::Model) -> Result<Option<TriMesh>> {
+    let mesh = &model.mesh;
+    if mesh.indices.is_empty() {
+        return Ok(None);
+    }
+    let bad = |detail: String| Error::BadGeometry {
+        source_name: path.display().to_string(),
+        detail,
+    };
+    let positions: Vec<Vec3> = mesh
+        .positions
+        .chunks_exact(3)
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(bad(format!(
+            "object '{}' vertex {i} has a non-finite coordinate {:?}",
+            model.name, positions[i]
+        )));
+    }
+    let uvs: Vec<Vec2> = if mesh.texcoords.len() == 2 * positions.len() {
+        mesh.texcoords
+            .chunks_exact(2)
+            .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    if let Some(i) = uvs.iter().position(|t| !t.is_finite()) {
+        return Err(bad(format!(
+            "object '{}' vertex {i} has non-finite texture coordinates {:?}",
+            model.name, uvs[i]
+        )));
+    }
+    if mesh.normals.len() != mesh.positions.len() {
+        return Ok(Some(smooth_normals(&positions, &uvs, &mesh.indices, CREASE_ANGLE_DEG)));
+    }
+    let normals = mesh
+        .normals
+        .chunks_exact(3)
+        .map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or(Vec3::Y))
+        .collect();
+    Ok(Some(TriMesh {
+        positions,
+        normals,
+        uvs,
+        indices: mesh.indices.clone(),
+    }))
 }
 
 #[cfg(test)]

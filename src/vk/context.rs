@@ -350,6 +350,116 @@ fn select(list: &[(vk::PhysicalDevice, DeviceInfo)], wanted: Option<&str>) -> Re
     Ok(chosen)
 }
 
+/// Something a half-made context created, undone (`undo`) when the guard drops, unless
+/// `keep` took it: a failed step then cleans up the steps before it, in reverse.
+struct Undo<T, F: FnOnce(T)> {
+    value: Option<T>,
+    undo: Option<F>,
+}
+
+impl<T, F: FnOnce(T)> Undo<T, F> {
+    fn new(value: T, undo: F) -> Self {
+        Self {
+            value: Some(value),
+            undo: Some(undo),
+        }
+    }
+
+    fn get(&self) -> &T {
+        self.value.as_ref().expect("kept only once")
+    }
+
+    /// The value, no longer undone.
+    fn keep(mut self) -> T {
+        self.value.take().expect("kept only once")
+    }
+}
+
+impl<T, F: FnOnce(T)> Drop for Undo<T, F> {
+    fn drop(&mut self) {
+        if let (Some(v), Some(undo)) = (self.value.take(), self.undo.take()) {
+            undo(v);
+        }
+    }
+}
+
+type Messenger = (ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT);
+
+/// The validation layer's messenger: warnings and errors counted in `counter`.
+fn create_messenger(entry: &ash::Entry, instance: &ash::Instance, counter: &MessageCounter) -> Result<Messenger> {
+    let loader = ash::ext::debug_utils::Instance::new(entry, instance);
+    let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(counter as *const MessageCounter as *mut c_void);
+    let messenger = unsafe { loader.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
+    Ok((loader, messenger))
+}
+
+/// The device `desc` asks for (or the best usable one), and its graphics+compute queue
+/// family; with a window, one that can present to it.
+fn pick_device(
+    instance: &ash::Instance,
+    surface: Option<&(ash::khr::surface::Instance, vk::SurfaceKHR)>,
+    desc: &ContextDesc,
+) -> Result<(vk::PhysicalDevice, DeviceInfo, u32)> {
+    let list = describe(instance)?;
+    let chosen = select(&list, desc.device.as_deref())?;
+    let (physical_device, info) = list[chosen].clone();
+    let queue_family = check_device(instance, physical_device).expect("checked by select");
+    if let Some((loader, raw)) = surface {
+        let presents =
+            unsafe { loader.get_physical_device_surface_support(physical_device, queue_family, *raw) }.unwrap_or(false);
+        let has_swapchain = unsafe { instance.enumerate_device_extension_properties(physical_device) }
+            .unwrap_or_default()
+            .iter()
+            .any(|e| {
+                e.extension_name_as_c_str()
+                    .is_ok_and(|n| n == ash::khr::swapchain::NAME)
+            });
+        if !presents || !has_swapchain {
+            return Err(Error::NoDevice(format!(
+                "device '{}' cannot present to this window (its graphics+compute queue has no present support{})",
+                info.name,
+                if has_swapchain { "" } else { ", no VK_KHR_swapchain" }
+            )));
+        }
+    }
+    Ok((physical_device, info, queue_family))
+}
+
+/// The logical device: one queue of `queue_family`, push descriptors, synchronization2
+/// and dynamic rendering (and the swapchain extension when presenting).
+fn create_device(
+    instance: &ash::Instance,
+    physical_device: vk::PhysicalDevice,
+    queue_family: u32,
+    presents: bool,
+) -> Result<ash::Device> {
+    let priorities = [1.0f32];
+    let queue_infos = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(queue_family)
+        .queue_priorities(&priorities)];
+    let mut dev_exts = vec![ash::khr::push_descriptor::NAME.as_ptr()];
+    if presents {
+        dev_exts.push(ash::khr::swapchain::NAME.as_ptr());
+    }
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+        .synchronization2(true)
+        .dynamic_rendering(true);
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+    let dinfo = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_infos)
+        .enabled_extension_names(&dev_exts)
+        .push_next(&mut f2);
+    unsafe { instance.create_device(physical_device, &dinfo, None) }.vk("vkCreateDevice")
+}
+
 impl Context {
     /// Creates the instance, picks a device and creates the queue and allocator.
     pub fn new(desc: &ContextDesc) -> Result<std::sync::Arc<Self>> {
@@ -366,6 +476,7 @@ impl Context {
         }
     }
 
+    // Long by design: the creation steps in order, each guarded, then the context's 23 fields.
     fn with_instance(
         entry: ash::Entry,
         instance: ash::Instance,
@@ -373,70 +484,57 @@ impl Context {
         desc: &ContextDesc,
     ) -> Result<Self> {
         let counter = Box::<MessageCounter>::default();
-        let debug_instance = if has_debug_utils {
-            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-                )
-                .message_type(
-                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-                )
-                .pfn_user_callback(Some(debug_callback))
-                .user_data(&*counter as *const MessageCounter as *mut c_void);
-            let messenger =
-                unsafe { loader.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
-            Some((loader, messenger))
-        } else {
-            None
-        };
-        let destroy_messenger = |d: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
-            if let Some((loader, m)) = d {
-                unsafe { loader.destroy_debug_utils_messenger(*m, None) };
-            }
-        };
-
+        // Each step's failure undoes the steps before it (the guards drop in reverse).
+        let messenger = Undo::new(
+            has_debug_utils
+                .then(|| create_messenger(&entry, &instance, &counter))
+                .transpose()?,
+            |m| {
+                if let Some((loader, m)) = m {
+                    unsafe { loader.destroy_debug_utils_messenger(m, None) };
+                }
+            },
+        );
         let surface = match &desc.window {
             Some(w) => {
                 let loader = ash::khr::surface::Instance::new(&entry, &instance);
                 let raw = unsafe { ash_window::create_surface(&entry, &instance, w.display, w.window, None) }
-                    .vk("vkCreate*SurfaceKHR")
-                    .inspect_err(|_| destroy_messenger(&debug_instance))?;
+                    .vk("vkCreate*SurfaceKHR")?;
                 Some((loader, raw))
             }
             None => None,
         };
-        let destroy_messenger = |d: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
-            if let Some((loader, raw)) = &surface {
-                unsafe { loader.destroy_surface(*raw, None) };
+        let surface = Undo::new(surface, |s| {
+            if let Some((loader, raw)) = s {
+                unsafe { loader.destroy_surface(raw, None) };
             }
-            destroy_messenger(d)
-        };
-        let list = describe(&instance).inspect_err(|_| destroy_messenger(&debug_instance))?;
-        let chosen = select(&list, desc.device.as_deref()).inspect_err(|_| destroy_messenger(&debug_instance))?;
-        let (physical_device, info) = list[chosen].clone();
-        let queue_family = check_device(&instance, physical_device).expect("checked by select");
-        if let Some((loader, raw)) = &surface {
-            let presents = unsafe { loader.get_physical_device_surface_support(physical_device, queue_family, *raw) }
-                .unwrap_or(false);
-            let has_swapchain = unsafe { instance.enumerate_device_extension_properties(physical_device) }
-                .unwrap_or_default()
-                .iter()
-                .any(|e| {
-                    e.extension_name_as_c_str()
-                        .is_ok_and(|n| n == ash::khr::swapchain::NAME)
-                });
-            if !presents || !has_swapchain {
-                destroy_messenger(&debug_instance);
-                return Err(Error::NoDevice(format!(
-                    "device '{}' cannot present to this window (its graphics+compute queue has no present support{})",
-                    info.name,
-                    if has_swapchain { "" } else { ", no VK_KHR_swapchain" }
-                )));
-            }
-        }
+        });
+        let (physical_device, info, queue_family) = pick_device(&instance, surface.get().as_ref(), desc)?;
+        let device = Undo::new(
+            create_device(&instance, physical_device, queue_family, surface.get().is_some())?,
+            |d| unsafe { d.destroy_device(None) },
+        );
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.get().clone(),
+            physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| Error::Allocation {
+            name: "allocator".into(),
+            source,
+        })?;
+        let allocator = Undo::new(allocator, drop);
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let command_pool = unsafe { device.get().create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+
+        // Everything is made: the context owns it from here (its Drop destroys it).
+        let (allocator, device) = (allocator.keep(), device.keep());
+        let (surface, debug_instance) = (surface.keep(), messenger.keep());
         let props = unsafe { instance.get_physical_device_properties(physical_device) };
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
@@ -444,75 +542,17 @@ impl Context {
         let text = |c: Result<&CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
         let (driver_name, driver_info) = (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()));
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
-
-        let priorities = [1.0f32];
-        let queue_infos = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
-        let mut dev_exts = vec![ash::khr::push_descriptor::NAME.as_ptr()];
-        if surface.is_some() {
-            dev_exts.push(ash::khr::swapchain::NAME.as_ptr());
-        }
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
-            .synchronization2(true)
-            .dynamic_rendering(true);
-        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
-        let dinfo = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_infos)
-            .enabled_extension_names(&dev_exts)
-            .push_next(&mut f2);
-        let device = unsafe { instance.create_device(physical_device, &dinfo, None) }
-            .vk("vkCreateDevice")
-            .inspect_err(|_| destroy_messenger(&debug_instance))?;
-        let queue = unsafe { device.get_device_queue(queue_family, 0) };
-        let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
-        let debug_utils = has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
-
-        let cleanup = |device: &ash::Device| {
-            unsafe { device.destroy_device(None) };
-            destroy_messenger(&debug_instance);
-        };
-        let allocator = Allocator::new(&AllocatorCreateDesc {
-            instance: instance.clone(),
-            device: device.clone(),
-            physical_device,
-            debug_settings: Default::default(),
-            buffer_device_address: false,
-            allocation_sizes: Default::default(),
-        })
-        .map_err(|source| {
-            cleanup(&device);
-            Error::Allocation {
-                name: "allocator".into(),
-                source,
-            }
-        })?;
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(queue_family)
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        let command_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
-            Ok(p) => p,
-            Err(result) => {
-                drop(allocator);
-                cleanup(&device);
-                return Err(Error::Vulkan {
-                    what: "vkCreateCommandPool",
-                    result,
-                });
-            }
-        };
-
-        let surface = surface.map(|(loader, raw)| Surface {
-            loader,
-            raw,
-            swapchain: ash::khr::swapchain::Device::new(&instance, &device),
-        });
         Ok(Self {
+            queue: unsafe { device.get_device_queue(queue_family, 0) },
+            push_descriptor: ash::khr::push_descriptor::Device::new(&instance, &device),
+            debug_utils: has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device)),
+            surface: surface.map(|(loader, raw)| Surface {
+                loader,
+                raw,
+                swapchain: ash::khr::swapchain::Device::new(&instance, &device),
+            }),
             entry,
-            instance,
             physical_device,
-            device,
-            queue,
             queue_family,
             device_name: info.name,
             device_type: props.device_type,
@@ -523,14 +563,13 @@ impl Context {
             limits: props.limits,
             timestamp_period_ns: props.limits.timestamp_period as f64,
             timestamp_valid_bits: families[queue_family as usize].timestamp_valid_bits,
-            push_descriptor,
-            debug_utils,
             debug_instance,
             counter,
             validation: desc.validation,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             command_pool,
-            surface,
+            device,
+            instance,
         })
     }
 

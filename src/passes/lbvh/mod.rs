@@ -44,6 +44,30 @@ pub enum MortonBits {
 }
 
 impl MortonBits {
+    pub const ALL: [MortonBits; 2] = [MortonBits::Bits30, MortonBits::Bits63];
+
+    /// Bits per code, as the CLI and reports name the width.
+    pub fn bits(self) -> u32 {
+        match self {
+            MortonBits::Bits30 => 30,
+            MortonBits::Bits63 => 63,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            MortonBits::Bits30 => "30",
+            MortonBits::Bits63 => "63",
+        }
+    }
+
+    pub fn about(self) -> &'static str {
+        match self {
+            MortonBits::Bits30 => "10 bits per axis, one key word",
+            MortonBits::Bits63 => "21 bits per axis, two key words: close centroids apart, twice the sort time",
+        }
+    }
+
     pub fn key_words(self) -> u32 {
         match self {
             MortonBits::Bits30 => 1,

@@ -1,6 +1,7 @@
 //! ssr.classify against its CPU reference on a random G-buffer, ssr.trace's coverage of
 //! the march list it dispatches over, and the march itself against
-//! `cpu_ref::ssr::march` on a random G-buffer and on `room`.
+//! `cpu_ref::ssr::march` on a random G-buffer and on `room`; the Hi-Z pyramid
+//! (`ssr.hiz`) against `cpu_ref::ssr::hiz`, exactly.
 //!
 //! Tolerances: the heading confidence goes through GPU `normalize` and matrix products
 //! that are not correctly rounded, so a pixel whose confidence lies within 1e-4 of the
@@ -16,6 +17,7 @@ use ash::vk;
 use glam::IVec2;
 use rand::Rng;
 use speculum::cpu_ref::ssr::{self, Class};
+use speculum::passes::ssr_hiz::{self, HiZPass};
 use speculum::passes::ssr_trace::SsrPass;
 use speculum::passes::GBuffer;
 use speculum::settings::SsrParams;
@@ -468,4 +470,54 @@ fn a_march_list_beyond_one_row_of_workgroups_is_covered() {
         .filter(|p| mask[(p.y as u32 * w + p.x as u32) as usize] == POISON_MASK)
         .count();
     assert_eq!(unmarched, 0, "listed pixels the march never reached");
+}
+
+/// `ssr.hiz` against `cpu_ref::ssr::hiz`, bit for bit, on random depth with sky holes
+/// at sizes odd and even, thin and 1x1, the pyramid poisoned first (0xcdcdcdcd is a
+/// large negative float: a minimum that read a texel it should not would keep it).
+#[test]
+fn hiz_pyramid_matches_cpu_exactly() {
+    let ctx = common::context();
+    let mut rng = common::rng(77);
+    for (w, h) in [(64u32, 48u32), (37, 23), (1, 19), (200, 1), (1, 1), (129, 65)] {
+        let extent = vk::Extent2D { width: w, height: h };
+        let gb = GBuffer::new(&ctx, extent).unwrap();
+        let depth: Vec<f32> = (0..w * h)
+            .map(|_| {
+                if rng.random_bool(0.15) {
+                    1.0
+                } else {
+                    rng.random_range(0.0..1.0f32)
+                }
+            })
+            .collect();
+        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        gb.depth.write(bytemuck::cast_slice(&depth), ro).unwrap();
+        let pass = HiZPass::new(&ctx, extent).unwrap();
+        pass.out
+            .buffer
+            .write(&vec![0xcdu8; pass.out.buffer.size as usize])
+            .unwrap();
+        ctx.one_shot(|cmd| pass.record(cmd, &gb.depth)).unwrap();
+        let gpu = pass.out.read().unwrap();
+        let want = ssr::hiz(&depth, w, h);
+        let sizes: Vec<usize> = ssr_hiz::levels(w, h)
+            .iter()
+            .map(|l| (l.size[0] * l.size[1]) as usize)
+            .collect();
+        assert_eq!(
+            sizes,
+            want.iter().map(Vec::len).collect::<Vec<_>>(),
+            "{w}x{h}: level sizes"
+        );
+        assert_eq!(gpu.len(), want.len(), "{w}x{h}: levels");
+        assert_eq!(want.last().map(Vec::len), Some(1), "{w}x{h}: the top is 1x1");
+        for (k, (g, c)) in gpu.iter().zip(&want).enumerate() {
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(g), bits(c), "{w}x{h} level {k}");
+        }
+        // The top is the nearest depth of the whole image.
+        let nearest = depth.iter().copied().fold(f32::INFINITY, f32::min);
+        assert_eq!(want.last().unwrap()[0], nearest);
+    }
 }

@@ -140,6 +140,31 @@ fn boundary_gap(x: Vec2) -> f32 {
     d(x.x).min(d(x.y))
 }
 
+/// Reference of `ssr.hiz`: the min-depth pyramid of a `width` x `height` depth image,
+/// one `Vec` per level, row-major: level 0 the depth, each next level
+/// `ceil(w / 2) x ceil(h / 2)` with texel (x, y) the minimum of texels 2x..2x+1,
+/// 2y..2y+1 below it (clamped to that level), the last 1x1.
+pub fn hiz(depth: &[f32], width: u32, height: u32) -> Vec<Vec<f32>> {
+    let mut levels = vec![depth.to_vec()];
+    let (mut w, mut h) = (width as usize, height as usize);
+    while (w, h) != (1, 1) {
+        let (nw, nh) = (w.div_ceil(2), h.div_ceil(2));
+        let below = levels.last().expect("level 0");
+        let mut level = vec![0.0f32; nw * nh];
+        for y in 0..nh {
+            for x in 0..nw {
+                let (x0, y0) = (2 * x, 2 * y);
+                let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+                let at = |x: usize, y: usize| below[y * w + x];
+                level[y * nw + x] = at(x0, y0).min(at(x1, y0)).min(at(x0, y1)).min(at(x1, y1));
+            }
+        }
+        levels.push(level);
+        (w, h) = (nw, nh);
+    }
+    levels
+}
+
 /// `ssr_trace.comp` for listed pixel `p`: the reflected ray marched over the depth
 /// buffer by perspective-correct DDA (McGuire & Mara 2014), the hit refined by binary
 /// search and a secant, then judged (back face, reflective surface, confidence).

@@ -27,6 +27,7 @@ pub mod shadow_map;
 pub mod sim_cloth;
 pub mod sim_transform;
 pub mod ssr_compact;
+pub mod ssr_hiz;
 pub mod ssr_trace;
 
 use crate::vk::{Buffer, Image, Resource};

@@ -1,0 +1,145 @@
+//! `ssr.hiz`: the min-depth pyramid (Hi-Z) of the G-buffer depth, for a hierarchical
+//! screen-space march (FidelityFX SSSR's depth hierarchy): level 0 is the depth, each
+//! level above holds the minimum (the nearest surface) of its 2x2 children, sizes
+//! rounding up, down to 1x1. The levels lie one after another in one storage buffer
+//! (`HiZ::levels` gives each one's offset and size), which every device binds the same
+//! way (no per-mip storage views).
+//! CPU reference: `cpu_ref::ssr::hiz` (tests/ssr.rs), exactly.
+
+use crate::error::Result;
+use crate::shaders;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+pub const NAME: &str = "ssr.hiz";
+
+/// Push constants of `ssr_hiz.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct HizPush {
+    src_offset: u32,
+    dst_offset: u32,
+    src_size: [u32; 2],
+    dst_size: [u32; 2],
+    from_depth: u32,
+    _pad0: u32,
+}
+
+/// One pyramid level: where it starts in the buffer (in floats) and its size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Level {
+    pub offset: u32,
+    pub size: [u32; 2],
+}
+
+/// The levels of the pyramid of a `width` x `height` depth image: level 0 that size,
+/// each next one `ceil(w / 2) x ceil(h / 2)`, the last 1x1.
+pub fn levels(width: u32, height: u32) -> Vec<Level> {
+    let mut out = vec![Level {
+        offset: 0,
+        size: [width, height],
+    }];
+    while out.last().is_some_and(|l| l.size != [1, 1]) {
+        let l = out.last().expect("one level at least");
+        out.push(Level {
+            offset: l.offset + l.size[0] * l.size[1],
+            size: [l.size[0].div_ceil(2), l.size[1].div_ceil(2)],
+        });
+    }
+    out
+}
+
+/// The pyramid: its buffer (floats, level after level) and the levels in it.
+pub struct HiZ {
+    pub buffer: Buffer,
+    pub levels: Vec<Level>,
+}
+
+impl HiZ {
+    fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        let levels = levels(extent.width, extent.height);
+        let last = levels.last().expect("one level at least");
+        let floats = (last.offset + 1) as u64;
+        Ok(Self {
+            buffer: Buffer::device_list(ctx, "ssr.hiz", floats * 4)?,
+            levels,
+        })
+    }
+
+    /// The pyramid read back, one `Vec` per level (a readback, for tests).
+    pub fn read(&self) -> Result<Vec<Vec<f32>>> {
+        let all: Vec<f32> = bytemuck::pod_collect_to_vec(&self.buffer.read()?);
+        Ok(self
+            .levels
+            .iter()
+            .map(|l| all[l.offset as usize..(l.offset + l.size[0] * l.size[1]) as usize].to_vec())
+            .collect())
+    }
+}
+
+pub struct HiZPass {
+    ctx: Arc<Context>,
+    pipeline: Pipeline,
+    sampler: Sampler,
+    pub out: HiZ,
+}
+
+impl HiZPass {
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        Ok(Self {
+            ctx: ctx.clone(),
+            pipeline: Pipeline::compute::<HizPush>(ctx, NAME, shaders::SSR_HIZ_COMP)?,
+            sampler: Sampler::nearest_clamp(ctx, "ssr.hiz.sampler")?,
+            out: HiZ::new(ctx, extent)?,
+        })
+    }
+
+    pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
+        self.out = HiZ::new(&self.ctx, extent)?;
+        Ok(())
+    }
+
+    /// Records the pyramid of `depth` (the G-buffer's, `SHADER_READ_ONLY_OPTIMAL`, of
+    /// the pass's extent), one dispatch per level. `out` ends visible to compute reads
+    /// (the march).
+    pub fn record(&self, cmd: vk::CommandBuffer, depth: &Image) {
+        let d = &self.ctx.device;
+        let levels = &self.out.levels;
+        assert_eq!(
+            [depth.extent.width, depth.extent.height],
+            levels[0].size,
+            "ssr.hiz sized for another depth image"
+        );
+        // WAR: the previous frame's reads of the pyramid finish before it is rewritten.
+        barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
+        for (k, level) in levels.iter().enumerate() {
+            if k > 0 {
+                // RAW: this level reads the one just written.
+                barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
+            }
+            let src = levels[k.saturating_sub(1)];
+            let push = HizPush {
+                src_offset: src.offset,
+                dst_offset: level.offset,
+                src_size: src.size,
+                dst_size: level.size,
+                from_depth: (k == 0) as u32,
+                _pad0: 0,
+            };
+            self.pipeline.dispatch(
+                cmd,
+                &[
+                    Resource::Sampled(depth, &self.sampler),
+                    Resource::Buffer(&self.out.buffer),
+                ],
+                &push,
+                Groups::Cover([level.size[0], level.size[1], 1]),
+            );
+        }
+        // RAW: the march reads the pyramid.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
+    }
+}

@@ -169,3 +169,44 @@ fn bad_sweeps_and_csvs_are_refused_before_any_gpu_work() {
     assert_eq!(out.code, 1);
     assert!(out.stderr.contains("points CSV"));
 }
+
+/// A sweep from the command line alone (no file): `--scene`, `--width`, `--height` and
+/// the view flags as in every other command; bad ones refused before any GPU work.
+#[test]
+fn a_sweep_needs_no_file() {
+    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = out.to_str().unwrap();
+    let args = [
+        "--scene",
+        "mirrors",
+        "--width",
+        "64",
+        "--height",
+        "40",
+        "--axis",
+        "max_bounces=1,2",
+    ];
+    let text = ok(&speculum(
+        &[&["tune"][..], &args, &["--out", o, "--confirm", "0"]].concat(),
+    ));
+    assert!(text.contains("64x40"), "{text}");
+    let rows = rows(&out);
+    assert_eq!(rows.len(), 4, "header + default + 2 points: {rows:?}");
+    assert!(rows[1..].iter().all(|r| r[0] == "mirrors"), "{rows:?}");
+    for (flag, value, says) in [
+        ("--width", "0", "--width"),
+        ("--fov", "0", "--fov 0"),
+        ("--scene", "nosuch", "unknown scene 'nosuch'"),
+    ] {
+        let out = speculum(&["tune", "--axis", "max_bounces=1", "--out", o, flag, value]);
+        let lines: Vec<&str> = out.stderr.lines().collect();
+        assert_eq!(out.code, 1, "{flag} {value}: {}", out.stderr);
+        assert!(
+            lines.len() == 1 && lines[0].contains(says),
+            "{flag} {value}: {}",
+            out.stderr
+        );
+    }
+}

@@ -33,6 +33,18 @@ pub struct TuneArgs {
     /// No progress bar and no text output.
     #[arg(long)]
     pub quiet: bool,
+    /// Scenes to sweep (built-in names, scene files or models; repeatable): they
+    /// replace the file's `scenes` (default: room).
+    #[arg(long)]
+    pub scene: Vec<String>,
+    /// Width in pixels [default: the file's, else 960].
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Height in pixels [default: the file's, else 540].
+    #[arg(long)]
+    pub height: Option<u32>,
+    #[command(flatten)]
+    pub view: super::ViewArgs,
     #[command(flatten)]
     pub gpu: GpuArgs,
 }
@@ -93,7 +105,19 @@ pub fn run(args: TuneArgs) -> Result<()> {
         ),
         None => (String::new(), "(command line)".to_string()),
     };
-    let sweep = Sweep::parse(&text, &what, &args.axis)?;
+    let mut sweep = Sweep::parse(&text, &what, &args.axis)?;
+    // The command line's scenes and size replace the file's, as in every command.
+    if !args.scene.is_empty() {
+        sweep.scenes = args.scene.clone();
+    }
+    for (flag, field, value) in [("--width", "width", args.width), ("--height", "height", args.height)] {
+        if let Some(v) = value {
+            sweep.base = sweep
+                .base
+                .with_field(field, &v.to_string())
+                .map_err(|e| speculum::Error::Input(format!("{flag}: {e}")))?;
+        }
+    }
     if !(0.0..=1.0).contains(&args.min_ssim) {
         anyhow::bail!(speculum::Error::Input(format!(
             "--min-ssim {} is outside 0..=1",
@@ -131,7 +155,7 @@ pub fn run(args: TuneArgs) -> Result<()> {
     let scenes: Vec<_> = sweep
         .scenes
         .iter()
-        .map(|s| super::ViewArgs::default().load(s).map(|scene| (s.clone(), scene)))
+        .map(|s| args.view.load(s).map(|scene| (s.clone(), scene)))
         .collect::<Result<_>>()?;
     let mut todo: Vec<(String, Vec<(String, tune::sweep::Point)>)> = Vec::new();
     let done: HashSet<(String, String)> = results.iter().map(|r| (r.scene.clone(), r.key.clone())).collect();

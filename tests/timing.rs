@@ -19,17 +19,38 @@ use speculum::{Renderer, Settings};
 /// clock: only the scopes' own agreement is checked, whatever the machine's load).
 fn frame_readout(r: &mut Renderer, ctx: &speculum::vk::Context) -> speculum::vk::TimerReadout {
     let cmd = ctx.allocate_command_buffer().unwrap();
-    let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-    unsafe { ctx.device.begin_command_buffer(cmd, &begin) }.unwrap();
-    r.record_frame(cmd, 0);
-    unsafe { ctx.device.end_command_buffer(cmd) }.unwrap();
+    ctx.rerecord(cmd, |cmd| r.record_frame(cmd, 0)).unwrap();
     ctx.submit_and_wait(cmd).unwrap();
     ctx.free_command_buffer(cmd);
     r.frame_finished(0).unwrap()
 }
 
+/// Frames tried for each one that must pass its self-check.
+const ATTEMPTS: usize = 4;
+
+/// The next frame whose timings pass their self-check, within `ATTEMPTS` frames: a
+/// lavapipe thread preempted between two stamps (by another process, or by this
+/// virtual machine's host) opens a gap in that one frame, which the check rightly
+/// refuses, while a stamp that does not mark its place fails every frame (the bug
+/// these tests catch put ~60 ms in the gap of each one). Every refused frame is printed.
+fn checked_frame(r: &mut Renderer, ctx: &speculum::vk::Context, what: &str) -> speculum::vk::TimerReadout {
+    let mut refused = Vec::new();
+    for _ in 0..ATTEMPTS {
+        let t = frame_readout(r, ctx);
+        match t.problem {
+            None => return t,
+            Some(p) => {
+                eprintln!("{what}: a frame refused by its self-check: {p}");
+                refused.push((p, t.scopes));
+            }
+        }
+    }
+    panic!("{what}: none of {ATTEMPTS} frames passed its self-check: {refused:#?}");
+}
+
 /// Every scope of `room` (SSR's indirect march included) and of `drop` (the sim and
-/// dynamic BVH scopes too) passes the self-check, in every reflecting mode, and the
+/// dynamic BVH scopes too) passes the self-check (`checked_frame`), in every
+/// reflecting mode, and the
 /// scopes the frame's work is in read what it costs: `ssr.trace` marches the whole
 /// screen, so it cannot read less than a tenth of `ssr.classify`.
 #[test]
@@ -47,8 +68,7 @@ fn frame_scopes_nest_and_fill_the_frame() {
             };
             let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
             for k in 0..3 {
-                let t = frame_readout(&mut r, &ctx);
-                assert_eq!(t.problem, None, "{name} {mode:?} frame {k}: {:?}", t.scopes);
+                let t = checked_frame(&mut r, &ctx, &format!("{name} {mode:?} frame {k}"));
                 let frame = t.get(speculum::renderer::FRAME).unwrap();
                 let inner: f64 = t
                     .iter()

@@ -310,7 +310,7 @@ fn settings_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: 
             ui.label("dynamic scenes (a change restarts the animation):");
             dynamic_label = true;
         }
-        let trades = f.trades.split_whitespace().collect::<Vec<_>>().join(" ");
+        let trades = f.trades_line();
         if let Some(v) = field_control(ui, f, (f.get)(s), &trades) {
             (f.set)(s, v);
         }

@@ -1,5 +1,5 @@
 //! The frame: DESIGN.md's table as data (`Row`, from which `SCOPES` comes) and as the
-//! function that records it (`Renderer::record`), every row visible and recorded in
+//! function that records it (`Renderer::record_frame`), every row visible and recorded in
 //! table order (`FrameRecorder` asserts it), each under its timer scope. Every pass's
 //! `record` places its own barriers (see `passes`); this file only does what spans
 //! passes: the uniform upload, which rows a mode runs, and the scopes.
@@ -185,10 +185,13 @@ impl<'a> FrameRecorder<'a> {
 }
 
 impl Renderer {
-    /// Records one frame into `cmd` with frame slot `slot`: DESIGN.md's frame table,
-    /// row by row. A dynamic scene advances one time step unless it is paused.
+    /// Records one frame into `cmd` (begun, not ended) with frame slot `slot`'s queries
+    /// and staging: DESIGN.md's frame table, row by row. A dynamic scene advances one
+    /// time step unless it is paused. The caller submits it, and must have seen the
+    /// slot's previous frame finish (a fence) before; several slots' frames may be in
+    /// flight on the queue at once.
     // Long by design: it is DESIGN.md's frame table, every row in order; split, rows would hide.
-    pub(super) fn record(&mut self, cmd: vk::CommandBuffer, slot: usize) {
+    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
         let advance = !self.paused || std::mem::take(&mut self.step_once);
         let Self {
             ctx,

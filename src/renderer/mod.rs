@@ -325,7 +325,7 @@ impl Renderer {
     /// reset shows the world at time (k + 1) x `sim_dt`.
     pub fn render_frame(&mut self) -> Result<TimerReadout> {
         let (ctx, cmd) = (self.ctx.clone(), self.cmd);
-        ctx.rerecord(cmd, |cmd| self.record(cmd, 0))?;
+        ctx.rerecord(cmd, |cmd| self.record_frame(cmd, 0))?;
         let submitted = std::time::Instant::now();
         self.ctx.submit_and_wait(self.cmd)?;
         let wall = Wall {
@@ -333,14 +333,6 @@ impl Renderer {
             tight: self.ctx.device_type == vk::PhysicalDeviceType::CPU,
         };
         self.read_frame(0, Some(wall))
-    }
-
-    /// Records one frame into `cmd` (begun, not ended), with frame slot `slot`'s
-    /// queries and staging: a dynamic scene first advances by one time step. The
-    /// caller submits it, and must have seen the slot's previous frame finish (a
-    /// fence) before; several slots' frames may be in flight on the queue at once.
-    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
-        self.record(cmd, slot);
     }
 
     /// Holds a dynamic scene still from the next frame on (its geometry and BVH stay

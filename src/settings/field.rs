@@ -61,6 +61,13 @@ pub enum Applies {
     NewRenderer,
 }
 
+impl Field {
+    /// What the field trades, on one line (its documentation's lines joined).
+    pub fn trades_line(&self) -> String {
+        self.trades.split_whitespace().collect::<Vec<_>>().join(" ")
+    }
+}
+
 impl Applies {
     pub fn describe(self) -> &'static str {
         match self {

@@ -297,7 +297,7 @@ pub fn markdown_table() -> String {
     let mut out =
         String::from("| setting | default | range | a change applies | what it trades |\n|---|---|---|---|---|\n");
     for f in FIELDS {
-        let trades = f.trades.split_whitespace().collect::<Vec<_>>().join(" ");
+        let trades = f.trades_line();
         let range = match (f.range, (f.get)(&defaults)) {
             (Range::Any, Value::Mode(_)) => Mode::ALL.map(Mode::name).join(", "),
             (Range::Any, Value::Bool(_)) => "true, false".into(),

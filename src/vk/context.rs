@@ -644,17 +644,20 @@ impl Context {
         unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")
     }
 
-    /// Resets `cmd` and records `record` into it, begun for one submission and ended.
-    pub fn rerecord(&self, cmd: vk::CommandBuffer, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
+    /// Resets `cmd` (from a pool that allows it) and begins it for one submission.
+    pub fn begin(&self, cmd: vk::CommandBuffer) -> Result<()> {
         let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         unsafe {
             self.device
                 .reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
                 .vk("vkResetCommandBuffer")?;
-            self.device
-                .begin_command_buffer(cmd, &begin)
-                .vk("vkBeginCommandBuffer")?;
+            self.device.begin_command_buffer(cmd, &begin).vk("vkBeginCommandBuffer")
         }
+    }
+
+    /// Resets `cmd` and records `record` into it, begun for one submission and ended.
+    pub fn rerecord(&self, cmd: vk::CommandBuffer, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
+        self.begin(cmd)?;
         record(cmd);
         unsafe { self.device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")
     }
@@ -675,14 +678,7 @@ impl Context {
     /// readbacks and tests. Not for frames (those reuse their command buffers).
     pub fn one_shot(&self, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
         let cmd = self.allocate_command_buffer()?;
-        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        let result = unsafe { self.device.begin_command_buffer(cmd, &begin) }
-            .vk("vkBeginCommandBuffer")
-            .and_then(|_| {
-                record(cmd);
-                unsafe { self.device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")
-            })
-            .and_then(|_| self.submit_and_wait(cmd));
+        let result = self.rerecord(cmd, record).and_then(|_| self.submit_and_wait(cmd));
         self.free_command_buffer(cmd);
         result
     }

@@ -103,13 +103,8 @@ impl FrameSync {
 
     /// Slot `i`'s command buffer, reset and begun for one submission.
     pub fn begin(&self, i: usize) -> Result<vk::CommandBuffer> {
-        let (d, cmd) = (&self.ctx.device, self.slots[i].cmd);
-        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        unsafe {
-            d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
-                .vk("vkResetCommandBuffer")?;
-            d.begin_command_buffer(cmd, &begin).vk("vkBeginCommandBuffer")?;
-        }
+        let cmd = self.slots[i].cmd;
+        self.ctx.begin(cmd)?;
         Ok(cmd)
     }
 

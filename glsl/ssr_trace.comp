@@ -1,10 +1,13 @@
 #version 460
-// ssr.trace: screen-space reflections by perspective-correct DDA over the depth buffer
-// (McGuire & Mara 2014, "Efficient GPU Screen-Space Ray Tracing", JCGT 3(4)), one
-// invocation per pixel of ssr.classify's march list (indirect dispatch). The reflected
-// ray is marched in screen space with a thickness test; a hit takes the lit colour
-// there with a confidence that fades near the screen edges and for rays heading back
-// to the camera. Writes SSR colour + confidence and the fail mask (reason bits,
+// ssr.trace: screen-space reflections, one invocation per pixel of ssr.classify's march
+// list (indirect dispatch). The reflected ray is marched in screen space, by default
+// through ssr.hiz's min-depth pyramid (HIZ: the hierarchical march of FidelityFX SSSR,
+// coarser while the ray crosses cells above their nearest surface, finer where it
+// meets one), or by the perspective-correct linear DDA of McGuire & Mara 2014
+// ("Efficient GPU Screen-Space Ray Tracing", JCGT 3(4)) with a stride. Either finds the
+// first pixel where the ray reaches the depth surface; within the thickness it is a
+// hit, which takes the lit colour there with a confidence that fades near the screen
+// edges and for rays heading back to the camera. Writes SSR colour + confidence and the fail mask (reason bits,
 // shader_defines.rs) of the listed pixels; nonzero sends the pixel to rt.trace
 // (FAIL_BLEND: a faded hit, kept and blended with the ray-traced colour by merge).
 // CPU reference: cpu_ref::ssr::march (tests/ssr.rs).
@@ -24,15 +27,21 @@ layout(binding = 7, std430) readonly buffer MarchArgs { uvec4 march_args; }; // 
 layout(binding = 8) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
 layout(binding = 9) uniform usampler2D gb_material;
 layout(binding = 10, std430) readonly buffer Materials { Material materials[]; };
+// ssr.hiz's pyramid: level after level, row-major, level k ceil(resolution / 2^k).
+layout(binding = 11, std430) readonly buffer Pyramid { float pyramid[]; };
+
+// true: the hierarchical march through the pyramid; false: the linear DDA.
+layout(constant_id = 0) const bool HIZ = true;
 
 layout(push_constant) uniform Push {
-    uint max_steps;
-    float stride;         // pixels per step
+    uint max_steps;       // DDA steps, or Hi-Z cell visits
+    float stride;         // pixels per DDA step
     float thickness;      // depth a surface is assumed to have, as a fraction of its view depth
     float max_distance;   // length of the ray, in multiples of the reflecting point's view depth
     float edge_fade;      // fraction of the screen's smaller side over which confidence fades
     float min_confidence; // below: the pixel fails
     float recursion_min;  // hits whose own reflection, seen along the ray, weighs more fail
+    uint hiz_top;         // the pyramid's last (1x1) level
 } pc;
 
 // View-space z (negative in front of the camera) of G-buffer depth d.
@@ -67,25 +76,17 @@ float hit_reflection_weight(ivec2 q, float reflectivity, vec3 n, vec3 v) {
     return max(w.r, max(w.g, w.b));
 }
 
-void main() {
-    uint i = list_entry(march_args.w, SSR_LIST_WG);
-    if (i >= march_args.w) {
-        return;
-    }
-    ivec2 p = unpack_pixel(march_list[i]);
-    ivec2 res = ivec2(frame.resolution);
-    SsrRay ray = ssr_ray(p, texelFetch(gb_depth, p, 0).r, texelFetch(gb_normal, p, 0).xyz);
-    vec3 vpos = ray.vpos, vn = ray.vn, vdir = ray.vdir;
-    // Start a little off the surface so the first steps do not hit the pixel itself.
-    vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
+// Where a march ended: `reason` 0 with the pixel and sub-pixel position of a hit, or
+// why it found none (FAIL_LEFT_SCREEN, FAIL_BEHIND, FAIL_OUT_OF_STEPS).
+struct Found {
+    uint reason;
+    ivec2 hit_pixel;
+    vec2 hit_pos;
+};
 
-    float near_z = -frame.proj[3][2] / frame.proj[2][2];
-    // Lengths relative to the view depth keep SSR's answers the same at any scene scale.
-    float max_len = pc.max_distance * abs(origin.z);
-    float ray_len = (origin.z + vdir.z * max_len) > near_z ? (near_z - origin.z) / vdir.z : max_len;
-    vec3 end_point = origin + vdir * ray_len;
-    vec4 h0 = frame.proj * vec4(origin, 1.0);
-    vec4 h1 = frame.proj * vec4(end_point, 1.0);
+// The perspective-correct DDA from clip-space h0 (the origin) to h1 (the ray's end),
+// `stride` pixels a step, the hit refined inside its step by binary search.
+Found march_linear(vec4 h0, vec4 h1, vec3 origin, vec3 end_point, ivec2 res) {
     float k0 = 1.0 / h0.w, k1 = 1.0 / h1.w;
     vec3 q0 = origin * k0, q1 = end_point * k1;
     vec2 p0 = to_pixel(h0), p1 = to_pixel(h1);
@@ -115,8 +116,7 @@ void main() {
     bool went_behind = false;
     bool hit = false;
     uint steps = 0u;
-    ivec2 hit_pixel = ivec2(-1);
-    vec2 hit_pos = vec2(-1.0); // sub-pixel hit position in pixels
+    Found found = Found(0u, ivec2(-1), vec2(-1.0));
     for (; pp.x * step_dir <= end && steps < pc.max_steps; ++steps) {
         vec2 px = permute ? pp.yx : pp;
         ivec2 ip = ivec2(floor(px));
@@ -137,8 +137,8 @@ void main() {
             float scene_z_min = scene_z_max - pc.thickness * abs(scene_z_max);
             if (ray_z_max >= scene_z_min && ray_z_min <= scene_z_max) {
                 hit = true;
-                hit_pixel = ip;
-                hit_pos = px;
+                found.hit_pixel = ip;
+                found.hit_pos = px;
                 break;
             }
             if (ray_z_max < scene_z_min) {
@@ -153,10 +153,15 @@ void main() {
         q.z += dq.z;
         k += dk;
     }
+    if (!hit) {
+        bool left = steps < pc.max_steps;
+        found.reason = went_behind ? FAIL_BEHIND : (left ? FAIL_LEFT_SCREEN : FAIL_OUT_OF_STEPS);
+        return found;
+    }
     // With strides of several pixels the hit is somewhere in the last step: binary
     // search it (McGuire & Mara, section 3) for the first sample at or behind the
     // surface. Everything interpolates linearly in screen space, so midpoints do too.
-    if (hit && pc.stride > 1.0) {
+    if (pc.stride > 1.0) {
         vec2 a_p = pp - dp, b_p = pp;
         float a_qz = q.z - dq.z, b_qz = q.z;
         float a_k = k - dk, b_k = k;
@@ -185,38 +190,150 @@ void main() {
         float gap_a = a_qz / a_k - view_z(za); // > 0: in front
         float gap_b = b_qz / b_k - view_z(zb); // <= 0: at or behind
         float f = za < 1.0 && gap_a > 0.0 ? clamp(gap_a / (gap_a - gap_b), 0.0, 1.0) : 1.0;
-        hit_pos = mix(pa, pb, f);
-        hit_pixel = clamp(ivec2(floor(hit_pos)), ivec2(0), res - 1);
+        found.hit_pos = mix(pa, pb, f);
+        found.hit_pixel = clamp(ivec2(floor(found.hit_pos)), ivec2(0), res - 1);
     }
+    return found;
+}
 
-    uint fail = 0u;
-    float confidence = 0.0;
-    vec3 color = vec3(0.0);
-    if (!hit) {
-        bool left = steps < pc.max_steps;
-        fail = went_behind ? FAIL_BEHIND : (left ? FAIL_LEFT_SCREEN : FAIL_OUT_OF_STEPS);
-    } else {
-        vec4 hit_nr = texelFetch(gb_normal, hit_pixel, 0); // xyz normal, w reflectivity
-        vec3 hit_n = normalize(hit_nr.xyz);
-        vec3 world_dir = transpose(mat3(frame.view)) * vdir; // view is rigid
-        if (dot(hit_n, world_dir) > 0.0) {
-            fail = FAIL_BACK_FACE;
-        } else if (hit_reflection_weight(hit_pixel, hit_nr.w, hit_n, -world_dir) > pc.recursion_min) {
-            fail = FAIL_HIT_REFLECTIVE;
-        } else {
-            vec2 hp = vec2(hit_pixel) + 0.5;
-            float edge = min(min(hp.x, float(res.x) - hp.x), min(hp.y, float(res.y) - hp.y));
-            float fade_px = max(pc.edge_fade * float(min(res.x, res.y)), 1.0);
-            confidence = clamp(edge / fade_px, 0.0, 1.0) * heading_confidence(vdir);
-            if (confidence < pc.min_confidence) {
-                fail = FAIL_LOW_CONFIDENCE;
-            } else {
-                color = lit_bilinear(hit_pos, res);
-                // A faded hit is kept, but traced too: merge blends the two by confidence.
-                fail = confidence < 1.0 ? FAIL_BLEND : 0u;
+// Past a cell's boundary a Hi-Z step lands this far (pixels) inside the next cell.
+const float HIZ_NUDGE = 0.005;
+// The ray parameter of a plane the ray runs parallel to: never the nearest.
+const float NO_PLANE = 3.0e38;
+
+// The pyramid's level k: ceil(resolution / 2^k) texels, as ssr.hiz halves rounding up.
+uvec2 hiz_size(uint k, ivec2 res) {
+    return (uvec2(res) + (1u << k) - 1u) >> k;
+}
+
+// The hierarchical march (FidelityFX SSSR's): the ray as a line in (pixel x, pixel y,
+// depth), which a perspective projection keeps straight, walked cell by cell through
+// the min-depth pyramid from level 0. In a cell whose nearest surface the ray stays in
+// front of up to the cell's far side, the ray jumps to that side and the next step
+// looks one level coarser; where it reaches that surface's depth inside the cell it
+// stops there and looks one level finer; where it is already behind, finer too. At
+// level 0 that is the first pixel the ray reaches the depth surface in (the surface
+// taken as infinitely thick); the thickness then judges it hit or behind.
+Found march_hiz(vec4 h0, vec4 h1, ivec2 res) {
+    vec3 s0 = vec3(to_pixel(h0), h0.z / h0.w);
+    vec3 s1 = vec3(to_pixel(h1), h1.z / h1.w);
+    vec3 dir = s1 - s0;
+    // Past the far plane (depth 1) the ray is behind every surface: it ends there.
+    float t_end = s1.z > 1.0 ? (1.0 - s0.z) / dir.z : 1.0;
+    vec3 inv = vec3(abs(dir.x) > 1e-20 ? 1.0 / dir.x : NO_PLANE, abs(dir.y) > 1e-20 ? 1.0 / dir.y : NO_PLANE,
+                    abs(dir.z) > 1e-20 ? 1.0 / dir.z : NO_PLANE);
+    // The side of a cell the ray leaves by, per axis (1: the high side), and the nudge
+    // past it.
+    vec2 side = vec2(dir.x >= 0.0 ? 1.0 : 0.0, dir.y >= 0.0 ? 1.0 : 0.0);
+    vec2 nudge = vec2(dir.x >= 0.0 ? HIZ_NUDGE : -HIZ_NUDGE, dir.y >= 0.0 ? HIZ_NUDGE : -HIZ_NUDGE);
+    // Out of the origin's own pixel first, which the ray would hit at once.
+    vec2 t0 = (floor(s0.xy) + side + nudge - s0.xy) * inv.xy;
+    float t = min(t0.x, t0.y);
+    vec3 pos = s0 + dir * t;
+    uint mip = 0u, offset = 0u;
+    uvec2 size = uvec2(res);
+    Found found = Found(FAIL_OUT_OF_STEPS, ivec2(-1), vec2(-1.0));
+    for (uint steps = 0u; steps < pc.max_steps; ++steps) {
+        if (t > t_end || any(lessThan(pos.xy, vec2(0.0))) || any(greaterThanEqual(pos.xy, vec2(res)))) {
+            found.reason = FAIL_LEFT_SCREEN; // off the screen, or the ray's end
+            break;
+        }
+        uvec2 cell = uvec2(pos.xy) >> mip; // pos >= 0: truncation is floor
+        float surface = pyramid[offset + cell.y * size.x + cell.x];
+        vec2 planes = (vec2(cell) + side) * float(1u << mip) + nudge;
+        vec2 txy = (planes - s0.xy) * inv.xy;
+        // Sky (depth 1) has no surface to reach; nor does a ray whose depth falls.
+        float tz = surface < 1.0 && dir.z > 0.0 ? (surface - s0.z) * inv.z : NO_PLANE;
+        float t_min = min(min(txy.x, txy.y), tz);
+        bool above = pos.z < surface;
+        if (above) {
+            t = t_min;
+            pos = s0 + dir * t;
+        }
+        if (above && t_min != tz) {
+            if (mip < pc.hiz_top) { // crossed the cell in front of it: coarser
+                offset += size.x * size.y;
+                mip += 1u;
+                size = hiz_size(mip, res);
             }
+        } else if (mip > 0u) { // reached its nearest surface, or behind it: finer
+            mip -= 1u;
+            size = hiz_size(mip, res);
+            offset -= size.x * size.y;
+        } else { // level 0: this pixel's surface
+            ivec2 p = ivec2(cell);
+            float depth = pyramid[p.y * res.x + p.x];
+            float scene_z = view_z(depth);
+            if (depth >= 1.0) {
+                found.reason = FAIL_LEFT_SCREEN; // the far plane, over the sky
+            } else if (view_z(pos.z) < scene_z - pc.thickness * abs(scene_z)) {
+                found.reason = FAIL_BEHIND; // see march_linear
+            } else {
+                found = Found(0u, p, pos.xy);
+            }
+            break;
         }
     }
+    return found;
+}
+
+// The hit's fail mask, colour and confidence: back faces, surfaces whose own
+// reflection the screen lacks and faded hits fail; a faded hit above the threshold is
+// kept and traced too (FAIL_BLEND: merge blends the two by confidence).
+void judge(Found found, vec3 vdir, ivec2 res, out uint fail, out float confidence, out vec3 color) {
+    fail = found.reason;
+    confidence = 0.0;
+    color = vec3(0.0);
+    if (fail != 0u) {
+        return;
+    }
+    ivec2 hit_pixel = found.hit_pixel;
+    vec4 hit_nr = texelFetch(gb_normal, hit_pixel, 0); // xyz normal, w reflectivity
+    vec3 hit_n = normalize(hit_nr.xyz);
+    vec3 world_dir = transpose(mat3(frame.view)) * vdir; // view is rigid
+    if (dot(hit_n, world_dir) > 0.0) {
+        fail = FAIL_BACK_FACE;
+    } else if (hit_reflection_weight(hit_pixel, hit_nr.w, hit_n, -world_dir) > pc.recursion_min) {
+        fail = FAIL_HIT_REFLECTIVE;
+    } else {
+        vec2 hp = vec2(hit_pixel) + 0.5;
+        float edge = min(min(hp.x, float(res.x) - hp.x), min(hp.y, float(res.y) - hp.y));
+        float fade_px = max(pc.edge_fade * float(min(res.x, res.y)), 1.0);
+        confidence = clamp(edge / fade_px, 0.0, 1.0) * heading_confidence(vdir);
+        if (confidence < pc.min_confidence) {
+            fail = FAIL_LOW_CONFIDENCE;
+        } else {
+            color = lit_bilinear(found.hit_pos, res);
+            fail = confidence < 1.0 ? FAIL_BLEND : 0u;
+        }
+    }
+}
+
+void main() {
+    uint i = list_entry(march_args.w, SSR_LIST_WG);
+    if (i >= march_args.w) {
+        return;
+    }
+    ivec2 p = unpack_pixel(march_list[i]);
+    ivec2 res = ivec2(frame.resolution);
+    SsrRay ray = ssr_ray(p, texelFetch(gb_depth, p, 0).r, texelFetch(gb_normal, p, 0).xyz);
+    vec3 vpos = ray.vpos, vn = ray.vn, vdir = ray.vdir;
+    // Start a little off the surface so the first steps do not hit the pixel itself.
+    vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
+
+    float near_z = -frame.proj[3][2] / frame.proj[2][2];
+    // Lengths relative to the view depth keep SSR's answers the same at any scene scale.
+    float max_len = pc.max_distance * abs(origin.z);
+    float ray_len = (origin.z + vdir.z * max_len) > near_z ? (near_z - origin.z) / vdir.z : max_len;
+    vec3 end_point = origin + vdir * ray_len;
+    vec4 h0 = frame.proj * vec4(origin, 1.0);
+    vec4 h1 = frame.proj * vec4(end_point, 1.0);
+    Found found = HIZ ? march_hiz(h0, h1, res) : march_linear(h0, h1, origin, end_point, res);
+
+    uint fail;
+    float confidence;
+    vec3 color;
+    judge(found, vdir, res, fail, confidence, color);
     bool kept = fail == 0u || fail == FAIL_BLEND;
     imageStore(ssr_out, p, vec4(color, kept ? confidence : 0.0));
     imageStore(fail_mask, p, uvec4(fail));

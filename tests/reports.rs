@@ -192,6 +192,7 @@ fn bench_reports_follow_the_schema() {
         check_stat(&m["frame_over_rt"], "frame_over_rt");
         let not_run: &[&str] = match m["mode"].as_str().unwrap() {
             "raster" => &[
+                "ssr.hiz",
                 "ssr.classify",
                 "ssr.trace",
                 "ssr.compact",
@@ -199,7 +200,7 @@ fn bench_reports_follow_the_schema() {
                 "reflect.merge",
             ],
             "ssr" => &["ssr.compact", "rt.reflect"],
-            "rt" => &["ssr.trace"],
+            "rt" => &["ssr.hiz", "ssr.trace"],
             _ => &[],
         };
         check_passes(&m["passes_ms"], not_run);

@@ -18,7 +18,7 @@ use glam::IVec2;
 use rand::Rng;
 use speculum::cpu_ref::ssr::{self, Class};
 use speculum::passes::ssr_hiz::{self, HiZPass};
-use speculum::passes::ssr_trace::SsrPass;
+use speculum::passes::ssr_trace::{MarchInputs, SsrPass};
 use speculum::passes::GBuffer;
 use speculum::settings::SsrParams;
 use speculum::shader_defines::{
@@ -41,6 +41,7 @@ struct Fixture {
     lit: Image,
     ubo: speculum::vk::Buffer,
     pass: SsrPass,
+    hiz: HiZPass,
     /// Random base colours (sRGB-encoded) and the metallic of each material id.
     albedo: Vec<u8>,
     metallic: Vec<f32>,
@@ -95,6 +96,7 @@ impl Fixture {
         Self {
             ubo: common::frame_ubo(ctx, &frame),
             pass: SsrPass::new(ctx, extent).unwrap(),
+            hiz: HiZPass::new(ctx, extent).unwrap(),
             settings,
             frame,
             g,
@@ -105,6 +107,42 @@ impl Fixture {
             metallic,
             materials,
         }
+    }
+}
+
+impl Fixture {
+    /// Records the march over the classification's list (after the pyramid, when
+    /// `params.hiz`), as the frame does.
+    fn record_march(&self, cmd: vk::CommandBuffer, params: &SsrParams) {
+        if params.hiz {
+            self.hiz.record(cmd, &self.gb.depth);
+        }
+        let inputs = MarchInputs {
+            frame: &self.ubo,
+            gbuffer: &self.gb,
+            lit: &self.lit,
+            materials: &self.materials,
+            hiz: &self.hiz.out.buffer,
+            hiz_levels: self.hiz.out.levels.len() as u32,
+        };
+        self.pass.trace(cmd, &inputs, params);
+    }
+
+    /// Poisons the SSR colour and fail mask, so a pixel no kernel wrote shows.
+    fn poison(&self) {
+        let n = (self.settings.width * self.settings.height) as usize;
+        let (out, general) = (&self.pass.out, vk::ImageLayout::GENERAL);
+        out.mask
+            .write(bytemuck::cast_slice(&vec![POISON_MASK; n]), general)
+            .unwrap();
+        out.color
+            .write(bytemuck::cast_slice(&vec![POISON_COLOR; n]), general)
+            .unwrap();
+    }
+
+    /// The pyramid the GPU march reads, from the CPU reference.
+    fn pyramid(&self) -> Vec<Vec<f32>> {
+        ssr::hiz(&self.g.depth, self.settings.width, self.settings.height)
     }
 }
 
@@ -119,7 +157,7 @@ impl Fixture {
 fn classify_matches_cpu_and_the_march_covers_its_list() {
     let ctx = common::context();
     let f = Fixture::new(&ctx, 77, 157, 83, |_| {});
-    let (frame, g, gb, lit, ubo, pass, settings) = (&f.frame, &f.g, &f.gb, &f.lit, &f.ubo, &f.pass, &f.settings);
+    let (frame, g, gb, ubo, pass, settings) = (&f.frame, &f.g, &f.gb, &f.ubo, &f.pass, &f.settings);
     let (w, h) = (settings.width as usize, settings.height as usize);
     let n = w * h;
     let general = vk::ImageLayout::GENERAL;
@@ -127,12 +165,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
 
     for (mask_only, march) in [(false, false), (true, false), (false, true)] {
         let out = &pass.out;
-        out.mask
-            .write(bytemuck::cast_slice(&vec![POISON_MASK; n]), general)
-            .unwrap();
-        out.color
-            .write(bytemuck::cast_slice(&vec![POISON_COLOR; n]), general)
-            .unwrap();
+        f.poison();
         out.march_list
             .write(&vec![0xcdu8; out.march_list.size as usize])
             .unwrap();
@@ -140,7 +173,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
         ctx.one_shot(|cmd| {
             pass.classify(cmd, ubo, gb, &params, mask_only);
             if march {
-                pass.trace(cmd, ubo, gb, lit, &f.materials, &params);
+                f.record_march(cmd, &params);
             }
             // RAW: the readback copies see the shaders' writes.
             let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
@@ -316,117 +349,128 @@ fn march_matches_cpu_on_a_random_gbuffer() {
         }
     });
     let (frame, g, gb, ubo, pass, settings) = (&f.frame, &f.g, &f.gb, &f.ubo, &f.pass, &f.settings);
-    let n = w * h;
     let general = vk::ImageLayout::GENERAL;
-    // A short budget, so rays also run out of steps; a recursion threshold that
-    // lets random reflectivities both pass and fail.
-    let params = SsrParams {
-        recursion_min: 0.6,
-        max_steps: 5,
-        ..SsrParams::from_settings(settings)
-    };
-    let out = &pass.out;
-    out.mask
-        .write(bytemuck::cast_slice(&vec![POISON_MASK; n]), general)
+    let pyramid = f.pyramid();
+    // Both marches. A short budget, so rays also run out of steps (a Hi-Z step may
+    // cross many pixels, a DDA step crosses `stride`); a recursion threshold that lets
+    // random reflectivities both pass and fail.
+    for (hiz, max_steps) in [(true, 9), (false, 5)] {
+        let params = SsrParams {
+            hiz,
+            recursion_min: 0.6,
+            max_steps,
+            ..SsrParams::from_settings(settings)
+        };
+        let out = &pass.out;
+        f.poison();
+        if hiz {
+            f.hiz
+                .out
+                .buffer
+                .write(&vec![0xcdu8; f.hiz.out.buffer.size as usize])
+                .unwrap();
+        }
+        ctx.one_shot(|cmd| {
+            pass.classify(cmd, ubo, gb, &params, false);
+            f.record_march(cmd, &params);
+        })
         .unwrap();
-    out.color
-        .write(bytemuck::cast_slice(&vec![POISON_COLOR; n]), general)
-        .unwrap();
-    ctx.one_shot(|cmd| {
-        pass.classify(cmd, ubo, gb, &params, false);
-        pass.trace(cmd, ubo, gb, &f.lit, &f.materials, &params);
-    })
-    .unwrap();
-    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
-    let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap());
-    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
-    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
-    let inputs = ssr::MarchInputs {
-        depth: &g.depth,
-        normal: &g.normal,
-        lit: &f.lit_texels,
-        albedo: &f.albedo,
-        material: &g.material,
-        metallic: &f.metallic,
-    };
-    let c = compare_march(
-        frame,
-        &inputs,
-        &params,
-        &listed_pixels(&list, args[3] as usize),
-        &mask,
-        &color,
-    );
-    println!("{c:?}");
-    assert!(c.grazing * 100 <= c.listed, "{c:?}");
-    // Hits kept, hits judged and misses all occur, so every branch was compared.
-    let outcomes = [
-        0,
-        FAIL_BLEND,
-        FAIL_BEHIND,
-        FAIL_LEFT_SCREEN,
-        FAIL_OUT_OF_STEPS,
-        FAIL_BACK_FACE,
-        FAIL_HIT_REFLECTIVE,
-    ];
-    c.assert_outcomes(&outcomes);
+        let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
+        let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap());
+        let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
+        let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
+        let inputs = ssr::MarchInputs {
+            depth: &g.depth,
+            normal: &g.normal,
+            lit: &f.lit_texels,
+            albedo: &f.albedo,
+            material: &g.material,
+            metallic: &f.metallic,
+            pyramid: &pyramid,
+        };
+        let c = compare_march(
+            frame,
+            &inputs,
+            &params,
+            &listed_pixels(&list, args[3] as usize),
+            &mask,
+            &color,
+        );
+        println!("hiz {hiz}: {c:?}");
+        assert!(c.grazing * 100 <= c.listed, "hiz {hiz}: {c:?}");
+        // Hits kept, hits judged and misses all occur, so every branch was compared.
+        let outcomes = [
+            0,
+            FAIL_BLEND,
+            FAIL_BEHIND,
+            FAIL_LEFT_SCREEN,
+            FAIL_OUT_OF_STEPS,
+            FAIL_BACK_FACE,
+            FAIL_HIT_REFLECTIVE,
+        ];
+        c.assert_outcomes(&outcomes);
+    }
 }
 
-/// The march against its CPU reference on `room`'s own G-buffer and lit image, as the
-/// renderer leaves them after a hybrid frame.
+/// Both marches against their CPU reference on `room`'s own G-buffer and lit image, as
+/// the renderer leaves them after a hybrid frame.
 #[test]
 fn march_matches_cpu_on_room() {
     let ctx = common::context();
     let scene = speculum::scene::builtin::room().unwrap();
-    let settings = speculum::Settings {
-        width: 192,
-        height: 108,
-        ..Default::default()
-    };
-    let mut r = speculum::Renderer::new(&ctx, &scene, &settings).unwrap();
-    r.render_frame().unwrap();
-    let frame = *r.uniforms();
-    let t = &r.gbuffer.out;
-    let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.depth).unwrap());
-    let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
-    let lit = r.read_lit().unwrap();
-    let general = vk::ImageLayout::GENERAL;
-    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.mask.read(general).unwrap());
-    let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.ssr.out.color.read(general).unwrap());
-    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_args.read().unwrap());
-    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_list.read().unwrap());
-    let albedo = r.read_target(&t.albedo).unwrap();
-    let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.material).unwrap());
-    let metallic: Vec<f32> = scene.materials.iter().map(|m| m.metallic).collect();
-    let inputs = ssr::MarchInputs {
-        depth: &depth,
-        normal: &normal,
-        lit: &lit,
-        albedo: &albedo,
-        material: &material,
-        metallic: &metallic,
-    };
-    let params = SsrParams::from_settings(&settings);
-    let c = compare_march(
-        &frame,
-        &inputs,
-        &params,
-        &listed_pixels(&list, args[3] as usize),
-        &mask,
-        &color,
-    );
-    println!("{c:?}");
-    assert!(c.listed > 2000 && c.grazing * 100 <= c.listed, "{c:?}");
-    let outcomes = [
-        0,
-        FAIL_BLEND,
-        FAIL_BEHIND,
-        FAIL_LEFT_SCREEN,
-        FAIL_BACK_FACE,
-        FAIL_LOW_CONFIDENCE,
-        FAIL_HIT_REFLECTIVE,
-    ];
-    c.assert_outcomes(&outcomes);
+    for hiz in [true, false] {
+        let settings = speculum::Settings {
+            width: 192,
+            height: 108,
+            ssr_hiz: hiz,
+            ..Default::default()
+        };
+        let mut r = speculum::Renderer::new(&ctx, &scene, &settings).unwrap();
+        r.render_frame().unwrap();
+        let frame = *r.uniforms();
+        let t = &r.gbuffer.out;
+        let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.depth).unwrap());
+        let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
+        let lit = r.read_lit().unwrap();
+        let general = vk::ImageLayout::GENERAL;
+        let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.mask.read(general).unwrap());
+        let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.ssr.out.color.read(general).unwrap());
+        let args: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_args.read().unwrap());
+        let list: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_list.read().unwrap());
+        let albedo = r.read_target(&t.albedo).unwrap();
+        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.material).unwrap());
+        let metallic: Vec<f32> = scene.materials.iter().map(|m| m.metallic).collect();
+        let inputs = ssr::MarchInputs {
+            depth: &depth,
+            normal: &normal,
+            lit: &lit,
+            albedo: &albedo,
+            material: &material,
+            metallic: &metallic,
+            pyramid: &ssr::hiz(&depth, settings.width, settings.height),
+        };
+        let params = SsrParams::from_settings(&settings);
+        let c = compare_march(
+            &frame,
+            &inputs,
+            &params,
+            &listed_pixels(&list, args[3] as usize),
+            &mask,
+            &color,
+        );
+        println!("hiz {hiz}: {c:?}");
+        assert!(c.listed > 2000 && c.grazing * 100 <= c.listed, "hiz {hiz}: {c:?}");
+        let outcomes = [
+            0,
+            FAIL_BLEND,
+            FAIL_BEHIND,
+            FAIL_LEFT_SCREEN,
+            FAIL_BACK_FACE,
+            FAIL_LOW_CONFIDENCE,
+            FAIL_HIT_REFLECTIVE,
+        ];
+        c.assert_outcomes(&outcomes);
+    }
 }
 
 /// A march list longer than `LIST_GROUPS_X` workgroups (every device's dispatch limit
@@ -443,16 +487,13 @@ fn a_march_list_beyond_one_row_of_workgroups_is_covered() {
             g.material[i] = 0;
         }
     });
-    let n = (w * h) as usize;
     let general = vk::ImageLayout::GENERAL;
     let out = &f.pass.out;
-    out.mask
-        .write(bytemuck::cast_slice(&vec![POISON_MASK; n]), general)
-        .unwrap();
+    f.poison();
     let params = SsrParams::from_settings(&f.settings);
     ctx.one_shot(|cmd| {
         f.pass.classify(cmd, &f.ubo, &f.gb, &params, false);
-        f.pass.trace(cmd, &f.ubo, &f.gb, &f.lit, &f.materials, &params);
+        f.record_march(cmd, &params);
     })
     .unwrap();
     let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
@@ -520,4 +561,79 @@ fn hiz_pyramid_matches_cpu_exactly() {
         let nearest = depth.iter().copied().fold(f32::INFINITY, f32::min);
         assert_eq!(want.last().unwrap()[0], nearest);
     }
+}
+
+/// A thin bar in front of a far wall, above a row of mirror pixels whose reflections
+/// rise up the screen and pass behind the bar: the hierarchical march visits every
+/// pixel on the way, so each ray stops behind the bar (`FAIL_BEHIND`, ray traced) and
+/// none takes the wall's colour from beyond it; the linear DDA (8 px strides) steps
+/// over the 2-px bar and reports false hits on the wall, a reflection seen through the
+/// bar (the case this test keeps fixed).
+#[test]
+fn the_hiz_march_does_not_see_through_thin_geometry() {
+    let ctx = common::context();
+    let (w, h) = (131usize, 77usize);
+    let bar = 30..32;
+    let f = Fixture::new(&ctx, 13, w as u32, h as u32, |g| {
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let (depth, normal) = match y {
+                    // The wall, far (about 7 m), facing the camera, not reflective.
+                    _ if y < bar.start => (0.985, [0.0, 0.0, 1.0, 0.0]),
+                    // The bar, near (about 1 m).
+                    _ if bar.contains(&y) => (0.90, [0.0, 0.0, 1.0, 0.0]),
+                    // The mirror row (about 3 m), normal up: rays rise up the screen.
+                    _ if y == h - 1 => (0.97, [0.0, 1.0, 0.0, 0.9]),
+                    _ => (1.0, [0.0, 0.0, 1.0, 0.0]),
+                };
+                g.depth[i] = depth;
+                g.normal[i] = normal;
+                g.material[i] = 0;
+            }
+        }
+    });
+    // Lit colours that say where a hit came from: the wall blue, the bar red.
+    let lit: Vec<[f32; 4]> = (0..w * h)
+        .map(|i| {
+            if i / w < bar.start {
+                [0.0, 0.0, 1.0, 1.0]
+            } else {
+                [1.0, 0.0, 0.0, 1.0]
+            }
+        })
+        .collect();
+    let general = vk::ImageLayout::GENERAL;
+    f.lit.write(bytemuck::cast_slice(&lit), general).unwrap();
+    let mut wall_hits = Vec::new();
+    for hiz in [true, false] {
+        let params = SsrParams {
+            hiz,
+            ..SsrParams::from_settings(&f.settings)
+        };
+        let out = &f.pass.out;
+        f.poison();
+        ctx.one_shot(|cmd| {
+            f.pass.classify(cmd, &f.ubo, &f.gb, &params, false);
+            f.record_march(cmd, &params);
+        })
+        .unwrap();
+        let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
+        let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap());
+        let row = (h - 1) * w..h * w;
+        let behind = row.clone().filter(|&i| mask[i] == FAIL_BEHIND).count();
+        let wall = row
+            .filter(|&i| (mask[i] == 0 || mask[i] == FAIL_BLEND) && color[i][2] > color[i][0])
+            .count();
+        println!("hiz {hiz}: {behind} of {w} behind the bar, {wall} false hits on the wall");
+        if hiz {
+            assert!(behind > w / 2, "hiz: {behind} of {w} rays stopped behind the bar");
+        }
+        wall_hits.push(wall);
+    }
+    assert_eq!(wall_hits[0], 0, "the Hi-Z march saw the wall through the bar");
+    assert!(
+        wall_hits[1] > 10,
+        "the linear DDA no longer steps over the bar: {wall_hits:?}"
+    );
 }

@@ -633,6 +633,7 @@ fn reflect(args: ReflectArgs) -> Result<()> {
         cell(Some(r.rt_frame_ms))
     ));
     let passes = [
+        "ssr.hiz",
         "ssr.classify",
         "ssr.trace",
         "ssr.compact",

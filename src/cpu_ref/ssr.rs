@@ -8,7 +8,7 @@ use crate::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
     FAIL_OUT_OF_STEPS, MATERIAL_NONE, SSR_REFINE_STEPS,
 };
-use glam::{IVec2, Mat3, Vec2, Vec2Swizzles, Vec3, Vec4, Vec4Swizzles};
+use glam::{IVec2, Mat3, Vec2, Vec2Swizzles, Vec3, Vec3Swizzles, Vec4, Vec4Swizzles};
 
 /// The reflected view-space ray of a pixel (`SsrRay`).
 #[derive(Clone, Copy, Debug)]
@@ -79,6 +79,8 @@ pub struct MarchInputs<'a> {
     pub material: &'a [u32],
     /// `metallic` of each material id.
     pub metallic: &'a [f32],
+    /// The Hi-Z pyramid of `depth` (`hiz`), for the hierarchical march.
+    pub pyramid: &'a [Vec<f32>],
 }
 
 /// What the march of one pixel writes, and how close it came to deciding otherwise.
@@ -165,19 +167,30 @@ pub fn hiz(depth: &[f32], width: u32, height: u32) -> Vec<Vec<f32>> {
     levels
 }
 
+/// Where a march ended (`Found` in `ssr_trace.comp`): `reason` 0 with the hit's pixel
+/// and sub-pixel position, or why it found none.
+struct Found {
+    reason: u32,
+    hit_pixel: IVec2,
+    hit_pos: Vec2,
+}
+
+/// The decisions' closest calls over a march (see `March`).
+struct Margins {
+    margin: f32,
+    pixel: f32,
+    steps: u32,
+}
+
 /// `ssr_trace.comp` for listed pixel `p`: the reflected ray marched over the depth
-/// buffer by perspective-correct DDA (McGuire & Mara 2014), the hit refined by binary
-/// search and a secant, then judged (back face, reflective surface, confidence).
-// Long by design: it mirrors `ssr_trace.comp` line by line, so the two can be read side by side.
+/// buffer, through the Hi-Z pyramid or by the linear DDA as `params.hiz` says, then the
+/// hit judged (back face, reflective surface, confidence).
 pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: &SsrParams) -> March {
     let res = IVec2::new(frame.resolution[0] as i32, frame.resolution[1] as i32);
     let at = |q: IVec2| (q.y * res.x + q.x) as usize;
-    let depth_at = |q: IVec2| inputs.depth[at(q)];
     let proj = frame.proj;
-    let view_z = |d: f32| -proj.w_axis.z / (d + proj.z_axis.z);
-    let to_pixel = |h: Vec4| (h.xy() / h.w * 0.5 + 0.5) * res.as_vec2();
     let nr = inputs.normal[at(p)];
-    let ray = ssr_ray(frame, p, depth_at(p), Vec3::new(nr[0], nr[1], nr[2]));
+    let ray = ssr_ray(frame, p, inputs.depth[at(p)], Vec3::new(nr[0], nr[1], nr[2]));
     let (vpos, vn, vdir) = (ray.vpos, ray.vn, ray.vdir);
     let origin = vpos + vn * (1e-3 * vpos.z.abs());
 
@@ -191,9 +204,54 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
     let end_point = origin + vdir * ray_len;
     let h0 = proj * origin.extend(1.0);
     let h1 = proj * end_point.extend(1.0);
+    let mut m = Margins {
+        margin: f32::INFINITY,
+        pixel: f32::INFINITY,
+        steps: 0,
+    };
+    let found = if params.hiz {
+        march_hiz(frame, h0, h1, inputs, params, &mut m)
+    } else {
+        march_linear(frame, (h0, h1), (origin, end_point), inputs, params, &mut m)
+    };
+    let (fail, color) = judge(frame, &found, vdir, inputs, params, &mut m.margin);
+    March {
+        fail,
+        color,
+        hit_pixel: (found.reason == 0).then_some(found.hit_pixel),
+        steps: m.steps,
+        margin: m.margin,
+        pixel_margin: m.pixel,
+    }
+}
+
+/// `view_z` of `ssr_trace.comp`: the view-space z of depth `d`.
+fn view_z(frame: &FrameUniforms, d: f32) -> f32 {
+    -frame.proj.w_axis.z / (d + frame.proj.z_axis.z)
+}
+
+/// `to_pixel`: pixel coordinates of a clip-space point.
+fn to_pixel(frame: &FrameUniforms, h: Vec4) -> Vec2 {
+    (h.xy() / h.w * 0.5 + 0.5) * Vec2::new(frame.resolution[0] as f32, frame.resolution[1] as f32)
+}
+
+/// `march_linear`: the perspective-correct DDA (McGuire & Mara 2014), the hit refined
+/// by binary search and a secant.
+// Long by design: it mirrors `march_linear` in `ssr_trace.comp` line by line.
+fn march_linear(
+    frame: &FrameUniforms,
+    (h0, h1): (Vec4, Vec4),
+    (origin, end_point): (Vec3, Vec3),
+    inputs: &MarchInputs<'_>,
+    params: &SsrParams,
+    m: &mut Margins,
+) -> Found {
+    let res = IVec2::new(frame.resolution[0] as i32, frame.resolution[1] as i32);
+    let depth_at = |q: IVec2| inputs.depth[(q.y * res.x + q.x) as usize];
+    let view_z = |d: f32| view_z(frame, d);
     let (k0, k1) = (1.0 / h0.w, 1.0 / h1.w);
     let (q0, q1) = (origin * k0, end_point * k1);
-    let (mut p0, mut p1) = (to_pixel(h0), to_pixel(h1));
+    let (mut p0, mut p1) = (to_pixel(frame, h0), to_pixel(frame, h1));
     if (p1 - p0).dot(p1 - p0) < 1e-4 {
         p1 += Vec2::splat(0.01);
     }
@@ -215,14 +273,15 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
     let end = p1.x * step_dir;
     let mut prev_z = (q0.z + 0.5 * dq.z) / (k0 + 0.5 * dk);
     let (mut went_behind, mut hit) = (false, false);
-    let mut steps = 0u32;
-    let mut hit_pixel = IVec2::splat(-1);
-    let mut hit_pos = Vec2::splat(-1.0);
-    let (mut margin, mut pixel_margin) = (f32::INFINITY, f32::INFINITY);
-    while pp.x * step_dir <= end && steps < params.max_steps {
-        margin = margin.min(gap(pp.x * step_dir, end));
+    let mut found = Found {
+        reason: 0,
+        hit_pixel: IVec2::splat(-1),
+        hit_pos: Vec2::splat(-1.0),
+    };
+    while pp.x * step_dir <= end && m.steps < params.max_steps {
+        m.margin = m.margin.min(gap(pp.x * step_dir, end));
         let px = swap_if(pp, permute);
-        pixel_margin = pixel_margin.min(boundary_gap(px));
+        m.pixel = m.pixel.min(boundary_gap(px));
         let ip = px.floor().as_ivec2();
         if ip.cmplt(IVec2::ZERO).any() || ip.cmpge(res).any() {
             break;
@@ -237,11 +296,14 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         if scene_depth < 1.0 {
             let scene_z_max = view_z(scene_depth);
             let scene_z_min = scene_z_max - params.thickness * scene_z_max.abs();
-            margin = margin.min(gap(ray_z_max, scene_z_min)).min(gap(ray_z_min, scene_z_max));
+            m.margin = m
+                .margin
+                .min(gap(ray_z_max, scene_z_min))
+                .min(gap(ray_z_min, scene_z_max));
             if ray_z_max >= scene_z_min && ray_z_min <= scene_z_max {
                 hit = true;
-                hit_pixel = ip;
-                hit_pos = px;
+                found.hit_pixel = ip;
+                found.hit_pos = px;
                 break;
             }
             if ray_z_max < scene_z_min {
@@ -252,9 +314,20 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         pp += dp;
         qz += dq.z;
         k += dk;
-        steps += 1;
+        m.steps += 1;
     }
-    if hit && params.stride > 1.0 {
+    if !hit {
+        let left = m.steps < params.max_steps;
+        found.reason = if went_behind {
+            FAIL_BEHIND
+        } else if left {
+            FAIL_LEFT_SCREEN
+        } else {
+            FAIL_OUT_OF_STEPS
+        };
+        return found;
+    }
+    if params.stride > 1.0 {
         let (mut a_p, mut b_p) = (pp - dp, pp);
         let (mut a_qz, mut b_qz) = (qz - dq.z, qz);
         let (mut a_k, mut b_k) = (k - dk, k);
@@ -263,10 +336,10 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
             let m_p = 0.5 * (a_p + b_p);
             let m_qz = 0.5 * (a_qz + b_qz);
             let m_k = 0.5 * (a_k + b_k);
-            pixel_margin = pixel_margin.min(boundary_gap(swap_if(m_p, permute)));
+            m.pixel = m.pixel.min(boundary_gap(swap_if(m_p, permute)));
             let d = depth_at(clamp_px(swap_if(m_p, permute)));
             if d < 1.0 {
-                margin = margin.min(gap(m_qz / m_k, view_z(d)));
+                m.margin = m.margin.min(gap(m_qz / m_k, view_z(d)));
             }
             if d < 1.0 && m_qz / m_k <= view_z(d) {
                 (b_p, b_qz, b_k) = (m_p, m_qz, m_k);
@@ -280,33 +353,138 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         let gap_a = a_qz / a_k - view_z(za);
         let gap_b = b_qz / b_k - view_z(zb);
         // `gap_a > 0` decides whether the secant is used at all.
-        margin = margin.min(gap(a_qz / a_k, view_z(za)));
+        m.margin = m.margin.min(gap(a_qz / a_k, view_z(za)));
         let f = if za < 1.0 && gap_a > 0.0 {
             (gap_a / (gap_a - gap_b)).clamp(0.0, 1.0)
         } else {
             1.0
         };
-        hit_pos = mix(pa, pb, f);
-        pixel_margin = pixel_margin.min(boundary_gap(hit_pos));
-        hit_pixel = hit_pos.floor().as_ivec2().clamp(IVec2::ZERO, res - 1);
+        found.hit_pos = mix(pa, pb, f);
+        m.pixel = m.pixel.min(boundary_gap(found.hit_pos));
+        found.hit_pixel = found.hit_pos.floor().as_ivec2().clamp(IVec2::ZERO, res - 1);
     }
+    found
+}
 
-    let fail;
-    let (mut confidence, mut color) = (0.0, Vec3::ZERO);
-    if !hit {
-        let left = steps < params.max_steps;
-        fail = if went_behind {
-            FAIL_BEHIND
-        } else if left {
-            FAIL_LEFT_SCREEN
+/// `HIZ_NUDGE`, `NO_PLANE` of `ssr_trace.comp`.
+const HIZ_NUDGE: f32 = 0.005;
+const NO_PLANE: f32 = 3.0e38;
+
+/// `march_hiz`: the hierarchical march through the min-depth pyramid
+/// (`inputs.pyramid`, `hiz`'s levels), step for step.
+// Long by design: it mirrors `march_hiz` in `ssr_trace.comp` line by line.
+fn march_hiz(
+    frame: &FrameUniforms,
+    h0: Vec4,
+    h1: Vec4,
+    inputs: &MarchInputs<'_>,
+    params: &SsrParams,
+    m: &mut Margins,
+) -> Found {
+    let res = IVec2::new(frame.resolution[0] as i32, frame.resolution[1] as i32);
+    let pyramid = inputs.pyramid;
+    assert!(!pyramid.is_empty(), "the Hi-Z march needs the pyramid");
+    let s0 = to_pixel(frame, h0).extend(h0.z / h0.w);
+    let s1 = to_pixel(frame, h1).extend(h1.z / h1.w);
+    let dir = s1 - s0;
+    let t_end = if s1.z > 1.0 { (1.0 - s0.z) / dir.z } else { 1.0 };
+    let inv1 = |d: f32| if d.abs() > 1e-20 { 1.0 / d } else { NO_PLANE };
+    let inv = Vec3::new(inv1(dir.x), inv1(dir.y), inv1(dir.z));
+    let side = Vec2::new(
+        if dir.x >= 0.0 { 1.0 } else { 0.0 },
+        if dir.y >= 0.0 { 1.0 } else { 0.0 },
+    );
+    let nudge = Vec2::new(
+        if dir.x >= 0.0 { HIZ_NUDGE } else { -HIZ_NUDGE },
+        if dir.y >= 0.0 { HIZ_NUDGE } else { -HIZ_NUDGE },
+    );
+    let t0 = (s0.xy().floor() + side + nudge - s0.xy()) * inv.xy();
+    let mut t = t0.x.min(t0.y);
+    let mut pos = s0 + dir * t;
+    let top = pyramid.len() - 1;
+    let mut mip = 0usize;
+    let mut found = Found {
+        reason: FAIL_OUT_OF_STEPS,
+        hit_pixel: IVec2::splat(-1),
+        hit_pos: Vec2::splat(-1.0),
+    };
+    let resf = res.as_vec2();
+    while m.steps < params.max_steps {
+        m.margin = m.margin.min(gap(t, t_end));
+        // Distances from the screen's edges are boundary distances too.
+        m.pixel = m.pixel.min(boundary_gap(pos.xy()));
+        if t > t_end || pos.x < 0.0 || pos.y < 0.0 || pos.x >= resf.x || pos.y >= resf.y {
+            found.reason = FAIL_LEFT_SCREEN;
+            break;
+        }
+        let size_x = (res.x as u32).div_ceil(1 << mip);
+        let cell = (pos.x as u32 >> mip, pos.y as u32 >> mip);
+        let surface = pyramid[mip][(cell.1 * size_x + cell.0) as usize];
+        let planes = (Vec2::new(cell.0 as f32, cell.1 as f32) + side) * (1u32 << mip) as f32 + nudge;
+        let txy = (planes - s0.xy()) * inv.xy();
+        let tz = if surface < 1.0 && dir.z > 0.0 {
+            (surface - s0.z) * inv.z
         } else {
-            FAIL_OUT_OF_STEPS
+            NO_PLANE
         };
+        let t_min = txy.x.min(txy.y).min(tz);
+        m.margin = m.margin.min(gap(pos.z, surface));
+        let above = pos.z < surface;
+        if above {
+            // Whether the surface's depth or a side is reached first.
+            m.margin = m.margin.min(gap(tz, txy.x.min(txy.y)));
+            t = t_min;
+            pos = s0 + dir * t;
+        }
+        m.steps += 1;
+        if above && t_min != tz {
+            mip = (mip + 1).min(top);
+        } else if mip > 0 {
+            mip -= 1;
+        } else {
+            let p = IVec2::new(cell.0 as i32, cell.1 as i32);
+            let depth = pyramid[0][(p.y * res.x + p.x) as usize];
+            let scene_z = view_z(frame, depth);
+            let limit = scene_z - params.thickness * scene_z.abs();
+            m.margin = m.margin.min(gap(view_z(frame, pos.z), limit));
+            m.pixel = m.pixel.min(boundary_gap(pos.xy()));
+            if depth >= 1.0 {
+                found.reason = FAIL_LEFT_SCREEN;
+            } else if view_z(frame, pos.z) < limit {
+                found.reason = FAIL_BEHIND;
+            } else {
+                found = Found {
+                    reason: 0,
+                    hit_pixel: p,
+                    hit_pos: pos.xy(),
+                };
+            }
+            break;
+        }
+    }
+    found
+}
+
+/// `judge`: the fail mask and colour (rgb) + confidence (a) of a march's outcome.
+fn judge(
+    frame: &FrameUniforms,
+    found: &Found,
+    vdir: Vec3,
+    inputs: &MarchInputs<'_>,
+    params: &SsrParams,
+    margin: &mut f32,
+) -> (u32, [f32; 4]) {
+    let res = IVec2::new(frame.resolution[0] as i32, frame.resolution[1] as i32);
+    let at = |q: IVec2| (q.y * res.x + q.x) as usize;
+    let (mut confidence, mut color) = (0.0, Vec3::ZERO);
+    let fail = if found.reason != 0 {
+        found.reason
     } else {
+        let hit_pixel = found.hit_pixel;
         let hit_nr = inputs.normal[at(hit_pixel)];
         let hit_n = Vec3::new(hit_nr[0], hit_nr[1], hit_nr[2]).normalize();
         let world_dir = Mat3::from_mat4(frame.view).transpose() * vdir;
-        margin = margin.min(hit_n.dot(world_dir).abs());
+        *margin = margin.min(hit_n.dot(world_dir).abs());
         // `hit_reflection_weight`: the hit surface's own reflection seen along the ray.
         let mut own_reflection = |q: IVec2, n: Vec3| {
             let q = at(q);
@@ -318,36 +496,33 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
             };
             let base = super::albedo_texel(&inputs.albedo[4 * q..4 * q + 4]).0;
             let w = super::shading::reflection_weight(base, metallic, hit_nr[3], n, -world_dir).max_element();
-            margin = margin.min(gap(w, params.recursion_min));
+            *margin = margin.min(gap(w, params.recursion_min));
             w
         };
         if hit_n.dot(world_dir) > 0.0 {
-            fail = FAIL_BACK_FACE;
+            FAIL_BACK_FACE
         } else if own_reflection(hit_pixel, hit_n) > params.recursion_min {
-            fail = FAIL_HIT_REFLECTIVE;
+            FAIL_HIT_REFLECTIVE
         } else {
             let hp = hit_pixel.as_vec2() + 0.5;
             let edge = hp.x.min(res.x as f32 - hp.x).min(hp.y.min(res.y as f32 - hp.y));
             let fade_px = (params.edge_fade * res.x.min(res.y) as f32).max(1.0);
             confidence = (edge / fade_px).clamp(0.0, 1.0) * heading_confidence(vdir);
-            margin = margin.min(gap(confidence, params.min_confidence));
+            *margin = margin.min(gap(confidence, params.min_confidence));
             if confidence < params.min_confidence {
-                fail = FAIL_LOW_CONFIDENCE;
+                FAIL_LOW_CONFIDENCE
             } else {
-                color = lit_bilinear(inputs.lit, hit_pos, res);
-                fail = if confidence < 1.0 { FAIL_BLEND } else { 0 };
+                color = lit_bilinear(inputs.lit, found.hit_pos, res);
+                if confidence < 1.0 {
+                    FAIL_BLEND
+                } else {
+                    0
+                }
             }
         }
-    }
+    };
     let kept = fail == 0 || fail == FAIL_BLEND;
-    March {
-        fail,
-        color: [color.x, color.y, color.z, if kept { confidence } else { 0.0 }],
-        hit_pixel: hit.then_some(hit_pixel),
-        steps,
-        margin,
-        pixel_margin,
-    }
+    (fail, [color.x, color.y, color.z, if kept { confidence } else { 0.0 }])
 }
 
 /// The lit colour at sub-pixel position `x` (texel centres at +0.5), bilinear, edges

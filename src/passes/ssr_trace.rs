@@ -1,5 +1,6 @@
-//! `ssr.classify` and `ssr.trace`: screen-space reflections (McGuire & Mara 2014 DDA)
-//! and the fail mask. The classification lists the pixels worth a march and fails or
+//! `ssr.classify` and `ssr.trace`: screen-space reflections and the fail mask. The march
+//! steps through `ssr.hiz`'s min-depth pyramid (FidelityFX SSSR's hierarchical march),
+//! or, with `ssr_hiz` off, by McGuire & Mara's 2014 linear DDA, kept for comparison. The classification lists the pixels worth a march and fails or
 //! clears the rest; the march runs over that list by an indirect dispatch (the shape
 //! of FidelityFX SSSR), so pixels with nothing to march cost it nothing.
 //! CPU reference: `cpu_ref::ssr` (`classify`, `march`; tests/ssr.rs).
@@ -40,6 +41,7 @@ struct MarchPush {
     edge_fade: f32,
     min_confidence: f32,
     recursion_min: f32,
+    hiz_top: u32,
 }
 
 pub struct SsrOutputs {
@@ -64,12 +66,27 @@ impl SsrOutputs {
     }
 }
 
+/// What the march reads besides its own outputs.
+#[derive(Clone, Copy)]
+pub struct MarchInputs<'a> {
+    pub frame: &'a Buffer,
+    pub gbuffer: &'a GBuffer,
+    /// The lit image, `GENERAL`.
+    pub lit: &'a Image,
+    pub materials: &'a Buffer,
+    /// `ssr.hiz`'s pyramid and its level count.
+    pub hiz: &'a Buffer,
+    pub hiz_levels: u32,
+}
+
 pub struct SsrPass {
     ctx: Arc<Context>,
     classify: Pipeline,
     /// The `rt` mode's classification (`MASK_ONLY`): every reflective pixel fails.
     mask_only: Pipeline,
-    trace: Pipeline,
+    /// The march through the Hi-Z pyramid, and the linear DDA (`ssr_hiz` off).
+    trace_hiz: Pipeline,
+    trace_linear: Pipeline,
     sampler: Sampler,
     pub out: SsrOutputs,
 }
@@ -81,7 +98,13 @@ impl SsrPass {
             ctx: ctx.clone(),
             classify: Pipeline::compute::<ClassifyPush>(ctx, CLASSIFY_NAME, classify)?,
             mask_only: Pipeline::compute_specialized::<ClassifyPush>(ctx, "ssr.mask_only", classify, &[1])?,
-            trace: Pipeline::compute::<MarchPush>(ctx, NAME, shaders::SSR_TRACE_COMP)?,
+            trace_hiz: Pipeline::compute_specialized::<MarchPush>(ctx, NAME, shaders::SSR_TRACE_COMP, &[1])?,
+            trace_linear: Pipeline::compute_specialized::<MarchPush>(
+                ctx,
+                "ssr.trace.linear",
+                shaders::SSR_TRACE_COMP,
+                &[0],
+            )?,
             sampler: Sampler::nearest_clamp(ctx, "ssr.sampler")?,
             out: SsrOutputs::new(ctx, extent)?,
         })
@@ -154,21 +177,26 @@ impl SsrPass {
 
     /// Records the march over the classification's list: SSR colour + confidence and
     /// the fail mask of the listed pixels, visible at the end to their readers
-    /// (`ssr.compact`, `reflect.merge`). `lit` in `GENERAL`.
-    /// `materials` gives the hit surfaces' metallic for their own reflection's weight.
-    #[allow(clippy::too_many_arguments)]
-    pub fn trace(
-        &self,
-        cmd: vk::CommandBuffer,
-        frame: &Buffer,
-        gbuffer: &GBuffer,
-        lit: &Image,
-        materials: &Buffer,
-        params: &SsrParams,
-    ) {
+    /// (`ssr.compact`, `reflect.merge`). `lit` in `GENERAL`; `materials` gives the hit
+    /// surfaces' metallic for their own reflection's weight; the pyramid (`ssr.hiz`'s,
+    /// of `hiz_levels` levels, visible to compute reads) is read when `params.hiz`.
+    pub fn trace(&self, cmd: vk::CommandBuffer, inputs: &MarchInputs<'_>, params: &SsrParams) {
+        let MarchInputs {
+            frame,
+            gbuffer,
+            lit,
+            materials,
+            hiz,
+            hiz_levels,
+        } = *inputs;
         let out = &self.out;
         let s = &self.sampler;
-        self.trace.dispatch(
+        let pipeline = if params.hiz {
+            &self.trace_hiz
+        } else {
+            &self.trace_linear
+        };
+        pipeline.dispatch(
             cmd,
             &[
                 Resource::Buffer(frame),
@@ -182,6 +210,7 @@ impl SsrPass {
                 Resource::Sampled(&gbuffer.albedo, s),
                 Resource::Sampled(&gbuffer.material, s),
                 Resource::Buffer(materials),
+                Resource::Buffer(hiz),
             ],
             &MarchPush {
                 max_steps: params.max_steps,
@@ -191,6 +220,7 @@ impl SsrPass {
                 edge_fade: params.edge_fade,
                 min_confidence: params.min_confidence,
                 recursion_min: params.recursion_min,
+                hiz_top: hiz_levels - 1,
             },
             Groups::Indirect(&out.march_args),
         );

@@ -10,7 +10,8 @@ use crate::passes::compose::{self, ComposeInputs, ComposeMode};
 use crate::passes::lbvh::dynamic::DynamicBvh;
 use crate::passes::reflect_merge::{self, BlurParams, MergeInputs, MergeParams};
 use crate::passes::rt_reflect::{self, ReflectInputs};
-use crate::passes::ssr_trace;
+use crate::passes::ssr_hiz;
+use crate::passes::ssr_trace::{self, MarchInputs};
 use crate::passes::{gbuffer, light_direct, shadow_map, sim_cloth, sim_transform, ssr_compact, SceneGeometry};
 use crate::passes::{TraceScene, Traceable};
 use crate::settings::Mode;
@@ -38,6 +39,7 @@ pub enum Row {
     ShadowMap,
     GBuffer,
     LightDirect,
+    SsrHiz,
     SsrClassify,
     SsrTrace,
     SsrCompact,
@@ -48,7 +50,7 @@ pub enum Row {
 
 impl Row {
     /// Every row, in frame order.
-    pub const ALL: [Row; 14] = [
+    pub const ALL: [Row; 15] = [
         Row::Uniforms,
         Row::SimRigid,
         Row::SimTransform,
@@ -57,6 +59,7 @@ impl Row {
         Row::ShadowMap,
         Row::GBuffer,
         Row::LightDirect,
+        Row::SsrHiz,
         Row::SsrClassify,
         Row::SsrTrace,
         Row::SsrCompact,
@@ -77,6 +80,7 @@ impl Row {
             Row::ShadowMap => &[shadow_map::NAME],
             Row::GBuffer => &[gbuffer::NAME],
             Row::LightDirect => &[light_direct::NAME],
+            Row::SsrHiz => &[ssr_hiz::NAME],
             Row::SsrClassify => &[ssr_trace::CLASSIFY_NAME],
             Row::SsrTrace => &[ssr_trace::NAME],
             Row::SsrCompact => &[ssr_compact::NAME],
@@ -202,6 +206,7 @@ impl Renderer {
             shadow,
             gbuffer,
             light,
+            hiz,
             ssr,
             compact,
             rt,
@@ -247,14 +252,23 @@ impl Renderer {
             light.record(cmd, ubo, g, &shadow.out, &scene.materials)
         });
         let params = SsrParams::from_settings(st);
+        if mode.marches() && params.hiz {
+            f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
+        }
         if mode.reflects() {
             let mask_only = !mode.marches();
             f.row(Row::SsrClassify, || ssr.classify(cmd, ubo, g, &params, mask_only));
         }
         if mode.marches() {
-            f.row(Row::SsrTrace, || {
-                ssr.trace(cmd, ubo, g, &light.out, &scene.materials, &params)
-            });
+            let inputs = MarchInputs {
+                frame: ubo,
+                gbuffer: g,
+                lit: &light.out,
+                materials: &scene.materials,
+                hiz: &hiz.out.buffer,
+                hiz_levels: hiz.out.levels.len() as u32,
+            };
+            f.row(Row::SsrTrace, || ssr.trace(cmd, &inputs, &params));
         }
         if mode.traces() {
             f.row(Row::SsrCompact, || compact.record(cmd, &ssr.out.mask));

@@ -4,7 +4,7 @@
 //!
 //! Frame: `uniforms` → (a dynamic scene: `sim.rigid` on the CPU, `sim.transform`,
 //! `sim.cloth`, the dynamic BVH's `lbvh.*`) → `shadow.map` → `gbuffer` →
-//! `light.direct` → (by mode) `ssr.classify` → `ssr.trace` → `ssr.compact` →
+//! `light.direct` → (by mode) `ssr.hiz` → `ssr.classify` → `ssr.trace` → `ssr.compact` →
 //! `rt.reflect` → `reflect.merge` → `compose`. The static BVH is built once, when the
 //! renderer is created; the dynamic one every frame, over that frame's geometry.
 //!
@@ -34,6 +34,7 @@ use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_compact::CompactPass;
+use crate::passes::ssr_hiz::HiZPass;
 use crate::passes::ssr_trace::SsrPass;
 use crate::passes::Traceable;
 use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
@@ -81,6 +82,7 @@ pub struct Renderer {
     pub shadow: ShadowMapPass,
     pub gbuffer: GBufferPass,
     pub light: LightDirectPass,
+    pub hiz: HiZPass,
     pub ssr: SsrPass,
     pub compact: CompactPass,
     pub rt: RtReflectPass,
@@ -149,6 +151,7 @@ impl Renderer {
             shadow: ShadowMapPass::new(ctx, settings.shadow_map_size, settings.shadow_slope_bias)?,
             gbuffer: GBufferPass::new(ctx, extent)?,
             light: LightDirectPass::new(ctx, extent)?,
+            hiz: HiZPass::new(ctx, extent)?,
             ssr: SsrPass::new(ctx, extent)?,
             compact: CompactPass::new(ctx, extent)?,
             rt: RtReflectPass::new(ctx, extent)?,
@@ -220,6 +223,7 @@ impl Renderer {
             let e = extent(&settings);
             self.gbuffer.resize(e)?;
             self.light.resize(e)?;
+            self.hiz.resize(e)?;
             self.ssr.resize(e)?;
             self.compact.resize(e)?;
             self.rt.resize(e)?;

@@ -170,9 +170,14 @@ settings_table! {
     /// mirrors within mirrors, each bounce costs another traversal for paths still on a
     /// reflector.
     max_bounces: u32 = 3, u32s(1, 16), slider(1.0, 16.0), NextFrame;
-    /// SSR step budget per ray: more finds farther hits, at up to that many depth reads.
+    /// SSR marches through the Hi-Z pyramid (`ssr.hiz`): empty screen regions cost a
+    /// few steps and the march finds the first pixel the ray reaches; off, a linear DDA
+    /// of `ssr_stride` px steps, kept for comparison.
+    ssr_hiz: bool = true, Range::Any, Hud::Checkbox, NextFrame;
+    /// SSR step budget per ray (Hi-Z cell visits, or DDA steps): more finds farther
+    /// hits, at up to that many depth reads.
     ssr_max_steps: u32 = 64, u32s(1, 4096), log_slider(1.0, 512.0), NextFrame;
-    /// SSR step length in pixels: longer reaches farther for the same budget but can
+    /// Linear DDA step length in pixels (`ssr_hiz` off): longer reaches farther for the same budget but can
     /// step over objects thinner than a step (a hit is refined to the pixel by binary
     /// search inside its step).
     ssr_stride: f32 = 8.0, Range::F32 { min: 0.5, max: MAX_SIDE as f32, open_min: false }, log_slider(0.5, 32.0), NextFrame;
@@ -400,7 +405,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 24);
+        assert_eq!(Settings::field_names().len(), 25);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).
@@ -457,6 +462,7 @@ mod tests {
 /// SSR settings (see `Settings` for what each trades).
 #[derive(Clone, Copy, Debug)]
 pub struct SsrParams {
+    pub hiz: bool,
     pub max_steps: u32,
     pub stride: f32,
     pub thickness: f32,
@@ -472,6 +478,7 @@ impl SsrParams {
     /// The SSR fields of the frame's settings.
     pub fn from_settings(st: &Settings) -> Self {
         Self {
+            hiz: st.ssr_hiz,
             max_steps: st.ssr_max_steps,
             stride: st.ssr_stride,
             thickness: st.ssr_thickness,

@@ -24,8 +24,8 @@ layout(push_constant) uniform ComposePush {
     float reflective_min; // COMPOSE_FAIL_MASK: which pixels reflect
 } pc;
 
-const uint FAIL_COLOURS[8] = uint[](MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3,
-                                    MASK_COLOUR_4, MASK_COLOUR_5, MASK_COLOUR_6, MASK_COLOUR_7);
+const uint FAIL_COLOURS[9] = uint[](MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3,
+                                    MASK_COLOUR_4, MASK_COLOUR_5, MASK_COLOUR_6, MASK_COLOUR_7, MASK_COLOUR_8);
 
 // Beyond 7.24 the ACES fit is flat at 1, and clamping its input here keeps x * x far
 // from f32 overflow (near 1.8e19, where inf / inf would give NaN): e.g. exposure 1e20.
@@ -43,11 +43,13 @@ void main() {
     }
     if (pc.mode == COMPOSE_FAIL_MASK) {
         // Mirrored by ReflectionMaps::fail_mask_rgba: black where nothing reflects,
-        // dark blue where SSR answered, else the colour of the lowest reason bit.
+        // dark blue where SSR answered, grey where untraced, else the colour of the
+        // lowest reason bit.
         uint rgb = 0u;
         if (texelFetch(gb_material, p, 0).r != MATERIAL_NONE && texelFetch(gb_normal, p, 0).w > pc.reflective_min) {
             uint m = imageLoad(fail_mask, p).r;
-            rgb = m == 0u ? MASK_COLOUR_SSR_OK : FAIL_COLOURS[uint(findLSB(m)) % 8u];
+            uint reason = (m & FAIL_UNTRACED) != 0u ? FAIL_UNTRACED : m;
+            rgb = m == 0u ? MASK_COLOUR_SSR_OK : FAIL_COLOURS[uint(findLSB(reason)) % 9u];
         }
         imageStore(ldr, p, vec4(unpackUnorm4x8(rgb).rgb, 1.0));
         return;

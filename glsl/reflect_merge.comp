@@ -33,7 +33,7 @@ void main() {
         if (reflective) {
             uint fail = imageLoad(fail_mask, p).r;
             vec4 ssr = imageLoad(ssr_in, p); // a: confidence
-            if (fail == 0u) {
+            if (fail == 0u || (fail & FAIL_UNTRACED) != 0u) { // SSR's answer, or the sky
                 out_value = vec4(ssr.rgb, float(SOURCE_SSR));
             } else if (pc.rt_enabled != 0u) {
                 // A faded SSR hit weighs by its confidence against the ray-traced colour.

@@ -4,7 +4,9 @@
 // ssr.classify: which pixels ssr.trace marches (after FidelityFX SSSR's classification).
 // A pixel with no reflective surface gets no reflection (fail mask 0); a reflective
 // pixel whose heading alone keeps its confidence below the threshold fails
-// (FAIL_LOW_CONFIDENCE) without a march, as every outcome of the march would; the rest
+// (FAIL_LOW_CONFIDENCE) without a march, as every outcome of the march would (and is
+// not traced either, keeping the sky, where its own reflection weighs less than
+// trace_min_weight: FAIL_UNTRACED); the rest
 // are appended to the march list, whose length sets ssr.trace's indirect dispatch. So
 // the march and everything around it run only where they can give a reflection:
 // lavapipe pays a full-screen kernel's whole straight-line code on every pixel, taken
@@ -24,6 +26,8 @@ layout(binding = 6, std430) writeonly buffer MarchList { uint march_list[]; };
 // VkDispatchIndirectCommand of ssr.trace (x) and the list's length (w); x and w are
 // zeroed before, y and z are 1.
 layout(binding = 7, std430) buffer MarchArgs { uvec4 march_args; };
+layout(binding = 8) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
+layout(binding = 9, std430) readonly buffer Materials { Material materials[]; };
 
 // The rt mode's variant: no SSR, every reflective pixel fails (FAIL_FORCED).
 layout(constant_id = 0) const bool MASK_ONLY = false;
@@ -31,6 +35,7 @@ layout(constant_id = 0) const bool MASK_ONLY = false;
 layout(push_constant) uniform Push {
     float min_confidence; // below: the pixel fails
     float reflective_min; // reflectivity above which a pixel reflects
+    float trace_min_weight; // failed pixels whose own reflection weighs less are not traced
 } pc;
 
 void main() {
@@ -39,6 +44,7 @@ void main() {
     bool inside = all(lessThan(p, res));
     uint fail = 0u;
     bool march = false;
+    vec3 sky = vec3(0.0);
     if (inside) {
         uint material = texelFetch(gb_material, p, 0).r;
         vec4 nr = texelFetch(gb_normal, p, 0);
@@ -49,9 +55,16 @@ void main() {
             SsrRay r = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz);
             march = heading_confidence(r.vdir) >= pc.min_confidence;
             fail = march ? 0u : FAIL_LOW_CONFIDENCE;
+            if (!march && pc.trace_min_weight > 0.0) {
+                vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
+                if (view_reflection_weight(r, nr.xyz, base, materials[material].metallic, nr.w) < pc.trace_min_weight) {
+                    fail |= FAIL_UNTRACED;
+                    sky = untraced_sky(r);
+                }
+            }
         }
         if (!march) {
-            imageStore(ssr_out, p, vec4(0.0));
+            imageStore(ssr_out, p, vec4(sky, 0.0));
             imageStore(fail_mask, p, uvec4(fail));
         }
     }

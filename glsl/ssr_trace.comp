@@ -42,6 +42,7 @@ layout(push_constant) uniform Push {
     float min_confidence; // below: the pixel fails
     float recursion_min;  // hits whose own reflection, seen along the ray, weighs more fail
     uint hiz_top;         // the pyramid's last (1x1) level
+    float trace_min_weight; // failed pixels whose own reflection weighs less are not traced
 } pc;
 
 // View-space z (negative in front of the camera) of G-buffer depth d.
@@ -334,6 +335,20 @@ void main() {
     float confidence;
     vec3 color;
     judge(found, vdir, res, fail, confidence, color);
+    if (fail != 0u && pc.trace_min_weight > 0.0) {
+        uint id = texelFetch(gb_material, p, 0).r; // listed pixels reflect: not MATERIAL_NONE
+        vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
+        vec4 nr = texelFetch(gb_normal, p, 0);
+        if (view_reflection_weight(ray, nr.xyz, base, materials[id].metallic, nr.w) < pc.trace_min_weight) {
+            // Not traced: a faded hit is kept whole, a failure keeps the sky.
+            if (fail == FAIL_BLEND) {
+                fail = 0u;
+            } else {
+                fail |= FAIL_UNTRACED;
+                color = untraced_sky(ray);
+            }
+        }
+    }
     bool kept = fail == 0u || fail == FAIL_BLEND;
     imageStore(ssr_out, p, vec4(color, kept ? confidence : 0.0));
     imageStore(fail_mask, p, uvec4(fail));

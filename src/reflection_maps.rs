@@ -3,8 +3,8 @@
 
 use crate::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
-    FAIL_OUT_OF_STEPS, MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3, MASK_COLOUR_4, MASK_COLOUR_5,
-    MASK_COLOUR_6, MASK_COLOUR_7, MASK_COLOUR_SSR_OK,
+    FAIL_OUT_OF_STEPS, FAIL_UNTRACED, MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3, MASK_COLOUR_4,
+    MASK_COLOUR_5, MASK_COLOUR_6, MASK_COLOUR_7, MASK_COLOUR_8, MASK_COLOUR_SSR_OK,
 };
 use std::collections::BTreeMap;
 
@@ -15,8 +15,8 @@ pub struct ReflectionStats {
     pub reflective_pixels: u64,
     /// Reflective pixels SSR failed on (all of them in `rt` mode, as `forced`).
     pub ssr_failed_pixels: u64,
-    /// Reflective pixels the ray tracer produced: the failed ones in the modes that
-    /// trace (`hybrid`, `rt`, `provenance`), none in `ssr` and `raster`.
+    /// Reflective pixels the ray tracer produced: the failed ones but the untraced in
+    /// the modes that trace (`hybrid`, `rt`, `provenance`), none in `ssr` and `raster`.
     pub traced_pixels: u64,
     /// Failed pixels by reason, every reason present (0 when none failed for it).
     pub fail_reasons: BTreeMap<&'static str, u64>,
@@ -53,17 +53,17 @@ impl ReflectionMaps {
                 }
             }
         }
-        let failed = failed().count() as u64;
+        let traced = failed().filter(|(m, _)| **m & FAIL_UNTRACED == 0).count() as u64;
         ReflectionStats {
             reflective_pixels: self.reflective.iter().filter(|r| **r).count() as u64,
-            ssr_failed_pixels: failed,
-            traced_pixels: if self.traced { failed } else { 0 },
+            ssr_failed_pixels: failed().count() as u64,
+            traced_pixels: if self.traced { traced } else { 0 },
             fail_reasons,
         }
     }
 
-    /// The fail mask as tightly packed RGBA8, one colour per reason (the lowest set
-    /// bit wins; `FAIL_COLOURS`), SSR successes dark blue, non-reflective pixels black.
+    /// The fail mask as tightly packed RGBA8, one colour per reason (untraced, else the
+    /// lowest set bit; `FAIL_COLOURS`), SSR successes dark blue, non-reflective pixels black.
     pub fn fail_mask_rgba(&self) -> Vec<u8> {
         self.mask
             .iter()
@@ -74,7 +74,8 @@ impl ReflectionMaps {
                 } else if m == 0 {
                     SSR_OK_COLOUR
                 } else {
-                    FAIL_COLOURS[m.trailing_zeros() as usize % FAIL_COLOURS.len()]
+                    let reason = if m & FAIL_UNTRACED != 0 { FAIL_UNTRACED } else { m };
+                    FAIL_COLOURS[reason.trailing_zeros() as usize % FAIL_COLOURS.len()]
                 };
                 [rgb[0], rgb[1], rgb[2], 255]
             })
@@ -91,8 +92,8 @@ const fn unpack(c: u32) -> [u8; 3] {
 pub const SSR_OK_COLOUR: [u8; 3] = unpack(MASK_COLOUR_SSR_OK);
 /// Colour of each fail reason, indexed by bit position (the order of
 /// `FAIL_REASONS`): yellow, orange, red, magenta, cyan, green, white, light blue (an
-/// SSR hit blended with the ray tracer's).
-pub const FAIL_COLOURS: [[u8; 3]; 8] = [
+/// SSR hit blended with the ray tracer's), grey (untraced).
+pub const FAIL_COLOURS: [[u8; 3]; 9] = [
     unpack(MASK_COLOUR_0),
     unpack(MASK_COLOUR_1),
     unpack(MASK_COLOUR_2),
@@ -101,10 +102,11 @@ pub const FAIL_COLOURS: [[u8; 3]; 8] = [
     unpack(MASK_COLOUR_5),
     unpack(MASK_COLOUR_6),
     unpack(MASK_COLOUR_7),
+    unpack(MASK_COLOUR_8),
 ];
 
 /// Names of the fail-mask reason bits, for reports.
-pub const FAIL_REASONS: [(u32, &str); 8] = [
+pub const FAIL_REASONS: [(u32, &str); 9] = [
     (FAIL_LEFT_SCREEN, "left_screen"),
     (FAIL_BEHIND, "behind_geometry"),
     (FAIL_OUT_OF_STEPS, "out_of_steps"),
@@ -113,6 +115,7 @@ pub const FAIL_REASONS: [(u32, &str); 8] = [
     (FAIL_HIT_REFLECTIVE, "hit_reflective"),
     (FAIL_FORCED, "forced"),
     (FAIL_BLEND, "ssr_blend"),
+    (FAIL_UNTRACED, "untraced"),
 ];
 
 #[cfg(test)]

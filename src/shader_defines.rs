@@ -109,6 +109,10 @@ pub const FAIL_FORCED: u32 = 64;
 /// traced too and `reflect.merge` blends confidence x SSR + (1 - confidence) x RT, so
 /// the screen-edge and toward-camera fades are smooth; alone in the mask.
 pub const FAIL_BLEND: u32 = 128;
+/// With a reason bit: the pixel's own reflection weighs less than `trace_min_weight`,
+/// so it is not ray traced: it keeps SSR's answer, the sky in the reflected direction
+/// where SSR found no hit (what a miss of the ray tracer returns).
+pub const FAIL_UNTRACED: u32 = 256;
 
 /// Provenance of a pixel's reflection, as `reflect.merge` labels it.
 pub const SOURCE_NONE: u32 = 0;
@@ -131,7 +135,7 @@ pub const fn rgb8(r: u8, g: u8, b: u8) -> u32 {
 /// Fail-mask colours (`--fail-mask` images and the demo's view): a reflective pixel
 /// SSR answered is dark blue; a failed one is coloured by its lowest reason bit:
 /// yellow, orange, red, magenta, cyan, green, white, light blue (an SSR hit blended
-/// with the ray tracer's).
+/// with the ray tracer's); an untraced one (`FAIL_UNTRACED`) grey, whatever its reason.
 pub const MASK_COLOUR_SSR_OK: u32 = rgb8(30, 50, 140);
 pub const MASK_COLOUR_0: u32 = rgb8(240, 220, 40);
 pub const MASK_COLOUR_1: u32 = rgb8(250, 130, 20);
@@ -141,6 +145,7 @@ pub const MASK_COLOUR_4: u32 = rgb8(40, 220, 230);
 pub const MASK_COLOUR_5: u32 = rgb8(40, 200, 60);
 pub const MASK_COLOUR_6: u32 = rgb8(255, 255, 255);
 pub const MASK_COLOUR_7: u32 = rgb8(120, 170, 255);
+pub const MASK_COLOUR_8: u32 = rgb8(110, 110, 120);
 
 /// Every constant above, as `(name, value)`, in the form build.rs hands to shaderc.
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
@@ -175,6 +180,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("FAIL_HIT_REFLECTIVE", FAIL_HIT_REFLECTIVE),
     ("FAIL_FORCED", FAIL_FORCED),
     ("FAIL_BLEND", FAIL_BLEND),
+    ("FAIL_UNTRACED", FAIL_UNTRACED),
     ("SOURCE_NONE", SOURCE_NONE),
     ("SOURCE_SSR", SOURCE_SSR),
     ("SOURCE_RT", SOURCE_RT),
@@ -191,4 +197,5 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("MASK_COLOUR_5", MASK_COLOUR_5),
     ("MASK_COLOUR_6", MASK_COLOUR_6),
     ("MASK_COLOUR_7", MASK_COLOUR_7),
+    ("MASK_COLOUR_8", MASK_COLOUR_8),
 ];

@@ -8,7 +8,7 @@ use rand::Rng;
 use speculum::cpu_ref::compact::compact;
 use speculum::passes::ssr_compact::CompactPass;
 use speculum::passes::ssr_trace::MASK_FORMAT;
-use speculum::shader_defines::RT_LIST_WG;
+use speculum::shader_defines::{FAIL_UNTRACED, RT_LIST_WG};
 use speculum::vk::Image;
 
 #[test]
@@ -18,11 +18,13 @@ fn compaction_matches_cpu_on_random_masks() {
     for (w, h) in [(1u32, 1u32), (67, 45), (300, 7), (960, 540)] {
         for density in [0.0, 0.003, 0.3, 0.97, 1.0] {
             let extent = vk::Extent2D { width: w, height: h };
-            // Masks carry reason bits: any nonzero value means "needs a ray".
+            // Masks carry reason bits: any nonzero value means "needs a ray", unless it
+            // is marked untraced (FAIL_UNTRACED with a reason: left out).
             let mask: Vec<u32> = (0..w * h)
                 .map(|_| {
                     if rng.random_bool(density) {
-                        rng.random_range(1..32)
+                        let untraced = if rng.random_bool(0.2) { FAIL_UNTRACED } else { 0 };
+                        rng.random_range(1..32) | untraced
                     } else {
                         0
                     }
@@ -59,7 +61,10 @@ fn compaction_matches_cpu_on_random_masks() {
             let got: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.pixels.read().unwrap());
             assert_eq!(&got[..want.len()], &want[..], "{w}x{h} density {density}");
             let pixels = pass.out.read_pixels().unwrap();
-            assert!(pixels.iter().all(|&(x, y)| mask[(y * w + x) as usize] != 0));
+            assert!(pixels.iter().all(|&(x, y)| {
+                let m = mask[(y * w + x) as usize];
+                m != 0 && m & FAIL_UNTRACED == 0
+            }));
         }
     }
 }

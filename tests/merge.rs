@@ -10,7 +10,7 @@ use rand::Rng;
 use speculum::cpu_ref::{self, merge};
 use speculum::passes::reflect_merge::{BlurParams, MergeInputs, MergeParams, MergePass};
 use speculum::passes::GBuffer;
-use speculum::shader_defines::{FAIL_BLEND, MATERIAL_NONE, SOURCE_NONE};
+use speculum::shader_defines::{FAIL_BLEND, FAIL_UNTRACED, MATERIAL_NONE, SOURCE_NONE};
 use speculum::vk::{barrier, Image};
 
 const POISON: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
@@ -56,8 +56,9 @@ fn merge_and_seam_blur_match_cpu_reference() {
             } else {
                 0.85
             };
-            // Any reason, FAIL_BLEND (a faded SSR hit, blended by confidence) included.
-            let reasons = [1u32, 2, 4, 8, 16, 32, FAIL_BLEND, FAIL_BLEND];
+            // Any reason, FAIL_BLEND (a faded SSR hit, blended by confidence) and
+            // untraced ones (SSR's answer kept) included.
+            let reasons = [1u32, 2, 4, 8, 16, 32, FAIL_BLEND, FAIL_BLEND, 16 | FAIL_UNTRACED];
             if rng.random_bool(p) {
                 reasons[rng.random_range(0..reasons.len())]
             } else {

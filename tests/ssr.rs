@@ -23,7 +23,7 @@ use speculum::passes::GBuffer;
 use speculum::settings::SsrParams;
 use speculum::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
-    FAIL_OUT_OF_STEPS, LIST_STRIPES, SSR_LIST_WG,
+    FAIL_OUT_OF_STEPS, FAIL_UNTRACED, LIST_STRIPES, MATERIAL_NONE, SSR_LIST_WG,
 };
 use speculum::vk::{barrier, Image};
 
@@ -128,6 +128,20 @@ impl Fixture {
         self.pass.trace(cmd, &inputs, params);
     }
 
+    /// Pixel i's base colour (linear) and metallic, as the kernels read them.
+    fn own(&self, i: usize) -> (glam::Vec3, f32) {
+        let id = self.g.material[i];
+        let metallic = if id == MATERIAL_NONE {
+            0.0
+        } else {
+            self.metallic[id as usize]
+        };
+        (
+            speculum::cpu_ref::albedo_texel(&self.albedo[4 * i..4 * i + 4]).0,
+            metallic,
+        )
+    }
+
     /// Poisons the SSR colour and fail mask, so a pixel no kernel wrote shows.
     fn poison(&self) {
         let n = (self.settings.width * self.settings.height) as usize;
@@ -161,9 +175,18 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
     let (w, h) = (settings.width as usize, settings.height as usize);
     let n = w * h;
     let general = vk::ImageLayout::GENERAL;
-    let params = SsrParams::from_settings(settings);
-
-    for (mask_only, march) in [(false, false), (true, false), (false, true)] {
+    // The last run also leaves pixels untraced (their own reflection weighing less
+    // than 0.3): they keep the sky.
+    for (mask_only, march, trace_min_weight) in [
+        (false, false, 0.0),
+        (true, false, 0.0),
+        (false, true, 0.0),
+        (false, false, 0.3),
+    ] {
+        let params = SsrParams {
+            trace_min_weight,
+            ..SsrParams::from_settings(settings)
+        };
         let out = &pass.out;
         f.poison();
         out.march_list
@@ -171,7 +194,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
             .unwrap();
         out.march_args.write(&[0xcdu8; 16]).unwrap();
         ctx.one_shot(|cmd| {
-            pass.classify(cmd, ubo, gb, &params, mask_only);
+            pass.classify(cmd, (ubo, gb, &f.materials), &params, mask_only);
             if march {
                 f.record_march(cmd, &params);
             }
@@ -196,25 +219,44 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
             listed[y * w + x] = true;
         }
 
-        let (mut counts, mut borderline) = ([0usize; 3], 0);
+        let (mut counts, mut borderline, mut untraced) = ([0usize; 3], 0, 0);
         for i in 0..n {
             let p = IVec2::new((i % w) as i32, (i / w) as i32);
             let texel = (g.depth[i], g.normal[i], g.material[i]);
-            let (want, heading) =
-                ssr::classify(frame, p, texel, params.min_confidence, params.reflective_min, mask_only);
-            let got = if listed[i] { Class::March } else { Class::Done(mask[i]) };
-            if got != want && (heading - params.min_confidence).abs() < 1e-4 {
+            let (want, [heading, weight]) = ssr::classify(frame, p, texel, f.own(i), &params, mask_only);
+            let got = if listed[i] {
+                Class::March
+            } else {
+                Class::Done(mask[i], [0.0; 3])
+            };
+            let same = match (got, want) {
+                (Class::Done(a, _), Class::Done(b, _)) => a == b,
+                (a, b) => a == b,
+            };
+            let on_threshold =
+                (heading - params.min_confidence).abs() < 1e-4 || (weight - params.trace_min_weight).abs() < 1e-4;
+            if !same && on_threshold {
                 borderline += 1;
                 continue;
             }
-            assert_eq!(got, want, "pixel {p} (mask only {mask_only})");
+            assert!(same, "pixel {p} (mask only {mask_only}): GPU {got:?}, CPU {want:?}");
             match want {
-                Class::Done(0) => counts[0] += 1,
-                Class::Done(_) => counts[1] += 1,
+                Class::Done(0, _) => counts[0] += 1,
+                Class::Done(m, _) => {
+                    counts[1] += 1;
+                    untraced += (m & FAIL_UNTRACED != 0) as usize;
+                }
                 Class::March => counts[2] += 1,
             }
             match (want, march) {
-                (Class::Done(_), _) => assert_eq!(color[i], [0.0; 4], "pixel {p}: SSR colour"),
+                (Class::Done(_, sky), _) => {
+                    let close = (0..3).all(|k| (color[i][k] - sky[k]).abs() <= 1e-4 * (1.0 + sky[k].abs()));
+                    assert!(
+                        close && color[i][3] == 0.0,
+                        "pixel {p}: SSR colour {:?}, want {sky:?}",
+                        color[i]
+                    );
+                }
                 // Listed: left to the march.
                 (Class::March, false) => {
                     assert_eq!(mask[i], POISON_MASK, "pixel {p}");
@@ -231,6 +273,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
             }
         }
         assert!(borderline <= n / 1000, "{borderline} pixels on the threshold");
+        assert_eq!(untraced > n / 100, trace_min_weight > 0.0, "{untraced} untraced pixels");
         // Every class occurs (the rt variant lists none and fails every reflective
         // pixel), so each comparison above means something.
         if mask_only {
@@ -354,9 +397,11 @@ fn march_matches_cpu_on_a_random_gbuffer() {
     // Both marches. A short budget, so rays also run out of steps (a Hi-Z step may
     // cross many pixels, a DDA step crosses `stride`); a recursion threshold that lets
     // random reflectivities both pass and fail.
-    for (hiz, max_steps) in [(true, 9), (false, 5)] {
+    // The last run leaves the failures of weak reflectors untraced (the sky kept).
+    for (hiz, max_steps, trace_min_weight) in [(true, 9, 0.0), (false, 5, 0.0), (true, 9, 0.3)] {
         let params = SsrParams {
             hiz,
+            trace_min_weight,
             recursion_min: 0.6,
             max_steps,
             ..SsrParams::from_settings(settings)
@@ -371,7 +416,7 @@ fn march_matches_cpu_on_a_random_gbuffer() {
                 .unwrap();
         }
         ctx.one_shot(|cmd| {
-            pass.classify(cmd, ubo, gb, &params, false);
+            pass.classify(cmd, (ubo, gb, &f.materials), &params, false);
             f.record_march(cmd, &params);
         })
         .unwrap();
@@ -409,6 +454,13 @@ fn march_matches_cpu_on_a_random_gbuffer() {
             FAIL_HIT_REFLECTIVE,
         ];
         c.assert_outcomes(&outcomes);
+        let untraced: usize = c
+            .outcomes
+            .iter()
+            .filter(|(m, _)| *m & FAIL_UNTRACED != 0)
+            .map(|(_, k)| k)
+            .sum();
+        assert_eq!(untraced > 20, trace_min_weight > 0.0, "{untraced} untraced");
     }
 }
 
@@ -492,7 +544,7 @@ fn a_march_list_beyond_one_row_of_workgroups_is_covered() {
     f.poison();
     let params = SsrParams::from_settings(&f.settings);
     ctx.one_shot(|cmd| {
-        f.pass.classify(cmd, &f.ubo, &f.gb, &params, false);
+        f.pass.classify(cmd, (&f.ubo, &f.gb, &f.materials), &params, false);
         f.record_march(cmd, &params);
     })
     .unwrap();
@@ -614,7 +666,7 @@ fn the_hiz_march_does_not_see_through_thin_geometry() {
         let out = &f.pass.out;
         f.poison();
         ctx.one_shot(|cmd| {
-            f.pass.classify(cmd, &f.ubo, &f.gb, &params, false);
+            f.pass.classify(cmd, (&f.ubo, &f.gb, &f.materials), &params, false);
             f.record_march(cmd, &params);
         })
         .unwrap();

@@ -128,8 +128,23 @@ fn one_shot_scopes_pass_their_self_check() {
     let builder = speculum::passes::lbvh::LbvhBuilder::new(&ctx).unwrap();
     let bvh = speculum::passes::lbvh::Bvh::new(&ctx, 20_000, speculum::passes::lbvh::MortonBits::Bits30).unwrap();
     let mut timer = GpuTimer::new(&ctx, 8).unwrap();
-    let build = speculum::bench::lbvh::timed_build(&mut timer, &builder, geometry, &bvh).unwrap();
-    assert_eq!(build.problem, None, "{:?}", build.scopes);
+    // As for frames (`checked_frame`): a build refused by its self-check may be a
+    // lavapipe thread preempted between two stamps; one that never passes is a bug.
+    let mut refused = Vec::new();
+    let build = loop {
+        let build = speculum::bench::lbvh::timed_build(&mut timer, &builder, geometry, &bvh).unwrap();
+        match &build.problem {
+            None => break build,
+            Some(p) if refused.len() + 1 < ATTEMPTS => {
+                eprintln!("lbvh build: refused by its self-check: {p}");
+                refused.push(p.clone());
+            }
+            Some(_) => panic!(
+                "no build of {ATTEMPTS} passed its self-check: {refused:?} then {:?}",
+                build.scopes
+            ),
+        }
+    };
     assert_eq!(build.len(), 6, "the build and its five stages: {:?}", build.scopes);
     let (lo, hi) = (glam::Vec3::splat(-5.0), glam::Vec3::splat(5.0));
     let rays = speculum::bench::lbvh::incoherent_rays(lo, hi, 50_000, 3);

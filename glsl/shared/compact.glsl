@@ -27,11 +27,15 @@ uvec2 pixel_at(uint i) {
 }
 
 #ifdef COMPACT_MASK
-// Slot i holds a pixel whose mask is set (the includer binds the mask image first and
-// defines COMPACT_MASK).
+// Slot i holds a pixel whose mask is set and not FAIL_UNTRACED (the includer binds the
+// mask image first and defines COMPACT_MASK).
 bool slot_listed(uint i) {
     uvec2 p = pixel_at(i);
-    return i < pc.slots && all(lessThan(p, pc.size)) && imageLoad(mask, ivec2(p)).r != 0u;
+    if (i >= pc.slots || any(greaterThanEqual(p, pc.size))) {
+        return false;
+    }
+    uint m = imageLoad(mask, ivec2(p)).r;
+    return m != 0u && (m & FAIL_UNTRACED) == 0u;
 }
 #endif
 #endif

@@ -2,7 +2,7 @@
 // confidence its heading allows. Mirrored by cpu_ref::ssr.
 #ifndef SSR_GLSL
 #define SSR_GLSL
-#include "frame.glsl"
+#include "shading.glsl"
 
 // The reflected ray of pixel p (G-buffer depth and world normal) in view space.
 struct SsrRay {
@@ -24,5 +24,19 @@ SsrRay ssr_ray(ivec2 p, float depth, vec3 n_world) {
 // A hit's confidence is at most this (edge fade aside).
 float heading_confidence(vec3 vdir) {
     return clamp(1.0 - vdir.z, 0.0, 1.0);
+}
+
+// The weight of the pixel's own mirror reflection as the camera sees it (reflectivity x
+// Fresnel, the largest channel): below trace_min_weight the pixel is never ray traced.
+float view_reflection_weight(SsrRay r, vec3 n_world, vec3 base, float metallic, float reflectivity) {
+    vec3 v = transpose(mat3(frame.view)) * -normalize(r.vpos); // view is rigid
+    vec3 w = reflection_weight(base, metallic, reflectivity, normalize(n_world), v);
+    return max(w.r, max(w.g, w.b));
+}
+
+// What an untraced pixel keeps where SSR found no hit: the sky in the reflected
+// direction, which is what a miss of the ray tracer returns.
+vec3 untraced_sky(SsrRay r) {
+    return sky_radiance(transpose(mat3(frame.view)) * r.vdir);
 }
 #endif

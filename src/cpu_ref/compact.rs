@@ -1,6 +1,6 @@
 //! Reference of `ssr.compact` (`glsl/compact_*.comp`).
 
-use crate::shader_defines::WG_2D;
+use crate::shader_defines::{FAIL_UNTRACED, WG_2D};
 
 /// The pixels in the list's order (`glsl/shared/compact.glsl`): `WG_2D` x `WG_2D`
 /// blocks row-major, pixels row-major inside each block.
@@ -13,11 +13,14 @@ pub fn order(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
         .filter(move |&(x, y)| x < width && y < height)
 }
 
-/// The pixels of a `width` x `height` row-major mask whose value is nonzero, in the
-/// list's order, packed `x | y << 16`.
+/// The pixels of a `width` x `height` row-major mask whose value is nonzero and not
+/// `FAIL_UNTRACED`, in the list's order, packed `x | y << 16`.
 pub fn compact(mask: &[u32], width: u32, height: u32) -> Vec<u32> {
     order(width, height)
-        .filter(|&(x, y)| mask[(y * width + x) as usize] != 0)
+        .filter(|&(x, y)| {
+            let m = mask[(y * width + x) as usize];
+            m != 0 && m & FAIL_UNTRACED == 0
+        })
         .map(|(x, y)| x | (y << 16))
         .collect()
 }

@@ -1,7 +1,7 @@
 //! Reference of `glsl/reflect_merge.comp`, `glsl/reflect_tiles.comp` and
 //! `glsl/reflect_blur.comp` (reflect.merge).
 
-use crate::shader_defines::{FAIL_BLEND, SOURCE_NONE, SOURCE_RT, SOURCE_SSR, WG_2D};
+use crate::shader_defines::{FAIL_BLEND, FAIL_UNTRACED, SOURCE_NONE, SOURCE_RT, SOURCE_SSR, WG_2D};
 
 /// One pixel of the merge: the reflection and its source (`SOURCE_*`, stored in alpha).
 /// `fail`: the fail mask; `ssr`: SSR colour (rgb) and confidence (a); `rt`: the
@@ -11,7 +11,7 @@ pub fn merge(fail: u32, ssr: [f32; 4], rt: [f32; 4], reflective: bool, rt_enable
     let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
     if !reflective {
         [0.0, 0.0, 0.0, SOURCE_NONE as f32]
-    } else if fail == 0 {
+    } else if fail == 0 || fail & FAIL_UNTRACED != 0 {
         [ssr[0], ssr[1], ssr[2], SOURCE_SSR as f32]
     } else if rt_enabled {
         let c = if fail == FAIL_BLEND { ssr[3] } else { 0.0 };

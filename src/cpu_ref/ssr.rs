@@ -6,7 +6,7 @@ use crate::gpu_types::FrameUniforms;
 use crate::settings::SsrParams;
 use crate::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
-    FAIL_OUT_OF_STEPS, MATERIAL_NONE, SSR_REFINE_STEPS,
+    FAIL_OUT_OF_STEPS, FAIL_UNTRACED, MATERIAL_NONE, SSR_REFINE_STEPS,
 };
 use glam::{IVec2, Mat3, Vec2, Vec2Swizzles, Vec3, Vec3Swizzles, Vec4, Vec4Swizzles};
 
@@ -31,41 +31,70 @@ pub fn heading_confidence(vdir: Vec3) -> f32 {
     (1.0 - vdir.z).clamp(0.0, 1.0)
 }
 
+/// `view_reflection_weight`: the weight of the pixel's own mirror reflection as the
+/// camera sees it (reflectivity x Fresnel, the largest channel).
+pub fn view_reflection_weight(
+    frame: &FrameUniforms,
+    ray: &SsrRay,
+    n_world: Vec3,
+    (base, metallic): (Vec3, f32),
+    reflectivity: f32,
+) -> f32 {
+    let v = Mat3::from_mat4(frame.view).transpose() * -ray.vpos.normalize();
+    super::shading::reflection_weight(base, metallic, reflectivity, n_world.normalize(), v).max_element()
+}
+
+/// `untraced_sky`: the sky in the reflected direction.
+pub fn untraced_sky(frame: &FrameUniforms, ray: &SsrRay) -> Vec3 {
+    super::shading::sky(frame, Mat3::from_mat4(frame.view).transpose() * ray.vdir)
+}
+
 /// What the classification does with a pixel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Class {
-    /// Not marched: this fail mask (0: nothing to reflect), SSR colour 0.
-    Done(u32),
+    /// Not marched: this fail mask (0: nothing to reflect) and SSR colour (the sky of
+    /// an untraced pixel, else 0).
+    Done(u32, [f32; 3]),
     /// Appended to the march list.
     March,
 }
 
-/// `ssr_classify.comp` for one pixel (G-buffer depth, normal.xyz + reflectivity in w,
-/// material id). Also returns the heading confidence it compared (NaN where none was),
-/// so a test can tell pixels on the threshold, where float rounding decides.
+/// `ssr_classify.comp` for one pixel: G-buffer depth, normal.xyz + reflectivity in w,
+/// material id, and its base colour (linear) and metallic. Also returns the heading
+/// confidence and the reflection weight it compared (NaN where none was), so a test
+/// can tell pixels on a threshold, where float rounding decides.
 pub fn classify(
     frame: &FrameUniforms,
     p: IVec2,
     gbuffer: (f32, [f32; 4], u32),
-    min_confidence: f32,
-    reflective_min: f32,
+    own: (Vec3, f32),
+    params: &SsrParams,
     mask_only: bool,
-) -> (Class, f32) {
+) -> (Class, [f32; 2]) {
     let (depth, nr, material) = gbuffer;
-    let reflective = material != MATERIAL_NONE && nr[3] > reflective_min;
+    let reflective = material != MATERIAL_NONE && nr[3] > params.reflective_min;
+    let none = [f32::NAN; 2];
     if mask_only {
-        return (Class::Done(if reflective { FAIL_FORCED } else { 0 }), f32::NAN);
+        return (Class::Done(if reflective { FAIL_FORCED } else { 0 }, [0.0; 3]), none);
     }
     if !reflective {
-        return (Class::Done(0), f32::NAN);
+        return (Class::Done(0, [0.0; 3]), none);
     }
-    let ray = ssr_ray(frame, p, depth, Vec3::new(nr[0], nr[1], nr[2]));
+    let n = Vec3::new(nr[0], nr[1], nr[2]);
+    let ray = ssr_ray(frame, p, depth, n);
     let h = heading_confidence(ray.vdir);
-    if h >= min_confidence {
-        (Class::March, h)
-    } else {
-        (Class::Done(FAIL_LOW_CONFIDENCE), h)
+    if h >= params.min_confidence {
+        return (Class::March, [h, f32::NAN]);
     }
+    if params.trace_min_weight > 0.0 {
+        let w = view_reflection_weight(frame, &ray, n, own, nr[3]);
+        if w < params.trace_min_weight {
+            let sky = untraced_sky(frame, &ray).to_array();
+            return (Class::Done(FAIL_LOW_CONFIDENCE | FAIL_UNTRACED, sky), [h, w]);
+        }
+        return (Class::Done(FAIL_LOW_CONFIDENCE, [0.0; 3]), [h, w]);
+    }
+    (Class::Done(FAIL_LOW_CONFIDENCE, [0.0; 3]), [h, f32::NAN])
 }
 
 /// The G-buffer and lit image a march reads, row-major at the frame's resolution.
@@ -214,7 +243,25 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
     } else {
         march_linear(frame, (h0, h1), (origin, end_point), inputs, params, &mut m)
     };
-    let (fail, color) = judge(frame, &found, vdir, inputs, params, &mut m.margin);
+    let (mut fail, mut color) = judge(frame, &found, vdir, inputs, params, &mut m.margin);
+    if fail != 0 && params.trace_min_weight > 0.0 {
+        let i = at(p);
+        let own = (
+            super::albedo_texel(&inputs.albedo[4 * i..4 * i + 4]).0,
+            inputs.metallic[inputs.material[i] as usize],
+        );
+        let w = view_reflection_weight(frame, &ray, Vec3::new(nr[0], nr[1], nr[2]), own, nr[3]);
+        m.margin = m.margin.min(gap(w, params.trace_min_weight));
+        if w < params.trace_min_weight {
+            if fail == FAIL_BLEND {
+                fail = 0;
+            } else {
+                fail |= FAIL_UNTRACED;
+                let sky = untraced_sky(frame, &ray);
+                color = [sky.x, sky.y, sky.z, 0.0];
+            }
+        }
+    }
     March {
         fail,
         color,

@@ -197,7 +197,7 @@ fn mode_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: &mut
             swatch(&mut cols[0], SSR_OK_COLOUR, "SSR answered");
             swatch(&mut cols[0], [0, 0, 0], "not reflective");
             for (i, ((_, name), c)) in FAIL_REASONS.iter().zip(FAIL_COLOURS).enumerate() {
-                swatch(&mut cols[(i + 2) / 5], c, name);
+                swatch(&mut cols[(i + 2) / 6], c, name);
             }
         });
     }

@@ -28,6 +28,7 @@ pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
 struct ClassifyPush {
     min_confidence: f32,
     reflective_min: f32,
+    trace_min_weight: f32,
 }
 
 /// Push constants of `ssr_trace.comp`.
@@ -42,6 +43,7 @@ struct MarchPush {
     min_confidence: f32,
     recursion_min: f32,
     hiz_top: u32,
+    trace_min_weight: f32,
 }
 
 pub struct SsrOutputs {
@@ -120,15 +122,16 @@ impl SsrPass {
     /// reflective pixel fails (`FAIL_FORCED`) and the list stays empty. G-buffer in
     /// `SHADER_READ_ONLY_OPTIMAL`. Ends with the list and its dispatch arguments visible
     /// to `trace`, the mask and colour to `trace` and to the mask's readers
-    /// (`ssr.compact`, `reflect.merge`).
+    /// (`ssr.compact`, `reflect.merge`). `materials` gives the pixels' metallic for
+    /// their own reflection's weight (`trace_min_weight`).
     pub fn classify(
         &self,
         cmd: vk::CommandBuffer,
-        frame: &Buffer,
-        gbuffer: &GBuffer,
+        inputs: (&Buffer, &GBuffer, &Buffer),
         params: &SsrParams,
         mask_only: bool,
     ) {
+        let (frame, gbuffer, materials) = inputs;
         let d = &self.ctx.device;
         let out = &self.out;
         // WAR/WAW: the previous frame's march (list and argument reads, the indirect
@@ -161,10 +164,13 @@ impl SsrPass {
                 Resource::StorageImage(&out.mask),
                 Resource::Buffer(&out.march_list),
                 Resource::Buffer(&out.march_args),
+                Resource::Sampled(&gbuffer.albedo, s),
+                Resource::Buffer(materials),
             ],
             &ClassifyPush {
                 min_confidence: params.min_confidence,
                 reflective_min: params.reflective_min,
+                trace_min_weight: params.trace_min_weight,
             },
             Groups::Cover([e.width, e.height, 1]),
         );
@@ -221,6 +227,7 @@ impl SsrPass {
                 min_confidence: params.min_confidence,
                 recursion_min: params.recursion_min,
                 hiz_top: hiz_levels - 1,
+                trace_min_weight: params.trace_min_weight,
             },
             Groups::Indirect(&out.march_args),
         );

@@ -257,7 +257,9 @@ impl Renderer {
         }
         if mode.reflects() {
             let mask_only = !mode.marches();
-            f.row(Row::SsrClassify, || ssr.classify(cmd, ubo, g, &params, mask_only));
+            f.row(Row::SsrClassify, || {
+                ssr.classify(cmd, (ubo, g, &scene.materials), &params, mask_only)
+            });
         }
         if mode.marches() {
             let inputs = MarchInputs {

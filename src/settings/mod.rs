@@ -201,6 +201,12 @@ settings_table! {
     /// reflection: a lower value is closer to the reference, a higher one ray traces
     /// fewer pixels.
     ssr_recursion_min: f32 = 0.2, ANY_F32, slider(0.0, 1.0), NextFrame;
+    /// Reflective pixels whose own reflection weighs less than this (reflectivity x
+    /// Fresnel toward the camera, the largest channel) are never ray traced: where SSR
+    /// fails they keep the sky in the reflected direction (`untraced`). Higher traces
+    /// fewer pixels (a dielectric seen head-on weighs 4%) but loses weak reflections of
+    /// what the screen does not hold; 0 traces every failure.
+    trace_min_weight: f32 = 0.0, ANY_F32, slider(0.0, 0.5), NextFrame;
     /// Seam blur radius in pixels (0: off): smoother SSR/RT transitions vs detail.
     blur_radius: u32 = 3, u32s(0, 16), slider(0.0, 16.0), NextFrame;
     /// Half-width in pixels of the band around SSR/RT seams that the blur touches.
@@ -405,7 +411,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 25);
+        assert_eq!(Settings::field_names().len(), 26);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).
@@ -472,6 +478,8 @@ pub struct SsrParams {
     pub reflective_min: f32,
     /// Hits on surfaces more reflective than this fail (need the ray tracer's bounce).
     pub recursion_min: f32,
+    /// Failed pixels whose own reflection weighs less are not traced (`FAIL_UNTRACED`).
+    pub trace_min_weight: f32,
 }
 
 impl SsrParams {
@@ -487,6 +495,7 @@ impl SsrParams {
             min_confidence: st.ssr_min_confidence,
             reflective_min: st.reflective_min,
             recursion_min: st.ssr_recursion_min.max(st.reflective_min),
+            trace_min_weight: st.trace_min_weight,
         }
     }
 }

@@ -3,7 +3,7 @@
 
 use super::file::SceneFile;
 use super::Scene;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use std::path::Path;
 
 /// (name, scene file text) of every built-in scene; the first is the default.
@@ -17,8 +17,9 @@ const SCENES: [(&str, &str); 7] = [
     ("cloth", include_str!("../../assets/scenes/cloth.toml")),
 ];
 
-/// Names accepted by `--scene`.
-pub const NAMES: [&str; 7] = [
+/// Names accepted by `--scene`: the scene files, then `gallery` (generated; `gallery:N`
+/// for about N triangles).
+pub const NAMES: [&str; 8] = [
     SCENES[0].0,
     SCENES[1].0,
     SCENES[2].0,
@@ -26,14 +27,82 @@ pub const NAMES: [&str; 7] = [
     SCENES[4].0,
     SCENES[5].0,
     SCENES[6].0,
+    GALLERY,
 ];
+
+/// The generated scene family: a mirror-floored hall of sculptures whose triangle count
+/// `gallery:N` sets, so the tracer's cost can be measured against scene size while
+/// everything on screen stays the same.
+pub const GALLERY: &str = "gallery";
+/// `gallery`'s triangle count when none is given.
+pub const GALLERY_DEFAULT_TRIANGLES: u32 = 100_000;
+/// The range `gallery:N` takes.
+pub const GALLERY_TRIANGLES: std::ops::RangeInclusive<u32> = 10_000..=8_000_000;
 
 /// The parsed scene file of the built-in scene `name`, if there is one.
 pub fn file(name: &str) -> Option<Result<SceneFile>> {
-    SCENES.iter().find(|(n, _)| *n == name).map(|(n, text)| {
-        let path = Path::new("assets/scenes").join(format!("{n}.toml"));
-        SceneFile::parse(&path, text)
+    let path = Path::new("assets/scenes").join(format!("{name}.toml"));
+    if let Some(detail) = gallery_triangles(name) {
+        return Some(detail.and_then(|n| SceneFile::parse(&path, &gallery_toml(name, n))));
+    }
+    SCENES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, text)| SceneFile::parse(&path, text))
+}
+
+/// The triangle count `name` asks of the gallery (`gallery`, `gallery:N`, N with an
+/// optional `k` or `M`), or `None` when it names another scene.
+fn gallery_triangles(name: &str) -> Option<Result<u32>> {
+    let detail = match name.strip_prefix(GALLERY)? {
+        "" => return Some(Ok(GALLERY_DEFAULT_TRIANGLES)),
+        rest => rest.strip_prefix(':')?,
+    };
+    let (digits, unit) = match detail.as_bytes().last() {
+        Some(b'k' | b'K') => (&detail[..detail.len() - 1], 1_000),
+        Some(b'm' | b'M') => (&detail[..detail.len() - 1], 1_000_000),
+        _ => (detail, 1),
+    };
+    let n = digits.parse::<u64>().ok().map(|d| d * unit);
+    Some(match n {
+        Some(n) if n >= *GALLERY_TRIANGLES.start() as u64 && n <= *GALLERY_TRIANGLES.end() as u64 => Ok(n as u32),
+        _ => Err(Error::Input(format!(
+            "scene '{name}': gallery:N takes a triangle count N in {}..={} (e.g. gallery:1M)",
+            GALLERY_TRIANGLES.start(),
+            GALLERY_TRIANGLES.end()
+        ))),
     })
+}
+
+/// The sculptures of the gallery: (x, z, radius, material) on pedestals in two rows.
+const SCULPTURES: [(f32, f32, f32, &str); 8] = [
+    (-2.6, -6.0, 0.75, "terracotta"),
+    (2.6, -6.0, 0.75, "jade"),
+    (-2.6, -2.0, 0.7, "marble"),
+    (2.6, -2.0, 0.7, "bronze"),
+    (-2.6, 2.0, 0.65, "jade"),
+    (2.6, 2.0, 0.65, "terracotta"),
+    (-2.6, 6.0, 0.6, "bronze"),
+    (2.6, 6.0, 0.6, "marble"),
+];
+
+/// The gallery's scene file with about `triangles` triangles: nearly all in its eight
+/// sculptures (UV spheres of `2r` segments and `r` rings, 4r^2 triangles each), the
+/// hall (mirror floor, glossy far wall, matte side walls, pedestals) a few hundred.
+fn gallery_toml(name: &str, triangles: u32) -> String {
+    let per = triangles as f64 / SCULPTURES.len() as f64;
+    let rings = ((per / 4.0).sqrt().round() as u32).clamp(4, 512);
+    let mut out = format!("name = \"{name}\"\n{}", include_str!("../../assets/gallery_hall.toml"));
+    for (x, z, r, material) in SCULPTURES {
+        out +=
+            &format!("\n[[instance]]\nbox = [1.2, 1.0, 1.2]\nmaterial = \"pedestal\"\ntranslate = [{x}, 0.5, {z}]\n");
+        out += &format!(
+            "\n[[instance]]\nsphere = {r}\nsegments = {}\nrings = {rings}\nmaterial = \"{material}\"\ntranslate = [{x}, {}, {z}]\n",
+            2 * rings,
+            1.0 + r
+        );
+    }
+    out
 }
 
 /// The built-in scene called `name`, if there is one.
@@ -101,6 +170,29 @@ mod tests {
             assert!(s.triangle_count() + s.dynamic_triangle_count() > 10);
         }
         assert!(by_name("nope").is_none());
+    }
+
+    /// `gallery:N` has about N triangles (within 5%, the hall's few hundred aside) for
+    /// N across its range, `gallery` the default; a count outside the range or not a
+    /// number is one error naming the scene; other names are not the gallery's.
+    #[test]
+    fn the_gallery_has_the_triangles_asked() {
+        for (name, want) in [
+            ("gallery", GALLERY_DEFAULT_TRIANGLES),
+            ("gallery:10000", 10_000),
+            ("gallery:250k", 250_000),
+            ("gallery:1M", 1_000_000),
+        ] {
+            let s = by_name(name).unwrap().unwrap();
+            let got = s.triangle_count() as f64;
+            assert!((got / want as f64 - 1.0).abs() < 0.05, "{name}: {got} triangles");
+            assert_eq!(s.name, name);
+        }
+        for bad in ["gallery:", "gallery:9999", "gallery:9M", "gallery:lots", "gallery:-5"] {
+            let e = file(bad).unwrap().unwrap_err().to_string();
+            assert!(e.contains(bad) && e.contains("gallery:N"), "{bad}: {e}");
+        }
+        assert!(file("gallery2").is_none() && file("galleryx:5").is_none());
     }
 
     /// `stress` spawns its 100 bodies; `set_spawn_count` replaces them (and only them),

@@ -234,12 +234,18 @@ Found march_hiz(vec4 h0, vec4 h1, ivec2 res) {
     uint mip = 0u, offset = 0u;
     uvec2 size = uvec2(res);
     Found found = Found(FAIL_OUT_OF_STEPS, ivec2(-1), vec2(-1.0));
+    // The loop body is kept short and free of divergent branches: a CPU driver
+    // (lavapipe) runs every branch of a SIMD group whichever its lanes take, so the
+    // level-0 judgement is made once, after the loop.
+    bool reached = false; // the ray reached the surface of a level-0 cell
+    bool entered_behind = false; // ... by entering it behind its surface (not crossing it)
+    uvec2 cell = uvec2(0u);
     for (uint steps = 0u; steps < pc.max_steps; ++steps) {
         if (t > t_end || any(lessThan(pos.xy, vec2(0.0))) || any(greaterThanEqual(pos.xy, vec2(res)))) {
             found.reason = FAIL_LEFT_SCREEN; // off the screen, or the ray's end
             break;
         }
-        uvec2 cell = uvec2(pos.xy) >> mip; // pos >= 0: truncation is floor
+        cell = uvec2(pos.xy) >> mip; // pos >= 0: truncation is floor
         float surface = pyramid[offset + cell.y * size.x + cell.x];
         vec2 planes = (vec2(cell) + side) * float(1u << mip) + nudge;
         vec2 txy = (planes - s0.xy) * inv.xy;
@@ -247,32 +253,43 @@ Found march_hiz(vec4 h0, vec4 h1, ivec2 res) {
         float tz = surface < 1.0 && dir.z > 0.0 ? (surface - s0.z) * inv.z : NO_PLANE;
         float t_min = min(min(txy.x, txy.y), tz);
         bool above = pos.z < surface;
-        if (above) {
-            t = t_min;
-            pos = s0 + dir * t;
-        }
-        if (above && t_min != tz) {
-            if (mip < pc.hiz_top) { // crossed the cell in front of it: coarser
-                offset += size.x * size.y;
-                mip += 1u;
-                size = hiz_size(mip, res);
-            }
-        } else if (mip > 0u) { // reached its nearest surface, or behind it: finer
-            mip -= 1u;
-            size = hiz_size(mip, res);
-            offset -= size.x * size.y;
-        } else { // level 0: this pixel's surface
-            ivec2 p = ivec2(cell);
-            float depth = pyramid[p.y * res.x + p.x];
-            float scene_z = view_z(depth);
-            if (depth >= 1.0) {
-                found.reason = FAIL_LEFT_SCREEN; // the far plane, over the sky
-            } else if (view_z(pos.z) < scene_z - pc.thickness * abs(scene_z)) {
-                found.reason = FAIL_BEHIND; // see march_linear
-            } else {
-                found = Found(0u, p, pos.xy);
-            }
+        t = above ? t_min : t;
+        pos = s0 + dir * t;
+        // Crossed the cell in front of its nearest surface: coarser (up to the top);
+        // reached that surface, or behind it: finer, and at level 0 the march ends.
+        bool coarser = above && t_min != tz;
+        reached = !coarser && mip == 0u;
+        entered_behind = !above;
+        if (reached) {
             break;
+        }
+        uint next = coarser ? min(mip + 1u, pc.hiz_top) : mip - 1u;
+        uvec2 next_size = hiz_size(next, res);
+        offset = next > mip ? offset + size.x * size.y : (next < mip ? offset - next_size.x * next_size.y : offset);
+        mip = next;
+        size = next_size;
+    }
+    if (reached) { // level 0: this pixel's surface
+        ivec2 p = ivec2(cell);
+        float depth = pyramid[p.y * res.x + p.x];
+        float scene_z = view_z(depth);
+        float ray_z = view_z(pos.z);
+        float thickness = pc.thickness * abs(scene_z);
+        if (entered_behind) {
+            // Entered from the side, behind the pixel's surface: a real hit only where
+            // the ray would have reached it within about a pixel (a surface sloped
+            // across the pixel). More is a silhouette the ray passes behind, or hits
+            // on a side the screen does not show: taking the silhouette's colour there
+            // streaks it along the ray (the curtains of thick SSR).
+            float t_px = 1.0 / max(abs(dir.x), abs(dir.y));
+            thickness = min(thickness, 2.0 * abs(view_z(s0.z + dir.z * (t + t_px)) - ray_z));
+        }
+        if (depth >= 1.0) {
+            found.reason = FAIL_LEFT_SCREEN; // the far plane, over the sky
+        } else if (ray_z < scene_z - thickness) {
+            found.reason = FAIL_BEHIND; // see march_linear
+        } else {
+            found = Found(0u, p, pos.xy);
         }
     }
     return found;

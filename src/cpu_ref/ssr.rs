@@ -492,12 +492,21 @@ fn march_hiz(
             let p = IVec2::new(cell.0 as i32, cell.1 as i32);
             let depth = pyramid[0][(p.y * res.x + p.x) as usize];
             let scene_z = view_z(frame, depth);
-            let limit = scene_z - params.thickness * scene_z.abs();
-            m.margin = m.margin.min(gap(view_z(frame, pos.z), limit));
+            let ray_z = view_z(frame, pos.z);
+            let mut thickness = params.thickness * scene_z.abs();
+            if !above {
+                // Entered behind the surface: within about a pixel of the ray only.
+                let t_px = 1.0 / dir.x.abs().max(dir.y.abs());
+                let near = 2.0 * (view_z(frame, s0.z + dir.z * (t + t_px)) - ray_z).abs();
+                m.margin = m.margin.min(gap(near, thickness));
+                thickness = thickness.min(near);
+            }
+            let limit = scene_z - thickness;
+            m.margin = m.margin.min(gap(ray_z, limit));
             m.pixel = m.pixel.min(boundary_gap(pos.xy()));
             if depth >= 1.0 {
                 found.reason = FAIL_LEFT_SCREEN;
-            } else if view_z(frame, pos.z) < limit {
+            } else if ray_z < limit {
                 found.reason = FAIL_BEHIND;
             } else {
                 found = Found {

@@ -689,3 +689,90 @@ fn the_hiz_march_does_not_see_through_thin_geometry() {
         "the linear DDA no longer steps over the bar: {wall_hits:?}"
     );
 }
+
+/// Curtains: rays that run across the screen at a constant depth pass 1% of their
+/// depth behind a vertical bar, well within `ssr_thickness` (3%) but far more than
+/// the ray's depth changes over a pixel. Such a ray enters the bar's pixels from the
+/// side, behind its surface: it passes behind the bar (or hits a side the screen does
+/// not show), so the march fails it (`FAIL_BEHIND`) instead of taking the bar's colour,
+/// which would streak the bar along every such ray. (With the thickness alone deciding,
+/// as before, every one of these rays was a hit on the bar.) The GPU march matches the
+/// CPU's on each.
+#[test]
+fn a_ray_passing_just_behind_a_silhouette_is_not_a_hit() {
+    use glam::{Mat3, Vec3};
+    let ctx = common::context();
+    let (w, h) = (131usize, 77usize);
+    let (band, bar) = (20..30usize, 80..84usize);
+    let mirror_depth = 0.97f32;
+    let probe = Fixture::new(&ctx, 3, w as u32, h as u32, |_| {});
+    let frame = probe.frame;
+    drop(probe);
+    let p = frame.proj;
+    let view_z = |d: f32| -p.w_axis.z / (d + p.z_axis.z);
+    let depth_of = |z: f32| -p.w_axis.z / z - p.z_axis.z;
+    // The bar 1% nearer than the mirror band (and so than its rays).
+    let bar_depth = depth_of(view_z(mirror_depth) * 0.99);
+    let to_world = Mat3::from_mat4(frame.view).transpose();
+    let right = to_world * Vec3::X;
+    let camera = frame.view.inverse().w_axis.truncate();
+    let f = Fixture::new(&ctx, 3, w as u32, h as u32, |g| {
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let (depth, normal) = if band.contains(&x) && (20..60).contains(&y) {
+                    // A mirror whose normal halves the view ray and the camera's right:
+                    // the reflection runs to the right at the pixel's own view depth.
+                    let q = IVec2::new(x as i32, y as i32);
+                    let v =
+                        (speculum::cpu_ref::shading::world_from_depth(&frame, q, mirror_depth) - camera).normalize();
+                    let n = (right - v).normalize();
+                    (mirror_depth, [n.x, n.y, n.z, 0.9])
+                } else if bar.contains(&x) {
+                    // Facing back along the rays and a little towards the camera.
+                    let n = (-right + 0.3 * (to_world * Vec3::Z)).normalize();
+                    (bar_depth, [n.x, n.y, n.z, 0.0])
+                } else {
+                    (1.0, [0.0, 1.0, 0.0, 0.0])
+                };
+                g.depth[i] = depth;
+                g.normal[i] = normal;
+                g.material[i] = 0;
+            }
+        }
+    });
+    let general = vk::ImageLayout::GENERAL;
+    let params = SsrParams::from_settings(&f.settings);
+    assert!(params.hiz && params.thickness > 0.02, "the default march and thickness");
+    f.poison();
+    ctx.one_shot(|cmd| {
+        f.pass.classify(cmd, (&f.ubo, &f.gb, &f.materials), &params, false);
+        f.record_march(cmd, &params);
+    })
+    .unwrap();
+    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&f.pass.out.mask.read(general).unwrap());
+    let pyramid = f.pyramid();
+    let inputs = ssr::MarchInputs {
+        depth: &f.g.depth,
+        normal: &f.g.normal,
+        lit: &f.lit_texels,
+        albedo: &f.albedo,
+        material: &f.g.material,
+        metallic: &f.metallic,
+        pyramid: &pyramid,
+    };
+    let mut behind = 0;
+    for y in 20..60 {
+        for x in band.clone() {
+            let q = IVec2::new(x as i32, y as i32);
+            let want = ssr::march(&frame, q, &inputs, &params);
+            assert_eq!(mask[y * w + x], want.fail, "pixel {q}: {want:?}");
+            assert!(
+                want.fail != 0 && want.fail != FAIL_BLEND,
+                "pixel {q} hit the bar: {want:?}"
+            );
+            behind += (want.fail == FAIL_BEHIND) as usize;
+        }
+    }
+    assert_eq!(behind, band.len() * 40, "every ray passes behind the bar");
+}

@@ -33,8 +33,15 @@ void main() {
         if (reflective) {
             uint fail = imageLoad(fail_mask, p).r;
             vec4 ssr = imageLoad(ssr_in, p); // a: confidence
-            if (fail == 0u || (fail & FAIL_UNTRACED) != 0u) { // SSR's answer, or the sky
+            if (fail == 0u) {
                 out_value = vec4(ssr.rgb, float(SOURCE_SSR));
+            } else if ((fail & FAIL_UNTRACED) != 0u) {
+                // A weak reflector not traced: the ray its 2x2 block's even corner
+                // traced (ssr.glsl, traced_for_block), else SSR's answer, the sky.
+                ivec2 q = p & ~1;
+                uint qf = imageLoad(fail_mask, q).r;
+                bool q_traced = pc.rt_enabled != 0u && qf != 0u && (qf & FAIL_UNTRACED) == 0u;
+                out_value = q_traced ? vec4(imageLoad(rt_in, q).rgb, float(SOURCE_RT)) : vec4(ssr.rgb, float(SOURCE_SSR));
             } else if (pc.rt_enabled != 0u) {
                 // A faded SSR hit weighs by its confidence against the ray-traced colour.
                 float c = fail == FAIL_BLEND ? ssr.a : 0.0;

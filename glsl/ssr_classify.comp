@@ -57,7 +57,7 @@ void main() {
             fail = march ? 0u : FAIL_LOW_CONFIDENCE;
             if (!march && pc.trace_min_weight > 0.0) {
                 vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
-                if (view_reflection_weight(r, nr.xyz, base, materials[material].metallic, nr.w) < pc.trace_min_weight) {
+                if (!traced_for_block(p) && view_reflection_weight(r, nr.xyz, base, materials[material].metallic, nr.w) < pc.trace_min_weight) {
                     fail |= FAIL_UNTRACED;
                     sky = untraced_sky(r);
                 }

@@ -357,10 +357,11 @@ void main() {
         vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
         vec4 nr = texelFetch(gb_normal, p, 0);
         if (view_reflection_weight(ray, nr.xyz, base, materials[id].metallic, nr.w) < pc.trace_min_weight) {
-            // Not traced: a faded hit is kept whole, a failure keeps the sky.
+            // Not traced: a faded hit is kept whole, a failure keeps the sky (but one
+            // pixel in four is traced for its 2x2 block).
             if (fail == FAIL_BLEND) {
                 fail = 0u;
-            } else {
+            } else if (!traced_for_block(p)) {
                 fail |= FAIL_UNTRACED;
                 color = untraced_sky(ray);
             }

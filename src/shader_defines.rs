@@ -109,9 +109,10 @@ pub const FAIL_FORCED: u32 = 64;
 /// traced too and `reflect.merge` blends confidence x SSR + (1 - confidence) x RT, so
 /// the screen-edge and toward-camera fades are smooth; alone in the mask.
 pub const FAIL_BLEND: u32 = 128;
-/// With a reason bit: the pixel's own reflection weighs less than `trace_min_weight`,
-/// so it is not ray traced: it keeps SSR's answer, the sky in the reflected direction
-/// where SSR found no hit (what a miss of the ray tracer returns).
+/// With a reason bit: the pixel's own reflection weighs less than `trace_min_weight`
+/// and it is not the traced corner of its 2x2 block, so it is not ray traced: it takes
+/// that corner's ray-traced colour, or where that was not traced SSR's answer, the sky
+/// in the reflected direction (what a miss of the ray tracer returns).
 pub const FAIL_UNTRACED: u32 = 256;
 
 /// Provenance of a pixel's reflection, as `reflect.merge` labels it.

@@ -136,7 +136,8 @@ fn merge_and_seam_blur_match_cpu_reference() {
         let merged: Vec<[f32; 4]> = (0..n)
             .map(|i| {
                 let reflective = material[i] != MATERIAL_NONE && normal[i][3] > reflective_min;
-                merge::merge(fail[i], ssr[i], rt[i], reflective, rt_enabled)
+                let block = ((i / w) & !1) * w + ((i % w) & !1);
+                merge::merge(fail[i], ssr[i], rt[i], reflective, rt_enabled, (fail[block], rt[block]))
             })
             .collect();
         let (r, b) = (radius as i32, band as i32);

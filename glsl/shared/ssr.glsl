@@ -34,6 +34,13 @@ float view_reflection_weight(SsrRay r, vec3 n_world, vec3 base, float metallic, 
     return max(w.r, max(w.g, w.b));
 }
 
+// Of the failed pixels whose reflection weighs less than trace_min_weight, the one at
+// the even corner of each 2x2 block is traced for its block; the others are not
+// (FAIL_UNTRACED) and take that ray's colour in reflect.merge, else the sky.
+bool traced_for_block(ivec2 p) {
+    return ((p.x | p.y) & 1) == 0;
+}
+
 // What an untraced pixel keeps where SSR found no hit: the sky in the reflected
 // direction, which is what a miss of the ray tracer returns.
 vec3 untraced_sky(SsrRay r) {

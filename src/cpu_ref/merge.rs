@@ -6,13 +6,29 @@ use crate::shader_defines::{FAIL_BLEND, FAIL_UNTRACED, SOURCE_NONE, SOURCE_RT, S
 /// One pixel of the merge: the reflection and its source (`SOURCE_*`, stored in alpha).
 /// `fail`: the fail mask; `ssr`: SSR colour (rgb) and confidence (a); `rt`: the
 /// ray-traced colour (rgb); `reflective`: the surface reflects; `rt_enabled`: failed
-/// pixels take the ray-traced colour.
-pub fn merge(fail: u32, ssr: [f32; 4], rt: [f32; 4], reflective: bool, rt_enabled: bool) -> [f32; 4] {
+/// pixels take the ray-traced colour; `block`: the fail mask and ray-traced colour of
+/// the even corner of the pixel's 2x2 block, which an untraced pixel takes where it
+/// was traced.
+pub fn merge(
+    fail: u32,
+    ssr: [f32; 4],
+    rt: [f32; 4],
+    reflective: bool,
+    rt_enabled: bool,
+    block: (u32, [f32; 4]),
+) -> [f32; 4] {
     let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
+    let (block_fail, block_rt) = block;
     if !reflective {
         [0.0, 0.0, 0.0, SOURCE_NONE as f32]
-    } else if fail == 0 || fail & FAIL_UNTRACED != 0 {
+    } else if fail == 0 {
         [ssr[0], ssr[1], ssr[2], SOURCE_SSR as f32]
+    } else if fail & FAIL_UNTRACED != 0 {
+        if rt_enabled && block_fail != 0 && block_fail & FAIL_UNTRACED == 0 {
+            [block_rt[0], block_rt[1], block_rt[2], SOURCE_RT as f32]
+        } else {
+            [ssr[0], ssr[1], ssr[2], SOURCE_SSR as f32]
+        }
     } else if rt_enabled {
         let c = if fail == FAIL_BLEND { ssr[3] } else { 0.0 };
         [

@@ -44,6 +44,12 @@ pub fn view_reflection_weight(
     super::shading::reflection_weight(base, metallic, reflectivity, n_world.normalize(), v).max_element()
 }
 
+/// `traced_for_block`: whether a weak reflector at `p` is traced for its 2x2 block
+/// (its even corner) rather than left untraced.
+pub fn traced_for_block(p: IVec2) -> bool {
+    (p.x | p.y) & 1 == 0
+}
+
 /// `untraced_sky`: the sky in the reflected direction.
 pub fn untraced_sky(frame: &FrameUniforms, ray: &SsrRay) -> Vec3 {
     super::shading::sky(frame, Mat3::from_mat4(frame.view).transpose() * ray.vdir)
@@ -86,7 +92,7 @@ pub fn classify(
     if h >= params.min_confidence {
         return (Class::March, [h, f32::NAN]);
     }
-    if params.trace_min_weight > 0.0 {
+    if params.trace_min_weight > 0.0 && !traced_for_block(p) {
         let w = view_reflection_weight(frame, &ray, n, own, nr[3]);
         if w < params.trace_min_weight {
             let sky = untraced_sky(frame, &ray).to_array();
@@ -255,7 +261,7 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         if w < params.trace_min_weight {
             if fail == FAIL_BLEND {
                 fail = 0;
-            } else {
+            } else if !traced_for_block(p) {
                 fail |= FAIL_UNTRACED;
                 let sky = untraced_sky(frame, &ray);
                 color = [sky.x, sky.y, sky.z, 0.0];

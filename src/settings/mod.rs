@@ -202,11 +202,12 @@ settings_table! {
     /// fewer pixels.
     ssr_recursion_min: f32 = 0.2, ANY_F32, slider(0.0, 1.0), NextFrame;
     /// Reflective pixels whose own reflection weighs less than this (reflectivity x
-    /// Fresnel toward the camera, the largest channel) are never ray traced: where SSR
-    /// fails they keep the sky in the reflected direction (`untraced`). Higher traces
-    /// fewer pixels (a dielectric seen head-on weighs 4%) but loses weak reflections of
-    /// what the screen does not hold; 0 traces every failure.
-    trace_min_weight: f32 = 0.0, ANY_F32, slider(0.0, 0.5), NextFrame;
+    /// Fresnel toward the camera, the largest channel) are ray traced one in four:
+    /// where SSR fails, the even corner of each 2x2 block is traced and the other three
+    /// (`untraced`) take its colour, or the sky in the reflected direction where it was
+    /// not traced. Higher traces fewer pixels (a dielectric seen head-on weighs 4%) at
+    /// a quarter of the detail in weak reflections; 0 traces every failure.
+    trace_min_weight: f32 = 0.06, ANY_F32, slider(0.0, 0.5), NextFrame;
     /// Seam blur radius in pixels (0: off): smoother SSR/RT transitions vs detail.
     blur_radius: u32 = 3, u32s(0, 16), slider(0.0, 16.0), NextFrame;
     /// Half-width in pixels of the band around SSR/RT seams that the blur touches.

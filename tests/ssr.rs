@@ -659,8 +659,10 @@ fn the_hiz_march_does_not_see_through_thin_geometry() {
     f.lit.write(bytemuck::cast_slice(&lit), general).unwrap();
     let mut wall_hits = Vec::new();
     for hiz in [true, false] {
+        // Every failure traced: the march's outcome alone.
         let params = SsrParams {
             hiz,
+            trace_min_weight: 0.0,
             ..SsrParams::from_settings(&f.settings)
         };
         let out = &f.pass.out;
@@ -742,7 +744,11 @@ fn a_ray_passing_just_behind_a_silhouette_is_not_a_hit() {
         }
     });
     let general = vk::ImageLayout::GENERAL;
-    let params = SsrParams::from_settings(&f.settings);
+    // The default march and thickness, every failure traced (the march's outcome alone).
+    let params = SsrParams {
+        trace_min_weight: 0.0,
+        ..SsrParams::from_settings(&f.settings)
+    };
     assert!(params.hiz && params.thickness > 0.02, "the default march and thickness");
     f.poison();
     ctx.one_shot(|cmd| {

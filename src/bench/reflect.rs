@@ -57,7 +57,7 @@ pub struct SplitReport {
 const REJECT_ALL: f32 = 1.01;
 
 /// The sweep's (step budget, confidence threshold) points for `base`: the budget
-/// halved down to 1, then every hit rejected.
+/// halved down to 1, then every hit rejected (and every failure traced).
 pub fn sweep(base: &Settings) -> Vec<(u32, f32)> {
     let mut points: Vec<(u32, f32)> = std::iter::successors(Some(base.ssr_max_steps), |&s| (s > 1).then_some(s / 2))
         .map(|s| (s, base.ssr_min_confidence))
@@ -85,6 +85,9 @@ pub fn run(
             mode: Mode::Hybrid,
             ssr_max_steps: steps,
             ssr_min_confidence: t,
+            // The last point traces every reflective pixel through the hybrid's passes,
+            // weak reflectors too (`trace_min_weight` would leave three in four).
+            trace_min_weight: if t == REJECT_ALL { 0.0 } else { base.trace_min_weight },
             ..base.clone()
         })
         .chain(std::iter::once(Settings {

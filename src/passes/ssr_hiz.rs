@@ -21,11 +21,12 @@ pub const NAME: &str = "ssr.hiz";
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct HizPush {
     src_offset: u32,
-    dst_offset: u32,
-    src_size: [u32; 2],
-    dst_size: [u32; 2],
+    mid_offset: u32,
+    top_offset: u32,
     from_depth: u32,
-    _pad0: u32,
+    src_size: [u32; 2],
+    mid_size: [u32; 2],
+    top_size: [u32; 2],
 }
 
 /// One pyramid level: where it starts in the buffer (in floats) and its size.
@@ -103,7 +104,7 @@ impl HiZPass {
     }
 
     /// Records the pyramid of `depth` (the G-buffer's, `SHADER_READ_ONLY_OPTIMAL`, of
-    /// the pass's extent), one dispatch per level. `out` ends visible to compute reads
+    /// the pass's extent), two levels per dispatch. `out` ends visible to compute reads
     /// (the march).
     pub fn record(&self, cmd: vk::CommandBuffer, depth: &Image) {
         let d = &self.ctx.device;
@@ -115,20 +116,22 @@ impl HiZPass {
         );
         // WAR: the previous frame's reads of the pyramid finish before it is rewritten.
         barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
-        for (k, level) in levels.iter().enumerate() {
-            if k > 0 {
-                // RAW: this level reads the one just written.
-                barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
-            }
-            let src = levels[k.saturating_sub(1)];
+        // Two levels per dispatch, from level `src`: the first reads the depth image
+        // and writes levels 0, 1 and 2 (of a 1x1 image, level 0 alone).
+        let mut src = 0;
+        loop {
+            let (from, mid, top) = (levels[src], levels.get(src + 1), levels.get(src + 2));
             let push = HizPush {
-                src_offset: src.offset,
-                dst_offset: level.offset,
-                src_size: src.size,
-                dst_size: level.size,
-                from_depth: (k == 0) as u32,
-                _pad0: 0,
+                src_offset: from.offset,
+                mid_offset: mid.map_or(0, |m| m.offset),
+                top_offset: top.map_or(0, |t| t.offset),
+                from_depth: (src == 0) as u32,
+                src_size: from.size,
+                mid_size: mid.map_or([0, 0], |m| m.size),
+                top_size: top.map_or([0, 0], |t| t.size),
             };
+            // One invocation per texel of level src + 2 (4x4 of level src).
+            let cover = [from.size[0].div_ceil(4), from.size[1].div_ceil(4), 1];
             self.pipeline.dispatch(
                 cmd,
                 &[
@@ -136,8 +139,14 @@ impl HiZPass {
                     Resource::Buffer(&self.out.buffer),
                 ],
                 &push,
-                Groups::Cover([level.size[0], level.size[1], 1]),
+                Groups::Cover(cover),
             );
+            src += 2;
+            if src + 1 >= levels.len() {
+                break;
+            }
+            // RAW: the next levels read the ones just written.
+            barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
         }
         // RAW: the march reads the pyramid.
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);

@@ -63,7 +63,7 @@ fn gallery_triangles(name: &str) -> Option<Result<u32>> {
         Some(b'm' | b'M') => (&detail[..detail.len() - 1], 1_000_000),
         _ => (detail, 1),
     };
-    let n = digits.parse::<u64>().ok().map(|d| d * unit);
+    let n = digits.parse::<u64>().ok().and_then(|d| d.checked_mul(unit));
     Some(match n {
         Some(n) if n >= *GALLERY_TRIANGLES.start() as u64 && n <= *GALLERY_TRIANGLES.end() as u64 => Ok(n as u32),
         _ => Err(Error::Input(format!(
@@ -188,7 +188,15 @@ mod tests {
             assert!((got / want as f64 - 1.0).abs() < 0.05, "{name}: {got} triangles");
             assert_eq!(s.name, name);
         }
-        for bad in ["gallery:", "gallery:9999", "gallery:9M", "gallery:lots", "gallery:-5"] {
+        // The last would wrap a u64 times 10^6 into the range.
+        for bad in [
+            "gallery:",
+            "gallery:9999",
+            "gallery:9M",
+            "gallery:lots",
+            "gallery:-5",
+            "gallery:18446744073710M",
+        ] {
             let e = file(bad).unwrap().unwrap_err().to_string();
             assert!(e.contains(bad) && e.contains("gallery:N"), "{bad}: {e}");
         }

@@ -66,13 +66,20 @@ vec3 lit_bilinear(vec2 x, ivec2 res) {
     return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
 }
 
+// The base colour (linear) and metallic of the surface at pixel q.
+void surface_at(ivec2 q, out vec3 base, out float metallic) {
+    uint id = texelFetch(gb_material, q, 0).r;
+    metallic = id == MATERIAL_NONE ? 0.0 : materials[id].metallic;
+    base = srgb_decode(texelFetch(gb_albedo, q, 0).rgb);
+}
+
 // How much of the surface at pixel q is its own mirror reflection, seen from the ray
 // arriving along -v: reflectivity x Fresnel (shading.glsl), the largest channel. SSR
 // takes the lit colour there, which lacks that reflection.
 float hit_reflection_weight(ivec2 q, float reflectivity, vec3 n, vec3 v) {
-    uint id = texelFetch(gb_material, q, 0).r;
-    float metallic = id == MATERIAL_NONE ? 0.0 : materials[id].metallic;
-    vec3 base = srgb_decode(texelFetch(gb_albedo, q, 0).rgb);
+    vec3 base;
+    float metallic;
+    surface_at(q, base, metallic);
     vec3 w = reflection_weight(base, metallic, reflectivity, n, v);
     return max(w.r, max(w.g, w.b));
 }
@@ -334,7 +341,8 @@ void main() {
     }
     ivec2 p = unpack_pixel(march_list[i]);
     ivec2 res = ivec2(frame.resolution);
-    SsrRay ray = ssr_ray(p, texelFetch(gb_depth, p, 0).r, texelFetch(gb_normal, p, 0).xyz);
+    vec4 nr = texelFetch(gb_normal, p, 0); // xyz normal, w reflectivity
+    SsrRay ray = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz);
     vec3 vpos = ray.vpos, vn = ray.vn, vdir = ray.vdir;
     // Start a little off the surface so the first steps do not hit the pixel itself.
     vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
@@ -353,10 +361,10 @@ void main() {
     vec3 color;
     judge(found, vdir, res, fail, confidence, color);
     if (fail != 0u && pc.trace_min_weight > 0.0) {
-        uint id = texelFetch(gb_material, p, 0).r; // listed pixels reflect: not MATERIAL_NONE
-        vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
-        vec4 nr = texelFetch(gb_normal, p, 0);
-        if (view_reflection_weight(ray, nr.xyz, base, materials[id].metallic, nr.w) < pc.trace_min_weight) {
+        vec3 base;
+        float metallic;
+        surface_at(p, base, metallic);
+        if (view_reflection_weight(ray, nr.xyz, base, metallic, nr.w) < pc.trace_min_weight) {
             // Not traced: a faded hit is kept whole, a failure keeps the sky (but one
             // pixel in four is traced for its 2x2 block).
             if (fail == FAIL_BLEND) {

@@ -23,7 +23,7 @@ use speculum::passes::GBuffer;
 use speculum::settings::SsrParams;
 use speculum::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
-    FAIL_OUT_OF_STEPS, FAIL_UNTRACED, LIST_STRIPES, MATERIAL_NONE, SSR_LIST_WG,
+    FAIL_OUT_OF_STEPS, FAIL_UNTRACED, LIST_STRIPES, SSR_LIST_WG,
 };
 use speculum::vk::{barrier, Image};
 
@@ -122,24 +122,22 @@ impl Fixture {
             gbuffer: &self.gb,
             lit: &self.lit,
             materials: &self.materials,
-            hiz: &self.hiz.out.buffer,
-            hiz_levels: self.hiz.out.levels.len() as u32,
+            hiz: &self.hiz.out,
         };
         self.pass.trace(cmd, &inputs, params);
     }
 
-    /// Pixel i's base colour (linear) and metallic, as the kernels read them.
-    fn own(&self, i: usize) -> (glam::Vec3, f32) {
-        let id = self.g.material[i];
-        let metallic = if id == MATERIAL_NONE {
-            0.0
-        } else {
-            self.metallic[id as usize]
-        };
-        (
-            speculum::cpu_ref::albedo_texel(&self.albedo[4 * i..4 * i + 4]).0,
-            metallic,
-        )
+    /// What the CPU march reads: this G-buffer, lit image and materials, and `pyramid`.
+    fn inputs<'a>(&'a self, pyramid: &'a [Vec<f32>]) -> ssr::MarchInputs<'a> {
+        ssr::MarchInputs {
+            depth: &self.g.depth,
+            normal: &self.g.normal,
+            lit: &self.lit_texels,
+            albedo: &self.albedo,
+            material: &self.g.material,
+            metallic: &self.metallic,
+            pyramid,
+        }
     }
 
     /// Poisons the SSR colour and fail mask, so a pixel no kernel wrote shows.
@@ -223,7 +221,8 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
         for i in 0..n {
             let p = IVec2::new((i % w) as i32, (i / w) as i32);
             let texel = (g.depth[i], g.normal[i], g.material[i]);
-            let (want, [heading, weight]) = ssr::classify(frame, p, texel, f.own(i), &params, mask_only);
+            let (want, [heading, weight]) =
+                ssr::classify(frame, p, texel, f.inputs(&[]).surface(i), &params, mask_only);
             let got = if listed[i] {
                 Class::March
             } else {
@@ -391,7 +390,7 @@ fn march_matches_cpu_on_a_random_gbuffer() {
             }
         }
     });
-    let (frame, g, gb, ubo, pass, settings) = (&f.frame, &f.g, &f.gb, &f.ubo, &f.pass, &f.settings);
+    let (frame, gb, ubo, pass, settings) = (&f.frame, &f.gb, &f.ubo, &f.pass, &f.settings);
     let general = vk::ImageLayout::GENERAL;
     let pyramid = f.pyramid();
     // Both marches. A short budget, so rays also run out of steps (a Hi-Z step may
@@ -424,15 +423,7 @@ fn march_matches_cpu_on_a_random_gbuffer() {
         let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap());
         let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
         let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
-        let inputs = ssr::MarchInputs {
-            depth: &g.depth,
-            normal: &g.normal,
-            lit: &f.lit_texels,
-            albedo: &f.albedo,
-            material: &g.material,
-            metallic: &f.metallic,
-            pyramid: &pyramid,
-        };
+        let inputs = f.inputs(&pyramid);
         let c = compare_march(
             frame,
             &inputs,
@@ -758,15 +749,7 @@ fn a_ray_passing_just_behind_a_silhouette_is_not_a_hit() {
     .unwrap();
     let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&f.pass.out.mask.read(general).unwrap());
     let pyramid = f.pyramid();
-    let inputs = ssr::MarchInputs {
-        depth: &f.g.depth,
-        normal: &f.g.normal,
-        lit: &f.lit_texels,
-        albedo: &f.albedo,
-        material: &f.g.material,
-        metallic: &f.metallic,
-        pyramid: &pyramid,
-    };
+    let inputs = f.inputs(&pyramid);
     let mut behind = 0;
     for y in 20..60 {
         for x in band.clone() {

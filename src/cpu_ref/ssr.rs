@@ -118,6 +118,20 @@ pub struct MarchInputs<'a> {
     pub pyramid: &'a [Vec<f32>],
 }
 
+impl MarchInputs<'_> {
+    /// `surface_at`: the base colour (linear) and metallic of the surface at texel `i`
+    /// (row-major; metallic 0 where no material is).
+    pub fn surface(&self, i: usize) -> (Vec3, f32) {
+        let id = self.material[i];
+        let metallic = if id == MATERIAL_NONE {
+            0.0
+        } else {
+            self.metallic[id as usize]
+        };
+        (super::albedo_texel(&self.albedo[4 * i..4 * i + 4]).0, metallic)
+    }
+}
+
 /// What the march of one pixel writes, and how close it came to deciding otherwise.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct March {
@@ -251,11 +265,7 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
     };
     let (mut fail, mut color) = judge(frame, &found, vdir, inputs, params, &mut m.margin);
     if fail != 0 && params.trace_min_weight > 0.0 {
-        let i = at(p);
-        let own = (
-            super::albedo_texel(&inputs.albedo[4 * i..4 * i + 4]).0,
-            inputs.metallic[inputs.material[i] as usize],
-        );
+        let own = inputs.surface(at(p));
         let w = view_reflection_weight(frame, &ray, Vec3::new(nr[0], nr[1], nr[2]), own, nr[3]);
         m.margin = m.margin.min(gap(w, params.trace_min_weight));
         if w < params.trace_min_weight {
@@ -549,14 +559,7 @@ fn judge(
         *margin = margin.min(hit_n.dot(world_dir).abs());
         // `hit_reflection_weight`: the hit surface's own reflection seen along the ray.
         let mut own_reflection = |q: IVec2, n: Vec3| {
-            let q = at(q);
-            let id = inputs.material[q];
-            let metallic = if id == MATERIAL_NONE {
-                0.0
-            } else {
-                inputs.metallic[id as usize]
-            };
-            let base = super::albedo_texel(&inputs.albedo[4 * q..4 * q + 4]).0;
+            let (base, metallic) = inputs.surface(at(q));
             let w = super::shading::reflection_weight(base, metallic, hit_nr[3], n, -world_dir).max_element();
             *margin = margin.min(gap(w, params.recursion_min));
             w

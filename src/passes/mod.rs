@@ -90,6 +90,20 @@ pub struct GBuffer {
     pub material: Image,
 }
 
+/// `ssr.hiz`'s min-depth pyramid: its buffer (floats, level after level) and the levels
+/// in it.
+pub struct HiZ {
+    pub buffer: Buffer,
+    pub levels: Vec<Level>,
+}
+
+/// One pyramid level: where it starts in the buffer (in floats) and its size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Level {
+    pub offset: u32,
+    pub size: [u32; 2],
+}
+
 /// The compacted list and its size.
 pub struct CompactOutputs {
     /// One `u32` per listed pixel: `x | y << 16`.

@@ -6,6 +6,7 @@
 //! way (no per-mip storage views).
 //! CPU reference: `cpu_ref::ssr::hiz` (tests/ssr.rs), exactly.
 
+use super::{HiZ, Level};
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
@@ -29,13 +30,6 @@ struct HizPush {
     top_size: [u32; 2],
 }
 
-/// One pyramid level: where it starts in the buffer (in floats) and its size.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Level {
-    pub offset: u32,
-    pub size: [u32; 2],
-}
-
 /// The levels of the pyramid of a `width` x `height` depth image: level 0 that size,
 /// each next one `ceil(w / 2) x ceil(h / 2)`, the last 1x1.
 pub fn levels(width: u32, height: u32) -> Vec<Level> {
@@ -51,12 +45,6 @@ pub fn levels(width: u32, height: u32) -> Vec<Level> {
         });
     }
     out
-}
-
-/// The pyramid: its buffer (floats, level after level) and the levels in it.
-pub struct HiZ {
-    pub buffer: Buffer,
-    pub levels: Vec<Level>,
 }
 
 impl HiZ {

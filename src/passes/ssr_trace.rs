@@ -5,7 +5,7 @@
 //! of FidelityFX SSSR), so pixels with nothing to march cost it nothing.
 //! CPU reference: `cpu_ref::ssr` (`classify`, `march`; tests/ssr.rs).
 
-use super::GBuffer;
+use super::{GBuffer, HiZ};
 use crate::error::Result;
 use crate::settings::SsrParams;
 use crate::shaders;
@@ -76,9 +76,8 @@ pub struct MarchInputs<'a> {
     /// The lit image, `GENERAL`.
     pub lit: &'a Image,
     pub materials: &'a Buffer,
-    /// `ssr.hiz`'s pyramid and its level count.
-    pub hiz: &'a Buffer,
-    pub hiz_levels: u32,
+    /// `ssr.hiz`'s pyramid.
+    pub hiz: &'a HiZ,
 }
 
 pub struct SsrPass {
@@ -185,7 +184,7 @@ impl SsrPass {
     /// the fail mask of the listed pixels, visible at the end to their readers
     /// (`ssr.compact`, `reflect.merge`). `lit` in `GENERAL`; `materials` gives the hit
     /// surfaces' metallic for their own reflection's weight; the pyramid (`ssr.hiz`'s,
-    /// of `hiz_levels` levels, visible to compute reads) is read when `params.hiz`.
+    /// visible to compute reads) is read when `params.hiz`.
     pub fn trace(&self, cmd: vk::CommandBuffer, inputs: &MarchInputs<'_>, params: &SsrParams) {
         let MarchInputs {
             frame,
@@ -193,7 +192,6 @@ impl SsrPass {
             lit,
             materials,
             hiz,
-            hiz_levels,
         } = *inputs;
         let out = &self.out;
         let s = &self.sampler;
@@ -216,7 +214,7 @@ impl SsrPass {
                 Resource::Sampled(&gbuffer.albedo, s),
                 Resource::Sampled(&gbuffer.material, s),
                 Resource::Buffer(materials),
-                Resource::Buffer(hiz),
+                Resource::Buffer(&hiz.buffer),
             ],
             &MarchPush {
                 max_steps: params.max_steps,
@@ -226,7 +224,7 @@ impl SsrPass {
                 edge_fade: params.edge_fade,
                 min_confidence: params.min_confidence,
                 recursion_min: params.recursion_min,
-                hiz_top: hiz_levels - 1,
+                hiz_top: hiz.levels.len() as u32 - 1,
                 trace_min_weight: params.trace_min_weight,
             },
             Groups::Indirect(&out.march_args),

@@ -267,8 +267,7 @@ impl Renderer {
                 gbuffer: g,
                 lit: &light.out,
                 materials: &scene.materials,
-                hiz: &hiz.out.buffer,
-                hiz_levels: hiz.out.levels.len() as u32,
+                hiz: &hiz.out,
             };
             f.row(Row::SsrTrace, || ssr.trace(cmd, &inputs, &params));
         }

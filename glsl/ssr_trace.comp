@@ -40,7 +40,7 @@ layout(push_constant) uniform Push {
     float max_distance;   // length of the ray, in multiples of the reflecting point's view depth
     float edge_fade;      // fraction of the screen's smaller side over which confidence fades
     float min_confidence; // below: the pixel fails
-    float recursion_min;  // hits whose own reflection, seen along the ray, weighs more fail
+    float recursion_min;  // hits whose own reflection, as the pixel shows it, weighs more fail
     uint hiz_top;         // the pyramid's last (1x1) level
     float trace_min_weight; // failed pixels whose own reflection weighs less are not traced
 } pc;
@@ -73,14 +73,17 @@ void surface_at(ivec2 q, out vec3 base, out float metallic) {
     base = srgb_decode(texelFetch(gb_albedo, q, 0).rgb);
 }
 
-// How much of the surface at pixel q is its own mirror reflection, seen from the ray
-// arriving along -v: reflectivity x Fresnel (shading.glsl), the largest channel. SSR
-// takes the lit colour there, which lacks that reflection.
-float hit_reflection_weight(ivec2 q, float reflectivity, vec3 n, vec3 v) {
+// How much of what the pixel shows is the hit surface's own mirror reflection (which
+// the lit colour SSR takes lacks): the surface at pixel q's reflectivity x Fresnel
+// (shading.glsl) seen from the ray arriving along -v, times the pixel's own reflection
+// weight `own`, the largest channel. A second bounce the pixel barely shows (a glossy
+// wall seen in a faint floor) costs nothing to leave out; one a mirror shows in full
+// does.
+float hit_reflection_weight(ivec2 q, float reflectivity, vec3 n, vec3 v, vec3 own) {
     vec3 base;
     float metallic;
     surface_at(q, base, metallic);
-    vec3 w = reflection_weight(base, metallic, reflectivity, n, v);
+    vec3 w = own * reflection_weight(base, metallic, reflectivity, n, v);
     return max(w.r, max(w.g, w.b));
 }
 
@@ -305,7 +308,7 @@ Found march_hiz(vec4 h0, vec4 h1, ivec2 res) {
 // The hit's fail mask, colour and confidence: back faces, surfaces whose own
 // reflection the screen lacks and faded hits fail; a faded hit above the threshold is
 // kept and traced too (FAIL_BLEND: merge blends the two by confidence).
-void judge(Found found, vec3 vdir, ivec2 res, out uint fail, out float confidence, out vec3 color) {
+void judge(Found found, vec3 vdir, vec3 own, ivec2 res, out uint fail, out float confidence, out vec3 color) {
     fail = found.reason;
     confidence = 0.0;
     color = vec3(0.0);
@@ -318,7 +321,7 @@ void judge(Found found, vec3 vdir, ivec2 res, out uint fail, out float confidenc
     vec3 world_dir = transpose(mat3(frame.view)) * vdir; // view is rigid
     if (dot(hit_n, world_dir) > 0.0) {
         fail = FAIL_BACK_FACE;
-    } else if (hit_reflection_weight(hit_pixel, hit_nr.w, hit_n, -world_dir) > pc.recursion_min) {
+    } else if (hit_reflection_weight(hit_pixel, hit_nr.w, hit_n, -world_dir, own) > pc.recursion_min) {
         fail = FAIL_HIT_REFLECTIVE;
     } else {
         vec2 hp = vec2(hit_pixel) + 0.5;
@@ -356,15 +359,16 @@ void main() {
     vec4 h1 = frame.proj * vec4(end_point, 1.0);
     Found found = HIZ ? march_hiz(h0, h1, res) : march_linear(h0, h1, origin, end_point, res);
 
+    vec3 base;
+    float metallic;
+    surface_at(p, base, metallic);
+    vec3 own = view_reflection(ray, nr.xyz, base, metallic, nr.w);
     uint fail;
     float confidence;
     vec3 color;
-    judge(found, vdir, res, fail, confidence, color);
+    judge(found, vdir, own, res, fail, confidence, color);
     if (fail != 0u && pc.trace_min_weight > 0.0) {
-        vec3 base;
-        float metallic;
-        surface_at(p, base, metallic);
-        if (view_reflection_weight(ray, nr.xyz, base, metallic, nr.w) < pc.trace_min_weight) {
+        if (max(own.r, max(own.g, own.b)) < pc.trace_min_weight) {
             // Not traced: a faded hit is kept whole, a failure keeps the sky (but one
             // pixel in four is traced for its 2x2 block).
             if (fail == FAIL_BLEND) {

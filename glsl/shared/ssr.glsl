@@ -27,10 +27,15 @@ float heading_confidence(vec3 vdir) {
 }
 
 // The weight of the pixel's own mirror reflection as the camera sees it (reflectivity x
-// Fresnel, the largest channel): below trace_min_weight the pixel is never ray traced.
-float view_reflection_weight(SsrRay r, vec3 n_world, vec3 base, float metallic, float reflectivity) {
+// Fresnel, per channel).
+vec3 view_reflection(SsrRay r, vec3 n_world, vec3 base, float metallic, float reflectivity) {
     vec3 v = transpose(mat3(frame.view)) * -normalize(r.vpos); // view is rigid
-    vec3 w = reflection_weight(base, metallic, reflectivity, normalize(n_world), v);
+    return reflection_weight(base, metallic, reflectivity, normalize(n_world), v);
+}
+
+// Its largest channel: below trace_min_weight the pixel is traced one in four.
+float view_reflection_weight(SsrRay r, vec3 n_world, vec3 base, float metallic, float reflectivity) {
+    vec3 w = view_reflection(r, n_world, base, metallic, reflectivity);
     return max(w.r, max(w.g, w.b));
 }
 

@@ -37,11 +37,22 @@ pub fn view_reflection_weight(
     frame: &FrameUniforms,
     ray: &SsrRay,
     n_world: Vec3,
-    (base, metallic): (Vec3, f32),
+    own: (Vec3, f32),
     reflectivity: f32,
 ) -> f32 {
+    view_reflection(frame, ray, n_world, own, reflectivity).max_element()
+}
+
+/// `view_reflection`: that weight per channel.
+pub fn view_reflection(
+    frame: &FrameUniforms,
+    ray: &SsrRay,
+    n_world: Vec3,
+    (base, metallic): (Vec3, f32),
+    reflectivity: f32,
+) -> Vec3 {
     let v = Mat3::from_mat4(frame.view).transpose() * -ray.vpos.normalize();
-    super::shading::reflection_weight(base, metallic, reflectivity, n_world.normalize(), v).max_element()
+    super::shading::reflection_weight(base, metallic, reflectivity, n_world.normalize(), v)
 }
 
 /// `traced_for_block`: whether a weak reflector at `p` is traced for its 2x2 block
@@ -263,10 +274,16 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
     } else {
         march_linear(frame, (h0, h1), (origin, end_point), inputs, params, &mut m)
     };
-    let (mut fail, mut color) = judge(frame, &found, vdir, inputs, params, &mut m.margin);
+    let own = view_reflection(
+        frame,
+        &ray,
+        Vec3::new(nr[0], nr[1], nr[2]),
+        inputs.surface(at(p)),
+        nr[3],
+    );
+    let (mut fail, mut color) = judge(frame, &found, (vdir, own), inputs, params, &mut m.margin);
     if fail != 0 && params.trace_min_weight > 0.0 {
-        let own = inputs.surface(at(p));
-        let w = view_reflection_weight(frame, &ray, Vec3::new(nr[0], nr[1], nr[2]), own, nr[3]);
+        let w = own.max_element();
         m.margin = m.margin.min(gap(w, params.trace_min_weight));
         if w < params.trace_min_weight {
             if fail == FAIL_BLEND {
@@ -541,7 +558,7 @@ fn march_hiz(
 fn judge(
     frame: &FrameUniforms,
     found: &Found,
-    vdir: Vec3,
+    (vdir, own): (Vec3, Vec3),
     inputs: &MarchInputs<'_>,
     params: &SsrParams,
     margin: &mut f32,
@@ -557,10 +574,11 @@ fn judge(
         let hit_n = Vec3::new(hit_nr[0], hit_nr[1], hit_nr[2]).normalize();
         let world_dir = Mat3::from_mat4(frame.view).transpose() * vdir;
         *margin = margin.min(hit_n.dot(world_dir).abs());
-        // `hit_reflection_weight`: the hit surface's own reflection seen along the ray.
+        // `hit_reflection_weight`: the hit surface's own reflection seen along the ray,
+        // as the pixel shows it.
         let mut own_reflection = |q: IVec2, n: Vec3| {
             let (base, metallic) = inputs.surface(at(q));
-            let w = super::shading::reflection_weight(base, metallic, hit_nr[3], n, -world_dir).max_element();
+            let w = (own * super::shading::reflection_weight(base, metallic, hit_nr[3], n, -world_dir)).max_element();
             *margin = margin.min(gap(w, params.recursion_min));
             w
         };

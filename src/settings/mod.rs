@@ -194,13 +194,13 @@ settings_table! {
     /// SSR hits below this confidence fail (go to the ray tracer): higher is cleaner
     /// and slower.
     ssr_min_confidence: f32 = 0.3, ANY_F32, slider(0.0, 1.0), NextFrame;
-    /// SSR hits on surfaces whose own mirror reflection, seen along the ray, weighs
-    /// more than this (reflectivity x Fresnel, the largest channel) fail and go to the
-    /// ray tracer (the screen holds no reflection of a reflection). Hits on weaker
-    /// reflectors (a dielectric seen head-on reflects 4%) are kept without their own
-    /// reflection: a lower value is closer to the reference, a higher one ray traces
-    /// fewer pixels.
-    ssr_recursion_min: f32 = 0.2, ANY_F32, slider(0.0, 1.0), NextFrame;
+    /// SSR hits on surfaces whose own mirror reflection, as the pixel shows it, weighs
+    /// more than this fail and go to the ray tracer (the screen holds no reflection of a
+    /// reflection): the hit surface's reflectivity x Fresnel seen along the ray, times
+    /// the pixel's own (toward the camera), the largest channel. Hits where less is
+    /// missing (a glossy wall seen in a faint floor) are kept without it: a lower value
+    /// is closer to the reference, a higher one ray traces fewer pixels.
+    ssr_recursion_min: f32 = 0.02, ANY_F32, slider(0.0, 1.0), NextFrame;
     /// Reflective pixels whose own reflection weighs less than this (reflectivity x
     /// Fresnel toward the camera, the largest channel) are ray traced one in four:
     /// where SSR fails, the even corner of each 2x2 block is traced and the other three
@@ -495,7 +495,7 @@ impl SsrParams {
             edge_fade: st.ssr_edge_fade,
             min_confidence: st.ssr_min_confidence,
             reflective_min: st.reflective_min,
-            recursion_min: st.ssr_recursion_min.max(st.reflective_min),
+            recursion_min: st.ssr_recursion_min,
             trace_min_weight: st.trace_min_weight,
         }
     }

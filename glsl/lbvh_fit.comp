@@ -8,7 +8,9 @@
 //
 // Memory ordering: box stores are made visible to the sibling's invocation with
 // memoryBarrierBuffer() on a `coherent` buffer, between the store and the visit
-// (release) and between the visit and the loads (acquire). The climb advances in
+// (release) and between the visit and the loads (acquire). The traversal layout
+// (bvh.glsl) is written on the way: each leaf's triangle, and each internal node with
+// its children's boxes by the invocation that unites them. The climb advances in
 // lockstep steps whose trip count is workgroup-uniform (a vote ends the loop), so
 // every memory barrier sits in uniform control flow: lavapipe 22.3 treats a memory
 // barrier in divergent flow like a workgroup barrier and loses invocations.
@@ -22,6 +24,8 @@ layout(binding = 1, std430) readonly buffer Indices { uint indices[]; };
 layout(binding = 2, std430) coherent buffer Nodes { BvhNode nodes[]; };
 layout(binding = 3, std430) readonly buffer Parents { uint parents[]; };
 layout(binding = 4, std430) coherent buffer Visits { uint visits[]; };
+layout(binding = 5, std430) writeonly buffer TNodes { TraversalNode tnodes[]; };
+layout(binding = 6, std430) writeonly buffer TTris { TraversalTri ttris[]; };
 
 layout(push_constant) uniform Push { uint n; } pc;
 
@@ -38,8 +42,13 @@ void main() {
         uint node = pc.n - 1u + j;
         uint prim = nodes[node].left & ~BVH_LEAF_BIT;
         TRIANGLE_CORNERS(vertices, indices, prim, a, b, c)
-        nodes[node].lo = min(a, min(b, c));
-        nodes[node].hi = max(a, max(b, c));
+        vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
+        nodes[node].lo = lo;
+        nodes[node].hi = hi;
+        ttris[j] = TraversalTri(a, prim, b - a, 0u, c - a, 0u);
+        if (pc.n == 1u) {
+            tnodes[0] = traversal_node(0u, lo, hi, 0u, lo, hi, 1u); // both children: the leaf
+        }
         parent = parents[node];
         climbing = parent != BVH_INVALID;
     }
@@ -58,8 +67,10 @@ void main() {
         if (climbing) {
             uint l = nodes[parent].left;
             uint r = nodes[parent].right;
-            nodes[parent].lo = min(nodes[l].lo, nodes[r].lo);
-            nodes[parent].hi = max(nodes[l].hi, nodes[r].hi);
+            vec3 l_lo = nodes[l].lo, l_hi = nodes[l].hi, r_lo = nodes[r].lo, r_hi = nodes[r].hi;
+            nodes[parent].lo = min(l_lo, r_lo);
+            nodes[parent].hi = max(l_hi, r_hi);
+            tnodes[parent] = traversal_node(l, l_lo, l_hi, r, r_lo, r_hi, pc.n);
             parent = parents[parent];
             climbing = parent != BVH_INVALID;
         }

@@ -1,5 +1,6 @@
 #version 460
-// lbvh.refit (scheduled), first pass: every leaf's box from its triangle.
+// lbvh.refit (scheduled), first pass: every leaf's box from its triangle, and the
+// triangle in the traversal layout (bvh.glsl); a single triangle's node too.
 // CPU reference: cpu_ref::lbvh::fit, the scheduled refit as a whole (tests/lbvh.rs).
 #include "bvh.glsl"
 
@@ -8,6 +9,8 @@ layout(local_size_x = LBVH_WG) in;
 layout(binding = 0, std430) readonly buffer Vertices { Vertex vertices[]; };
 layout(binding = 1, std430) readonly buffer Indices { uint indices[]; };
 layout(binding = 2, std430) buffer Nodes { BvhNode nodes[]; };
+layout(binding = 3, std430) writeonly buffer TNodes { TraversalNode tnodes[]; };
+layout(binding = 4, std430) writeonly buffer TTris { TraversalTri ttris[]; };
 
 layout(push_constant) uniform Push { uint n; } pc;
 
@@ -19,6 +22,11 @@ void main() {
     uint node = pc.n - 1u + j;
     uint prim = nodes[node].left & ~BVH_LEAF_BIT;
     TRIANGLE_CORNERS(vertices, indices, prim, a, b, c)
-    nodes[node].lo = min(a, min(b, c));
-    nodes[node].hi = max(a, max(b, c));
+    vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
+    nodes[node].lo = lo;
+    nodes[node].hi = hi;
+    ttris[j] = TraversalTri(a, prim, b - a, 0u, c - a, 0u);
+    if (pc.n == 1u) {
+        tnodes[0] = traversal_node(0u, lo, hi, 0u, lo, hi, 1u); // both children: the leaf
+    }
 }

@@ -1,6 +1,6 @@
 #version 460
 // lbvh.refit (scheduled): the boxes of one height level of internal nodes (all their
-// children are done), each the union of its children's.
+// children are done), each the union of its children's, and its traversal node.
 // CPU reference: cpu_ref::lbvh::fit, the scheduled refit as a whole (tests/lbvh.rs).
 #include "bvh.glsl"
 
@@ -8,10 +8,12 @@ layout(local_size_x = LBVH_WG) in;
 
 layout(binding = 0, std430) buffer Nodes { BvhNode nodes[]; };
 layout(binding = 1, std430) readonly buffer Order { uint order[]; };
+layout(binding = 2, std430) writeonly buffer TNodes { TraversalNode tnodes[]; };
 
 layout(push_constant) uniform Push {
     uint first;
     uint count;
+    uint n; // triangles
 } pc;
 
 void main() {
@@ -22,6 +24,8 @@ void main() {
     uint node = order[pc.first + i];
     uint l = nodes[node].left;
     uint r = nodes[node].right;
-    nodes[node].lo = min(nodes[l].lo, nodes[r].lo);
-    nodes[node].hi = max(nodes[l].hi, nodes[r].hi);
+    vec3 l_lo = nodes[l].lo, l_hi = nodes[l].hi, r_lo = nodes[r].lo, r_hi = nodes[r].hi;
+    nodes[node].lo = min(l_lo, r_lo);
+    nodes[node].hi = max(l_hi, r_hi);
+    tnodes[node] = traversal_node(l, l_lo, l_hi, r, r_lo, r_hi, pc.n);
 }

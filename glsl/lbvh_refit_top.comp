@@ -1,7 +1,7 @@
 #version 460
 // lbvh.refit (scheduled), last pass: one workgroup refits every remaining level (each
 // at most REFIT_TOP_WG nodes: a level never holds more nodes than the one below it),
-// level by level, a workgroup barrier between levels.
+// level by level, a workgroup barrier between levels; each node's traversal node too.
 // CPU reference: cpu_ref::lbvh::fit, the scheduled refit as a whole (tests/lbvh.rs).
 #include "bvh.glsl"
 
@@ -10,10 +10,12 @@ layout(local_size_x = REFIT_TOP_WG) in;
 layout(binding = 0, std430) coherent buffer Nodes { BvhNode nodes[]; };
 layout(binding = 1, std430) readonly buffer Order { uint order[]; };
 layout(binding = 2, std430) readonly buffer Levels { uvec2 levels[]; }; // (first, count)
+layout(binding = 3, std430) writeonly buffer TNodes { TraversalNode tnodes[]; };
 
 layout(push_constant) uniform Push {
     uint first_level;
     uint level_count;
+    uint n; // triangles
 } pc;
 
 void main() {
@@ -24,8 +26,10 @@ void main() {
             uint node = order[lv.x + i];
             uint l = nodes[node].left;
             uint r = nodes[node].right;
-            nodes[node].lo = min(nodes[l].lo, nodes[r].lo);
-            nodes[node].hi = max(nodes[l].hi, nodes[r].hi);
+            vec3 l_lo = nodes[l].lo, l_hi = nodes[l].hi, r_lo = nodes[r].lo, r_hi = nodes[r].hi;
+            nodes[node].lo = min(l_lo, r_lo);
+            nodes[node].hi = max(l_hi, r_hi);
+            tnodes[node] = traversal_node(l, l_lo, l_hi, r, r_lo, r_hi, pc.n);
         }
         // The next level reads this one's boxes.
         memoryBarrierBuffer();

@@ -26,10 +26,10 @@ layout(binding = 4) uniform sampler2D shadow_map;
 layout(binding = 5, std430) readonly buffer Pixels { uint pixels[]; };
 layout(binding = 6, std430) readonly buffer Indirect { uvec4 indirect; }; // w: count
 layout(binding = 7, rgba32f) uniform writeonly image2D rt_out;
-// Bindings 8-13: traverse.glsl. Texture coordinates of the static and dynamic vertices.
-layout(binding = 14, std430) readonly buffer StaticUvs { vec2 s_uvs[]; };
-layout(binding = 15, std430) readonly buffer DynamicUvs { vec2 d_uvs[]; };
-layout(binding = 16) uniform sampler2DArray scene_textures;
+// Bindings 8-15: traverse.glsl. Texture coordinates of the static and dynamic vertices.
+layout(binding = 16, std430) readonly buffer StaticUvs { vec2 s_uvs[]; };
+layout(binding = 17, std430) readonly buffer DynamicUvs { vec2 d_uvs[]; };
+layout(binding = 18) uniform sampler2DArray scene_textures;
 
 layout(push_constant) uniform Push {
     uint max_bounces;  // rays per path (1: a single reflection)

@@ -91,6 +91,37 @@ pub struct BvhNode {
     pub right: u32,
 }
 
+/// A node of the traversal layout (std430, 64 bytes; `glsl/shared/bvh.glsl`): an
+/// internal node of the binary tree with both children's boxes, so one fetch tests
+/// both. `child0`/`child1`: an internal node's index, or `BVH_LEAF_BIT |` the leaf's
+/// position in `TraversalTri` order. The fit and the refit write N-1 of them (one for
+/// a single triangle, whose two children are that leaf).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TraversalNode {
+    pub lo0: [f32; 3],
+    pub child0: u32,
+    pub hi0: [f32; 3],
+    pub child1: u32,
+    pub lo1: [f32; 3],
+    pub _pad0: u32,
+    pub hi1: [f32; 3],
+    pub _pad1: u32,
+}
+
+/// A triangle of the traversal layout (std430, 48 bytes), in leaf order: corner `a`,
+/// the edges `b - a` and `c - a` the ray test uses, and the scene's triangle id.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TraversalTri {
+    pub a: [f32; 3],
+    pub id: u32,
+    pub e1: [f32; 3],
+    pub _pad0: u32,
+    pub e2: [f32; 3],
+    pub _pad1: u32,
+}
+
 /// A ray for `rt.trace` (std430, 32 bytes). Hits count for `tmin < t < tmax`, with t
 /// in units of `dir`'s length.
 #[repr(C)]
@@ -116,6 +147,8 @@ pub struct Hit {
 }
 
 const _: () = assert!(std::mem::size_of::<BvhNode>() == 32);
+const _: () = assert!(std::mem::size_of::<TraversalNode>() == 64);
+const _: () = assert!(std::mem::size_of::<TraversalTri>() == 48);
 const _: () = assert!(std::mem::size_of::<Ray>() == 32);
 const _: () = assert!(std::mem::size_of::<Hit>() == 16);
 

@@ -41,7 +41,9 @@ impl GpuGeometry {
 
 fn build(ctx: &Arc<Context>, b: &LbvhBuilder, g: &GpuGeometry, bits: MortonBits) -> Bvh {
     let bvh = Bvh::new(ctx, g.tri_count, bits).unwrap();
-    // Poison the nodes: a node the kernels fail to write cannot pass the checks.
+    // Poison the nodes and the traversal layout: what the kernels fail to write cannot
+    // pass the checks.
+    poison_packed(&bvh);
     bvh.nodes.write(&vec![0xa5u8; bvh.nodes.size as usize]).unwrap();
     let mut timer = GpuTimer::new(ctx, 8).unwrap();
     ctx.one_shot(|cmd| {
@@ -50,6 +52,23 @@ fn build(ctx: &Arc<Context>, b: &LbvhBuilder, g: &GpuGeometry, bits: MortonBits)
     })
     .unwrap();
     bvh
+}
+
+fn poison_packed(bvh: &Bvh) {
+    bvh.tnodes.write(&vec![0xa5u8; bvh.tnodes.size as usize]).unwrap();
+    bvh.ttris.write(&vec![0x5au8; bvh.ttris.size as usize]).unwrap();
+}
+
+/// The traversal layout the fit or refit wrote equals the CPU's from the CPU-fitted `want`, byte for
+/// byte (boxes and edges are copies and exact subtractions).
+fn assert_packed(bvh: &Bvh, want: &[speculum::gpu_types::BvhNode], v: &[GpuVertex], i: &[u32], what: &str) {
+    let (tnodes, ttris) = bvh.read_packed().unwrap();
+    let (want_nodes, want_tris) = cref::pack(want, v, i);
+    assert_eq!(tnodes.len(), want_nodes.len(), "{what}: traversal nodes");
+    for (k, (got, exp)) in tnodes.iter().zip(&want_nodes).enumerate() {
+        assert_eq!(got, exp, "{what}: traversal node {k}");
+    }
+    assert_eq!(ttris, want_tris, "{what}: triangles in leaf order");
 }
 
 fn keys_u64(raw: &[u32], key_words: u32) -> Vec<u64> {
@@ -181,6 +200,7 @@ fn hierarchy_and_fit_match_cpu_exactly() {
                 assert_eq!(got, exp, "n={n} {bits:?}: node {k}");
             }
             cref::check_bvh(&nodes, Some(&parents), &v, &i).unwrap_or_else(|e| panic!("n={n} {bits:?}: {e}"));
+            assert_packed(&bvh, &want, &v, &i, &format!("n={n} {bits:?}"));
         }
     }
 }
@@ -327,6 +347,7 @@ fn refit_matches_cpu_fit_after_moving_vertices() {
     assert_eq!(after, want);
     assert_ne!(after, before, "the boxes moved");
     cref::check_bvh(&after, None, &moved, &i).unwrap();
+    assert_packed(&bvh, &want, &moved, &i, "refit");
 }
 
 /// The scheduled refit (leaves, then height levels, the top in one workgroup) gives
@@ -375,6 +396,7 @@ fn scheduled_refit_matches_cpu_fit() {
             nd.hi = [f32::NAN; 3];
         }
         bvh.nodes.write(bytemuck::cast_slice(&poisoned)).unwrap();
+        poison_packed(&bvh);
         let mut timer = GpuTimer::new(&ctx, 2).unwrap();
         ctx.one_shot(|cmd| {
             timer.reset(cmd);
@@ -385,6 +407,7 @@ fn scheduled_refit_matches_cpu_fit() {
         let mut want = before.clone();
         cref::fit(&mut want, &moved, &i);
         assert_eq!(after, want, "{n} triangles");
+        assert_packed(&bvh, &want, &moved, &i, &format!("scheduled refit, {n} triangles"));
         assert!(levels.iter().any(|l| l[1] > 1024) == (n > 5000), "{n}: {levels:?}");
     }
 }

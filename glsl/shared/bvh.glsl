@@ -5,6 +5,16 @@
 //   node: | lo.x lo.y lo.z | left  | hi.x hi.y hi.z | right |   32 bytes
 //   internal: left/right = child node indices
 //   leaf:     left = BVH_LEAF_BIT | triangle id, right = BVH_INVALID
+//
+// The traversal reads a layout the fit and the refit write beside it (src/gpu_types.rs:
+// TraversalNode, TraversalTri): N-1 internal nodes (one for N = 1, whose two children
+// are that leaf), each holding both children's boxes, written by the invocation that
+// computes the node's own box, and the N triangles in leaf order, written with the
+// leaf boxes.
+//
+//   traversal node: | lo0 | child0 | hi0 | child1 | lo1 | 0 | hi1 | 0 |   64 bytes
+//   child: an internal node's index, or BVH_LEAF_BIT | the leaf's position
+//   traversal triangle: | a | triangle id | b - a | 0 | c - a | 0 |      48 bytes
 #ifndef BVH_GLSL
 #define BVH_GLSL
 #include "types.glsl"
@@ -15,6 +25,37 @@ struct BvhNode {
     vec3 hi;
     uint right;
 };
+
+struct TraversalNode {
+    vec3 lo0;
+    uint child0;
+    vec3 hi0;
+    uint child1;
+    vec3 lo1;
+    uint pad0;
+    vec3 hi1;
+    uint pad1;
+};
+
+struct TraversalTri {
+    vec3 a;
+    uint id;
+    vec3 e1;
+    uint pad0;
+    vec3 e2;
+    uint pad1;
+};
+
+// The traversal layout's link to node c of a tree over n triangles: internal nodes keep
+// their index, leaves become their position in leaf order.
+uint traversal_ref(uint c, uint n) {
+    return c < n - 1u ? c : (BVH_LEAF_BIT | (c - (n - 1u)));
+}
+
+// The traversal node of internal node `i` with children `l`, `r` and their boxes.
+TraversalNode traversal_node(uint l, vec3 l_lo, vec3 l_hi, uint r, vec3 r_lo, vec3 r_hi, uint n) {
+    return TraversalNode(l_lo, traversal_ref(l, n), l_hi, traversal_ref(r, n), r_lo, 0u, r_hi, 0u);
+}
 
 // Float <-> uint mapping that preserves order, so atomicMin/atomicMax on uint act as
 // float min/max (negative floats: all bits flipped; positive: the sign bit set).

@@ -6,7 +6,10 @@
 // offset is applied to the origin: callers set tmin or offset origins. Mirrored by
 // cpu_ref::trace.
 //
-// The includer defines TRAVERSE_BINDING (first of six consecutive bindings) first.
+// The includer defines TRAVERSE_BINDING (first of eight consecutive bindings) first.
+// The walk reads the traversal layout (bvh.glsl): one 64-byte node per step, whose two
+// children's boxes are tested together, and one 48-byte triangle per leaf in leaf
+// order; the scene's vertices and indices serve only the hit's attributes.
 #ifndef TRAVERSE_GLSL
 #define TRAVERSE_GLSL
 #include "bvh.glsl"
@@ -18,31 +21,33 @@ struct Hit {
     float v;    // barycentric weight of corner c
 };
 
-layout(binding = TRAVERSE_BINDING + 0, std430) readonly buffer StaticNodes { BvhNode s_nodes[]; };
+layout(binding = TRAVERSE_BINDING + 0, std430) readonly buffer StaticNodes { TraversalNode s_nodes[]; };
 layout(binding = TRAVERSE_BINDING + 1, std430) readonly buffer StaticVertices { Vertex s_vertices[]; };
 layout(binding = TRAVERSE_BINDING + 2, std430) readonly buffer StaticIndices { uint s_indices[]; };
-layout(binding = TRAVERSE_BINDING + 3, std430) readonly buffer DynamicNodes { BvhNode d_nodes[]; };
+layout(binding = TRAVERSE_BINDING + 3, std430) readonly buffer DynamicNodes { TraversalNode d_nodes[]; };
 layout(binding = TRAVERSE_BINDING + 4, std430) readonly buffer DynamicVertices { Vertex d_vertices[]; };
 layout(binding = TRAVERSE_BINDING + 5, std430) readonly buffer DynamicIndices { uint d_indices[]; };
+layout(binding = TRAVERSE_BINDING + 6, std430) readonly buffer StaticTris { TraversalTri s_tris[]; };
+layout(binding = TRAVERSE_BINDING + 7, std430) readonly buffer DynamicTris { TraversalTri d_tris[]; };
 
-BvhNode fetch_node(uint bvh, uint i) {
+TraversalNode fetch_node(uint bvh, uint i) {
     // Member-wise copies: glslang cannot select between two buffer struct loads.
-    BvhNode nd;
+    TraversalNode nd;
     if (bvh == 0u) {
-        nd.lo = s_nodes[i].lo; nd.left = s_nodes[i].left; nd.hi = s_nodes[i].hi; nd.right = s_nodes[i].right;
+        nd.lo0 = s_nodes[i].lo0; nd.child0 = s_nodes[i].child0; nd.hi0 = s_nodes[i].hi0; nd.child1 = s_nodes[i].child1;
+        nd.lo1 = s_nodes[i].lo1; nd.hi1 = s_nodes[i].hi1;
     } else {
-        nd.lo = d_nodes[i].lo; nd.left = d_nodes[i].left; nd.hi = d_nodes[i].hi; nd.right = d_nodes[i].right;
+        nd.lo0 = d_nodes[i].lo0; nd.child0 = d_nodes[i].child0; nd.hi0 = d_nodes[i].hi0; nd.child1 = d_nodes[i].child1;
+        nd.lo1 = d_nodes[i].lo1; nd.hi1 = d_nodes[i].hi1;
     }
     return nd;
 }
 
-void fetch_triangle(uint bvh, uint t, out vec3 a, out vec3 b, out vec3 c) {
+void fetch_triangle(uint bvh, uint k, out vec3 a, out vec3 e1, out vec3 e2, out uint id) {
     if (bvh == 0u) {
-        TRIANGLE_CORNERS(s_vertices, s_indices, t, sa, sb, sc)
-        a = sa; b = sb; c = sc;
+        a = s_tris[k].a; e1 = s_tris[k].e1; e2 = s_tris[k].e2; id = s_tris[k].id;
     } else {
-        TRIANGLE_CORNERS(d_vertices, d_indices, t, da, db, dc)
-        a = da; b = db; c = dc;
+        a = d_tris[k].a; e1 = d_tris[k].e1; e2 = d_tris[k].e2; id = d_tris[k].id;
     }
 }
 
@@ -83,19 +88,12 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
             continue;
         }
         uint sp = 0u;
-        uint node = 0u;
-        BvhNode root = fetch_node(bvh, 0u);
-        if (box_entry(root.lo, root.hi, origin, inv_dir, tmin, best.t) == 1.0 / 0.0) {
-            continue;
-        }
+        uint node = 0u; // the root, an internal node (or two links to the single leaf)
         while (true) {
-            BvhNode nd = fetch_node(bvh, node);
-            if ((nd.left & BVH_LEAF_BIT) != 0u) {
-                uint t = nd.left & ~BVH_LEAF_BIT;
-                vec3 a, b, c;
-                fetch_triangle(bvh, t, a, b, c);
-                vec3 e1 = b - a;
-                vec3 e2 = c - a;
+            if ((node & BVH_LEAF_BIT) != 0u) {
+                vec3 a, e1, e2;
+                uint t;
+                fetch_triangle(bvh, node & ~BVH_LEAF_BIT, a, e1, e2, t);
                 vec3 p = cross(dir, e2);
                 float det = dot(e1, p);
                 if (det != 0.0) {
@@ -116,15 +114,14 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
                     }
                 }
             } else {
-                BvhNode cl = fetch_node(bvh, nd.left);
-                BvhNode cr = fetch_node(bvh, nd.right);
-                float tl = box_entry(cl.lo, cl.hi, origin, inv_dir, tmin, best.t);
-                float tr = box_entry(cr.lo, cr.hi, origin, inv_dir, tmin, best.t);
-                bool hit_l = tl != 1.0 / 0.0;
-                bool hit_r = tr != 1.0 / 0.0;
-                if (hit_l && hit_r) {
-                    uint near = tl <= tr ? nd.left : nd.right;
-                    uint far = tl <= tr ? nd.right : nd.left;
+                TraversalNode nd = fetch_node(bvh, node);
+                float t0 = box_entry(nd.lo0, nd.hi0, origin, inv_dir, tmin, best.t);
+                float t1 = box_entry(nd.lo1, nd.hi1, origin, inv_dir, tmin, best.t);
+                bool hit0 = t0 != 1.0 / 0.0;
+                bool hit1 = t1 != 1.0 / 0.0;
+                if (hit0 && hit1) {
+                    uint near = t0 <= t1 ? nd.child0 : nd.child1;
+                    uint far = t0 <= t1 ? nd.child1 : nd.child0;
                     if (sp < TRACE_STACK) {
                         stack[sp++] = far;
                     } else {
@@ -132,8 +129,8 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
                     }
                     node = near;
                     continue;
-                } else if (hit_l || hit_r) {
-                    node = hit_l ? nd.left : nd.right;
+                } else if (hit0 || hit1) {
+                    node = hit0 ? nd.child0 : nd.child1;
                     continue;
                 }
             }

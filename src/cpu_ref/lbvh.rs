@@ -2,7 +2,7 @@
 //! checks every built BVH must pass.
 
 pub use crate::aabb::{ordered_to_float, Aabb};
-use crate::gpu_types::{BvhNode, GpuVertex};
+use crate::gpu_types::{BvhNode, GpuVertex, TraversalNode, TraversalTri};
 use crate::shader_defines::{BVH_INVALID, BVH_LEAF_BIT};
 use glam::{UVec3, Vec3};
 
@@ -161,6 +161,54 @@ pub fn fit(nodes: &mut [BvhNode], vertices: &[GpuVertex], indices: &[u32]) {
     if !nodes.is_empty() {
         visit(nodes, 0, vertices, indices);
     }
+}
+
+/// The traversal layout `lbvh.fit` and `lbvh.refit` write beside the nodes, from a
+/// fitted tree over `indices.len() / 3` triangles: each internal node with both
+/// children's boxes (a single triangle: one node whose two children are that leaf),
+/// and the triangles in leaf order with their edges.
+pub fn pack(nodes: &[BvhNode], vertices: &[GpuVertex], indices: &[u32]) -> (Vec<TraversalNode>, Vec<TraversalTri>) {
+    let n = indices.len() / 3;
+    let internal = n - 1;
+    let child = |c: u32| {
+        if (c as usize) < internal {
+            c
+        } else {
+            BVH_LEAF_BIT | (c - internal as u32)
+        }
+    };
+    let packed = |l: u32, r: u32| {
+        let (a, b) = (&nodes[l as usize], &nodes[r as usize]);
+        TraversalNode {
+            lo0: a.lo,
+            child0: child(l),
+            hi0: a.hi,
+            child1: child(r),
+            lo1: b.lo,
+            hi1: b.hi,
+            ..Default::default()
+        }
+    };
+    let tnodes = if internal == 0 {
+        vec![packed(0, 0)]
+    } else {
+        nodes[..internal].iter().map(|nd| packed(nd.left, nd.right)).collect()
+    };
+    let tris = nodes[internal..]
+        .iter()
+        .map(|leaf| {
+            let t = leaf.left & !BVH_LEAF_BIT;
+            let [a, b, c] = triangle(vertices, indices, t as usize);
+            TraversalTri {
+                a: a.to_array(),
+                id: t,
+                e1: (b - a).to_array(),
+                e2: (c - a).to_array(),
+                ..Default::default()
+            }
+        })
+        .collect();
+    (tnodes, tris)
 }
 
 /// Checks what every BVH over `vertices`/`indices` must satisfy: 2N-1 nodes forming

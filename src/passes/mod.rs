@@ -130,20 +130,23 @@ pub struct TraceScene<'a> {
 }
 
 impl<'a> TraceScene<'a> {
-    /// The six traversal bindings of `glsl/shared/traverse.glsl` (static nodes,
-    /// vertices, indices, then dynamic) and the two triangle counts. A missing BVH is
-    /// bound to the other's buffers with a triangle count of 0.
-    pub fn bindings(&self) -> ([Resource<'a>; 6], u32, u32) {
+    /// The eight traversal bindings of `glsl/shared/traverse.glsl` (static nodes,
+    /// vertices, indices, then dynamic, then the static and dynamic triangles in leaf
+    /// order) and the two triangle counts. A missing BVH is bound to the other's
+    /// buffers with a triangle count of 0.
+    pub fn bindings(&self) -> ([Resource<'a>; 8], u32, u32) {
         let any = self.static_bvh.or(self.dynamic_bvh).expect("tracing needs a BVH");
         let s = self.static_bvh.unwrap_or(any);
         let d = self.dynamic_bvh.unwrap_or(any);
         let resources = [
-            Resource::Buffer(&s.bvh.nodes),
+            Resource::Buffer(&s.bvh.tnodes),
             Resource::Buffer(s.geometry.vertices),
             Resource::Buffer(s.geometry.indices),
-            Resource::Buffer(&d.bvh.nodes),
+            Resource::Buffer(&d.bvh.tnodes),
             Resource::Buffer(d.geometry.vertices),
             Resource::Buffer(d.geometry.indices),
+            Resource::Buffer(&s.bvh.ttris),
+            Resource::Buffer(&d.bvh.ttris),
         ];
         let count = |b: Option<Traceable<'_>>| b.map_or(0, |b| b.geometry.tri_count);
         (resources, count(self.static_bvh), count(self.dynamic_bvh))

@@ -62,7 +62,7 @@ impl RtReflectPass {
     /// Records the indirect dispatch over the list (visible to compute reads and
     /// indirect dispatch). `color` ends visible to its reader, `reflect.merge`.
     pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ReflectInputs<'_>, max_bounces: u32, shadow_rays: bool) {
-        let ([sn, sv, si, dn, dv, di], static_tris, dynamic_tris) = inputs.scene.bindings();
+        let ([sn, sv, si, dn, dv, di, st, dt], static_tris, dynamic_tris) = inputs.scene.bindings();
         let push = ReflectPush {
             max_bounces,
             static_tris,
@@ -90,6 +90,8 @@ impl RtReflectPass {
                 dn,
                 dv,
                 di,
+                st,
+                dt,
                 Resource::Buffer(inputs.surfaces.uvs[0]),
                 Resource::Buffer(inputs.surfaces.uvs[1]),
                 Resource::Sampled(inputs.surfaces.textures, inputs.surfaces.sampler),

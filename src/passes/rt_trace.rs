@@ -52,7 +52,7 @@ impl TracePass {
     /// Records the traversal of a batch of rays. At least one BVH must be given; rays,
     /// nodes and geometry must be visible to compute reads.
     pub fn record(&self, cmd: vk::CommandBuffer, batch: RayBatch<'_>, scene: TraceScene<'_>) {
-        let ([sn, sv, si, dn, dv, di], static_tris, dynamic_tris) = scene.bindings();
+        let ([sn, sv, si, dn, dv, di, st, dt], static_tris, dynamic_tris) = scene.bindings();
         let push = TracePush {
             ray_count: batch.count,
             static_tris,
@@ -70,6 +70,8 @@ impl TracePass {
                 dn,
                 dv,
                 di,
+                st,
+                dt,
             ],
             &push,
             Groups::Cover([batch.count, 1, 1]),

@@ -2,7 +2,9 @@
 //! Karras 2012). Kernels, each under its timer scope:
 //! `lbvh.bounds` → `lbvh.morton` → `lbvh.sort` → `lbvh.hierarchy` → `lbvh.fit`,
 //! or `lbvh.refit` alone when vertices moved but the triangles stayed the same.
-//! Node layout: `glsl/shared/bvh.glsl` (2N-1 nodes of 32 bytes, root at 0).
+//! Node layout: `glsl/shared/bvh.glsl` (2N-1 nodes of 32 bytes, root at 0); the fit
+//! and the refit also write the layout the traversal reads (`TraversalNode`: both
+//! children's boxes in one 64-byte node; `TraversalTri`: the triangles in leaf order).
 //! CPU reference: `cpu_ref::lbvh` (every stage exactly; tests/lbvh.rs).
 
 pub mod dynamic;
@@ -10,7 +12,7 @@ pub mod sort;
 
 use crate::aabb::{ordered_to_float, Aabb};
 use crate::error::{Error, Result};
-use crate::gpu_types::BvhNode;
+use crate::gpu_types::{BvhNode, TraversalNode, TraversalTri};
 use crate::shader_defines::{LBVH_BOUNDS_ITEMS, LBVH_WG};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
@@ -88,6 +90,10 @@ pub struct Geometry<'a> {
 pub struct Bvh {
     /// 2N-1 nodes (`BvhNode`).
     pub nodes: Buffer,
+    /// The traversal layout (written by the fit and the refit): max(N-1, 1)
+    /// `TraversalNode`s and N `TraversalTri`s.
+    pub tnodes: Buffer,
+    pub ttris: Buffer,
     /// Parent of every node (`BVH_INVALID` for the root).
     pub parents: Buffer,
     visits: Buffer,
@@ -115,6 +121,14 @@ impl Bvh {
         let nodes = 2 * tri_count as u64 - 1;
         Ok(Self {
             nodes: buf("lbvh.nodes", nodes * std::mem::size_of::<BvhNode>() as u64)?,
+            tnodes: buf(
+                "lbvh.tnodes",
+                (tri_count as u64 - 1).max(1) * std::mem::size_of::<TraversalNode>() as u64,
+            )?,
+            ttris: buf(
+                "lbvh.ttris",
+                tri_count as u64 * std::mem::size_of::<TraversalTri>() as u64,
+            )?,
             parents: buf("lbvh.parents", nodes * 4)?,
             visits: buf("lbvh.visits", (tri_count as u64 - 1).max(1) * 4)?,
             bounds: buf("lbvh.bounds", 12 * 4)?,
@@ -124,9 +138,10 @@ impl Bvh {
         })
     }
 
-    /// Bytes of the BVH itself (nodes + parents), without the rebuild scratch.
+    /// Bytes of the BVH itself (nodes, parents and the traversal layout), without the
+    /// rebuild scratch.
     pub fn bytes(&self) -> u64 {
-        self.nodes.size + self.parents.size
+        self.nodes.size + self.parents.size + self.tnodes.size + self.ttris.size
     }
 
     /// (centroid bounds, scene bounds) from the last `lbvh.bounds`, read back.
@@ -145,6 +160,14 @@ impl Bvh {
     /// The nodes, read back (for tests and benchmarks).
     pub fn read_nodes(&self) -> Result<Vec<BvhNode>> {
         Ok(bytemuck::pod_collect_to_vec(&self.nodes.read()?))
+    }
+
+    /// The traversal layout, read back (for tests).
+    pub fn read_packed(&self) -> Result<(Vec<TraversalNode>, Vec<TraversalTri>)> {
+        Ok((
+            bytemuck::pod_collect_to_vec(&self.tnodes.read()?),
+            bytemuck::pod_collect_to_vec(&self.ttris.read()?),
+        ))
     }
 }
 
@@ -239,6 +262,7 @@ pub struct LbvhBuilder {
 struct RangePush {
     first: u32,
     count: u32,
+    tri_count: u32,
 }
 
 impl LbvhBuilder {
@@ -381,6 +405,8 @@ impl LbvhBuilder {
                 Resource::Buffer(geom.vertices),
                 Resource::Buffer(geom.indices),
                 Resource::Buffer(&bvh.nodes),
+                Resource::Buffer(&bvh.tnodes),
+                Resource::Buffer(&bvh.ttris),
             ],
             &n,
             Groups::Cover([n, 1, 1]),
@@ -392,10 +418,15 @@ impl LbvhBuilder {
             barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
             self.refit_level.dispatch(
                 cmd,
-                &[Resource::Buffer(&bvh.nodes), Resource::Buffer(&schedule.order)],
+                &[
+                    Resource::Buffer(&bvh.nodes),
+                    Resource::Buffer(&schedule.order),
+                    Resource::Buffer(&bvh.tnodes),
+                ],
                 &RangePush {
                     first: l[0],
                     count: l[1],
+                    tri_count: n,
                 },
                 Groups::Cover([l[1], 1, 1]),
             );
@@ -409,10 +440,12 @@ impl LbvhBuilder {
                     Resource::Buffer(&bvh.nodes),
                     Resource::Buffer(&schedule.order),
                     Resource::Buffer(&schedule.levels),
+                    Resource::Buffer(&bvh.tnodes),
                 ],
                 &RangePush {
                     first: big as u32,
                     count: levels.len() as u32,
+                    tri_count: n,
                 },
                 Groups::Exact([1, 1, 1]),
             );
@@ -445,6 +478,8 @@ impl LbvhBuilder {
                 Resource::Buffer(&bvh.nodes),
                 Resource::Buffer(&bvh.parents),
                 Resource::Buffer(&bvh.visits),
+                Resource::Buffer(&bvh.tnodes),
+                Resource::Buffer(&bvh.ttris),
             ],
             &geom.tri_count,
             Groups::Cover([geom.tri_count, 1, 1]),

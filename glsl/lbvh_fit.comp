@@ -8,12 +8,11 @@
 //
 // Memory ordering: box stores are made visible to the sibling's invocation with
 // memoryBarrierBuffer() on a `coherent` buffer, between the store and the visit
-// (release) and between the visit and the loads (acquire). The traversal layout
-// (bvh.glsl) is written on the way: each leaf's triangle, and each internal node with
-// its children's boxes by the invocation that unites them. The climb advances in
-// lockstep steps whose trip count is workgroup-uniform (a vote ends the loop), so
-// every memory barrier sits in uniform control flow: lavapipe 22.3 treats a memory
-// barrier in divergent flow like a workgroup barrier and loses invocations.
+// (release) and between the visit and the loads (acquire). Each invocation climbs on
+// its own (Apetrei 2014's bottom-up pass): no workgroup barrier, no vote, nothing
+// waits. The traversal layout (bvh.glsl) is written on the way: each leaf's
+// triangle, and each internal node with its children's boxes by the invocation that
+// unites them.
 // CPU reference: cpu_ref::lbvh::fit (tests/lbvh.rs).
 #include "bvh.glsl"
 
@@ -29,61 +28,36 @@ layout(binding = 6, std430) writeonly buffer TTris { TraversalTri ttris[]; };
 
 layout(push_constant) uniform Push { uint n; } pc;
 
-// Triple-buffered vote flags: iteration k sets flag k%3 and clears flag (k+1)%3 for
-// the next iteration, so one barrier per iteration suffices (flag (k+2)%3 was last read
-// before the previous iteration's barrier).
-shared uint s_vote[3];
-
 void main() {
     uint j = gl_GlobalInvocationID.x;
-    bool climbing = j < pc.n;
-    uint parent = BVH_INVALID;
-    if (climbing) {
-        uint node = pc.n - 1u + j;
-        uint prim = nodes[node].left & ~BVH_LEAF_BIT;
-        TRIANGLE_CORNERS(vertices, indices, prim, a, b, c)
-        vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
-        nodes[node].lo = lo;
-        nodes[node].hi = hi;
-        ttris[j] = TraversalTri(a, prim, b - a, 0u, c - a, 0u);
-        if (pc.n == 1u) {
-            tnodes[0] = traversal_node(0u, lo, hi, 0u, lo, hi, 1u); // both children: the leaf
-        }
-        parent = parents[node];
-        climbing = parent != BVH_INVALID;
+    if (j >= pc.n) {
+        return;
     }
-    if (gl_LocalInvocationID.x == 0u) {
-        s_vote[0] = 0u;
+    uint node = pc.n - 1u + j;
+    uint prim = nodes[node].left & ~BVH_LEAF_BIT;
+    TRIANGLE_CORNERS(vertices, indices, prim, a, b, c)
+    vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
+    nodes[node].lo = lo;
+    nodes[node].hi = hi;
+    ttris[j] = TraversalTri(a, prim, b - a, 0u, c - a, 0u);
+    if (pc.n == 1u) {
+        tnodes[0] = traversal_node(0u, lo, hi, 0u, lo, hi, 1u); // both children: the leaf
     }
-    barrier();
-    for (uint it = 0u;; ++it) {
+    uint parent = parents[node];
+    while (parent != BVH_INVALID) {
         // Release: this invocation's last box is visible before its visit is counted.
         memoryBarrierBuffer();
-        if (climbing && atomicAdd(visits[parent], 1u) == 0u) {
-            climbing = false; // first child here: the sibling's invocation continues
+        if (atomicAdd(visits[parent], 1u) == 0u) {
+            break; // first child here: the sibling's invocation continues
         }
         // Acquire: the sibling's box, stored before its visit, is visible now.
         memoryBarrierBuffer();
-        if (climbing) {
-            uint l = nodes[parent].left;
-            uint r = nodes[parent].right;
-            vec3 l_lo = nodes[l].lo, l_hi = nodes[l].hi, r_lo = nodes[r].lo, r_hi = nodes[r].hi;
-            nodes[parent].lo = min(l_lo, r_lo);
-            nodes[parent].hi = max(l_hi, r_hi);
-            tnodes[parent] = traversal_node(l, l_lo, l_hi, r, r_lo, r_hi, pc.n);
-            parent = parents[parent];
-            climbing = parent != BVH_INVALID;
-        }
-        // Workgroup vote: stop when no invocation of the group is still climbing.
-        if (climbing) {
-            s_vote[it % 3u] = 1u;
-        }
-        if (gl_LocalInvocationID.x == 0u) {
-            s_vote[(it + 1u) % 3u] = 0u;
-        }
-        barrier();
-        if (s_vote[it % 3u] == 0u) {
-            break;
-        }
+        uint l = nodes[parent].left;
+        uint r = nodes[parent].right;
+        vec3 l_lo = nodes[l].lo, l_hi = nodes[l].hi, r_lo = nodes[r].lo, r_hi = nodes[r].hi;
+        nodes[parent].lo = min(l_lo, r_lo);
+        nodes[parent].hi = max(l_hi, r_hi);
+        tnodes[parent] = traversal_node(l, l_lo, l_hi, r, r_lo, r_hi, pc.n);
+        parent = parents[parent];
     }
 }

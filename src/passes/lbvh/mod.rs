@@ -383,7 +383,7 @@ impl LbvhBuilder {
     /// Records a refit of `bvh` by its `schedule` (which must be of the tree as it is):
     /// the leaves, then each height level with more than `REFIT_TOP_WG` nodes in a
     /// dispatch of its own, then every smaller level in one workgroup. The same boxes
-    /// as `record_refit` (min and max are exact), without its climb in lockstep.
+    /// as `record_refit` (min and max are exact), without its atomics and climb.
     pub fn record_refit_scheduled(
         &self,
         cmd: vk::CommandBuffer,

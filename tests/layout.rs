@@ -1,7 +1,7 @@
 //! Rust/GLSL shared structs: member names and byte offsets in the compiled SPIR-V
 //! (std430/std140 as glslang laid them out) equal the `#[repr(C)]` Rust offsets.
 
-use speculum::gpu_types::{BvhNode, FrameUniforms, GpuMaterial, GpuVertex, Hit, Ray};
+use speculum::gpu_types::{BvhNode, FrameUniforms, GpuMaterial, GpuVertex, Hit, Ray, TraversalNode, TraversalTri};
 use speculum::passes::compose::ComposePush;
 use speculum::shaders;
 use speculum::vk::spirv::{reflect, words, Reflection};
@@ -69,8 +69,27 @@ fn material_layout_matches_glsl() {
 /// link each), `Ray` and `Hit`, as `rt.trace` reads and writes them: offsets and strides.
 #[test]
 fn tracer_layouts_match_glsl() {
+    let fit = reflected(shaders::LBVH_FIT_COMP);
+    check(&fit, "BvhNode", rust_layout!(BvhNode { lo, left, hi, right }));
+    assert_eq!(fit.array_strides["BvhNode"] as usize, size_of::<BvhNode>());
     let r = reflected(shaders::RT_TRACE_COMP);
-    check(&r, "BvhNode", rust_layout!(BvhNode { lo, left, hi, right }));
+    check(
+        &r,
+        "TraversalNode",
+        rust_layout!(TraversalNode {
+            lo0,
+            child0,
+            hi0,
+            child1,
+            lo1,
+            _pad0,
+            hi1,
+            _pad1
+        }),
+    );
+    check(&r, "TraversalTri", rust_layout!(TraversalTri { a, id, e1, _pad0, e2, _pad1 }));
+    assert_eq!(r.array_strides["TraversalNode"] as usize, size_of::<TraversalNode>());
+    assert_eq!(r.array_strides["TraversalTri"] as usize, size_of::<TraversalTri>());
     check(
         &r,
         "Ray",
@@ -82,7 +101,6 @@ fn tracer_layouts_match_glsl() {
         }),
     );
     check(&r, "Hit", rust_layout!(Hit { t, prim, u, v }));
-    assert_eq!(r.array_strides["BvhNode"] as usize, size_of::<BvhNode>());
     assert_eq!(r.array_strides["Ray"] as usize, size_of::<Ray>());
     assert_eq!(r.array_strides["Hit"] as usize, size_of::<Hit>());
 }

@@ -32,18 +32,18 @@ struct TraversalNode {
     vec3 hi0;
     uint child1;
     vec3 lo1;
-    uint pad0;
+    uint _pad0;
     vec3 hi1;
-    uint pad1;
+    uint _pad1;
 };
 
 struct TraversalTri {
     vec3 a;
     uint id;
     vec3 e1;
-    uint pad0;
+    uint _pad0;
     vec3 e2;
-    uint pad1;
+    uint _pad1;
 };
 
 // The traversal layout's link to node c of a tree over n triangles: internal nodes keep

@@ -87,7 +87,18 @@ fn tracer_layouts_match_glsl() {
             _pad1
         }),
     );
-    check(&r, "TraversalTri", rust_layout!(TraversalTri { a, id, e1, _pad0, e2, _pad1 }));
+    check(
+        &r,
+        "TraversalTri",
+        rust_layout!(TraversalTri {
+            a,
+            id,
+            e1,
+            _pad0,
+            e2,
+            _pad1
+        }),
+    );
     assert_eq!(r.array_strides["TraversalNode"] as usize, size_of::<TraversalNode>());
     assert_eq!(r.array_strides["TraversalTri"] as usize, size_of::<TraversalTri>());
     check(

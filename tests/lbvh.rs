@@ -174,16 +174,23 @@ fn radix_sort_is_a_stable_sort() {
 }
 
 /// Full builds: links and parents equal Karras on the CPU exactly, boxes equal the CPU
-/// fit exactly, and the invariants hold.
+/// fit exactly, and the invariants hold; with the fit climbing freely and in lockstep
+/// (the variant lavapipe before Mesa 25 gets) alike.
 #[test]
 fn hierarchy_and_fit_match_cpu_exactly() {
     let ctx = common::context();
-    let b = LbvhBuilder::new(&ctx).unwrap();
+    for lockstep in [false, true] {
+        hierarchy_and_fit_match_cpu(&ctx, &LbvhBuilder::with_fit(&ctx, lockstep).unwrap());
+    }
+}
+
+fn hierarchy_and_fit_match_cpu(ctx: &Arc<Context>, b: &LbvhBuilder) {
+    let ctx = ctx.clone();
     for (seed, &n) in [1usize, 2, 3, 1000, 65537].iter().enumerate() {
         let (v, i) = random_soup(n, 3.0, default_size(n) * 3.0, 100 + seed as u64);
         let g = GpuGeometry::new(&ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
-            let bvh = build(&ctx, &b, &g, bits);
+            let bvh = build(&ctx, b, &g, bits);
             let nodes = bvh.read_nodes().unwrap();
             let parents: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.parents.read().unwrap());
             let keys = cref::morton_keys(&v, &i, bits.key_words());

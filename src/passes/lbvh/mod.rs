@@ -234,6 +234,21 @@ pub fn refit_order(nodes: &[BvhNode], tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]
     (order, levels)
 }
 
+/// Whether `lbvh.fit` must climb in workgroup lockstep: on lavapipe before Mesa 25
+/// (Mesa 22.3 treats a memory barrier in divergent control flow like a workgroup
+/// barrier and loses invocations; the free climb is tested on Mesa 25 only). Every
+/// other driver climbs freely.
+pub fn lockstep_fit(driver_name: &str, driver_info: &str) -> bool {
+    if driver_name != "llvmpipe" {
+        return false;
+    }
+    let major = driver_info
+        .strip_prefix("Mesa ")
+        .and_then(|v| v.split('.').next())
+        .and_then(|m| m.parse::<u32>().ok());
+    major.is_none_or(|m| m < 25)
+}
+
 /// Push constants of `lbvh_morton.comp` and `lbvh_hierarchy.comp` (`lbvh.bounds` and
 /// `lbvh.fit` push the triangle count alone, as a `u32`).
 #[repr(C)]
@@ -266,14 +281,21 @@ struct RangePush {
 }
 
 impl LbvhBuilder {
+    /// The kernels, the fit's climb chosen for the driver (`lockstep_fit`).
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        Self::with_fit(ctx, lockstep_fit(&ctx.driver_name, &ctx.driver_info))
+    }
+
+    /// The kernels with the fit climbing in lockstep or freely, whatever the driver
+    /// (tests check both give the same tree).
+    pub fn with_fit(ctx: &Arc<Context>, lockstep: bool) -> Result<Self> {
         Ok(Self {
             ctx: ctx.clone(),
             bounds: Pipeline::compute::<u32>(ctx, BOUNDS, shaders::LBVH_BOUNDS_COMP)?,
             morton: Pipeline::compute::<KeyPush>(ctx, MORTON, shaders::LBVH_MORTON_COMP)?,
             sort: RadixSort::new(ctx)?,
             hierarchy: Pipeline::compute::<KeyPush>(ctx, HIERARCHY, shaders::LBVH_HIERARCHY_COMP)?,
-            fit: Pipeline::compute::<u32>(ctx, FIT, shaders::LBVH_FIT_COMP)?,
+            fit: Pipeline::compute_specialized::<u32>(ctx, FIT, shaders::LBVH_FIT_COMP, &[lockstep as u32])?,
             refit_leaves: Pipeline::compute::<u32>(ctx, REFIT, shaders::LBVH_REFIT_LEAVES_COMP)?,
             refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
             refit_top: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_TOP_COMP)?,
@@ -486,5 +508,20 @@ impl LbvhBuilder {
         );
         // RAW: traversal (or a readback) reads the finished boxes.
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::ALL_READ_WRITE);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lockstep_fit;
+
+    #[test]
+    fn the_fit_climbs_in_lockstep_only_on_lavapipe_before_mesa_25() {
+        assert!(lockstep_fit("llvmpipe", "Mesa 22.3.6 (LLVM 15.0.6)"));
+        assert!(lockstep_fit("llvmpipe", "Mesa 24.2.8-1 (LLVM 17.0.6)"));
+        assert!(!lockstep_fit("llvmpipe", "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"));
+        assert!(!lockstep_fit("llvmpipe", "Mesa 26.1.0"));
+        assert!(lockstep_fit("llvmpipe", "an unknown version text"));
+        assert!(!lockstep_fit("NVIDIA", "560.35.03"));
     }
 }

@@ -53,6 +53,51 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
     );
 }
 
+/// With the Embree anchor built in, `bench lbvh` also builds the same triangles with
+/// Embree LOW and MEDIUM and traces the same rays: both qualities are reported with
+/// their timings, and Embree's hits agree with Speculum's on every ray but ties
+/// (checked on a soup and on `room`, a scene of walls meeting at edges). Without the
+/// feature the report's `embree` is null.
+#[test]
+fn lbvh_benchmark_anchors_against_embree() {
+    let ctx = common::context();
+    let opts = Options {
+        repeats: 1,
+        rays: 8192,
+        check_rays: 200,
+        bits: MortonBits::Bits30,
+        file_rays: None,
+        keep_hits: false,
+    };
+    let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);
+    let room = speculum::scene::builtin::room().unwrap();
+    for (name, v, i) in [("soup-3000", &v, &i), ("room", &room.vertices, &room.indices)] {
+        let c = run_case(&ctx, name, v, i, &opts, &mut || {}).unwrap();
+        assert!(c.valid, "{name}: {c:?}");
+        if !cfg!(feature = "embree") {
+            assert!(c.embree.is_none());
+            continue;
+        }
+        let anchors = c.embree.as_ref().expect("the anchor ran");
+        let qualities: Vec<&str> = anchors.iter().map(|a| a.quality).collect();
+        assert_eq!(qualities, ["low", "medium"]);
+        for a in anchors {
+            assert!(
+                a.build_ms.median > 0.0 && a.build_ratio.is_finite() && a.threads >= 1,
+                "{a:?}"
+            );
+            assert!(a.file.is_none());
+            for (set, r) in [("coherent", &a.coherent), ("incoherent", &a.incoherent)] {
+                assert_eq!(r.agree + r.ties + r.disagree, 8192, "{name} {set}");
+                // A ray through an edge may slip past one of two non-watertight tests.
+                assert!(r.disagree <= 8, "{name} {} {set}: {r:?}", a.quality);
+                assert!(r.ties <= 82, "{name} {} {set}: {r:?}", a.quality);
+                assert!(r.mrays_per_s > 0.0 && r.speed_ratio > 0.0, "{r:?}");
+            }
+        }
+    }
+}
+
 /// The reflection split benchmark's sweep is consistent: same reflective pixels at
 /// every point, a failed share that only grows, everything ray traced at the end.
 #[test]

@@ -9,7 +9,12 @@
 set -euo pipefail
 
 SPECULUM_PACKAGES=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers
-  libshaderc-dev glslang-dev glslang-tools spirv-tools xvfb xauth fonts-dejavu-core)
+  libshaderc-dev glslang-dev glslang-tools spirv-tools xvfb xauth fonts-dejavu-core
+  libembree-dev)
+
+# Cargo features tools/run and tools/test build with (one build serves both): the
+# Embree 3 anchor of `bench lbvh` (libembree-dev, above).
+SPECULUM_FEATURES=(--features embree)
 
 speculum_has_gpu() {
   [ -e /dev/nvidia0 ] || ls /dev/dri/renderD* >/dev/null 2>&1

@@ -10,7 +10,7 @@ use crate::cpu_ref::lbvh::{check_bvh, sah_cost_nodes, triangle};
 use crate::cpu_ref::trace::{intersect, CpuBvh};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
-use crate::passes::lbvh::{self, Bvh, Geometry, LbvhBuilder, MortonBits};
+use crate::passes::lbvh::{self, Bvh, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
 use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
@@ -68,10 +68,11 @@ pub struct CaseReport {
     pub build_ms: Stat,
     /// Million triangles built per second (at the median build time).
     pub mtris_per_s: f64,
-    /// GPU milliseconds of a refit.
+    /// GPU milliseconds of the frame's refit (`record_refit_scheduled`) of the tree
+    /// just built.
     pub refit_ms: Stat,
     pub nodes_per_triangle: f64,
-    /// BVH bytes (nodes + parent links) per triangle.
+    /// BVH bytes (nodes, parent links and the traversal layout) per triangle.
     pub bytes_per_triangle: f64,
     /// Rebuild scratch (sort buffers, counters) per triangle.
     pub scratch_bytes_per_triangle: f64,
@@ -86,6 +87,9 @@ pub struct CaseReport {
     pub incoherent: RaySetReport,
     /// The rays of `--rays-file`, when given.
     pub file: Option<RaySetReport>,
+    /// Embree 3 on the same triangles and rays, LOW then MEDIUM (built with the cargo
+    /// feature `embree`; `null` without it).
+    pub embree: Option<Vec<AnchorReport>>,
     /// The traced rays and their hits kept for `--dump-rays` / `--dump-hits`.
     #[serde(skip)]
     pub kept: Option<(Vec<Ray>, Vec<Hit>)>,
@@ -95,6 +99,40 @@ pub struct CaseReport {
     /// The self-check of every timed build, refit and ray batch (`vk::timing`).
     pub timing: TimingCheck,
     pub valid: bool,
+}
+
+/// One Embree build quality on a case (cargo feature `embree`): its build, and the
+/// same ray sets traced with `rtcIntersect1` on the same CPU threads.
+#[derive(Clone, Debug, Serialize)]
+pub struct AnchorReport {
+    /// `low` (Embree's Morton builder) or `medium` (its binned SAH).
+    pub quality: &'static str,
+    pub threads: u32,
+    /// Wall-clock milliseconds of `rtcCommitScene`.
+    pub build_ms: Stat,
+    /// Speculum's build time over Embree's (> 1: Embree builds faster).
+    pub build_ratio: f64,
+    pub coherent: AnchorRays,
+    pub incoherent: AnchorRays,
+    pub file: Option<AnchorRays>,
+}
+
+/// Embree on one ray set, against Speculum's hits of the same rays.
+#[derive(Clone, Debug, Serialize)]
+pub struct AnchorRays {
+    /// Wall-clock milliseconds of tracing the set.
+    pub trace_ms: Stat,
+    pub mrays_per_s: f64,
+    /// Speculum's rays/s over Embree's (< 1: Embree is faster).
+    pub speed_ratio: f64,
+    /// Rays whose hits agree: the same triangle, or both miss.
+    pub agree: u32,
+    /// Rays where both hit different triangles at the same distance (within 1e-4,
+    /// relative): an edge or a coplanar pair, each tracer picking one.
+    pub ties: u32,
+    /// The rest: one tracer hit and the other missed (a ray through an edge that one
+    /// of the two non-watertight tests lets through), or different distances.
+    pub disagree: u32,
 }
 
 /// The `bench lbvh` report.
@@ -237,7 +275,11 @@ pub fn run_case(
         if rep > 0 {
             stages.add(&times);
         }
-        let refit = timer.one_shot(|cmd, timer| builder.record_refit(cmd, timer, geometry, &bvh))?;
+        // The frame's refit: scheduled by height from the tree just built (the
+        // schedule is made once per build, as the frame does, and is not timed).
+        let schedule = RefitSchedule::of(ctx, &bvh)?;
+        let refit =
+            timer.one_shot(|cmd, timer| builder.record_refit_scheduled(cmd, timer, geometry, &bvh, &schedule))?;
         if rep > 0 {
             refits.push(refit.first().map_or(f64::NAN, |r| r.1));
             timing.add(refit.problem.as_deref());
@@ -290,14 +332,38 @@ pub fn run_case(
         };
         Ok((report, hits))
     };
-    let coherent = ray_set(&coherent_rays(lo, hi, opts.rays))?.0;
+    let coherent_set = coherent_rays(lo, hi, opts.rays);
+    let (coherent, coherent_hits) = ray_set(&coherent_set)?;
     let incoherent_set = incoherent_rays(lo, hi, opts.rays, 7);
     let (incoherent, incoherent_hits) = ray_set(&incoherent_set)?;
-    let (file, kept) = match &opts.file_rays {
-        Some(rays) => {
-            let (report, hits) = ray_set(rays)?;
-            (Some(report), opts.keep_hits.then(|| (rays.clone(), hits)))
-        }
+    let file_set = match &opts.file_rays {
+        Some(rays) => Some((ray_set(rays)?, rays)),
+        None => None,
+    };
+    #[cfg(feature = "embree")]
+    let embree = {
+        let sets = [
+            Some((&coherent_set[..], &coherent_hits[..], coherent.mrays_per_s, true)),
+            Some((&incoherent_set[..], &incoherent_hits[..], incoherent.mrays_per_s, false)),
+            file_set
+                .as_ref()
+                .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
+        ];
+        Some(super::embree::anchor_reports(
+            v,
+            i,
+            &sets,
+            opts.repeats,
+            build_ms.median,
+        )?)
+    };
+    #[cfg(not(feature = "embree"))]
+    let embree = {
+        let _ = &coherent_hits; // only the anchor compares them
+        None
+    };
+    let (file, kept) = match file_set {
+        Some(((report, hits), rays)) => (Some(report), opts.keep_hits.then(|| (rays.clone(), hits))),
         None => (None, opts.keep_hits.then_some((incoherent_set, incoherent_hits))),
     };
 
@@ -325,6 +391,7 @@ pub fn run_case(
         coherent,
         incoherent,
         file,
+        embree,
         kept,
         invariants_ok,
         invariant_error: invariants.err(),

@@ -2,6 +2,8 @@
 //! JSON says whether all checks passed.
 
 pub mod dynamic;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod lbvh;
 pub mod modes;
 pub mod rays_file;

@@ -605,6 +605,33 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
             f.checked
         ))
     }
+    for a in case.embree.iter().flatten() {
+        let sets = [
+            ("coherent", Some(&a.coherent)),
+            ("incoherent", Some(&a.incoherent)),
+            ("file", a.file.as_ref()),
+        ];
+        let rays: Vec<String> = sets
+            .iter()
+            .filter_map(|(name, r)| {
+                r.map(|r| {
+                    format!(
+                        "{name} {:.2} Mrays/s (Speculum {:.2}x; hits {} agree, {} ties, {} differ)",
+                        r.mrays_per_s, r.speed_ratio, r.agree, r.ties, r.disagree
+                    )
+                })
+            })
+            .collect();
+        text.line(format_args!(
+            "{:<14} Embree {} ({} CPU threads, wall ms): build {} (Speculum {:.2}x its time); {}",
+            "",
+            a.quality.to_uppercase(),
+            a.threads,
+            cell(Some(a.build_ms)),
+            a.build_ratio,
+            rays.join(", ")
+        ));
+    }
 }
 
 fn reflect(args: ReflectArgs) -> Result<()> {

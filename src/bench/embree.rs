@@ -1,0 +1,294 @@
+//! The CPU anchor of `bench lbvh` (cargo feature `embree`): Intel Embree 3 (Debian's
+//! `libembree-dev`, through the `embree` crate's raw bindings) building and tracing
+//! the same triangles and rays on this machine's CPU threads, so that a run shows
+//! "this device against the best CPU tracer" as ratios.
+//!
+//! Builds: `LOW` quality with the dynamic-scene flag (Embree's Morton builder, the
+//! LBVH family; TOOLCHAIN.md: with the geometry's quality left at `MEDIUM` a dynamic
+//! scene silently takes the binned-SAH builder) and `MEDIUM` (its default binned SAH).
+//! Only `rtcCommitScene` is timed. Traversal: `rtcIntersect1` per ray, the rays split
+//! into one contiguous chunk per thread.
+
+use super::lbvh::{AnchorRays, AnchorReport};
+use crate::error::{Error, Result};
+use crate::gpu_types::{GpuVertex, Hit, Ray};
+use crate::report::Stat;
+use crate::shader_defines::BVH_INVALID;
+use embree::sys::*;
+use serde::Serialize;
+use std::ffi::CString;
+
+/// An Embree build quality.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Quality {
+    /// The Morton builder (with `RTC_SCENE_FLAG_DYNAMIC`).
+    Low,
+    /// The default binned-SAH builder.
+    Medium,
+}
+
+impl Quality {
+    pub const ALL: [Quality; 2] = [Quality::Low, Quality::Medium];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Quality::Low => "low",
+            Quality::Medium => "medium",
+        }
+    }
+}
+
+/// An Embree device limited to `threads` threads.
+pub struct Anchor {
+    device: RTCDevice,
+    pub threads: usize,
+}
+
+// Embree devices and committed scenes may be used from any thread (Embree's API
+// documentation: ray queries on a committed scene are thread safe).
+unsafe impl Send for Anchor {}
+unsafe impl Sync for Anchor {}
+
+impl Anchor {
+    /// A device with as many threads as this machine runs at once (the GPU bench's CPU
+    /// driver gets the same cores).
+    pub fn new() -> Result<Self> {
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let config = CString::new(format!("threads={threads}")).expect("no NUL");
+        let device = unsafe { rtcNewDevice(config.as_ptr()) };
+        if device.is_null() {
+            return Err(Error::Bvh("Embree: rtcNewDevice failed".into()));
+        }
+        Ok(Self { device, threads })
+    }
+
+    fn check(&self, what: &str) -> Result<()> {
+        let e = unsafe { rtcGetDeviceError(self.device) };
+        if e == RTCError::NONE {
+            Ok(())
+        } else {
+            Err(Error::Bvh(format!("Embree: {what}: {e:?}")))
+        }
+    }
+
+    /// Builds a scene of the triangles at `quality`; returns it and the milliseconds
+    /// `rtcCommitScene` took.
+    pub fn build(&self, vertices: &[GpuVertex], indices: &[u32], quality: Quality) -> Result<(Scene<'_>, f64)> {
+        let tris = indices.len() / 3;
+        unsafe {
+            let geom = rtcNewGeometry(self.device, RTCGeometryType::TRIANGLE);
+            let vb = rtcSetNewGeometryBuffer(geom, RTCBufferType::VERTEX, 0, RTCFormat::FLOAT3, 12, vertices.len())
+                as *mut f32;
+            let ib = rtcSetNewGeometryBuffer(geom, RTCBufferType::INDEX, 0, RTCFormat::UINT3, 12, tris) as *mut u32;
+            if vb.is_null() || ib.is_null() {
+                rtcReleaseGeometry(geom);
+                self.check("geometry buffers")?;
+                return Err(Error::Bvh("Embree: no geometry buffers".into()));
+            }
+            let vs = std::slice::from_raw_parts_mut(vb, vertices.len() * 3);
+            for (k, v) in vertices.iter().enumerate() {
+                vs[3 * k..3 * k + 3].copy_from_slice(&v.position);
+            }
+            std::slice::from_raw_parts_mut(ib, tris * 3).copy_from_slice(&indices[..tris * 3]);
+            let q = match quality {
+                Quality::Low => RTCBuildQuality::LOW,
+                Quality::Medium => RTCBuildQuality::MEDIUM,
+            };
+            rtcSetGeometryBuildQuality(geom, q);
+            rtcCommitGeometry(geom);
+            let scene = rtcNewScene(self.device);
+            rtcAttachGeometry(scene, geom);
+            rtcReleaseGeometry(geom); // the scene holds it
+            rtcSetSceneBuildQuality(scene, q);
+            if quality == Quality::Low {
+                rtcSetSceneFlags(scene, RTCSceneFlags(1)); // RTC_SCENE_FLAG_DYNAMIC
+            }
+            let t0 = std::time::Instant::now();
+            rtcCommitScene(scene);
+            let ms = t0.elapsed().as_secs_f64() * 1e3;
+            let built = Scene { scene, anchor: self };
+            self.check("rtcCommitScene")?;
+            Ok((built, ms))
+        }
+    }
+}
+
+impl Drop for Anchor {
+    fn drop(&mut self) {
+        unsafe { rtcReleaseDevice(self.device) };
+    }
+}
+
+/// A committed Embree scene.
+pub struct Scene<'a> {
+    scene: RTCScene,
+    anchor: &'a Anchor,
+}
+
+unsafe impl Send for Scene<'_> {}
+unsafe impl Sync for Scene<'_> {}
+
+impl Scene<'_> {
+    /// Closest hits of `rays` with `rtcIntersect1` on the anchor's threads, in
+    /// Speculum's `Hit` form (a miss: `t = tmax`, `BVH_INVALID`), and the wall-clock
+    /// milliseconds.
+    pub fn trace(&self, rays: &[Ray], coherent: bool) -> (Vec<Hit>, f64) {
+        let mut hits = vec![Hit::default(); rays.len()];
+        let chunk = rays.len().div_ceil(self.anchor.threads).max(1);
+        let flags = if coherent {
+            RTCIntersectContextFlags::COHERENT
+        } else {
+            RTCIntersectContextFlags::INCOHERENT
+        };
+        let t0 = std::time::Instant::now();
+        std::thread::scope(|s| {
+            for (rs, hs) in rays.chunks(chunk).zip(hits.chunks_mut(chunk)) {
+                s.spawn(move || {
+                    let mut ctx = RTCIntersectContext {
+                        flags,
+                        filter: None,
+                        instID: [u32::MAX],
+                    };
+                    for (r, h) in rs.iter().zip(hs.iter_mut()) {
+                        *h = self.intersect(&mut ctx, r);
+                    }
+                });
+            }
+        });
+        (hits, t0.elapsed().as_secs_f64() * 1e3)
+    }
+
+    fn intersect(&self, ctx: &mut RTCIntersectContext, r: &Ray) -> Hit {
+        let mut rh = RTCRayHit {
+            ray: RTCRay {
+                org_x: r.origin[0],
+                org_y: r.origin[1],
+                org_z: r.origin[2],
+                tnear: r.tmin,
+                dir_x: r.dir[0],
+                dir_y: r.dir[1],
+                dir_z: r.dir[2],
+                time: 0.0,
+                tfar: r.tmax,
+                mask: u32::MAX,
+                id: 0,
+                flags: 0,
+            },
+            hit: RTCHit {
+                Ng_x: 0.0,
+                Ng_y: 0.0,
+                Ng_z: 0.0,
+                u: 0.0,
+                v: 0.0,
+                primID: u32::MAX,
+                geomID: u32::MAX,
+                instID: [u32::MAX],
+            },
+        };
+        unsafe { rtcIntersect1(self.scene, ctx, &mut rh) };
+        if rh.hit.geomID == u32::MAX {
+            Hit {
+                t: r.tmax,
+                prim: BVH_INVALID,
+                u: 0.0,
+                v: 0.0,
+            }
+        } else {
+            Hit {
+                t: rh.ray.tfar,
+                prim: rh.hit.primID,
+                u: rh.hit.u,
+                v: rh.hit.v,
+            }
+        }
+    }
+}
+
+impl Drop for Scene<'_> {
+    fn drop(&mut self) {
+        unsafe { rtcReleaseScene(self.scene) };
+    }
+}
+
+/// One ray set for the anchor: the rays, Speculum's hits, Speculum's Mrays/s, and
+/// whether the rays are coherent (Embree's context hint).
+pub type AnchorSet<'a> = (&'a [Ray], &'a [Hit], f64, bool);
+
+/// Embree LOW and MEDIUM on a case: each built `repeats` times after a warm-up, each
+/// of `sets` (coherent, incoherent, the file's; `None` where absent) traced `repeats`
+/// times after a warm-up and compared with Speculum's hits.
+pub fn anchor_reports(
+    vertices: &[GpuVertex],
+    indices: &[u32],
+    sets: &[Option<AnchorSet<'_>>; 3],
+    repeats: u32,
+    speculum_build_ms: f64,
+) -> Result<Vec<AnchorReport>> {
+    let anchor = Anchor::new()?;
+    let mut reports = Vec::new();
+    for quality in Quality::ALL {
+        let mut builds = Vec::new();
+        for rep in 0..=repeats {
+            let (_, ms) = anchor.build(vertices, indices, quality)?;
+            if rep > 0 {
+                builds.push(ms);
+            }
+        }
+        let (scene, _) = anchor.build(vertices, indices, quality)?;
+        let build_ms = Stat::of(&builds).expect("repeats > 0");
+        let mut traced = sets.iter().map(|set| {
+            set.map(|(rays, theirs, speculum_mrays, coherent)| {
+                let mut times = Vec::new();
+                let mut hits = Vec::new();
+                for rep in 0..=repeats {
+                    let (h, ms) = scene.trace(rays, coherent);
+                    if rep > 0 {
+                        times.push(ms);
+                    }
+                    hits = h;
+                }
+                let trace_ms = Stat::of(&times).expect("repeats > 0");
+                let mrays_per_s = rays.len() as f64 / (trace_ms.median * 1e3);
+                let (agree, ties, disagree) = agreement(&hits, theirs);
+                AnchorRays {
+                    trace_ms,
+                    mrays_per_s,
+                    speed_ratio: speculum_mrays / mrays_per_s,
+                    agree,
+                    ties,
+                    disagree,
+                }
+            })
+        });
+        let (coherent, incoherent, file) = (traced.next(), traced.next(), traced.next());
+        reports.push(AnchorReport {
+            quality: quality.name(),
+            threads: anchor.threads as u32,
+            build_ms,
+            build_ratio: speculum_build_ms / build_ms.median,
+            coherent: coherent.flatten().expect("a coherent set"),
+            incoherent: incoherent.flatten().expect("an incoherent set"),
+            file: file.flatten(),
+        });
+    }
+    Ok(reports)
+}
+
+/// (agree, ties, disagree) of two tracers' hits of the same rays (see `AnchorRays`).
+pub fn agreement(a: &[Hit], b: &[Hit]) -> (u32, u32, u32) {
+    let (mut agree, mut ties, mut disagree) = (0, 0, 0);
+    for (x, y) in a.iter().zip(b) {
+        if x.prim == y.prim {
+            agree += 1;
+        } else if x.prim != BVH_INVALID
+            && y.prim != BVH_INVALID
+            && (x.t - y.t).abs() <= 1e-4 * x.t.abs().max(y.t.abs()).max(1.0)
+        {
+            ties += 1;
+        } else {
+            disagree += 1;
+        }
+    }
+    (agree, ties, disagree)
+}

@@ -1,8 +1,12 @@
 #version 460
 // lbvh.morton: Morton code of each triangle's center, quantized in the center
 // bounds; values start as the triangle ids. 30-bit codes (10 bits per axis) in one
-// word, or 63-bit codes (21 bits per axis) in two words, low word first.
-// Mirrored by cpu_ref::lbvh::{morton30, morton63}.
+// word, or 63-bit codes (21 bits per axis) in two words, low word first. The key's
+// spare top bits (2 above a 30-bit code, 1 above a 63-bit one) hold the triangle's
+// size class against the scene (after the extended Morton codes of Vinkler et al.
+// 2017): the hierarchy splits large triangles (a wall, a floor) from small ones
+// first, so the small ones' subtrees are not stretched to the walls' extent.
+// Mirrored by cpu_ref::lbvh::{morton30, morton63, size_class}.
 #include "bvh.glsl"
 
 layout(local_size_x = LBVH_WG) in;
@@ -28,6 +32,25 @@ uint expand_bits10(uint x) {
     return x;
 }
 
+// The size class of a triangle whose box has squared diagonal d2, in a scene whose box
+// has squared diagonal s2: with 2 bits 0 (a diagonal of at least half the scene's), 1
+// (a quarter), 2 (an eighth) or 3; with 1 bit 0 (a quarter) or 1.
+uint size_class(float d2, float s2, uint bits) {
+    if (bits == 1u) {
+        return d2 >= s2 * 0.0625 ? 0u : 1u;
+    }
+    return d2 >= s2 * 0.25 ? 0u : (d2 >= s2 * 0.0625 ? 1u : (d2 >= s2 * 0.015625 ? 2u : 3u));
+}
+
+// Squared length of v, in this order and unfused (the CPU computes the same float).
+float squared_length(vec3 v) {
+    precise float x = v.x * v.x;
+    precise float y = v.y * v.y;
+    precise float z = v.z * v.z;
+    precise float s = x + y + z;
+    return s;
+}
+
 void main() {
     uint t = gl_GlobalInvocationID.x;
     if (t >= pc.tri_count) {
@@ -40,9 +63,13 @@ void main() {
     vec3 extent = hi - lo;
     // A flat axis (all centroids equal along it) quantizes to 0.
     vec3 unit = clamp((center - lo) / max(extent, vec3(1e-30)), 0.0, 1.0);
+    vec3 s_lo = vec3(ordered_to_float(bounds[6]), ordered_to_float(bounds[7]), ordered_to_float(bounds[8]));
+    vec3 s_hi = vec3(ordered_to_float(bounds[9]), ordered_to_float(bounds[10]), ordered_to_float(bounds[11]));
+    float d2 = squared_length(max(a, max(b, c)) - min(a, min(b, c)));
+    float s2 = squared_length(s_hi - s_lo);
     if (pc.key_words == 1u) {
         uvec3 q = uvec3(min(unit * 1024.0, vec3(1023.0)));
-        keys[t] = (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z);
+        keys[t] = (size_class(d2, s2, 2u) << 30) | (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z);
     } else {
         uvec3 q = uvec3(min(unit * 2097152.0, vec3(2097151.0)));
         // Bit 3b+2 of the code is bit b of x, 3b+1 of y, 3b of z (x most significant).
@@ -59,7 +86,7 @@ void main() {
             }
         }
         keys[2u * t] = code.x;
-        keys[2u * t + 1u] = code.y;
+        keys[2u * t + 1u] = code.y | (size_class(d2, s2, 1u) << 31);
     }
     values[t] = t;
 }

@@ -47,18 +47,48 @@ pub fn morton63(q: UVec3) -> u64 {
     })
 }
 
-/// `lbvh.morton`: the key of every triangle (as u64; 30-bit codes when `key_words` is 1).
+/// `size_class` of `lbvh_morton.comp`: a triangle whose box has squared diagonal `d2`
+/// in a scene whose box has `s2`, in `bits` bits (2: 0 for a diagonal of at least half
+/// the scene's, 1 a quarter, 2 an eighth, else 3; 1: 0 for a quarter, else 1).
+pub fn size_class(d2: f32, s2: f32, bits: u32) -> u32 {
+    if bits == 1 {
+        return if d2 >= s2 * 0.0625 { 0 } else { 1 };
+    }
+    if d2 >= s2 * 0.25 {
+        0
+    } else if d2 >= s2 * 0.0625 {
+        1
+    } else if d2 >= s2 * 0.015625 {
+        2
+    } else {
+        3
+    }
+}
+
+/// `squared_length` of `lbvh_morton.comp`: x², y², z² summed in that order, unfused.
+fn squared_length(v: Vec3) -> f32 {
+    v.x * v.x + v.y * v.y + v.z * v.z
+}
+
+/// `lbvh.morton`: the key of every triangle (as u64; 30-bit codes when `key_words` is
+/// 1), its size class in the spare top bits (bits 30-31 above a 30-bit code, bit 63
+/// above a 63-bit one).
 pub fn morton_keys(vertices: &[GpuVertex], indices: &[u32], key_words: u32) -> Vec<u64> {
-    let (cb, _) = bounds(vertices, indices);
+    let (cb, sb) = bounds(vertices, indices);
     let extent = cb.hi - cb.lo;
+    let s2 = squared_length(sb.hi - sb.lo);
     (0..indices.len() / 3)
         .map(|t| {
-            let c = centroid(&triangle(vertices, indices, t));
+            let tri = triangle(vertices, indices, t);
+            let c = centroid(&tri);
+            let b = Aabb::of_triangle(&tri);
+            let d2 = squared_length(b.hi - b.lo);
             let unit = ((c - cb.lo) / extent.max(Vec3::splat(1e-30))).clamp(Vec3::ZERO, Vec3::ONE);
             if key_words == 1 {
-                morton30((unit * 1024.0).min(Vec3::splat(1023.0)).as_uvec3()) as u64
+                ((size_class(d2, s2, 2) << 30) | morton30((unit * 1024.0).min(Vec3::splat(1023.0)).as_uvec3())) as u64
             } else {
-                morton63((unit * 2_097_152.0).min(Vec3::splat(2_097_151.0)).as_uvec3())
+                ((size_class(d2, s2, 1) as u64) << 63)
+                    | morton63((unit * 2_097_152.0).min(Vec3::splat(2_097_151.0)).as_uvec3())
             }
         })
         .collect()

@@ -61,8 +61,13 @@ pub const RT_LIST_WG: u32 = 256;
 pub const BVH_LEAF_BIT: u32 = 0x8000_0000;
 /// "No node / no primitive" (parent of the root, the primitive of a miss).
 pub const BVH_INVALID: u32 = 0xffff_ffff;
-/// Traversal stack entries per ray. A 2N-1 node LBVH over 30-bit keys is at most
-/// 30 + log2(N) levels deep (equal keys split by index); 64 covers 2^34 triangles.
+/// Traversal stack entries per ray. A 2N-1 node LBVH over one-word keys (a 30-bit
+/// Morton code and 2 size-class bits) is at most 32 + ceil(log2 N) levels deep (equal
+/// keys split by index), and a walk holds at most one pending child per level: 64 is
+/// enough for every tree the frame builds (`passes::lbvh` asserts it against
+/// `MAX_TRIANGLES`). Two-word keys (`bench lbvh --bits 63`) can build deeper trees; a
+/// walk that runs out of stack returns t = -1, which the benchmark counts as a
+/// mismatch.
 pub const TRACE_STACK: u32 = 64;
 
 /// Binary-search steps that refine an SSR hit inside its last stride: log2 of the

@@ -35,6 +35,12 @@ pub const REFIT: &str = "lbvh.refit";
 /// workgroups.
 pub const MAX_TRIANGLES: u32 = 65535 * LBVH_WG;
 
+// A tree over one-word keys (32 bits) and MAX_TRIANGLES leaves is at most 32 +
+// ceil(log2 MAX_TRIANGLES) deep, and a traversal holds at most one pending child per
+// level: its stack can never overflow in the frame (see TRACE_STACK).
+const MAX_DEPTH: u32 = 32 + (MAX_TRIANGLES - 1).ilog2() + 1;
+const _: () = assert!(MAX_DEPTH <= crate::shader_defines::TRACE_STACK);
+
 /// Morton code width: 30 bits (10 per axis, one word) or 63 bits (21 per axis, two
 /// words). 63-bit codes separate close centroids in large scenes at twice the sort time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -344,3 +344,69 @@ fn the_moved_dynamic_bvh_equals_brute_force() {
     let hits = gpu.iter().filter(|h| h.prim != BVH_INVALID).count();
     assert!(hits > 3000 && ties <= rays.len() / 1000, "{hits} hits, {ties} ties");
 }
+
+/// A tree deeper than the traversal stack is reported, never silently wrong. 65
+/// triangles whose 63-bit keys each set one bit (centroids at (2^b + 1/2) / 2^21 along
+/// one axis, plus 0 and 1), four copies each, build a chain 66 levels deep. Every box
+/// starts at x = -1, where a ray along x starts, so all entries tie at t = 0 and the
+/// walk takes the first child (the chain) and holds the other at every level: 65
+/// pending subtrees overflow its 64 entries, and `rt.trace` returns t = -1. With 30-bit
+/// keys (the frame's, whose trees the stack always covers) the same ray gets brute
+/// force's answer.
+#[test]
+fn a_tree_deeper_than_the_stack_is_reported() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let mut centroids = vec![Vec3::ZERO, Vec3::ONE];
+    for axis in 0..3 {
+        for bit in 0..21 {
+            let mut p = Vec3::ZERO;
+            p[axis] = ((1u32 << bit) as f32 + 0.5) / 2_097_152.0;
+            centroids.push(p);
+        }
+    }
+    let (mut v, mut i) = (Vec::new(), Vec::new());
+    for p in &centroids {
+        // Two corners fixed at x = -1, the third placing the centroid at p (to within
+        // a rounding far below a key bit's width, hence the half).
+        let (v1, v2) = (Vec3::new(-1.0, -1.0, -1.0), Vec3::new(-1.0, 2.0, 2.0));
+        let v3 = 3.0 * *p - v1 - v2;
+        for _copy in 0..4 {
+            for c in [v1, v2, v3] {
+                i.push(v.len() as u32);
+                v.push(GpuVertex {
+                    position: c.to_array(),
+                    material: 0,
+                    normal: [1.0, 0.0, 0.0],
+                    object: 0,
+                });
+            }
+        }
+    }
+    let ray = Ray {
+        origin: [-1.0, 0.5, 0.5],
+        tmin: 0.0,
+        dir: [1.0, 0.0, 0.0],
+        tmax: 100.0,
+    };
+    let want = brute_force(&ray, &v, &i);
+    let tracer = TracePass::new(&ctx).unwrap();
+    for (bits, overflows) in [(MortonBits::Bits63, true), (MortonBits::Bits30, false)] {
+        let built = Built::new(&ctx, &b, &v, &i, bits);
+        let scene = TraceScene {
+            static_bvh: Some(built.traceable()),
+            dynamic_bvh: None,
+        };
+        let (hits, _) = tracer.trace(&[ray], scene, false).unwrap();
+        if overflows {
+            assert_eq!(
+                (hits[0].t, hits[0].prim),
+                (-1.0, BVH_INVALID),
+                "{bits:?}: the overflow is reported"
+            );
+        } else {
+            assert_eq!((hits[0].t, hits[0].prim), (want.t, want.prim), "{bits:?}");
+        }
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}

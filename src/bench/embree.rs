@@ -228,51 +228,51 @@ pub fn anchor_reports(
     let anchor = Anchor::new()?;
     let mut reports = Vec::new();
     for quality in Quality::ALL {
-        let mut builds = Vec::new();
-        for rep in 0..=repeats {
-            let (_, ms) = anchor.build(vertices, indices, quality)?;
-            if rep > 0 {
-                builds.push(ms);
-            }
+        let (scene, build_ms) = repeated(repeats, || anchor.build(vertices, indices, quality))?;
+        let mut traced = Vec::new();
+        for set in sets {
+            traced.push(match *set {
+                Some((rays, theirs, speculum_mrays, coherent)) => {
+                    let (hits, trace_ms) = repeated(repeats, || Ok(scene.trace(rays, coherent)))?;
+                    let mrays_per_s = rays.len() as f64 / (trace_ms.median * 1e3);
+                    let (agree, ties, disagree) = agreement(&hits, theirs);
+                    Some(AnchorRays {
+                        trace_ms,
+                        mrays_per_s,
+                        speed_ratio: speculum_mrays / mrays_per_s,
+                        agree,
+                        ties,
+                        disagree,
+                    })
+                }
+                None => None,
+            });
         }
-        let (scene, _) = anchor.build(vertices, indices, quality)?;
-        let build_ms = Stat::of(&builds).expect("repeats > 0");
-        let mut traced = sets.iter().map(|set| {
-            set.map(|(rays, theirs, speculum_mrays, coherent)| {
-                let mut times = Vec::new();
-                let mut hits = Vec::new();
-                for rep in 0..=repeats {
-                    let (h, ms) = scene.trace(rays, coherent);
-                    if rep > 0 {
-                        times.push(ms);
-                    }
-                    hits = h;
-                }
-                let trace_ms = Stat::of(&times).expect("repeats > 0");
-                let mrays_per_s = rays.len() as f64 / (trace_ms.median * 1e3);
-                let (agree, ties, disagree) = agreement(&hits, theirs);
-                AnchorRays {
-                    trace_ms,
-                    mrays_per_s,
-                    speed_ratio: speculum_mrays / mrays_per_s,
-                    agree,
-                    ties,
-                    disagree,
-                }
-            })
-        });
-        let (coherent, incoherent, file) = (traced.next(), traced.next(), traced.next());
+        let [coherent, incoherent, file]: [Option<AnchorRays>; 3] = traced.try_into().expect("three sets");
         reports.push(AnchorReport {
             quality: quality.name(),
             threads: anchor.threads as u32,
             build_ms,
             build_ratio: speculum_build_ms / build_ms.median,
-            coherent: coherent.flatten().expect("a coherent set"),
-            incoherent: incoherent.flatten().expect("an incoherent set"),
-            file: file.flatten(),
+            coherent: coherent.expect("a coherent set"),
+            incoherent: incoherent.expect("an incoherent set"),
+            file,
         });
     }
     Ok(reports)
+}
+
+/// `run` once to warm up, then `repeats` times timed: the last run's output and the
+/// statistic of the timed runs' milliseconds.
+fn repeated<T>(repeats: u32, mut run: impl FnMut() -> Result<(T, f64)>) -> Result<(T, Stat)> {
+    let (mut out, _) = run()?;
+    let mut times = Vec::new();
+    for _ in 0..repeats {
+        let (o, ms) = run()?;
+        times.push(ms);
+        out = o;
+    }
+    Ok((out, Stat::of(&times).expect("repeats > 0")))
 }
 
 /// (agree, ties, disagree) of two tracers' hits of the same rays (see `AnchorRays`).

@@ -13,9 +13,9 @@
 // waits. LOCKSTEP (a specialization, for lavapipe before Mesa 25: Mesa 22.3 treats a
 // memory barrier in divergent flow like a workgroup barrier and loses invocations)
 // climbs instead in steps whose trip count is workgroup-uniform, a vote ending the
-// loop, so that every memory barrier sits in uniform control flow. The traversal layout (bvh.glsl) is written on the way: each leaf's
-// triangle, and each internal node with its children's boxes by the invocation that
-// unites them.
+// loop, so that every memory barrier sits in uniform control flow. The traversal
+// layout (bvh.glsl) is written on the way: each leaf's triangle, and each internal
+// node with its children's boxes by the invocation that unites them.
 // CPU reference: cpu_ref::lbvh::fit (tests/lbvh.rs).
 #include "bvh.glsl"
 
@@ -39,31 +39,16 @@ layout(constant_id = 0) const bool LOCKSTEP = false;
 // (flag (k+2)%3 was last read before the previous iteration's barrier).
 shared uint s_vote[3];
 
-// Leaf j's box and traversal triangle (and for a single triangle its node); returns
-// the leaf's parent.
+// Leaf j's box and traversal triangle (bvh.glsl, FIT_LEAF); returns its parent.
 uint fit_leaf(uint j) {
-    uint node = pc.n - 1u + j;
-    uint prim = nodes[node].left & ~BVH_LEAF_BIT;
-    TRIANGLE_CORNERS(vertices, indices, prim, a, b, c)
-    vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
-    nodes[node].lo = lo;
-    nodes[node].hi = hi;
-    ttris[j] = TraversalTri(a, prim, b - a, 0u, c - a, 0u);
-    if (pc.n == 1u) {
-        tnodes[0] = traversal_node(0u, lo, hi, 0u, lo, hi, 1u); // both children: the leaf
-    }
-    return parents[node];
+    FIT_LEAF(vertices, indices, nodes, tnodes, ttris, j, pc.n)
+    return parents[pc.n - 1u + j];
 }
 
-// The second child's invocation at `parent`: its box (and traversal node) from the
-// children's; returns the next parent.
+// The second child's invocation at `parent`: its box and traversal node (UNITE);
+// returns the next parent.
 uint unite(uint parent) {
-    uint l = nodes[parent].left;
-    uint r = nodes[parent].right;
-    vec3 l_lo = nodes[l].lo, l_hi = nodes[l].hi, r_lo = nodes[r].lo, r_hi = nodes[r].hi;
-    nodes[parent].lo = min(l_lo, r_lo);
-    nodes[parent].hi = max(l_hi, r_hi);
-    tnodes[parent] = traversal_node(l, l_lo, l_hi, r, r_lo, r_hi, pc.n);
+    UNITE(nodes, tnodes, parent, pc.n)
     return parents[parent];
 }
 

@@ -19,14 +19,5 @@ void main() {
     if (j >= pc.n) {
         return;
     }
-    uint node = pc.n - 1u + j;
-    uint prim = nodes[node].left & ~BVH_LEAF_BIT;
-    TRIANGLE_CORNERS(vertices, indices, prim, a, b, c)
-    vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
-    nodes[node].lo = lo;
-    nodes[node].hi = hi;
-    ttris[j] = TraversalTri(a, prim, b - a, 0u, c - a, 0u);
-    if (pc.n == 1u) {
-        tnodes[0] = traversal_node(0u, lo, hi, 0u, lo, hi, 1u); // both children: the leaf
-    }
+    FIT_LEAF(vertices, indices, nodes, tnodes, ttris, j, pc.n)
 }

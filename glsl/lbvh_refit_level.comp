@@ -22,10 +22,5 @@ void main() {
         return;
     }
     uint node = order[pc.first + i];
-    uint l = nodes[node].left;
-    uint r = nodes[node].right;
-    vec3 l_lo = nodes[l].lo, l_hi = nodes[l].hi, r_lo = nodes[r].lo, r_hi = nodes[r].hi;
-    nodes[node].lo = min(l_lo, r_lo);
-    nodes[node].hi = max(l_hi, r_hi);
-    tnodes[node] = traversal_node(l, l_lo, l_hi, r, r_lo, r_hi, pc.n);
+    UNITE(nodes, tnodes, node, pc.n)
 }

@@ -24,12 +24,7 @@ void main() {
         uvec2 lv = levels[k];
         if (i < lv.y) {
             uint node = order[lv.x + i];
-            uint l = nodes[node].left;
-            uint r = nodes[node].right;
-            vec3 l_lo = nodes[l].lo, l_hi = nodes[l].hi, r_lo = nodes[r].lo, r_hi = nodes[r].hi;
-            nodes[node].lo = min(l_lo, r_lo);
-            nodes[node].hi = max(l_hi, r_hi);
-            tnodes[node] = traversal_node(l, l_lo, l_hi, r, r_lo, r_hi, pc.n);
+            UNITE(nodes, tnodes, node, pc.n)
         }
         // The next level reads this one's boxes.
         memoryBarrierBuffer();

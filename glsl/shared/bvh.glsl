@@ -52,10 +52,41 @@ uint traversal_ref(uint c, uint n) {
     return c < n - 1u ? c : (BVH_LEAF_BIT | (c - (n - 1u)));
 }
 
-// The traversal node of internal node `i` with children `l`, `r` and their boxes.
+// The traversal node of an internal node with children `l`, `r` and their boxes.
 TraversalNode traversal_node(uint l, vec3 l_lo, vec3 l_hi, uint r, vec3 r_lo, vec3 r_hi, uint n) {
     return TraversalNode(l_lo, traversal_ref(l, n), l_hi, traversal_ref(r, n), r_lo, 0u, r_hi, 0u);
 }
+
+// The fit's and the refits' two steps, on the includer's buffers (GLSL cannot pass a
+// buffer to a function): `nodes` (BvhNode), `tnodes` (TraversalNode), `ttris`
+// (TraversalTri), over a tree of `n` triangles.
+//
+// FIT_LEAF: leaf j (node n - 1 + j) gets its triangle's box, and its traversal triangle;
+// a single triangle also gets the one traversal node, whose two children are that leaf.
+#define FIT_LEAF(vertices, indices, nodes, tnodes, ttris, j, n)                          \
+    {                                                                                     \
+        uint leaf_ = (n) - 1u + (j);                                                      \
+        uint prim_ = nodes[leaf_].left & ~BVH_LEAF_BIT;                                   \
+        TRIANGLE_CORNERS(vertices, indices, prim_, a_, b_, c_)                            \
+        vec3 lo_ = min(a_, min(b_, c_)), hi_ = max(a_, max(b_, c_));                      \
+        nodes[leaf_].lo = lo_;                                                            \
+        nodes[leaf_].hi = hi_;                                                            \
+        ttris[j] = TraversalTri(a_, prim_, b_ - a_, 0u, c_ - a_, 0u);                     \
+        if ((n) == 1u) {                                                                  \
+            tnodes[0] = traversal_node(0u, lo_, hi_, 0u, lo_, hi_, 1u);                   \
+        }                                                                                 \
+    }
+// UNITE: internal node `node`'s box, the union of its children's, and its traversal
+// node.
+#define UNITE(nodes, tnodes, node, n)                                                     \
+    {                                                                                     \
+        uint l_ = nodes[node].left, r_ = nodes[node].right;                               \
+        vec3 l_lo_ = nodes[l_].lo, l_hi_ = nodes[l_].hi;                                  \
+        vec3 r_lo_ = nodes[r_].lo, r_hi_ = nodes[r_].hi;                                  \
+        nodes[node].lo = min(l_lo_, r_lo_);                                               \
+        nodes[node].hi = max(l_hi_, r_hi_);                                               \
+        tnodes[node] = traversal_node(l_, l_lo_, l_hi_, r_, r_lo_, r_hi_, (n));           \
+    }
 
 // Float <-> uint mapping that preserves order, so atomicMin/atomicMax on uint act as
 // float min/max (negative floats: all bits flipped; positive: the sign bit set).

@@ -185,12 +185,11 @@ fn hierarchy_and_fit_match_cpu_exactly() {
 }
 
 fn hierarchy_and_fit_match_cpu(ctx: &Arc<Context>, b: &LbvhBuilder) {
-    let ctx = ctx.clone();
     for (seed, &n) in [1usize, 2, 3, 1000, 65537].iter().enumerate() {
         let (v, i) = random_soup(n, 3.0, default_size(n) * 3.0, 100 + seed as u64);
-        let g = GpuGeometry::new(&ctx, &v, &i);
+        let g = GpuGeometry::new(ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
-            let bvh = build(&ctx, b, &g, bits);
+            let bvh = build(ctx, b, &g, bits);
             let nodes = bvh.read_nodes().unwrap();
             let parents: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.parents.read().unwrap());
             let keys = cref::morton_keys(&v, &i, bits.key_words());

@@ -51,6 +51,8 @@ pub const SORT_ITEMS: u32 = 16;
 pub const COMPACT_WG: u32 = 256;
 /// Slots each compaction thread owns: a tile is COMPACT_WG x COMPACT_ITEMS slots.
 pub const COMPACT_ITEMS: u32 = 16;
+// wg_scan.glsl scans in groups of 16 invocations.
+const _: () = assert!(SORT_WG % 16 == 0 && COMPACT_WG % 16 == 0);
 
 /// Invocations per workgroup of `rt.reflect`, which runs over the compacted ray list
 /// (`ssr.compact` writes its indirect arguments in these units): 32 of lavapipe's

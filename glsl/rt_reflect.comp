@@ -35,12 +35,8 @@ layout(push_constant) uniform Push {
     uint max_bounces;  // rays per path (1: a single reflection)
     uint static_tris;
     uint dynamic_tris;
-    uint shadow_rays;  // 1: shadow rays through the BVHs instead of the shadow map
+    uint shadows;      // SHADOWS_*: how hits are shadowed
 } pc;
-
-float offset_scale(vec3 pos) {
-    return 2e-4 * max(1.0, length(pos - frame.camera_pos.xyz));
-}
 
 vec2 hit_uv(uint prim, uint k) {
     uint t = prim & 0x7fffffffu;
@@ -101,13 +97,23 @@ void main() {
         // The next mirror direction stays above the facet.
         hn = clamp_bent_normal(hn, g, -dir);
         vec3 hp = origin + dir * h.t;
+        // Shadows as on the visible surface: the map, a ray, or the map where it is
+        // sure (shadow_map_doubt) and a ray elsewhere. A hit facing away from the sun
+        // is unlit whatever is in the way.
         float vis;
-        if (pc.shadow_rays != 0u) {
+        float ndl = dot(hn, frame.light_dir.xyz);
+        bool ray = pc.shadows == SHADOWS_RAYS && ndl > 0.0;
+        if (pc.shadows == SHADOWS_MAP) {
+            vis = shadow_visibility(shadow_map, hp);
+        } else if (ndl <= 0.0) {
+            vis = 0.0;
+        } else if (pc.shadows == SHADOWS_HYBRID) {
+            ray = shadow_map_doubt(shadow_map, hp, ndl, vis) != 0u;
+        }
+        if (ray) {
             vec3 so = hp + g * offset_scale(hp);
             Hit sh = trace_ray(so, frame.light_dir.xyz, 0.0, 3.0e38, pc.static_tris, pc.dynamic_tris, true);
             vis = sh.prim == BVH_INVALID ? 1.0 : 0.0;
-        } else {
-            vis = shadow_visibility(shadow_map, hp);
         }
         radiance += throughput * shade_direct(albedo, m.roughness, m.reflectivity, m.metallic, hn, -dir, vis);
         if (m.reflectivity <= 0.0) {

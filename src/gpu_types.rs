@@ -72,7 +72,10 @@ pub struct FrameUniforms {
     pub exposure: f32,
     /// Strength of the hemispherical sky ambient term.
     pub ambient: f32,
-    pub _pad0: f32,
+    /// Light clip-space depth distance from the biased compare within which a shadow-map
+    /// texel leaves the map unsure (`shadow_map_doubt`): the pixel gets a shadow ray in
+    /// the hybrid shadows.
+    pub shadow_band: f32,
 }
 
 const _: () = assert!(std::mem::size_of::<GpuVertex>() == 32);

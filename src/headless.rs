@@ -6,7 +6,8 @@ use crate::metrics::compare_rgba8;
 use crate::renderer::{Renderer, FRAME};
 use crate::report::{FrameRecord, Header, PassTimes, Stat};
 use crate::scene::Scene;
-use crate::settings::{Mode, Settings};
+use crate::settings::{Mode, Settings, Shadows};
+use crate::shadow_maps::ShadowMaps;
 use crate::vk::{Context, TimingCheck, Timings};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -48,6 +49,17 @@ pub struct TimingsReport {
     pub rt_pixel_fraction: f64,
     /// Failed pixels by reason, every reason present (see `reflection_maps`).
     pub fail_reasons: BTreeMap<String, u64>,
+    /// Where the shadows came from (the `shadows` setting).
+    pub shadows: String,
+    /// Pixels whose surface faces the sun.
+    pub shadow_lit_pixels: u64,
+    /// Lit pixels that got a shadow ray (0 under `map` shadows).
+    pub shadow_traced_pixels: u64,
+    /// shadow-traced / lit pixels.
+    pub shadow_ray_fraction: f64,
+    /// With `--reference` and shadows other than `rays`: the last frame against the
+    /// same frame with `rays` shadows; `null` otherwise.
+    pub shadows_vs_rays: Option<ShadowsVsRays>,
     /// With `--reference`: SSIM and RMSE of the last frame against the same frame in
     /// `rt` mode, and the reference's frame time; `null` without.
     pub ssim_vs_rt: Option<f64>,
@@ -55,6 +67,50 @@ pub struct TimingsReport {
     pub rt_frame_ms: Option<Stat>,
     /// The self-check of every measured frame, the reference's included (`vk::timing`).
     pub timing: TimingCheck,
+}
+
+/// How far a frame's shadows are from the same frame's with `rays` shadows.
+#[derive(Clone, Debug, Serialize)]
+pub struct ShadowsVsRays {
+    /// SSIM and RMSE of the final images.
+    pub ssim: f64,
+    pub rmse: f64,
+    /// Lit pixels whose visibility is the rays' (within 1/256: a PCF-filtered map's
+    /// fractions count as different).
+    pub visibility_agreement: f64,
+    /// RMSE of the visibility over the lit pixels (0..1).
+    pub visibility_rmse: f64,
+    /// Lit pixels compared.
+    pub lit_pixels: u64,
+}
+
+impl ShadowsVsRays {
+    /// Compares a frame (`rgba`, `maps`) with the rays frame, the visibility over the
+    /// rays frame's lit pixels.
+    pub fn of(
+        rgba: &[u8],
+        maps: &ShadowMaps,
+        rays_rgba: &[u8],
+        rays: &ShadowMaps,
+        settings: &Settings,
+    ) -> Result<Self> {
+        let c = compare_rgba8(rgba, rays_rgba, settings.width, settings.height)?;
+        let lit: Vec<usize> = (0..rays.lit.len()).filter(|&i| rays.lit[i]).collect();
+        let (mut agree, mut sq) = (0u64, 0f64);
+        for &i in &lit {
+            let d = (maps.visibility[i] - rays.visibility[i]) as f64;
+            agree += (d.abs() < 1.0 / 256.0) as u64;
+            sq += d * d;
+        }
+        let n = lit.len().max(1) as f64;
+        Ok(Self {
+            ssim: c.ssim,
+            rmse: c.rmse,
+            visibility_agreement: agree as f64 / n,
+            visibility_rmse: (sq / n).sqrt(),
+            lit_pixels: lit.len() as u64,
+        })
+    }
 }
 
 /// A finished headless render.
@@ -73,14 +129,21 @@ pub struct Rendered {
 pub struct FramePlan {
     pub warmup: u32,
     pub frames: u32,
-    /// Also render the frame in `rt` mode and report SSIM/RMSE against it.
+    /// Also render the frame in `rt` mode and report SSIM/RMSE against it; and, when
+    /// the shadows are not `rays`, in its own mode with `rays` shadows and report how
+    /// far its shadows are from them.
     pub reference: bool,
 }
 
 impl FramePlan {
     /// Frames `render` draws in all, for a progress bar.
-    pub fn total_frames(&self) -> u64 {
-        (self.warmup as u64 + self.frames as u64) * if self.reference { 2 } else { 1 }
+    pub fn total_frames(&self, settings: &Settings) -> u64 {
+        let renderers = match (self.reference, settings.shadows) {
+            (false, _) => 1,
+            (true, Shadows::Rays) => 2,
+            (true, _) => 3,
+        };
+        (self.warmup as u64 + self.frames as u64) * renderers
     }
 
     /// Checks what can be known before any GPU work: frame counts, and an image large
@@ -138,15 +201,30 @@ pub fn render_frames(
     } else {
         None
     };
+    let mut rays_reference = if plan.reference && settings.shadows != Shadows::Rays {
+        let rays = Settings {
+            shadows: Shadows::Rays,
+            ..settings.clone()
+        };
+        Some(Renderer::new(ctx, scene, &rays)?)
+    } else {
+        None
+    };
     for _ in 0..plan.warmup {
-        for r in std::iter::once(&mut renderer).chain(reference.as_mut()) {
+        for r in std::iter::once(&mut renderer)
+            .chain(reference.as_mut())
+            .chain(rays_reference.as_mut())
+        {
             r.render_frame()?;
             tick();
         }
     }
     // A dynamic scene starts over after the warm-up: measured frame k is the same
     // image whatever the warm-up (the world after k + 1 time steps).
-    for r in std::iter::once(&mut renderer).chain(reference.as_mut()) {
+    for r in std::iter::once(&mut renderer)
+        .chain(reference.as_mut())
+        .chain(rays_reference.as_mut())
+    {
         r.reset_simulation()?;
     }
     let (mut timings, mut ref_timings) = (Timings::default(), Timings::default());
@@ -156,6 +234,10 @@ pub fn render_frames(
         timings.add(&times);
         if let Some(r) = &mut reference {
             ref_timings.add(&r.render_frame()?);
+            tick();
+        }
+        if let Some(r) = &mut rays_reference {
+            r.render_frame()?;
             tick();
         }
         if let Some(hook) = on_frame.as_mut() {
@@ -183,6 +265,18 @@ pub fn render_frames(
     let rgba = renderer.read_output()?;
     let maps = renderer.reflection_maps()?;
     let stats = maps.stats();
+    let shadow_maps = renderer.shadow_maps()?;
+    let shadow_stats = shadow_maps.stats();
+    let vs_rays = match &rays_reference {
+        Some(r) => Some(ShadowsVsRays::of(
+            &rgba,
+            &shadow_maps,
+            &r.read_output()?,
+            &r.shadow_maps()?,
+            settings,
+        )?),
+        None => None,
+    };
     let frame_stat = |t: &Timings| t.samples(FRAME).and_then(Stat::of).expect("every frame is timed");
     let (mut ssim, mut rmse, mut rt_frame_ms, mut reference_rgba) = (None, None, None, None);
     if let Some(r) = &reference {
@@ -209,6 +303,11 @@ pub fn render_frames(
         traced_pixels: stats.traced_pixels,
         rt_pixel_fraction: stats.rt_pixel_fraction(),
         fail_reasons: stats.fail_reasons.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        shadows: settings.shadows.name().to_string(),
+        shadow_lit_pixels: shadow_stats.lit_pixels,
+        shadow_traced_pixels: shadow_stats.traced_pixels,
+        shadow_ray_fraction: shadow_stats.ray_fraction(),
+        shadows_vs_rays: vs_rays,
         ssim_vs_rt: ssim,
         rmse_vs_rt: rmse,
         rt_frame_ms,

@@ -24,6 +24,7 @@ pub mod renderer;
 pub mod report;
 pub mod scene;
 pub mod settings;
+pub mod shadow_maps;
 pub mod sim;
 pub mod tune;
 pub mod vk;

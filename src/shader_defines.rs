@@ -52,7 +52,7 @@ pub const COMPACT_WG: u32 = 256;
 /// Slots each compaction thread owns: a tile is COMPACT_WG x COMPACT_ITEMS slots.
 pub const COMPACT_ITEMS: u32 = 16;
 // wg_scan.glsl scans in groups of 16 invocations.
-const _: () = assert!(SORT_WG % 16 == 0 && COMPACT_WG % 16 == 0);
+const _: () = assert!(SORT_WG.is_multiple_of(16) && COMPACT_WG.is_multiple_of(16));
 
 /// Invocations per workgroup of `rt.reflect`, which runs over the compacted ray list
 /// (`ssr.compact` writes its indirect arguments in these units): 32 of lavapipe's
@@ -99,6 +99,23 @@ pub const BLUR_MAX_EXTENT: u32 = 64;
 
 /// Fail-mask reason bits written by `ssr.classify` and `ssr.trace` (any nonzero value
 /// sends the pixel to the ray tracer): the march left the screen or crossed the near plane,
+pub const SHADOWS_MAP: u32 = 0;
+pub const SHADOWS_RAYS: u32 = 1;
+pub const SHADOWS_HYBRID: u32 = 2;
+
+/// Why a pixel gets a shadow ray (`shadow.classify`'s mask; nonzero means "needs a
+/// ray"): outside the shadow map.
+pub const SHADOW_OUTSIDE: u32 = 1;
+/// The shadow map's texels under the PCF footprint disagree (a shadow edge).
+pub const SHADOW_EDGE: u32 = 2;
+/// A texel's depth is within `shadow_band` of the biased compare (acne, contact).
+pub const SHADOW_NEAR: u32 = 4;
+/// The sun grazes the surface (n.l below `SHADOW_GRAZING_NDL` in shading.glsl): the
+/// map's depth slope outruns any bias there.
+pub const SHADOW_GRAZING: u32 = 8;
+/// Every lit pixel is traced (`rays`).
+pub const SHADOW_ALL: u32 = 16;
+
 pub const FAIL_LEFT_SCREEN: u32 = 1;
 /// ... it passed behind geometry thicker than the threshold (what lies beyond is a guess),
 pub const FAIL_BEHIND: u32 = 2;
@@ -180,6 +197,14 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("LIST_GROUPS_X", LIST_GROUPS_X),
     ("BLUR_LINE", BLUR_LINE),
     ("BLUR_MAX_EXTENT", BLUR_MAX_EXTENT),
+    ("SHADOWS_MAP", SHADOWS_MAP),
+    ("SHADOWS_RAYS", SHADOWS_RAYS),
+    ("SHADOWS_HYBRID", SHADOWS_HYBRID),
+    ("SHADOW_OUTSIDE", SHADOW_OUTSIDE),
+    ("SHADOW_EDGE", SHADOW_EDGE),
+    ("SHADOW_NEAR", SHADOW_NEAR),
+    ("SHADOW_GRAZING", SHADOW_GRAZING),
+    ("SHADOW_ALL", SHADOW_ALL),
     ("FAIL_LEFT_SCREEN", FAIL_LEFT_SCREEN),
     ("FAIL_BEHIND", FAIL_BEHIND),
     ("FAIL_OUT_OF_STEPS", FAIL_OUT_OF_STEPS),

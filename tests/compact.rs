@@ -40,7 +40,7 @@ fn compaction_matches_cpu_on_random_masks() {
             .unwrap();
             img.write(bytemuck::cast_slice(&mask), vk::ImageLayout::GENERAL)
                 .unwrap();
-            let pass = CompactPass::new(&ctx, extent).unwrap();
+            let pass = CompactPass::new(&ctx, speculum::passes::ssr_compact::PIPELINES, extent).unwrap();
             // Poison the outputs: stale values cannot pass.
             pass.out
                 .pixels

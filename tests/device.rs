@@ -102,7 +102,7 @@ fn pipeline_push_type_must_match_the_shader() {
     let msg = err.to_string();
     assert!(msg.contains("20 B") && msg.contains("8 B"), "{msg}");
     assert!(Pipeline::compute::<speculum::passes::compose::ComposePush>(&ctx, "test.compose", shader).is_ok());
-    assert!(Pipeline::compute::<()>(&ctx, "test.light", speculum::shaders::LIGHT_DIRECT_COMP).is_ok());
+    assert!(Pipeline::compute::<u32>(&ctx, "test.light", speculum::shaders::LIGHT_DIRECT_COMP).is_ok());
 }
 
 /// The device limits the renderer checks against, printed for the record.

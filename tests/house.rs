@@ -15,7 +15,7 @@ const LAYERS: &[&[&str]] = &[
     &["settings", "scene"],
     &["sim"],
     &["cpu_ref", "passes"],
-    &["limits", "reflection_maps"],
+    &["limits", "reflection_maps", "shadow_maps"],
     &["renderer"],
     &["report"],
     &["headless"],

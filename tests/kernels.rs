@@ -13,7 +13,8 @@ use glam::{IVec2, Vec3, Vec4Swizzles};
 use rand::Rng;
 use speculum::cpu_ref::{self, shading};
 use speculum::passes::compose::ComposePass;
-use speculum::passes::light_direct::LightDirectPass;
+use speculum::passes::light_direct::{LightDirectPass, Sun};
+use speculum::passes::shadow_trace;
 use speculum::passes::GBuffer;
 use speculum::shader_defines::MATERIAL_NONE;
 use speculum::vk::{barrier, Image};
@@ -168,12 +169,18 @@ fn compose_matches_cpu_reference() {
 }
 
 /// light.direct: a random G-buffer (depths, normals, albedo, roughness, reflectivity,
-/// sky pixels) and a random shadow map shade like the CPU reference.
+/// sky pixels) and a random shadow map shade like the CPU reference; and so they do
+/// with a random visibility image in the map's place (shadows `rays` and `hybrid`).
 #[test]
 fn light_direct_matches_cpu_reference() {
+    for traced in [false, true] {
+        light_direct_case(traced);
+    }
+}
+
+fn light_direct_case(traced: bool) {
     let ctx = common::context();
     let mut rng = common::rng(2);
-    let scene = speculum::scene::builtin::room().unwrap();
     let settings = speculum::Settings {
         width: 45,
         height: 37,
@@ -181,38 +188,15 @@ fn light_direct_matches_cpu_reference() {
         pcf_radius: 2,
         ..Default::default()
     };
-    settings.validate().unwrap();
-    let frame = speculum::renderer::frame_uniforms(&scene, &settings);
-    let extent = vk::Extent2D {
-        width: settings.width,
-        height: settings.height,
-    };
+    let (frame, extent) = common::room_frame(&settings);
     let n = (extent.width * extent.height) as usize;
-
-    let common::RandomGBuffer {
-        depth,
-        normal,
-        normal_bytes,
-        material,
-    } = common::random_gbuffer(&mut rng, n);
+    let g = common::random_gbuffer(&mut rng, n);
+    let (depth, normal, material) = (&g.depth, &g.normal, &g.material);
     let albedo: Vec<u8> = (0..n * 4).map(|_| rng.random()).collect();
     let shadow: Vec<f32> = (0..64 * 64).map(|_| rng.random_range(0.0..1.0f32)).collect();
 
-    let gb = GBuffer::new(&ctx, extent).unwrap();
-    let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-    gb.depth.write(bytemuck::cast_slice(&depth), ro).unwrap();
-    gb.normal.write(&normal_bytes, ro).unwrap();
-    gb.albedo.write(&albedo, ro).unwrap();
-    gb.material.write(bytemuck::cast_slice(&material), ro).unwrap();
-    let shadow_map = Image::new(
-        &ctx,
-        "test.shadow",
-        vk::Extent2D { width: 64, height: 64 },
-        vk::Format::D32_SFLOAT,
-        vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-    )
-    .unwrap();
-    shadow_map.write(bytemuck::cast_slice(&shadow), ro).unwrap();
+    let gb = common::upload_gbuffer(&ctx, extent, &g, Some(&albedo));
+    let shadow_map = common::shadow_map_image(&ctx, 64, &shadow);
     let ubo = common::frame_ubo(&ctx, &frame);
     let (materials, materials_buffer) = common::random_materials(&ctx);
     let pass = LightDirectPass::new(&ctx, extent).unwrap();
@@ -222,14 +206,27 @@ fn light_direct_matches_cpu_reference() {
             vk::ImageLayout::GENERAL,
         )
         .unwrap();
+    let visibility: Vec<f32> = (0..n).map(|_| rng.random_range(0.0..1.0f32)).collect();
+    let visibility_image = Image::storage(&ctx, "test.visibility", extent, shadow_trace::VISIBILITY_FORMAT).unwrap();
+    visibility_image
+        .write(bytemuck::cast_slice(&visibility), vk::ImageLayout::GENERAL)
+        .unwrap();
+    let sun = Sun {
+        map: &shadow_map,
+        visibility: &visibility_image,
+        traced,
+    };
     ctx.one_shot(|cmd| {
-        pass.record(cmd, &ubo, &gb, &shadow_map, &materials_buffer);
+        pass.record(cmd, &ubo, &gb, sun, &materials_buffer);
         // RAW: the readback copy sees the shader's writes.
         let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
         barrier::record(&ctx.device, cmd, &[b], &[]);
     })
     .unwrap();
     let gpu: Vec<[f32; 4]> = bytemuck::cast_slice(&pass.out.read(vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    // Under the map, light.direct writes back the visibility it shaded with.
+    let gpu_visibility: Vec<f32> =
+        bytemuck::pod_collect_to_vec(&visibility_image.read(vk::ImageLayout::GENERAL).unwrap());
 
     let map = shading::ShadowMap {
         size: 64,
@@ -247,7 +244,17 @@ fn light_direct_matches_cpu_reference() {
                 shading::sky(&frame, -to_camera.normalize())
             } else {
                 let (base, roughness) = cpu_ref::albedo_texel(&albedo[4 * i..4 * i + 4]);
-                let vis = shading::shadow_visibility(&frame, &map, w);
+                let vis = if traced {
+                    visibility[i]
+                } else {
+                    shading::shadow_visibility(&frame, &map, w)
+                };
+                let written = if traced { visibility[i] } else { vis };
+                assert!(
+                    (gpu_visibility[i] - written).abs() <= 1e-4,
+                    "pixel {p}: visibility {} vs {written}",
+                    gpu_visibility[i]
+                );
                 if vis < 1.0 {
                     shadowed += 1;
                 }

@@ -136,12 +136,14 @@ fn frame_uniforms_layout_matches_glsl() {
         shadow_bias,
         exposure,
         ambient,
-        _pad0,
+        shadow_band,
     });
     for shader in [
         shaders::GBUFFER_VERT,
         shaders::LIGHT_DIRECT_COMP,
         shaders::SHADOW_MAP_VERT,
+        shaders::SHADOW_CLASSIFY_COMP,
+        shaders::SHADOW_TRACE_COMP,
     ] {
         check(&reflected(shader), "FrameUniforms", rust.clone());
     }
@@ -164,8 +166,8 @@ fn compose_push_layout_matches_glsl() {
 }
 
 /// The push-constant block's size is reflected (pipelines check their push type
-/// against it): 20 B for compose, 4 B for the fit's triangle count, none for
-/// light.direct.
+/// against it): 20 B for compose, 4 B for the fit's triangle count and for
+/// light.direct's visibility switch.
 #[test]
 fn push_block_sizes_are_reflected() {
     assert_eq!(
@@ -178,7 +180,7 @@ fn push_block_sizes_are_reflected() {
         16,
         "ivec2 axis, int radius, int band"
     );
-    assert_eq!(reflected(shaders::LIGHT_DIRECT_COMP).push_size, 0);
+    assert_eq!(reflected(shaders::LIGHT_DIRECT_COMP).push_size, 4);
 }
 
 /// The reflection itself: a layout mismatch is detected (the check can fail).
@@ -206,7 +208,8 @@ fn light_direct_bindings_are_reflected() {
             D::COMBINED_IMAGE_SAMPLER,
             D::COMBINED_IMAGE_SAMPLER,
             D::STORAGE_IMAGE,
-            D::STORAGE_BUFFER
+            D::STORAGE_BUFFER,
+            D::STORAGE_IMAGE
         ]
     );
     assert_eq!(

@@ -82,9 +82,17 @@ const DYNAMIC_SCOPES: [&str; 9] = [
     "lbvh.refit",
 ];
 
+/// The scopes only shadows other than `map` run (these reports are of `map` shadows).
+const TRACED_SHADOW_SCOPES: [&str; 3] = ["shadow.classify", "shadow.compact", "shadow.trace"];
+
 /// `passes_ms` has every scope of the frame, in frame order; `null` where not run.
 fn check_passes(p: &Value, not_run: &[&str]) {
-    let not_run: Vec<&str> = not_run.iter().chain(&DYNAMIC_SCOPES).copied().collect();
+    let not_run: Vec<&str> = not_run
+        .iter()
+        .chain(&DYNAMIC_SCOPES)
+        .chain(&TRACED_SHADOW_SCOPES)
+        .copied()
+        .collect();
     let names: Vec<&str> = p.as_object().unwrap().keys().map(String::as_str).collect();
     let want: Vec<&str> = speculum::renderer::SCOPES
         .iter()
@@ -171,6 +179,10 @@ fn reports_go_to_stdout_with_a_dash() {
     check_passes(&r["passes_ms"], &[]);
     check_stat(&r["rt_frame_ms"], "rt_frame_ms");
     assert!(r["ssim_vs_rt"].as_f64().unwrap() > 0.5);
+    let v = &r["shadows_vs_rays"];
+    assert!(v["ssim"].as_f64().unwrap() > 0.5, "{v}");
+    assert!(v["visibility_agreement"].as_f64().unwrap() > 0.5, "{v}");
+    assert!(v["lit_pixels"].as_u64().unwrap() > 0, "{v}");
 }
 
 #[test]

@@ -20,7 +20,7 @@ use speculum::cpu_ref::texture::TextureArray;
 use speculum::cpu_ref::trace::CpuBvh;
 use speculum::gpu_types::GpuMaterial;
 use speculum::scene::{texture, Camera, Material, Scene, SceneBuilder, Texture, TriMesh};
-use speculum::settings::Mode;
+use speculum::settings::{Mode, Shadows};
 use speculum::{Renderer, Settings};
 
 const POISON: [f32; 4] = [-12345.0, -12345.0, -12345.0, 99.0];
@@ -74,19 +74,22 @@ fn textured_scene() -> Scene {
     b.build().unwrap()
 }
 
-/// Shadows from the shadow map on `room` and the textured scene, from shadow rays on
-/// `mirrors`; up to three bounces, and paths of two or more rays must occur for the
-/// comparison to cover them.
+/// Each scene under one of the `shadows` settings (the map, rays, the hybrid), which
+/// shadows the visible surface and the hits alike; up to three bounces, and paths of
+/// two or more rays must occur for the comparison to cover them. Under rays and the
+/// hybrid the frame's visibility (shadow.classify, shadow.compact, shadow.trace; the
+/// dynamic scenes' from that frame's dynamic BVH) is compared with the CPU's too.
 #[test]
 fn reflected_paths_match_cpu_reference() {
     let ctx = common::context();
-    for (name, shadow_rays) in [
-        ("room", false),
-        ("mirrors", true),
-        ("textured", false),
-        ("drop", false),
-        ("drop", true),
-        ("cloth", false),
+    for (name, shadows) in [
+        ("room", Shadows::Hybrid),
+        ("room", Shadows::Map),
+        ("mirrors", Shadows::Rays),
+        ("textured", Shadows::Map),
+        ("drop", Shadows::Map),
+        ("drop", Shadows::Hybrid),
+        ("cloth", Shadows::Rays),
     ] {
         let scene = if name == "textured" {
             textured_scene()
@@ -98,7 +101,7 @@ fn reflected_paths_match_cpu_reference() {
             width: 192,
             height: 108,
             mode: Mode::Rt,
-            shadow_rays,
+            shadows,
             ..Default::default()
         };
         let (w, h) = (settings.width as usize, settings.height as usize);
@@ -106,6 +109,11 @@ fn reflected_paths_match_cpu_reference() {
         let general = vk::ImageLayout::GENERAL;
         r.rt.out
             .write(bytemuck::cast_slice(&vec![POISON; w * h]), general)
+            .unwrap();
+        r.shadow_trace
+            .out
+            .visibility
+            .write(bytemuck::cast_slice(&vec![POISON[0]; w * h]), general)
             .unwrap();
         // A dynamic scene: the world after DROP_FRAMES time steps, bodies in the air
         // and on the floor.
@@ -167,9 +175,12 @@ fn reflected_paths_match_cpu_reference() {
             materials: &materials,
             textures: &textures,
             shadow_map: &shadow_map,
-            shadow_rays,
+            shadows,
             dynamic,
         };
+        if shadows.traces() {
+            check_visibility(name, &r, &path_scene, (&depth, &normal));
+        }
         let (mut compared, mut parted, mut multi) = (0usize, 0usize, 0usize);
 
         for i in (0..w * h).filter(|&i| reflective[i]) {
@@ -194,4 +205,32 @@ fn reflected_paths_match_cpu_reference() {
             "{name}: {parted} of {compared} paths differ from the CPU's"
         );
     }
+}
+
+/// The frame's sun visibility on every lit pixel against `cpu_ref::shadows::visibility`
+/// (the same classification, then the same shadow ray): equal but for rays through a
+/// triangle's edge and classifications on a threshold's ulp, at most 1 in 500.
+fn check_visibility(name: &str, r: &Renderer, s: &PathScene<'_>, (depth, normal): (&[f32], &[[f32; 4]])) {
+    let maps = r.shadow_maps().unwrap();
+    let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.out.material).unwrap());
+    let w = s.frame.resolution[0] as usize;
+    let (mut lit, mut traced, mut shadowed, mut differ) = (0usize, 0usize, 0usize, 0usize);
+    for i in (0..maps.lit.len()).filter(|&i| maps.lit[i]) {
+        let p = IVec2::new((i % w) as i32, (i / w) as i32);
+        let n = Vec3::new(normal[i][0], normal[i][1], normal[i][2]);
+        let want = speculum::cpu_ref::shadows::visibility(s, p, (depth[i], n, material[i]));
+        let got = maps.visibility[i];
+        assert!(got == 0.0 || got == 1.0, "{name} pixel {p}: visibility {got}");
+        lit += 1;
+        traced += (maps.mask[i] != 0) as usize;
+        shadowed += (got == 0.0) as usize;
+        differ += (got != want) as usize;
+    }
+    assert!(lit > maps.lit.len() / 4, "{name}: {lit} lit pixels");
+    assert!(traced > lit / 20, "{name}: {traced} of {lit} lit pixels traced");
+    assert!(shadowed * 200 > lit, "{name}: {shadowed} of {lit} lit pixels in shadow");
+    assert!(
+        differ * 500 <= lit,
+        "{name}: {differ} of {lit} visibilities differ from the CPU's"
+    );
 }

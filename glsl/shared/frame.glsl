@@ -22,6 +22,13 @@ vec3 world_from_depth(ivec2 p, float depth) {
     return w.xyz / w.w;
 }
 
+// How far a ray's origin is pushed off its surface (along a normal) at `pos`: it grows
+// with the distance from the camera, as depth-buffer and float error do. Mirrored by
+// cpu_ref::reflect::offset_scale.
+float offset_scale(vec3 pos) {
+    return 2e-4 * max(1.0, length(pos - frame.camera_pos.xyz));
+}
+
 // The sRGB transfer function and its inverse (IEC 61966-2-1), for the G-buffer's base
 // colour (gbuffer::ALBEDO_FORMAT). Mirrored by scene::texture::{srgb_to_linear, linear_to_srgb}.
 vec3 srgb_encode(vec3 c) {

@@ -16,11 +16,17 @@ float pcf_weight(int k, int n, float f) {
 // mean but computed over the (2r+2)^2 texels it touches, each read once, four at a
 // time with textureGather (clamp-to-edge sampler): interior texels weigh 1, the
 // border rows and columns (1-f) and f.
-float shadow_visibility(sampler2D shadow_map, vec3 w) {
+// `doubt` receives the SHADOW_* bits of why the map may be wrong at w (0: it is
+// sure): w is outside the map (SHADOW_OUTSIDE); the texels of the footprint, whatever
+// their weights, do not all agree (SHADOW_EDGE); a texel's depth is within
+// frame.shadow_band of the biased compare (SHADOW_NEAR: acne, contact shadows).
+float shadow_pcf(sampler2D shadow_map, vec3 w, out uint doubt) {
+    doubt = 0u;
     vec4 c = frame.light_view_proj * vec4(w, 1.0);
     vec3 ndc = c.xyz / c.w;
     vec2 uv = ndc.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0))) || ndc.z > 1.0) {
+        doubt = SHADOW_OUTSIDE;
         return 1.0; // outside the light's frustum: unshadowed
     }
     float ref_depth = ndc.z - frame.shadow_bias;
@@ -32,6 +38,7 @@ float shadow_visibility(sampler2D shadow_map, vec3 w) {
     ivec2 base = ivec2(cell) - r;
     int n = 2 * r + 2; // even: the footprint is whole 2x2 gathers
     float sum = 0.0;
+    bool any_lit = false, any_dark = false;
     for (int j = 0; j < n; j += 2) {
         float wy0 = pcf_weight(j, n, f.y);
         float wy1 = pcf_weight(j + 1, n, f.y);
@@ -42,12 +49,43 @@ float shadow_visibility(sampler2D shadow_map, vec3 w) {
             // exactly half a texel from every texel centre, so the footprint is exact.
             vec2 g = (vec2(base + ivec2(i, j)) + 1.0) / size;
             // Gather order: x = (i, j+1), y = (i+1, j+1), z = (i+1, j), w = (i, j).
-            vec4 lit = step(vec4(ref_depth), textureGather(shadow_map, g, 0));
+            vec4 d = textureGather(shadow_map, g, 0);
+            bvec4 texel_lit = greaterThanEqual(d, vec4(ref_depth));
+            any_lit = any_lit || any(texel_lit);
+            any_dark = any_dark || !all(texel_lit);
+            if (any(lessThan(abs(d - vec4(ref_depth)), vec4(frame.shadow_band)))) {
+                doubt |= SHADOW_NEAR;
+            }
+            vec4 lit = vec4(texel_lit);
             sum += lit.w * wx0 * wy0 + lit.z * wx1 * wy0 + lit.x * wx0 * wy1 + lit.y * wx1 * wy1;
         }
     }
+    if (any_lit && any_dark) {
+        doubt |= SHADOW_EDGE;
+    }
     float taps = float((2 * r + 1) * (2 * r + 1));
     return sum / taps;
+}
+
+float shadow_visibility(sampler2D shadow_map, vec3 w) {
+    uint doubt;
+    return shadow_pcf(shadow_map, w, doubt);
+}
+
+// Cosine of the sun's angle to the normal under which the hybrid shadows do not trust
+// the shadow map: its depth slope outruns any bias there.
+const float SHADOW_GRAZING_NDL = 0.1;
+
+// The hybrid shadows' question at w (normal n, a unit vector facing the sun: n.l > 0):
+// returns 0 when the shadow map is sure, with `vis` its answer (0 or 1: every texel
+// agrees), else the SHADOW_* bits of why not (shadow_pcf's, and SHADOW_GRAZING).
+uint shadow_map_doubt(sampler2D shadow_map, vec3 w, float ndl, out float vis) {
+    uint doubt;
+    vis = shadow_pcf(shadow_map, w, doubt) > 0.5 ? 1.0 : 0.0;
+    if (ndl < SHADOW_GRAZING_NDL) {
+        doubt |= SHADOW_GRAZING;
+    }
+    return doubt;
 }
 
 // The material model (README, "Materials"): a base colour, a metallic blend between a

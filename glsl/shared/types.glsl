@@ -35,6 +35,6 @@ struct Material {
     float shadow_bias;                                                                \
     float exposure;                                                                   \
     float ambient;                                                                    \
-    float _pad0;
+    float shadow_band;
 
 #endif

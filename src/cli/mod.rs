@@ -11,6 +11,7 @@ use anyhow::{Context as _, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use speculum::scene::Floor;
+use speculum::settings::Shadows;
 use speculum::vk::{Context, ContextDesc};
 use speculum::Settings;
 use std::io::IsTerminal;
@@ -52,6 +53,9 @@ pub struct SettingsArgs {
     /// Height in pixels [default: 540, or the settings file's].
     #[arg(long)]
     pub height: Option<u32>,
+    /// Where shadows come from [default: map, or the settings file's].
+    #[arg(long, value_parser = choice(&Shadows::ALL, Shadows::name, Shadows::about))]
+    pub shadows: Option<Shadows>,
 }
 
 impl SettingsArgs {
@@ -63,6 +67,9 @@ impl SettingsArgs {
         }
         if let Some(h) = self.height {
             s.height = h;
+        }
+        if let Some(shadows) = self.shadows {
+            s.shadows = shadows;
         }
         s.validate()?;
         Ok(s)

@@ -139,7 +139,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let text = Text::new(&[args.timings.as_deref()], args.quiet);
     let ctx = args.gpu.context()?;
 
-    let bar = progress(plan.total_frames(), "render", args.quiet);
+    let bar = progress(plan.total_frames(&settings), "render", args.quiet);
     let (w, h) = (settings.width, settings.height);
     // Per measured frame: its PNG and line (a sequence), or the frames of the sheet.
     let (mut frames_png, mut lines, mut sheet) = (Vec::new(), String::new(), Vec::new());
@@ -210,10 +210,27 @@ pub fn run(args: RenderArgs) -> Result<()> {
         r.traced_pixels,
         100.0 * r.rt_pixel_fraction
     ));
+    text.line(format_args!(
+        "  {} shadows: lit pixels {}, shadow rays {} ({:.1}%)",
+        r.shadows,
+        r.shadow_lit_pixels,
+        r.shadow_traced_pixels,
+        100.0 * r.shadow_ray_fraction
+    ));
     if let (Some(ssim), Some(rmse), Some(rt)) = (r.ssim_vs_rt, r.rmse_vs_rt, r.rt_frame_ms) {
         text.line(format_args!(
             "  vs rt reference: SSIM {ssim:.4}, RMSE {rmse:.4}; rt frame {}",
             super::cell(Some(rt))
+        ));
+    }
+    if let Some(v) = &r.shadows_vs_rays {
+        text.line(format_args!(
+            "  vs rays shadows: SSIM {:.4}, RMSE {:.4}; visibility equal on {:.2}% of {} lit pixels, RMSE {:.4}",
+            v.ssim,
+            v.rmse,
+            100.0 * v.visibility_agreement,
+            v.lit_pixels,
+            v.visibility_rmse
         ));
     }
     text.line(format_args!("  {}", super::timing_note(&r.timing)));

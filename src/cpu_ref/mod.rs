@@ -8,6 +8,7 @@ pub mod lbvh;
 pub mod merge;
 pub mod reflect;
 pub mod shading;
+pub mod shadows;
 pub mod sim;
 pub mod ssr;
 pub mod texture;

@@ -4,7 +4,8 @@
 use super::shading::{self, ShadowMap};
 use super::texture::{self, TextureArray};
 use super::trace::CpuBvh;
-use crate::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex, Ray};
+use crate::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex, Hit, Ray};
+use crate::settings::Shadows;
 use crate::shader_defines::BVH_INVALID;
 use glam::{IVec2, Vec2, Vec3, Vec4Swizzles};
 
@@ -30,44 +31,61 @@ pub struct PathScene<'a> {
     pub materials: &'a [GpuMaterial],
     pub textures: &'a TextureArray,
     pub shadow_map: &'a ShadowMap<'a>,
-    pub shadow_rays: bool,
+    /// How the visible surface and the hits are shadowed (the `shadows` setting).
+    pub shadows: Shadows,
     /// The dynamic triangles, traced after the static ones (a tie goes to the static
     /// triangle, as in the kernel); their hits carry bit 31.
     pub dynamic: Option<Triangles<'a>>,
 }
 
-fn offset_scale(frame: &FrameUniforms, pos: Vec3) -> f32 {
+/// `offset_scale`: how far a ray's origin is pushed off its surface at `pos`.
+pub fn offset_scale(frame: &FrameUniforms, pos: Vec3) -> f32 {
     2e-4 * (pos - frame.camera_pos.xyz()).length().max(1.0)
+}
+
+/// `trace_ray` through the static then the dynamic triangles: the closest hit, a
+/// dynamic one with bit 31 set.
+pub fn trace_scene(s: &PathScene<'_>, origin: Vec3, dir: Vec3) -> Hit {
+    let ray = Ray {
+        origin: origin.into(),
+        tmin: 0.0,
+        dir: dir.into(),
+        tmax: 3.0e38,
+    };
+    let hit = s.bvh.trace(&ray, s.vertices, s.indices);
+    match &s.dynamic {
+        Some(d) => {
+            let closer = Ray { tmax: hit.t, ..ray };
+            let dh = d.bvh.trace(&closer, d.vertices, d.indices);
+            if dh.prim == BVH_INVALID {
+                hit
+            } else {
+                Hit {
+                    prim: dh.prim | 0x8000_0000,
+                    ..dh
+                }
+            }
+        }
+        None => hit,
+    }
+}
+
+/// A shadow ray from `pos`, pushed off along `n`, toward the sun: 1 when nothing is in
+/// the way, else 0.
+pub fn shadow_ray(s: &PathScene<'_>, pos: Vec3, n: Vec3) -> f32 {
+    let origin = pos + n * offset_scale(s.frame, pos);
+    if trace_scene(s, origin, s.frame.light_dir.xyz()).prim == BVH_INVALID {
+        1.0
+    } else {
+        0.0
+    }
 }
 
 /// The radiance the reflected path from pixel `p` (G-buffer depth, world normal as
 /// stored) gathers in up to `max_bounces` rays, and the number of rays it traced.
 pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3, max_bounces: u32) -> (Vec3, u32) {
     let frame = s.frame;
-    let trace = |origin: Vec3, dir: Vec3| {
-        let ray = Ray {
-            origin: origin.into(),
-            tmin: 0.0,
-            dir: dir.into(),
-            tmax: 3.0e38,
-        };
-        let hit = s.bvh.trace(&ray, s.vertices, s.indices);
-        match &s.dynamic {
-            Some(d) => {
-                let closer = Ray { tmax: hit.t, ..ray };
-                let dh = d.bvh.trace(&closer, d.vertices, d.indices);
-                if dh.prim == BVH_INVALID {
-                    hit
-                } else {
-                    crate::gpu_types::Hit {
-                        prim: dh.prim | 0x8000_0000,
-                        ..dh
-                    }
-                }
-            }
-            None => hit,
-        }
-    };
+    let trace = |origin: Vec3, dir: Vec3| trace_scene(s, origin, dir);
     let statics = Triangles {
         bvh: s.bvh,
         vertices: s.vertices,
@@ -121,15 +139,15 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
         }
         hn = texture::clamp_bent_normal(hn, g, -dir);
         let hp = origin + dir * h.t;
-        let vis = if s.shadow_rays {
-            let so = hp + g * offset_scale(frame, hp);
-            if trace(so, frame.light_dir.xyz()).prim == BVH_INVALID {
-                1.0
-            } else {
-                0.0
-            }
-        } else {
-            shading::shadow_visibility(frame, s.shadow_map, hp)
+        let ndl = hn.dot(frame.light_dir.xyz());
+        let vis = match s.shadows {
+            Shadows::Map => shading::shadow_visibility(frame, s.shadow_map, hp),
+            _ if ndl <= 0.0 => 0.0,
+            Shadows::Rays => shadow_ray(s, hp, g),
+            Shadows::Hybrid => match shading::shadow_map_doubt(frame, s.shadow_map, hp, ndl) {
+                (0, vis) => vis,
+                _ => shadow_ray(s, hp, g),
+            },
         };
         let surface = shading::Surface {
             base: albedo,

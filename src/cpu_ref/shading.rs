@@ -1,7 +1,7 @@
 //! Reference of `glsl/shared/shading.glsl` and `frame.glsl` (light.direct).
 
 use crate::gpu_types::FrameUniforms;
-use crate::shader_defines::MAX_PCF_RADIUS;
+use crate::shader_defines::{MAX_PCF_RADIUS, SHADOW_EDGE, SHADOW_GRAZING, SHADOW_NEAR, SHADOW_OUTSIDE};
 use glam::{IVec2, Vec2, Vec3, Vec3Swizzles, Vec4, Vec4Swizzles};
 
 /// Sky radiance along unit direction `d` (`sky_radiance`).
@@ -30,24 +30,27 @@ pub struct ShadowMap<'a> {
 }
 
 impl ShadowMap<'_> {
-    fn texel(&self, q: IVec2, ref_depth: f32) -> f32 {
+    /// The depth of texel `q`, clamped to the edge.
+    fn texel(&self, q: IVec2) -> f32 {
         let last = self.size as i32 - 1;
         let q = q.clamp(IVec2::ZERO, IVec2::splat(last));
-        if self.depth[(q.y * self.size as i32 + q.x) as usize] >= ref_depth {
-            1.0
-        } else {
-            0.0
-        }
+        self.depth[(q.y * self.size as i32 + q.x) as usize]
     }
 }
 
 /// Fraction of light reaching `w` (`shadow_visibility`).
 pub fn shadow_visibility(frame: &FrameUniforms, map: &ShadowMap<'_>, w: Vec3) -> f32 {
+    shadow_pcf(frame, map, w).0
+}
+
+/// `shadow_pcf`: the fraction of light reaching `w` and the `SHADOW_*` bits of why the
+/// map may be wrong there (0: sure).
+pub fn shadow_pcf(frame: &FrameUniforms, map: &ShadowMap<'_>, w: Vec3) -> (f32, u32) {
     let c = frame.light_view_proj * w.extend(1.0);
     let ndc = c.xyz() / c.w;
     let uv = ndc.xy() * 0.5 + 0.5;
     if uv.x < 0.0 || uv.y < 0.0 || uv.x > 1.0 || uv.y > 1.0 || ndc.z > 1.0 {
-        return 1.0;
+        return (1.0, SHADOW_OUTSIDE);
     }
     let ref_depth = ndc.z - frame.shadow_bias;
     let t = uv * frame.shadow_map_size as f32 - 0.5;
@@ -57,6 +60,7 @@ pub fn shadow_visibility(frame: &FrameUniforms, map: &ShadowMap<'_>, w: Vec3) ->
     let base = cell.as_ivec2() - r;
     let n = 2 * r + 2;
     let mut sum = 0.0;
+    let (mut any_lit, mut any_dark, mut doubt) = (false, false, 0);
     for j in 0..n {
         let wy = if j == 0 {
             1.0 - f.y
@@ -73,10 +77,33 @@ pub fn shadow_visibility(frame: &FrameUniforms, map: &ShadowMap<'_>, w: Vec3) ->
             } else {
                 1.0
             };
-            sum += wx * wy * map.texel(base + IVec2::new(i, j), ref_depth);
+            let d = map.texel(base + IVec2::new(i, j));
+            let lit = d >= ref_depth;
+            any_lit |= lit;
+            any_dark |= !lit;
+            if (d - ref_depth).abs() < frame.shadow_band {
+                doubt |= SHADOW_NEAR;
+            }
+            sum += wx * wy * if lit { 1.0 } else { 0.0 };
         }
     }
-    sum / ((2 * r + 1) * (2 * r + 1)) as f32
+    if any_lit && any_dark {
+        doubt |= SHADOW_EDGE;
+    }
+    (sum / ((2 * r + 1) * (2 * r + 1)) as f32, doubt)
+}
+
+/// `SHADOW_GRAZING_NDL`: n.l under which the hybrid shadows do not trust the map.
+pub const SHADOW_GRAZING_NDL: f32 = 0.1;
+
+/// `shadow_map_doubt`: 0 and the map's visibility (0 or 1) where the map is sure of
+/// `w` (its normal's n.l = `ndl` > 0), else the `SHADOW_*` bits of why not.
+pub fn shadow_map_doubt(frame: &FrameUniforms, map: &ShadowMap<'_>, w: Vec3, ndl: f32) -> (u32, f32) {
+    let (pcf, mut doubt) = shadow_pcf(frame, map, w);
+    if ndl < SHADOW_GRAZING_NDL {
+        doubt |= SHADOW_GRAZING;
+    }
+    (doubt, if pcf > 0.5 { 1.0 } else { 0.0 })
 }
 
 /// `DIELECTRIC_F0`: a dielectric's specular reflectance at normal incidence.

@@ -5,7 +5,7 @@
 use super::script::Action;
 use crate::reflection_maps::{ReflectionStats, FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
-use crate::settings::{Applies, Field, Hud, Mode, Settings, Value, FIELDS};
+use crate::settings::{Applies, Field, Hud, Mode, Settings, Shadows, Value, FIELDS};
 use crate::vk::swapchain::present_mode_name;
 use ash::vk;
 use egui::{Color32, RichText};
@@ -176,6 +176,13 @@ fn mode_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: &mut
             {
                 s.mode = m;
             }
+        }
+    });
+    ui.horizontal(|ui| {
+        ui.label("shadows");
+        for sh in Shadows::ALL {
+            ui.selectable_value(&mut s.shadows, sh, sh.name())
+                .on_hover_text(sh.about());
         }
     });
     let mut fail = info.fail_mask;

@@ -1,5 +1,6 @@
-//! `light.direct`: deferred shading of the G-buffer with the sun, PCF-filtered shadow
-//! map and sky ambient, into an HDR image. CPU reference: `cpu_ref::shading`.
+//! `light.direct`: deferred shading of the G-buffer with the sun, shadowed by the
+//! PCF-filtered shadow map or by the visibility `shadow.trace` left, and the sky
+//! ambient, into an HDR image. CPU reference: `cpu_ref::shading`.
 
 use super::GBuffer;
 use crate::error::Result;
@@ -15,6 +16,24 @@ pub const NAME: &str = "light.direct";
 /// GPUs the extra bandwidth is small next to the reflection passes.
 pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
+/// Where the sun's visibility comes from.
+#[derive(Clone, Copy)]
+pub struct Sun<'a> {
+    /// The shadow map (`SHADER_READ_ONLY_OPTIMAL`).
+    pub map: &'a Image,
+    /// Per-pixel visibility (`GENERAL`, `shadow_trace::VISIBILITY_FORMAT`): read when
+    /// `traced`, else written with the map's.
+    pub visibility: &'a Image,
+    /// Read `visibility` (the shadows are `rays` or `hybrid`) instead of the map.
+    pub traced: bool,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LightPush {
+    traced: u32,
+}
+
 pub struct LightDirectPass {
     ctx: Arc<Context>,
     pipeline: Pipeline,
@@ -27,7 +46,7 @@ impl LightDirectPass {
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         Ok(Self {
             ctx: ctx.clone(),
-            pipeline: Pipeline::compute::<()>(ctx, NAME, shaders::LIGHT_DIRECT_COMP)?,
+            pipeline: Pipeline::compute::<LightPush>(ctx, NAME, shaders::LIGHT_DIRECT_COMP)?,
             sampler: Sampler::nearest_clamp(ctx, "light.sampler")?,
             out: Image::storage(ctx, "light.lit", extent, FORMAT)?,
         })
@@ -38,17 +57,9 @@ impl LightDirectPass {
         Ok(())
     }
 
-    /// Records the shading dispatch. G-buffer and shadow map in
-    /// `SHADER_READ_ONLY_OPTIMAL`. `lit` ends visible to its readers, `ssr.trace` and
-    /// `compose` (compute).
-    pub fn record(
-        &self,
-        cmd: vk::CommandBuffer,
-        frame: &Buffer,
-        gbuffer: &GBuffer,
-        shadow_map: &Image,
-        materials: &Buffer,
-    ) {
+    /// Records the shading dispatch. G-buffer in `SHADER_READ_ONLY_OPTIMAL`. `lit` ends
+    /// visible to its readers, `ssr.trace` and `compose` (compute).
+    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, sun: Sun<'_>, materials: &Buffer) {
         let d = &self.ctx.device;
         let s = &self.sampler;
         // WAR: the previous frame's reads of `lit` finish before it is overwritten.
@@ -62,11 +73,14 @@ impl LightDirectPass {
                 Resource::Sampled(&gbuffer.normal, s),
                 Resource::Sampled(&gbuffer.albedo, s),
                 Resource::Sampled(&gbuffer.material, s),
-                Resource::Sampled(shadow_map, s),
+                Resource::Sampled(sun.map, s),
                 Resource::StorageImage(&self.out),
                 Resource::Buffer(materials),
+                Resource::StorageImage(sun.visibility),
             ],
-            &(),
+            &LightPush {
+                traced: sun.traced as u32,
+            },
             Groups::Cover([e.width, e.height, 1]),
         );
         // RAW: ssr.trace and compose read the lit colour.

@@ -24,6 +24,7 @@ pub mod reflect_merge;
 pub mod rt_reflect;
 pub mod rt_trace;
 pub mod shadow_map;
+pub mod shadow_trace;
 pub mod sim_cloth;
 pub mod sim_transform;
 pub mod ssr_compact;

@@ -6,6 +6,7 @@
 use super::GBuffer;
 use super::{CompactOutputs, Surfaces, TraceScene};
 use crate::error::Result;
+use crate::settings::Shadows;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
@@ -22,7 +23,7 @@ struct ReflectPush {
     max_bounces: u32,
     static_tris: u32,
     dynamic_tris: u32,
-    shadow_rays: u32,
+    shadows: u32,
 }
 
 pub struct RtReflectPass {
@@ -61,13 +62,14 @@ impl RtReflectPass {
 
     /// Records the indirect dispatch over the list (visible to compute reads and
     /// indirect dispatch). `color` ends visible to its reader, `reflect.merge`.
-    pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ReflectInputs<'_>, max_bounces: u32, shadow_rays: bool) {
+    /// `shadows`: how the hits are shadowed (the `shadows` setting).
+    pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ReflectInputs<'_>, max_bounces: u32, shadows: Shadows) {
         let ([sn, sv, si, dn, dv, di, st, dt], static_tris, dynamic_tris) = inputs.scene.bindings();
         let push = ReflectPush {
             max_bounces,
             static_tris,
             dynamic_tris,
-            shadow_rays: shadow_rays as u32,
+            shadows: shadows.gpu(),
         };
         let s = &self.sampler;
         let d = &self.ctx.device;

@@ -48,6 +48,36 @@ impl ShadowMapPass {
                 | vk::ImageUsageFlags::TRANSFER_SRC
                 | vk::ImageUsageFlags::TRANSFER_DST,
         )?;
+        // Cleared to the far plane (nothing casts) and left readable: under `rays`
+        // shadows no frame renders it, but the kernels that could read it bind it.
+        ctx.one_shot(|cmd| {
+            use vk::ImageLayout as L;
+            let to_clear = (access::NONE, access::TRANSFER_WRITE);
+            barrier::transition(
+                &ctx.device,
+                cmd,
+                &[&map],
+                to_clear,
+                (L::UNDEFINED, L::TRANSFER_DST_OPTIMAL),
+            );
+            let range = vk::ImageSubresourceRange::default()
+                .aspect_mask(vk::ImageAspectFlags::DEPTH)
+                .level_count(1)
+                .layer_count(1);
+            let far = vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 };
+            unsafe {
+                ctx.device
+                    .cmd_clear_depth_stencil_image(cmd, map.raw, L::TRANSFER_DST_OPTIMAL, &far, &[range])
+            };
+            let to_read = (access::TRANSFER_WRITE, access::ANY_SHADER_READ);
+            barrier::transition(
+                &ctx.device,
+                cmd,
+                &[&map],
+                to_read,
+                (L::TRANSFER_DST_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
+            );
+        })?;
         Ok(Self {
             ctx: ctx.clone(),
             pipeline,

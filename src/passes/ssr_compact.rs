@@ -16,6 +16,8 @@ use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub const NAME: &str = "ssr.compact";
+/// The debug names of the fail mask's compaction pipelines.
+pub const PIPELINES: [&str; 3] = ["ssr.compact.count", "ssr.compact.scan", "ssr.compact.scatter"];
 /// Slots per tile of the count and scatter kernels.
 pub const TILE: u32 = COMPACT_WG * COMPACT_ITEMS;
 
@@ -70,12 +72,14 @@ pub struct CompactPass {
 }
 
 impl CompactPass {
-    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+    /// `names`: the count, scan and scatter pipelines' debug names (`PIPELINES`, or the
+    /// shadows' own).
+    pub fn new(ctx: &Arc<Context>, names: [&'static str; 3], extent: vk::Extent2D) -> Result<Self> {
         Ok(Self {
             ctx: ctx.clone(),
-            count: Pipeline::compute::<CompactPush>(ctx, "ssr.compact.count", shaders::COMPACT_COUNT_COMP)?,
-            scan: Pipeline::compute::<CompactPush>(ctx, "ssr.compact.scan", shaders::COMPACT_SCAN_COMP)?,
-            scatter: Pipeline::compute::<CompactPush>(ctx, "ssr.compact.scatter", shaders::COMPACT_SCATTER_COMP)?,
+            count: Pipeline::compute::<CompactPush>(ctx, names[0], shaders::COMPACT_COUNT_COMP)?,
+            scan: Pipeline::compute::<CompactPush>(ctx, names[1], shaders::COMPACT_SCAN_COMP)?,
+            scatter: Pipeline::compute::<CompactPush>(ctx, names[2], shaders::COMPACT_SCATTER_COMP)?,
             out: CompactOutputs::new(ctx, extent)?,
         })
     }

@@ -8,11 +8,14 @@ use super::{FrameSlot, Renderer};
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::{self, ComposeInputs, ComposeMode};
 use crate::passes::lbvh::dynamic::DynamicBvh;
+use crate::passes::light_direct::Sun;
 use crate::passes::reflect_merge::{self, BlurParams, MergeInputs, MergeParams};
 use crate::passes::rt_reflect::{self, ReflectInputs};
 use crate::passes::ssr_hiz;
 use crate::passes::ssr_trace::{self, MarchInputs};
-use crate::passes::{gbuffer, light_direct, shadow_map, sim_cloth, sim_transform, ssr_compact, SceneGeometry};
+use crate::passes::{
+    gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_transform, ssr_compact, SceneGeometry,
+};
 use crate::passes::{TraceScene, Traceable};
 use crate::settings::Mode;
 use crate::settings::SsrParams;
@@ -38,6 +41,9 @@ pub enum Row {
     DynamicBvh,
     ShadowMap,
     GBuffer,
+    ShadowClassify,
+    ShadowCompact,
+    ShadowTrace,
     LightDirect,
     SsrHiz,
     SsrClassify,
@@ -50,7 +56,7 @@ pub enum Row {
 
 impl Row {
     /// Every row, in frame order.
-    pub const ALL: [Row; 15] = [
+    pub const ALL: [Row; 18] = [
         Row::Uniforms,
         Row::SimRigid,
         Row::SimTransform,
@@ -58,6 +64,9 @@ impl Row {
         Row::DynamicBvh,
         Row::ShadowMap,
         Row::GBuffer,
+        Row::ShadowClassify,
+        Row::ShadowCompact,
+        Row::ShadowTrace,
         Row::LightDirect,
         Row::SsrHiz,
         Row::SsrClassify,
@@ -79,6 +88,9 @@ impl Row {
             Row::DynamicBvh => &DynamicBvh::SCOPES,
             Row::ShadowMap => &[shadow_map::NAME],
             Row::GBuffer => &[gbuffer::NAME],
+            Row::ShadowClassify => &[shadow_trace::CLASSIFY_NAME],
+            Row::ShadowCompact => &[shadow_trace::COMPACT_NAME],
+            Row::ShadowTrace => &[shadow_trace::NAME],
             Row::LightDirect => &[light_direct::NAME],
             Row::SsrHiz => &[ssr_hiz::NAME],
             Row::SsrClassify => &[ssr_trace::CLASSIFY_NAME],
@@ -209,6 +221,8 @@ impl Renderer {
             hiz,
             ssr,
             compact,
+            shadow_trace,
+            shadow_compact,
             rt,
             merge,
             compose,
@@ -245,12 +259,35 @@ impl Renderer {
         let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.mesh.geometry())
             .chain(dynamic.map(|dy| dy.mesh.geometry()))
             .collect();
-        f.row(Row::ShadowMap, || shadow.record(cmd, ubo, &geometries));
+        let shadows = st.shadows;
+        if shadows.uses_map() {
+            f.row(Row::ShadowMap, || shadow.record(cmd, ubo, &geometries));
+        }
         let surfaces = scene.surfaces(dynamic);
         f.row(Row::GBuffer, || gbuffer.record(cmd, ubo, &surfaces, &geometries));
-        f.row(Row::LightDirect, || {
-            light.record(cmd, ubo, g, &shadow.out, &scene.materials)
-        });
+        let trace_scene = TraceScene {
+            static_bvh: Some(Traceable {
+                bvh: static_bvh,
+                geometry: scene.mesh.triangles(),
+            }),
+            dynamic_bvh: dynamic.map(|dy| dy.traceable()),
+        };
+        if shadows.traces() {
+            f.row(Row::ShadowClassify, || {
+                shadow_trace.classify(cmd, ubo, g, &shadow.out, shadows)
+            });
+            f.row(Row::ShadowCompact, || {
+                shadow_compact.record(cmd, &shadow_trace.out.mask)
+            });
+            let list = &shadow_compact.out;
+            f.row(Row::ShadowTrace, || shadow_trace.trace(cmd, ubo, g, list, &trace_scene));
+        }
+        let sun = Sun {
+            map: &shadow.out,
+            visibility: &shadow_trace.out.visibility,
+            traced: shadows.traces(),
+        };
+        f.row(Row::LightDirect, || light.record(cmd, ubo, g, sun, &scene.materials));
         let params = SsrParams::from_settings(st);
         if mode.marches() && params.hiz {
             f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
@@ -279,17 +316,9 @@ impl Renderer {
                 surfaces,
                 shadow_map: &shadow.out,
                 list: &compact.out,
-                scene: TraceScene {
-                    static_bvh: Some(Traceable {
-                        bvh: static_bvh,
-                        geometry: scene.mesh.triangles(),
-                    }),
-                    dynamic_bvh: dynamic.map(|dy| dy.traceable()),
-                },
+                scene: trace_scene,
             };
-            f.row(Row::RtReflect, || {
-                rt.record(cmd, &inputs, st.max_bounces, st.shadow_rays)
-            });
+            f.row(Row::RtReflect, || rt.record(cmd, &inputs, st.max_bounces, shadows));
         }
         if mode.reflects() {
             // Seams exist only where both sources do.

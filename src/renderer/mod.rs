@@ -3,8 +3,9 @@
 //! maths; `gpu_scene.rs`: the scene's buffers and the moving geometry).
 //!
 //! Frame: `uniforms` → (a dynamic scene: `sim.rigid` on the CPU, `sim.transform`,
-//! `sim.cloth`, the dynamic BVH's `lbvh.*`) → `shadow.map` → `gbuffer` →
-//! `light.direct` → (by mode) `ssr.hiz` → `ssr.classify` → `ssr.trace` → `ssr.compact` →
+//! `sim.cloth`, the dynamic BVH's `lbvh.*`) → `shadow.map` (unless the shadows are
+//! `rays`) → `gbuffer` → (shadows `rays` or `hybrid`) `shadow.classify` →
+//! `shadow.compact` → `shadow.trace` → `light.direct` → (by mode) `ssr.hiz` → `ssr.classify` → `ssr.trace` → `ssr.compact` →
 //! `rt.reflect` → `reflect.merge` → `compose`. The static BVH is built once, when the
 //! renderer is created; the dynamic one every frame, over that frame's geometry.
 //!
@@ -31,15 +32,17 @@ use crate::passes::light_direct::{self, LightDirectPass};
 use crate::passes::reflect_merge::MergePass;
 use crate::passes::rt_reflect::RtReflectPass;
 use crate::passes::shadow_map::ShadowMapPass;
+use crate::passes::shadow_trace::{self, ShadowTracePass};
 use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_transform::SimTransformPass;
-use crate::passes::ssr_compact::CompactPass;
+use crate::passes::ssr_compact::{self, CompactPass};
 use crate::passes::ssr_hiz::HiZPass;
 use crate::passes::ssr_trace::SsrPass;
 use crate::passes::Traceable;
 use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
 use crate::scene::{Camera, Scene};
 use crate::settings::{Applies, Mode, Settings};
+use crate::shadow_maps::ShadowMaps;
 use crate::vk::{Buffer, Context, GpuTimer, Image, TimerReadout, Wall};
 use ash::vk;
 use glam::Vec3;
@@ -85,6 +88,9 @@ pub struct Renderer {
     pub hiz: HiZPass,
     pub ssr: SsrPass,
     pub compact: CompactPass,
+    pub shadow_trace: ShadowTracePass,
+    /// `shadow.compact`: the shadow mask's compaction into the shadow-ray list.
+    pub shadow_compact: CompactPass,
     pub rt: RtReflectPass,
     pub merge: MergePass,
     pub compose: ComposePass,
@@ -153,7 +159,9 @@ impl Renderer {
             light: LightDirectPass::new(ctx, extent)?,
             hiz: HiZPass::new(ctx, extent)?,
             ssr: SsrPass::new(ctx, extent)?,
-            compact: CompactPass::new(ctx, extent)?,
+            compact: CompactPass::new(ctx, ssr_compact::PIPELINES, extent)?,
+            shadow_trace: ShadowTracePass::new(ctx, extent)?,
+            shadow_compact: CompactPass::new(ctx, shadow_trace::COMPACT_PIPELINES, extent)?,
             rt: RtReflectPass::new(ctx, extent)?,
             merge: MergePass::new(ctx, extent)?,
             compose: ComposePass::new(ctx, extent)?,
@@ -226,6 +234,8 @@ impl Renderer {
             self.hiz.resize(e)?;
             self.ssr.resize(e)?;
             self.compact.resize(e)?;
+            self.shadow_trace.resize(e)?;
+            self.shadow_compact.resize(e)?;
             self.rt.resize(e)?;
             self.merge.resize(e)?;
             self.compose.resize(e)?;
@@ -401,6 +411,31 @@ impl Renderer {
             reflective,
             mask,
             traced: self.settings.mode.traces(),
+        })
+    }
+
+    /// The last frame's shadow state (a readback: for stats, tests and images).
+    pub fn shadow_maps(&self) -> Result<ShadowMaps> {
+        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.out.normal)?);
+        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.out.material)?);
+        let l = self.uniforms.light_dir.truncate();
+        let lit = normal
+            .iter()
+            .zip(&material)
+            .map(|(n, &m)| {
+                m != crate::shader_defines::MATERIAL_NONE && Vec3::new(n[0], n[1], n[2]).normalize().dot(l) > 0.0
+            })
+            .collect();
+        let read = |image: &Image| image.read(vk::ImageLayout::GENERAL);
+        let mask = if self.settings.shadows.traces() {
+            bytemuck::pod_collect_to_vec(&read(&self.shadow_trace.out.mask)?)
+        } else {
+            vec![0; material.len()]
+        };
+        Ok(ShadowMaps {
+            lit,
+            mask,
+            visibility: bytemuck::pod_collect_to_vec(&read(&self.shadow_trace.out.visibility)?),
         })
     }
 

@@ -57,7 +57,7 @@ impl View {
             shadow_bias: settings.shadow_bias,
             exposure: settings.exposure,
             ambient: settings.ambient,
-            _pad0: 0.0,
+            shadow_band: settings.shadow_band,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! HUD shows it, how a change applies, and its value as one type for generic code
 //! (validation, the HUD, the README's list).
 
-use super::{Mode, Settings};
+use super::{Mode, Settings, Shadows};
 
 /// One setting: everything the struct, validation, the renderer, the HUD, the CLI and
 /// the README need to know of it.
@@ -86,6 +86,7 @@ pub enum Value {
     F32(f32),
     Bool(bool),
     Mode(Mode),
+    Shadows(Shadows),
 }
 
 /// The field's type back from a `Value` (`Field::set`); a value of another type is a
@@ -117,6 +118,7 @@ value_of!(u32, U32);
 value_of!(f32, F32);
 value_of!(bool, Bool);
 value_of!(Mode, Mode);
+value_of!(Shadows, Shadows);
 
 impl std::fmt::Display for Value {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -125,6 +127,7 @@ impl std::fmt::Display for Value {
             Value::F32(v) => write!(f, "{v}"),
             Value::Bool(v) => write!(f, "{v}"),
             Value::Mode(m) => write!(f, "{}", m.name()),
+            Value::Shadows(m) => write!(f, "{}", m.name()),
         }
     }
 }

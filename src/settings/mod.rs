@@ -7,7 +7,7 @@
 pub mod field;
 
 use crate::error::{Error, Result};
-use crate::shader_defines::{BLUR_MAX_EXTENT, MAX_PCF_RADIUS};
+use crate::shader_defines::{BLUR_MAX_EXTENT, MAX_PCF_RADIUS, SHADOWS_HYBRID, SHADOWS_MAP, SHADOWS_RAYS};
 pub use field::{Applies, Field, Hud, Range, Value};
 use serde::{Deserialize, Serialize};
 
@@ -82,6 +82,69 @@ impl std::str::FromStr for Mode {
                 "unknown mode '{s}' (modes: raster, ssr, hybrid, rt, provenance)"
             ))
         })
+    }
+}
+
+/// Where the sun's shadows come from, on the visible surface and at every ray-traced
+/// reflection hit alike (`about` says what each is).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Shadows {
+    Map,
+    Rays,
+    Hybrid,
+}
+
+impl Shadows {
+    pub const ALL: [Shadows; 3] = [Shadows::Map, Shadows::Rays, Shadows::Hybrid];
+
+    /// Whether the shadow map is rendered (every mode but `rays` reads it).
+    pub fn uses_map(self) -> bool {
+        self != Shadows::Rays
+    }
+
+    /// Whether shadow rays are traced (`shadow.classify`, `shadow.compact` and
+    /// `shadow.trace` run).
+    pub fn traces(self) -> bool {
+        self != Shadows::Map
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Shadows::Map => "map",
+            Shadows::Rays => "rays",
+            Shadows::Hybrid => "hybrid",
+        }
+    }
+
+    /// What the shadows are, in a line (the CLI's help, the HUD).
+    pub fn about(self) -> &'static str {
+        match self {
+            Shadows::Map => "The shadow map, PCF-filtered: cheap, limited by its resolution and bias",
+            Shadows::Rays => "A shadow ray toward the sun from every lit pixel (the reference)",
+            Shadows::Hybrid => {
+                "The shadow map where every PCF texel agrees and none is near the compare; a shadow ray elsewhere"
+            }
+        }
+    }
+
+    /// The value the kernels read (`SHADOWS_*` in shader_defines).
+    pub fn gpu(self) -> u32 {
+        match self {
+            Shadows::Map => SHADOWS_MAP,
+            Shadows::Rays => SHADOWS_RAYS,
+            Shadows::Hybrid => SHADOWS_HYBRID,
+        }
+    }
+}
+
+impl std::str::FromStr for Shadows {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Shadows::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| Error::Settings(format!("unknown shadows '{s}' (shadows: map, rays, hybrid)")))
     }
 }
 
@@ -212,9 +275,16 @@ settings_table! {
     blur_radius: u32 = 3, u32s(0, 16), slider(0.0, 16.0), NextFrame;
     /// Half-width in pixels of the band around SSR/RT seams that the blur touches.
     blur_band: u32 = 3, u32s(0, BLUR_MAX_EXTENT), slider(0.0, BLUR_MAX_EXTENT as f64), NextFrame;
-    /// Shadows at ray-traced hits from shadow rays (exact, one more traversal per hit)
-    /// instead of the shadow map (cheap, limited by its resolution).
-    shadow_rays: bool = false, Range::Any, Hud::Checkbox, NextFrame;
+    /// Where shadows come from, on the visible surface and at every ray-traced
+    /// reflection hit: the shadow map (cheap, limited by its resolution and bias), a
+    /// shadow ray per lit pixel (exact, one any-hit traversal each), or the hybrid (the
+    /// map where it is sure, rays where it is not).
+    shadows: Shadows = Shadows::Map, Range::Any, Hud::Own, NextFrame;
+    /// Hybrid shadows: a shadow-map texel within this light-depth distance of the
+    /// biased compare leaves the map unsure and the pixel gets a shadow ray (acne and
+    /// detached contact shadows live there): wider traces more pixels, closer to
+    /// `rays`.
+    shadow_band: f32 = 0.0002, ANY_F32, log_slider(0.00001, 0.01), NextFrame;
     /// Simulated seconds per rendered frame of a dynamic scene (a fixed step, so frame
     /// k is the same image in every run): smaller is smoother motion and more frames
     /// for the same animation.
@@ -225,6 +295,15 @@ settings_table! {
     cloth_rebuild: bool = false, Range::Any, Hud::Checkbox, NewRenderer;
     /// When refitting, still rebuild every this many frames (1: always rebuild).
     refit_rebuild_every: u32 = 60, u32s(1, u32::MAX), log_slider(1.0, 600.0), NewRenderer;
+}
+
+/// Why a setting of an older Speculum is refused, naming what replaced it.
+fn replaced(name: &str) -> Option<String> {
+    (name == "shadow_rays").then(|| {
+        "setting 'shadow_rays' was replaced by 'shadows': \"map\" (shadow_rays false), \"rays\" (shadow rays \
+         on the visible surface and at every reflection hit) or \"hybrid\" (rays where the shadow map is unsure)"
+            .into()
+    })
 }
 
 impl Settings {
@@ -246,6 +325,9 @@ impl Settings {
                 "settings must be a JSON object {{\"field\": value, ...}}, not {kind}"
             )));
         }
+        if let Some(why) = value.as_object().and_then(|o| o.keys().find_map(|k| replaced(k))) {
+            return Err(Error::Settings(why));
+        }
         // Parsed from the text again (not the value) so errors keep their line and column.
         serde_json::from_str(text).map_err(|e| Error::Settings(e.to_string()))
     }
@@ -263,6 +345,9 @@ impl Settings {
         let serde_json::Value::Object(mut map) = serde_json::to_value(self).expect("Settings serialize") else {
             unreachable!("Settings serialize to an object")
         };
+        if let Some(why) = replaced(name) {
+            return Err(Error::Settings(why));
+        }
         if !map.contains_key(name) {
             return Err(Error::Settings(format!(
                 "unknown setting '{name}' (settings: {})",
@@ -312,6 +397,7 @@ pub fn markdown_table() -> String {
         let trades = f.trades_line();
         let range = match (f.range, (f.get)(&defaults)) {
             (Range::Any, Value::Mode(_)) => Mode::ALL.map(Mode::name).join(", "),
+            (Range::Any, Value::Shadows(_)) => Shadows::ALL.map(Shadows::name).join(", "),
             (Range::Any, Value::Bool(_)) => "true, false".into(),
             (r, _) => r.describe(),
         };
@@ -401,7 +487,15 @@ mod tests {
         assert_eq!(d.with_field("mode", "rt").unwrap().mode, Mode::Rt);
         assert_eq!(d.with_field("ssr_stride", "2.5").unwrap().ssr_stride, 2.5);
         assert!(d.with_field("ssr_stride", "1e300").is_err(), "infinite as f32");
-        assert!(d.with_field("shadow_rays", "true").unwrap().shadow_rays);
+        assert_eq!(d.with_field("shadows", "rays").unwrap().shadows, Shadows::Rays);
+        for err in [
+            d.with_field("shadow_rays", "true").unwrap_err().to_string(),
+            Settings::from_json(r#"{"shadow_rays": false}"#)
+                .unwrap_err()
+                .to_string(),
+        ] {
+            assert!(err.contains("'shadow_rays' was replaced by 'shadows'"), "{err}");
+        }
         for (name, value, says) in [
             ("bounces", "2", "unknown setting 'bounces'"),
             ("max_bounces", "many", "max_bounces"),
@@ -412,7 +506,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 26);
+        assert_eq!(Settings::field_names().len(), 27);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).

@@ -95,6 +95,54 @@ pub fn random_gbuffer(rng: &mut impl rand::Rng, n: usize) -> RandomGBuffer {
     }
 }
 
+/// `settings`' frame over the built-in `room` (its camera and sun) and its extent.
+pub fn room_frame(settings: &speculum::Settings) -> (speculum::gpu_types::FrameUniforms, ash::vk::Extent2D) {
+    settings.validate().unwrap();
+    let scene = speculum::scene::builtin::room().unwrap();
+    let extent = ash::vk::Extent2D {
+        width: settings.width,
+        height: settings.height,
+    };
+    (speculum::renderer::frame_uniforms(&scene, settings), extent)
+}
+
+/// A G-buffer of `extent` holding `g` (and `albedo`, RGBA8 texels, when given), in
+/// `SHADER_READ_ONLY_OPTIMAL`.
+pub fn upload_gbuffer(
+    ctx: &Arc<Context>,
+    extent: ash::vk::Extent2D,
+    g: &RandomGBuffer,
+    albedo: Option<&[u8]>,
+) -> speculum::passes::GBuffer {
+    let gb = speculum::passes::GBuffer::new(ctx, extent).unwrap();
+    let ro = ash::vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
+    gb.normal.write(&g.normal_bytes, ro).unwrap();
+    gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
+    if let Some(a) = albedo {
+        gb.albedo.write(a, ro).unwrap();
+    }
+    gb
+}
+
+/// A `size`² D32 shadow map holding `depth`, in `SHADER_READ_ONLY_OPTIMAL`.
+pub fn shadow_map_image(ctx: &Arc<Context>, size: u32, depth: &[f32]) -> speculum::vk::Image {
+    let map = speculum::vk::Image::new(
+        ctx,
+        "test.shadow",
+        ash::vk::Extent2D {
+            width: size,
+            height: size,
+        },
+        ash::vk::Format::D32_SFLOAT,
+        ash::vk::ImageUsageFlags::SAMPLED | ash::vk::ImageUsageFlags::TRANSFER_DST,
+    )
+    .unwrap();
+    map.write(bytemuck::cast_slice(depth), ash::vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+        .unwrap();
+    map
+}
+
 /// Materials for the four ids of `random_gbuffer`: a dielectric, a metal and two
 /// blends (only `metallic` is read by the screen-space kernels), and their buffer.
 pub fn random_materials(ctx: &Arc<Context>) -> (Vec<speculum::gpu_types::GpuMaterial>, speculum::vk::Buffer) {

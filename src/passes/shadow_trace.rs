@@ -1,0 +1,161 @@
+//! `shadow.classify` and `shadow.trace`: the sun's visibility of every pixel, from the
+//! shadow map where it is sure and from shadow rays elsewhere (the `shadows` setting:
+//! `rays` traces every lit pixel, `hybrid` only the pixels where the map is unsure;
+//! `map` runs none of this). The same classify → compact → indirect-trace shape as the
+//! reflections; between the two, `shadow.compact` is the reflections' compaction
+//! (`ssr_compact::CompactPass`) run over this pass's mask.
+//! CPU reference: `cpu_ref::shadows` (tests/shadows.rs).
+
+use super::{CompactOutputs, GBuffer, TraceScene};
+use crate::error::Result;
+use crate::settings::Shadows;
+use crate::shaders;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+pub const CLASSIFY_NAME: &str = "shadow.classify";
+pub const COMPACT_NAME: &str = "shadow.compact";
+pub const NAME: &str = "shadow.trace";
+/// The debug names of the shadow mask's compaction pipelines.
+pub const COMPACT_PIPELINES: [&str; 3] = ["shadow.compact.count", "shadow.compact.scan", "shadow.compact.scatter"];
+/// The shadow mask: `SHADOW_*` bits per pixel, nonzero means "gets a shadow ray".
+pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
+/// The sun's visibility per pixel, 0..1.
+pub const VISIBILITY_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ClassifyPush {
+    shadows: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TracePush {
+    static_tris: u32,
+    dynamic_tris: u32,
+}
+
+/// What the three steps leave; every image always `GENERAL`.
+pub struct ShadowOutputs {
+    /// Why each pixel got a shadow ray (`SHADOW_*` bits; 0: the map answered, or the
+    /// pixel is sky or faces away from the sun).
+    pub mask: Image,
+    /// The sun's visibility of each pixel: what `light.direct` multiplies the sun by
+    /// when the shadows are not `map`.
+    pub visibility: Image,
+}
+
+pub struct ShadowTracePass {
+    ctx: Arc<Context>,
+    classify: Pipeline,
+    trace: Pipeline,
+    sampler: Sampler,
+    pub out: ShadowOutputs,
+}
+
+impl ShadowOutputs {
+    fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        Ok(Self {
+            mask: Image::storage(ctx, "shadow.mask", extent, MASK_FORMAT)?,
+            visibility: Image::storage(ctx, "shadow.visibility", extent, VISIBILITY_FORMAT)?,
+        })
+    }
+}
+
+impl ShadowTracePass {
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        Ok(Self {
+            ctx: ctx.clone(),
+            classify: Pipeline::compute::<ClassifyPush>(ctx, CLASSIFY_NAME, shaders::SHADOW_CLASSIFY_COMP)?,
+            trace: Pipeline::compute::<TracePush>(ctx, NAME, shaders::SHADOW_TRACE_COMP)?,
+            sampler: Sampler::nearest_clamp(ctx, "shadow.sampler")?,
+            out: ShadowOutputs::new(ctx, extent)?,
+        })
+    }
+
+    pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
+        self.out = ShadowOutputs::new(&self.ctx, extent)?;
+        Ok(())
+    }
+
+    /// Records `shadow.classify` (`shadows` is `rays` or `hybrid`): the mask and the
+    /// map's visibility. G-buffer and shadow map in `SHADER_READ_ONLY_OPTIMAL` (the map
+    /// is not read under `rays`). Mask and visibility end visible to compute reads.
+    pub fn classify(
+        &self,
+        cmd: vk::CommandBuffer,
+        frame: &Buffer,
+        gbuffer: &GBuffer,
+        shadow_map: &Image,
+        shadows: Shadows,
+    ) {
+        assert!(shadows.traces(), "shadow.classify under map shadows");
+        let d = &self.ctx.device;
+        let s = &self.sampler;
+        // WAR: the previous frame's reads of the mask and visibility are done.
+        barrier::global(d, cmd, access::ALL_READ_WRITE, access::COMPUTE_WRITE);
+        let e = self.out.mask.extent;
+        self.classify.dispatch(
+            cmd,
+            &[
+                Resource::Buffer(frame),
+                Resource::Sampled(&gbuffer.depth, s),
+                Resource::Sampled(&gbuffer.normal, s),
+                Resource::Sampled(&gbuffer.material, s),
+                Resource::Sampled(shadow_map, s),
+                Resource::StorageImage(&self.out.mask),
+                Resource::StorageImage(&self.out.visibility),
+            ],
+            &ClassifyPush { shadows: shadows.gpu() },
+            Groups::Cover([e.width, e.height, 1]),
+        );
+        // RAW: the compaction reads the mask.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
+    }
+
+    /// Records `shadow.trace` over `list`, the mask's compaction (visible to compute
+    /// reads and indirect dispatch): the listed pixels' visibility, from any-hit rays.
+    /// The visibility ends visible to compute reads (`light.direct`).
+    pub fn trace(
+        &self,
+        cmd: vk::CommandBuffer,
+        frame: &Buffer,
+        gbuffer: &GBuffer,
+        list: &CompactOutputs,
+        scene: &TraceScene<'_>,
+    ) {
+        let ([sn, sv, si, dn, dv, di, st, dt], static_tris, dynamic_tris) = scene.bindings();
+        let d = &self.ctx.device;
+        let s = &self.sampler;
+        self.trace.dispatch(
+            cmd,
+            &[
+                Resource::Buffer(frame),
+                Resource::Sampled(&gbuffer.depth, s),
+                Resource::Sampled(&gbuffer.normal, s),
+                Resource::Buffer(&list.pixels),
+                Resource::Buffer(&list.indirect),
+                Resource::StorageImage(&self.out.visibility),
+                sn,
+                sv,
+                si,
+                dn,
+                dv,
+                di,
+                st,
+                dt,
+            ],
+            &TracePush {
+                static_tris,
+                dynamic_tris,
+            },
+            Groups::Indirect(&list.indirect),
+        );
+        // RAW: light.direct reads the visibility.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
+    }
+}

@@ -1,0 +1,86 @@
+//! Per-pixel shadow state of a frame read back from the GPU (the G-buffer, the shadow
+//! mask and the visibility): which pixels the sun lights, which got a shadow ray and
+//! why, and the share traced. For reports, tests and the shadow provenance image.
+
+use crate::shader_defines::{SHADOW_ALL, SHADOW_EDGE, SHADOW_GRAZING, SHADOW_NEAR, SHADOW_OUTSIDE};
+use std::collections::BTreeMap;
+
+/// The `SHADOW_*` reasons by name, in bit order.
+pub const REASONS: [(u32, &str); 5] = [
+    (SHADOW_OUTSIDE, "outside"),
+    (SHADOW_EDGE, "edge"),
+    (SHADOW_NEAR, "near"),
+    (SHADOW_GRAZING, "grazing"),
+    (SHADOW_ALL, "all"),
+];
+
+/// Per-pixel shadow state of a frame, row-major.
+#[derive(Clone, Debug)]
+pub struct ShadowMaps {
+    /// The pixel shows a surface that faces the sun (n.l > 0): a lit pixel, whose
+    /// visibility a shadow can change.
+    pub lit: Vec<bool>,
+    /// `SHADOW_*` bits written by `shadow.classify` (0: the map answered, or not lit);
+    /// all 0 under `map` shadows.
+    pub mask: Vec<u32>,
+    /// The sun's visibility `light.direct` shaded with (under `map` shadows, the map's
+    /// PCF, which it writes back).
+    pub visibility: Vec<f32>,
+}
+
+/// What `ShadowMaps` counts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShadowStats {
+    pub lit_pixels: u64,
+    /// Lit pixels that got a shadow ray.
+    pub traced_pixels: u64,
+    /// Traced pixels by reason, every reason present (a pixel counts once per bit).
+    pub reasons: BTreeMap<&'static str, u64>,
+}
+
+impl ShadowStats {
+    /// traced / lit pixels: the share of the sun's visibility that rays answered.
+    pub fn ray_fraction(&self) -> f64 {
+        self.traced_pixels as f64 / self.lit_pixels.max(1) as f64
+    }
+}
+
+impl ShadowMaps {
+    pub fn stats(&self) -> ShadowStats {
+        let mut s = ShadowStats {
+            reasons: REASONS.iter().map(|&(_, name)| (name, 0)).collect(),
+            ..Default::default()
+        };
+        for (&lit, &m) in self.lit.iter().zip(&self.mask) {
+            s.lit_pixels += lit as u64;
+            if lit && m != 0 {
+                s.traced_pixels += 1;
+                for &(bit, name) in &REASONS {
+                    if m & bit != 0 {
+                        *s.reasons.get_mut(name).expect("every reason present") += 1;
+                    }
+                }
+            }
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stats_count_lit_and_traced_pixels_by_reason() {
+        let maps = ShadowMaps {
+            lit: vec![true, true, false, true],
+            mask: vec![0, SHADOW_EDGE | SHADOW_NEAR, 0, SHADOW_OUTSIDE],
+            visibility: vec![],
+        };
+        let s = maps.stats();
+        assert_eq!((s.lit_pixels, s.traced_pixels), (3, 2));
+        assert_eq!((s.reasons["edge"], s.reasons["near"], s.reasons["outside"]), (1, 1, 1));
+        assert_eq!(s.reasons["grazing"], 0);
+        assert!((s.ray_fraction() - 2.0 / 3.0).abs() < 1e-12);
+    }
+}

@@ -122,6 +122,8 @@ pub struct Rendered {
     pub reference_rgba: Option<Vec<u8>>,
     /// The last frame's fail mask coloured by reason (`ReflectionMaps::fail_mask_rgba`).
     pub fail_mask_rgba: Vec<u8>,
+    /// The last frame's shadows coloured by source (`ShadowMaps::sources_rgba`).
+    pub shadow_sources_rgba: Vec<u8>,
 }
 
 /// Frames to render and measure.
@@ -318,6 +320,7 @@ pub fn render_frames(
         rgba,
         reference_rgba,
         fail_mask_rgba: maps.fail_mask_rgba(),
+        shadow_sources_rgba: shadow_maps.sources_rgba(),
     })
 }
 

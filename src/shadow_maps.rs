@@ -45,7 +45,39 @@ impl ShadowStats {
     }
 }
 
+/// `--shadow-sources` colours: a lit pixel the shadow map answered is grey, light where
+/// the sun reaches it and dark where not (PCF fractions in between); one a shadow ray
+/// answered is pink where the sun reaches it, dark magenta where not; sky and surfaces
+/// facing away from the sun are black.
+pub const SOURCE_COLOURS: [(&str, [u8; 3]); 5] = [
+    ("map, lit", [200, 200, 200]),
+    ("map, shadowed", [60, 60, 60]),
+    ("ray, lit", [240, 110, 180]),
+    ("ray, shadowed", [110, 20, 70]),
+    ("not lit (sky, facing away)", [0, 0, 0]),
+];
+
 impl ShadowMaps {
+    /// Each pixel coloured by where its shadow came from (`SOURCE_COLOURS`), RGBA8.
+    pub fn sources_rgba(&self) -> Vec<u8> {
+        let [map_lit, map_dark, ray_lit, ray_dark, none] = SOURCE_COLOURS.map(|c| c.1);
+        let mix = |a: [u8; 3], b: [u8; 3], t: f32| {
+            let t = t.clamp(0.0, 1.0);
+            [0, 1, 2].map(|c| (a[c] as f32 + (b[c] as f32 - a[c] as f32) * t).round() as u8)
+        };
+        (0..self.lit.len())
+            .flat_map(|i| {
+                let v = self.visibility[i];
+                let rgb = match (self.lit[i], self.mask[i] != 0) {
+                    (false, _) => none,
+                    (true, false) => mix(map_dark, map_lit, v),
+                    (true, true) => mix(ray_dark, ray_lit, v),
+                };
+                [rgb[0], rgb[1], rgb[2], 255]
+            })
+            .collect()
+    }
+
     pub fn stats(&self) -> ShadowStats {
         let mut s = ShadowStats {
             reasons: REASONS.iter().map(|&(_, name)| (name, 0)).collect(),
@@ -82,5 +114,18 @@ mod tests {
         assert_eq!((s.reasons["edge"], s.reasons["near"], s.reasons["outside"]), (1, 1, 1));
         assert_eq!(s.reasons["grazing"], 0);
         assert!((s.ray_fraction() - 2.0 / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn sources_are_coloured_by_origin_and_visibility() {
+        let maps = ShadowMaps {
+            lit: vec![true, true, true, true, false],
+            mask: vec![0, 0, SHADOW_EDGE, SHADOW_ALL, 0],
+            visibility: vec![1.0, 0.0, 1.0, 0.0, 1.0],
+        };
+        let rgba = maps.sources_rgba();
+        let px: Vec<[u8; 3]> = rgba.chunks(4).map(|c| [c[0], c[1], c[2]]).collect();
+        let want: Vec<[u8; 3]> = SOURCE_COLOURS.iter().map(|c| c.1).collect();
+        assert_eq!(px, want);
     }
 }

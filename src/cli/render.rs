@@ -44,6 +44,10 @@ pub struct RenderArgs {
     /// Also write the SSR fail mask as a PNG, coloured by reason (see README).
     #[arg(long)]
     pub fail_mask: Option<PathBuf>,
+    /// Also write where each pixel's shadow came from as a PNG: grey from the shadow
+    /// map, pink from a shadow ray, each lighter where the sun reaches (see README).
+    #[arg(long)]
+    pub shadow_sources: Option<PathBuf>,
     /// Also write every measured frame to this folder (created if needed) as
     /// frame_0000.png, ..., and frames.jsonl (one JSON object per frame: its timings,
     /// dynamic triangles, traced share, and with --reference its SSIM/RMSE against rt).
@@ -124,6 +128,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             ("--out", Some(&args.out), Kind::Png),
             ("--reference (its <out>_rt.png)", reference_out.as_deref(), Kind::Png),
             ("--fail-mask", args.fail_mask.as_deref(), Kind::Png),
+            ("--shadow-sources", args.shadow_sources.as_deref(), Kind::Png),
             ("--timings", args.timings.as_deref(), Kind::Json),
             ("--contact-sheet", args.contact_sheet.as_deref(), Kind::Png),
         ],
@@ -171,6 +176,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     if let Some(path) = &args.fail_mask {
         outputs.add(path, speculum::output::png_bytes(&rendered.fail_mask_rgba, w, h)?);
+    }
+    if let Some(path) = &args.shadow_sources {
+        outputs.add(path, speculum::output::png_bytes(&rendered.shadow_sources_rgba, w, h)?);
     }
     if let Some(path) = &args.timings {
         outputs.add(path, speculum::report::to_json(&r).into_bytes());
@@ -241,6 +249,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         Some(&args.out),
         reference_out.as_ref(),
         args.fail_mask.as_ref(),
+        args.shadow_sources.as_ref(),
         args.timings.as_ref(),
     ];
     for path in written.into_iter().flatten().filter(|p| p.as_os_str() != "-") {

@@ -138,8 +138,11 @@ pub fn shadow_map_image(ctx: &Arc<Context>, size: u32, depth: &[f32]) -> speculu
         ash::vk::ImageUsageFlags::SAMPLED | ash::vk::ImageUsageFlags::TRANSFER_DST,
     )
     .unwrap();
-    map.write(bytemuck::cast_slice(depth), ash::vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
-        .unwrap();
+    map.write(
+        bytemuck::cast_slice(depth),
+        ash::vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    )
+    .unwrap();
     map
 }
 

@@ -7,7 +7,7 @@ use crate::renderer::{Renderer, FRAME};
 use crate::report::{FrameRecord, Header, PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings, Shadows};
-use crate::shadow_maps::ShadowMaps;
+use crate::shadow_maps::ShadowsVsRays;
 use crate::vk::{Context, TimingCheck, Timings};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -67,50 +67,6 @@ pub struct TimingsReport {
     pub rt_frame_ms: Option<Stat>,
     /// The self-check of every measured frame, the reference's included (`vk::timing`).
     pub timing: TimingCheck,
-}
-
-/// How far a frame's shadows are from the same frame's with `rays` shadows.
-#[derive(Clone, Debug, Serialize)]
-pub struct ShadowsVsRays {
-    /// SSIM and RMSE of the final images.
-    pub ssim: f64,
-    pub rmse: f64,
-    /// Lit pixels whose visibility is the rays' (within 1/256: a PCF-filtered map's
-    /// fractions count as different).
-    pub visibility_agreement: f64,
-    /// RMSE of the visibility over the lit pixels (0..1).
-    pub visibility_rmse: f64,
-    /// Lit pixels compared.
-    pub lit_pixels: u64,
-}
-
-impl ShadowsVsRays {
-    /// Compares a frame (`rgba`, `maps`) with the rays frame, the visibility over the
-    /// rays frame's lit pixels.
-    pub fn of(
-        rgba: &[u8],
-        maps: &ShadowMaps,
-        rays_rgba: &[u8],
-        rays: &ShadowMaps,
-        settings: &Settings,
-    ) -> Result<Self> {
-        let c = compare_rgba8(rgba, rays_rgba, settings.width, settings.height)?;
-        let lit: Vec<usize> = (0..rays.lit.len()).filter(|&i| rays.lit[i]).collect();
-        let (mut agree, mut sq) = (0u64, 0f64);
-        for &i in &lit {
-            let d = (maps.visibility[i] - rays.visibility[i]) as f64;
-            agree += (d.abs() < 1.0 / 256.0) as u64;
-            sq += d * d;
-        }
-        let n = lit.len().max(1) as f64;
-        Ok(Self {
-            ssim: c.ssim,
-            rmse: c.rmse,
-            visibility_agreement: agree as f64 / n,
-            visibility_rmse: (sq / n).sqrt(),
-            lit_pixels: lit.len() as u64,
-        })
-    }
 }
 
 /// A finished headless render.
@@ -271,11 +227,9 @@ pub fn render_frames(
     let shadow_stats = shadow_maps.stats();
     let vs_rays = match &rays_reference {
         Some(r) => Some(ShadowsVsRays::of(
-            &rgba,
-            &shadow_maps,
-            &r.read_output()?,
-            &r.shadow_maps()?,
-            settings,
+            (&rgba, &shadow_maps),
+            (&r.read_output()?, &r.shadow_maps()?),
+            [settings.width, settings.height],
         )?),
         None => None,
     };

@@ -2,7 +2,10 @@
 //! mask and the visibility): which pixels the sun lights, which got a shadow ray and
 //! why, and the share traced. For reports, tests and the shadow provenance image.
 
+use crate::error::Result;
+use crate::metrics::compare_rgba8;
 use crate::shader_defines::{SHADOW_ALL, SHADOW_EDGE, SHADOW_GRAZING, SHADOW_NEAR, SHADOW_OUTSIDE};
+use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// The `SHADOW_*` reasons by name, in bit order.
@@ -13,6 +16,48 @@ pub const REASONS: [(u32, &str); 5] = [
     (SHADOW_GRAZING, "grazing"),
     (SHADOW_ALL, "all"),
 ];
+
+/// How far a frame's shadows are from the same frame's with `rays` shadows.
+#[derive(Clone, Debug, Serialize)]
+pub struct ShadowsVsRays {
+    /// SSIM and RMSE of the final images.
+    pub ssim: f64,
+    pub rmse: f64,
+    /// Lit pixels whose visibility is the rays' (within 1/256: a PCF-filtered map's
+    /// fractions count as different).
+    pub visibility_agreement: f64,
+    /// RMSE of the visibility over the lit pixels (0..1).
+    pub visibility_rmse: f64,
+    /// Lit pixels compared.
+    pub lit_pixels: u64,
+}
+
+impl ShadowsVsRays {
+    /// Compares a frame (`rgba`, `maps`) with the rays frame, the visibility over the
+    /// rays frame's lit pixels.
+    pub fn of(
+        (rgba, maps): (&[u8], &ShadowMaps),
+        (rays_rgba, rays): (&[u8], &ShadowMaps),
+        [width, height]: [u32; 2],
+    ) -> Result<Self> {
+        let c = compare_rgba8(rgba, rays_rgba, width, height)?;
+        let lit: Vec<usize> = (0..rays.lit.len()).filter(|&i| rays.lit[i]).collect();
+        let (mut agree, mut sq) = (0u64, 0f64);
+        for &i in &lit {
+            let d = (maps.visibility[i] - rays.visibility[i]) as f64;
+            agree += (d.abs() < 1.0 / 256.0) as u64;
+            sq += d * d;
+        }
+        let n = lit.len().max(1) as f64;
+        Ok(Self {
+            ssim: c.ssim,
+            rmse: c.rmse,
+            visibility_agreement: agree as f64 / n,
+            visibility_rmse: (sq / n).sqrt(),
+            lit_pixels: lit.len() as u64,
+        })
+    }
+}
 
 /// Per-pixel shadow state of a frame, row-major.
 #[derive(Clone, Debug)]

@@ -146,6 +146,28 @@ fn modes_benchmark_is_valid() {
     assert!(by("rt").passes_ms.get("ssr.trace").is_none(), "rt mode marches nothing");
 }
 
+/// `bench shadows` on a small `room`: valid (the same lit pixels in every source, rays
+/// traces them all, the hybrid fewer and exactly the rays' visibility there, the map
+/// none), the rays frame equal to itself, the hybrid closer to it than the map, and
+/// only the sources that trace have the tracing passes.
+#[test]
+fn shadows_benchmark_is_valid() {
+    let ctx = common::context();
+    let (scene, settings) = small_room();
+    let r = speculum::bench::shadows::run(&ctx, &scene, &settings, 0, 2, &mut || {}).unwrap();
+    assert!(r.valid, "{r:?}");
+    let by = |name: &str| r.shadows.iter().find(|s| s.shadows == name).unwrap();
+    let (map, hybrid, rays) = (by("map"), by("hybrid"), by("rays"));
+    assert_eq!((rays.vs_rays.ssim, rays.vs_rays.visibility_agreement), (1.0, 1.0));
+    assert_eq!(rays.frame_over_rays.median, 1.0);
+    assert!(hybrid.traced_pixels > 0 && hybrid.traced_pixels < rays.traced_pixels);
+    assert!(hybrid.vs_rays.visibility_agreement > map.vs_rays.visibility_agreement);
+    assert!(hybrid.vs_rays.visibility_agreement >= 0.995, "{:?}", hybrid.vs_rays);
+    assert!(map.passes_ms.get("shadow.trace").is_none() && map.trace_over_rays.is_none());
+    assert!(rays.passes_ms.get("shadow.map").is_none(), "rays render no shadow map");
+    assert!(hybrid.trace_over_rays.is_some_and(|t| t > 0.0));
+}
+
 /// `bench dynamic` on `stress` with 4 and 12 bodies: every point valid (both BVHs'
 /// hits equal the CPU's), the triangles growing with the bodies, each time measured.
 #[test]

@@ -85,14 +85,15 @@ const DYNAMIC_SCOPES: [&str; 9] = [
 /// The scopes only shadows other than `map` run (these reports are of `map` shadows).
 const TRACED_SHADOW_SCOPES: [&str; 3] = ["shadow.classify", "shadow.compact", "shadow.trace"];
 
-/// `passes_ms` has every scope of the frame, in frame order; `null` where not run.
+/// `passes_ms` of a frame with `map` shadows (see `check_scopes`).
 fn check_passes(p: &Value, not_run: &[&str]) {
-    let not_run: Vec<&str> = not_run
-        .iter()
-        .chain(&DYNAMIC_SCOPES)
-        .chain(&TRACED_SHADOW_SCOPES)
-        .copied()
-        .collect();
+    check_scopes(p, &[not_run, &TRACED_SHADOW_SCOPES].concat());
+}
+
+/// `passes_ms` has every scope of the frame, in frame order; `null` where not run
+/// (`not_run`, and a dynamic scene's scopes).
+fn check_scopes(p: &Value, not_run: &[&str]) {
+    let not_run: Vec<&str> = not_run.iter().chain(&DYNAMIC_SCOPES).copied().collect();
     let names: Vec<&str> = p.as_object().unwrap().keys().map(String::as_str).collect();
     let want: Vec<&str> = speculum::renderer::SCOPES
         .iter()
@@ -216,6 +217,33 @@ fn bench_reports_follow_the_schema() {
             _ => &[],
         };
         check_passes(&m["passes_ms"], not_run);
+    }
+    std::fs::remove_file(dir.path().join("r.json")).unwrap();
+
+    let shadows = speculum(
+        &[
+            &["bench", "shadows", "--rounds", "2", "--warmup", "0", "--json", "r.json"][..],
+            &small,
+        ]
+        .concat(),
+        dir.path(),
+    );
+    check_header(&shadows, "bench.shadows", true);
+    let scene = &shadows["scenes"][0];
+    assert_eq!(scene["mode"], "hybrid");
+    for s in scene["shadows"].as_array().unwrap() {
+        check_stat(&s["frame_ms"], "frame_ms");
+        check_stat(&s["frame_over_rays"], "frame_over_rays");
+        for k in ["ssim", "rmse", "visibility_agreement", "visibility_rmse"] {
+            assert!(s["vs_rays"][k].is_number(), "{k} in {s}");
+        }
+        let not_run: &[&str] = match s["shadows"].as_str().unwrap() {
+            "map" => &TRACED_SHADOW_SCOPES,
+            "rays" => &["shadow.map"],
+            _ => &[],
+        };
+        assert_eq!(s["trace_over_rays"].is_null(), s["shadows"] == "map");
+        check_scopes(&s["passes_ms"], not_run);
     }
     std::fs::remove_file(dir.path().join("r.json")).unwrap();
 

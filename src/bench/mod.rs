@@ -8,6 +8,7 @@ pub mod lbvh;
 pub mod modes;
 pub mod rays_file;
 pub mod reflect;
+pub mod shadows;
 pub mod suite;
 
 use crate::error::Result;

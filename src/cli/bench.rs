@@ -1,5 +1,5 @@
-//! `speculum bench modes|reflect|lbvh|dynamic`: GPU timing benchmarks that check what
-//! they time.
+//! `speculum bench modes|shadows|reflect|lbvh|dynamic|suite`: GPU timing benchmarks
+//! that check what they time.
 
 use super::{cell, check_count, check_outputs, progress, GpuArgs, SettingsArgs, Text};
 use anyhow::Result;
@@ -21,6 +21,10 @@ pub enum BenchCommand {
     /// Every mode timed in the same run, interleaved: per-pass medians, frame time
     /// against rt, SSIM/RMSE against rt, and whether ssr < hybrid < rt.
     Modes(ModesArgs),
+    /// The shadow sources (map, hybrid, rays) timed in the same run, interleaved:
+    /// per-pass medians, frame and shadow.trace time against rays, the traced share,
+    /// and SSIM and sun visibility against the rays frame.
+    Shadows(ModesArgs),
     /// A dynamic scene's per-frame costs as its bodies grow: simulation, transform,
     /// dynamic BVH rebuild vs refit, tracing, the frame; refit vs rebuilt traversal.
     Dynamic(DynamicArgs),
@@ -107,7 +111,7 @@ pub struct ModesArgs {
     /// Built-in scene names or .obj paths (each timed on its own).
     #[arg(long, num_args = 1.., default_value = "room")]
     pub scene: Vec<String>,
-    /// Measured rounds (one frame of every mode each).
+    /// Measured rounds (one frame of every mode, or shadow source, each).
     #[arg(long, default_value_t = 7)]
     pub rounds: u32,
     /// Uncounted warm-up rounds.
@@ -177,6 +181,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Lbvh(a) => lbvh(a),
         BenchCommand::Reflect(a) => reflect(a),
         BenchCommand::Modes(a) => modes(a),
+        BenchCommand::Shadows(a) => shadows(a),
         BenchCommand::Dynamic(a) => dynamic(a),
         BenchCommand::Suite(a) => suite(a),
     }
@@ -767,5 +772,91 @@ fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str
         if r.valid { "valid" } else { "INVALID" }
     ));
     let timing: speculum::vk::TimingCheck = r.modes.iter().map(|m| &m.timing).collect();
+    text.line(format_args!("  {}", super::timing_note(&timing)));
+}
+
+fn shadows(args: ModesArgs) -> Result<()> {
+    use speculum::bench::shadows::{run, ShadowsReport};
+    let c = &args.common;
+    let settings = args.frame.resolve()?;
+    check_count("--rounds", args.rounds, 1)?;
+    check_count("--warmup", args.warmup, 0)?;
+    // SSIM against the rays frame needs an image its window fits in.
+    speculum::metrics::check_size(settings.width, settings.height)?;
+    check_outputs(
+        &[("--json", c.json.as_deref(), Kind::Json)],
+        &[("--settings", args.frame.settings.as_deref())],
+    )?;
+    let scenes = args
+        .scene
+        .iter()
+        .map(|s| args.view.load(s))
+        .collect::<Result<Vec<_>>>()?;
+    let text = Text::new(&[c.json.as_deref()], c.quiet);
+    let ctx = c.gpu.context()?;
+    let sources = speculum::settings::Shadows::ALL.len() as u64;
+    let per_scene = sources * (args.rounds + args.warmup) as u64;
+    let bar = progress(per_scene * scenes.len() as u64, "bench shadows", c.quiet);
+    let mut results = Vec::new();
+    for scene in &scenes {
+        let r = run(&ctx, scene, &settings, args.warmup, args.rounds, &mut || bar.inc(1))?;
+        bar.suspend(|| print_shadows(&text, &r, &ctx.device_name, args.rounds));
+        results.push(r);
+    }
+    bar.finish_and_clear();
+    let valid = results.iter().all(|r| r.valid);
+    let report = ShadowsReport {
+        header: Header::new("bench.shadows", Some(&ctx), Some(&settings)),
+        rounds: args.rounds,
+        warmup_rounds: args.warmup,
+        scenes: results,
+        valid,
+    };
+    if let Some(path) = &c.json {
+        super::write_report(path, &report, &text)?;
+    }
+    super::check_validation(&ctx)?;
+    valid_or_fail(valid)
+}
+
+fn print_shadows(text: &Text, r: &speculum::bench::shadows::SceneShadows, device: &str, rounds: u32) {
+    use speculum::bench::shadows::ShadowResult;
+    text.line(format_args!(
+        "{} on {device}: {}x{}, {} reflections, median of {rounds} interleaved rounds",
+        r.scene, r.resolution[0], r.resolution[1], r.mode
+    ));
+    let header: String = r.shadows.iter().map(|s| format!(" {:>10}", s.shadows)).collect();
+    text.line(format_args!("  {:<16}{header}", "pass (ms)"));
+    let row = |name: &str, f: &dyn Fn(&ShadowResult) -> String| {
+        let cells: String = r.shadows.iter().map(|s| format!(" {:>10}", f(s))).collect();
+        text.line(format_args!("  {name:<16}{cells}"));
+    };
+    let scopes = [
+        "shadow.map",
+        "shadow.classify",
+        "shadow.compact",
+        "shadow.trace",
+        "light.direct",
+        "rt.reflect",
+    ];
+    for p in scopes {
+        row(p, &|s| match s.passes_ms.get(p) {
+            Some(t) => format!("{:.1}", t.median),
+            None => "-".into(),
+        });
+    }
+    row("frame", &|s| format!("{:.1}", s.frame_ms.median));
+    row("frame / rays", &|s| format!("{:.3}", s.frame_over_rays.median));
+    row("trace / rays", &|s| {
+        s.trace_over_rays.map_or("-".into(), |v| format!("{v:.3}"))
+    });
+    row("traced % of lit", &|s| format!("{:.1}", 100.0 * s.ray_fraction));
+    row("vis. = rays %", &|s| {
+        format!("{:.3}", 100.0 * s.vs_rays.visibility_agreement)
+    });
+    row("vis. RMSE", &|s| format!("{:.4}", s.vs_rays.visibility_rmse));
+    row("SSIM vs rays", &|s| format!("{:.4}", s.vs_rays.ssim));
+    text.line(format_args!("  checks {}", if r.valid { "valid" } else { "INVALID" }));
+    let timing: speculum::vk::TimingCheck = r.shadows.iter().map(|s| &s.timing).collect();
     text.line(format_args!("  {}", super::timing_note(&timing)));
 }

@@ -309,6 +309,15 @@ impl Renderer {
         self.dynamic.as_ref().map_or(0, |d| d.bvh.bvh.tri_count)
     }
 
+    /// The static BVH and the scene's triangles (relative to `origin()`), for tracing
+    /// them apart (tests, benchmarks).
+    pub fn static_traceable(&self) -> Traceable<'_> {
+        Traceable {
+            bvh: &self.static_bvh,
+            geometry: self.scene.mesh.triangles(),
+        }
+    }
+
     /// The dynamic BVH and the world-space geometry it was built over in the last
     /// frame (relative to `origin()`), for tracing it apart (tests, benchmarks).
     pub fn dynamic_traceable(&self) -> Option<Traceable<'_>> {

@@ -6,13 +6,12 @@
 //! Checked in the same run: every mode sees the same reflective pixels, `rt` traces all
 //! of them, `hybrid` no more, `ssr` and `raster` none, and every frame time is finite.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::metrics::compare_rgba8;
-use crate::report::{Header, PassTimes, Stat};
+use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
 use crate::vk::{Context, TimingCheck};
-use crate::Renderer;
 use serde::Serialize;
 use std::sync::Arc;
 
@@ -48,17 +47,7 @@ pub struct SceneModes {
 }
 
 /// The `bench modes` report.
-#[derive(Clone, Debug, Serialize)]
-pub struct ModesReport {
-    #[serde(flatten)]
-    pub header: Header,
-    /// Measured rounds (one frame of every mode each), after `warmup_rounds`.
-    pub rounds: u32,
-    pub warmup_rounds: u32,
-    pub scenes: Vec<SceneModes>,
-    /// Every scene's checks passed.
-    pub valid: bool,
-}
+pub type ModesReport = super::RoundsReport<SceneModes>;
 
 /// Times every mode of `scene` in `rounds` interleaved rounds after `warmup` rounds.
 pub fn run(
@@ -69,14 +58,10 @@ pub fn run(
     rounds: u32,
     tick: super::Tick<'_>,
 ) -> Result<SceneModes> {
-    if rounds == 0 {
-        return Err(Error::Settings("bench modes needs at least one round".into()));
-    }
-    let mut renderers = Mode::ALL
-        .iter()
-        .map(|&mode| Renderer::new(ctx, scene, &Settings { mode, ..base.clone() }))
-        .collect::<Result<Vec<_>>>()?;
-    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds, tick)?;
+    let variants = Mode::ALL.iter().map(|&mode| Settings { mode, ..base.clone() });
+    let (renderers, measured) =
+        super::interleave_variants(ctx, scene, variants, (warmup, rounds), tick, "bench modes")?;
+    let super::Interleaved { timings, frames } = measured;
     let rt = Mode::ALL.iter().position(|&m| m == Mode::Rt).expect("rt is a mode");
     let rt_image = renderers[rt].read_output()?;
     let mut modes = Vec::new();

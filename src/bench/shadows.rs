@@ -8,13 +8,12 @@
 //! fewer and exactly the rays' visibility where it traces, `map` none, and every frame
 //! time is finite.
 
-use crate::error::{Error, Result};
-use crate::report::{Header, PassTimes, Stat};
+use crate::error::Result;
+use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Settings, Shadows};
 use crate::shadow_maps::ShadowsVsRays;
 use crate::vk::{Context, TimingCheck};
-use crate::Renderer;
 use serde::Serialize;
 use std::sync::Arc;
 
@@ -52,17 +51,7 @@ pub struct SceneShadows {
 }
 
 /// The `bench shadows` report.
-#[derive(Clone, Debug, Serialize)]
-pub struct ShadowsReport {
-    #[serde(flatten)]
-    pub header: Header,
-    /// Measured rounds (one frame of every source each), after `warmup_rounds`.
-    pub rounds: u32,
-    pub warmup_rounds: u32,
-    pub scenes: Vec<SceneShadows>,
-    /// Every scene's checks passed.
-    pub valid: bool,
-}
+pub type ShadowsReport = super::RoundsReport<SceneShadows>;
 
 /// Times every shadow source of `scene` in `rounds` interleaved rounds after `warmup`
 /// rounds, in `base`'s reflection mode.
@@ -74,23 +63,13 @@ pub fn run(
     rounds: u32,
     tick: super::Tick<'_>,
 ) -> Result<SceneShadows> {
-    if rounds == 0 {
-        return Err(Error::Settings("bench shadows needs at least one round".into()));
-    }
-    let mut renderers = Shadows::ALL
-        .iter()
-        .map(|&shadows| {
-            Renderer::new(
-                ctx,
-                scene,
-                &Settings {
-                    shadows,
-                    ..base.clone()
-                },
-            )
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds, tick)?;
+    let variants = Shadows::ALL.iter().map(|&shadows| Settings {
+        shadows,
+        ..base.clone()
+    });
+    let (renderers, measured) =
+        super::interleave_variants(ctx, scene, variants, (warmup, rounds), tick, "bench shadows")?;
+    let super::Interleaved { timings, frames } = measured;
     let at = |s: Shadows| {
         Shadows::ALL
             .iter()

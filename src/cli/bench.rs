@@ -695,13 +695,30 @@ fn reflect(args: ReflectArgs) -> Result<()> {
     valid_or_fail(r.valid)
 }
 
-fn modes(args: ModesArgs) -> Result<()> {
-    use speculum::bench::modes::{run, ModesReport};
+/// What `bench modes` and `bench shadows` share: the settings, counts and outputs
+/// checked and every scene loaded before any GPU work; each scene run in turn
+/// (`renderers` frames a round) under one progress bar, printed as it finishes; the
+/// report (`report` of the header and the results) written; exit 1 when a check failed.
+fn scene_bench<R, Rep: serde::Serialize>(
+    args: &ModesArgs,
+    kind: &'static str,
+    renderers: u64,
+    run: impl Fn(
+        &std::sync::Arc<speculum::vk::Context>,
+        &speculum::scene::Scene,
+        &speculum::Settings,
+        &mut dyn FnMut(),
+    ) -> speculum::Result<R>,
+    print: impl Fn(&Text, &R, &str),
+    valid: impl Fn(&R) -> bool,
+    report: impl FnOnce(Header, Vec<R>, bool) -> Rep,
+) -> Result<()> {
     let c = &args.common;
     let settings = args.frame.resolve()?;
     check_count("--rounds", args.rounds, 1)?;
     check_count("--warmup", args.warmup, 0)?;
-    // SSIM against rt needs an image its window fits in: known before any GPU work.
+    // SSIM against the reference frame needs an image its window fits in: known
+    // before any GPU work.
     speculum::metrics::check_size(settings.width, settings.height)?;
     check_outputs(
         &[("--json", c.json.as_deref(), Kind::Json)],
@@ -715,29 +732,42 @@ fn modes(args: ModesArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
-    let modes = speculum::settings::Mode::ALL.len() as u64;
-    let per_scene = modes * (args.rounds + args.warmup) as u64;
-    let bar = progress(per_scene * scenes.len() as u64, "bench modes", c.quiet);
+    let per_scene = renderers * (args.rounds + args.warmup) as u64;
+    let bar = progress(per_scene * scenes.len() as u64, &kind.replace('.', " "), c.quiet);
     let mut results = Vec::new();
     for scene in &scenes {
-        let r = run(&ctx, scene, &settings, args.warmup, args.rounds, &mut || bar.inc(1))?;
-        bar.suspend(|| print_modes(&text, &r, &ctx.device_name, args.rounds));
+        let r = run(&ctx, scene, &settings, &mut || bar.inc(1))?;
+        bar.suspend(|| print(&text, &r, &ctx.device_name));
         results.push(r);
     }
     bar.finish_and_clear();
-    let valid = results.iter().all(|r| r.valid);
-    let report = ModesReport {
-        header: Header::new("bench.modes", Some(&ctx), Some(&settings)),
-        rounds: args.rounds,
-        warmup_rounds: args.warmup,
-        scenes: results,
-        valid,
-    };
+    let all_valid = results.iter().all(&valid);
+    let report = report(Header::new(kind, Some(&ctx), Some(&settings)), results, all_valid);
     if let Some(path) = &c.json {
         super::write_report(path, &report, &text)?;
     }
     super::check_validation(&ctx)?;
-    valid_or_fail(valid)
+    valid_or_fail(all_valid)
+}
+
+fn modes(args: ModesArgs) -> Result<()> {
+    use speculum::bench::modes::{run, ModesReport};
+    let (warmup, rounds) = (args.warmup, args.rounds);
+    scene_bench(
+        &args,
+        "bench.modes",
+        speculum::settings::Mode::ALL.len() as u64,
+        |ctx, scene, settings, tick| run(ctx, scene, settings, warmup, rounds, tick),
+        |text, r, device| print_modes(text, r, device, rounds),
+        |r| r.valid,
+        |header, scenes, valid| ModesReport {
+            header,
+            rounds,
+            warmup_rounds: warmup,
+            scenes,
+            valid,
+        },
+    )
 }
 
 fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str, rounds: u32) {
@@ -777,46 +807,22 @@ fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str
 
 fn shadows(args: ModesArgs) -> Result<()> {
     use speculum::bench::shadows::{run, ShadowsReport};
-    let c = &args.common;
-    let settings = args.frame.resolve()?;
-    check_count("--rounds", args.rounds, 1)?;
-    check_count("--warmup", args.warmup, 0)?;
-    // SSIM against the rays frame needs an image its window fits in.
-    speculum::metrics::check_size(settings.width, settings.height)?;
-    check_outputs(
-        &[("--json", c.json.as_deref(), Kind::Json)],
-        &[("--settings", args.frame.settings.as_deref())],
-    )?;
-    let scenes = args
-        .scene
-        .iter()
-        .map(|s| args.view.load(s))
-        .collect::<Result<Vec<_>>>()?;
-    let text = Text::new(&[c.json.as_deref()], c.quiet);
-    let ctx = c.gpu.context()?;
-    let sources = speculum::settings::Shadows::ALL.len() as u64;
-    let per_scene = sources * (args.rounds + args.warmup) as u64;
-    let bar = progress(per_scene * scenes.len() as u64, "bench shadows", c.quiet);
-    let mut results = Vec::new();
-    for scene in &scenes {
-        let r = run(&ctx, scene, &settings, args.warmup, args.rounds, &mut || bar.inc(1))?;
-        bar.suspend(|| print_shadows(&text, &r, &ctx.device_name, args.rounds));
-        results.push(r);
-    }
-    bar.finish_and_clear();
-    let valid = results.iter().all(|r| r.valid);
-    let report = ShadowsReport {
-        header: Header::new("bench.shadows", Some(&ctx), Some(&settings)),
-        rounds: args.rounds,
-        warmup_rounds: args.warmup,
-        scenes: results,
-        valid,
-    };
-    if let Some(path) = &c.json {
-        super::write_report(path, &report, &text)?;
-    }
-    super::check_validation(&ctx)?;
-    valid_or_fail(valid)
+    let (warmup, rounds) = (args.warmup, args.rounds);
+    scene_bench(
+        &args,
+        "bench.shadows",
+        speculum::settings::Shadows::ALL.len() as u64,
+        |ctx, scene, settings, tick| run(ctx, scene, settings, warmup, rounds, tick),
+        |text, r, device| print_shadows(text, r, device, rounds),
+        |r| r.valid,
+        |header, scenes, valid| ShadowsReport {
+            header,
+            rounds,
+            warmup_rounds: warmup,
+            scenes,
+            valid,
+        },
+    )
 }
 
 fn print_shadows(text: &Text, r: &speculum::bench::shadows::SceneShadows, device: &str, rounds: u32) {

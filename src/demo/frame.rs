@@ -151,13 +151,14 @@ impl Demo {
         Ok(())
     }
 
-    /// The reflection counts of the last frame (waits for the GPU).
+    /// The reflection and shadow counts of the last frame (waits for the GPU).
     pub(super) fn refresh_stats(&mut self) -> Result<()> {
         if !self.rendered_since_change {
             return Ok(());
         }
         self.drain()?;
-        self.stats = Some(self.renderer.reflection_stats()?);
+        let shadows = self.renderer.shadow_maps()?.stats();
+        self.stats = Some((self.renderer.reflection_stats()?, shadows));
         Ok(())
     }
 

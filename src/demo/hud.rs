@@ -6,6 +6,7 @@ use super::script::Action;
 use crate::reflection_maps::{ReflectionStats, FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
 use crate::settings::{Applies, Field, Hud, Mode, Settings, Shadows, Value, FIELDS};
+use crate::shadow_maps::ShadowStats;
 use crate::vk::swapchain::present_mode_name;
 use ash::vk;
 use egui::{Color32, RichText};
@@ -27,7 +28,7 @@ pub struct HudInfo<'a> {
     pub wall_ms: &'a [f64],
     /// Median ms per pass over the history, in frame order.
     pub passes: &'a [(&'static str, f64)],
-    pub stats: Option<&'a ReflectionStats>,
+    pub stats: Option<&'a (ReflectionStats, ShadowStats)>,
     pub camera: Camera,
     pub speed: f32,
     pub dynamic: bool,
@@ -250,13 +251,20 @@ fn timings_panel(ui: &mut egui::Ui, info: &HudInfo<'_>) {
 
 fn reflections_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, out: &mut Vec<Request>) {
     match info.stats {
-        Some(st) => {
+        Some((st, sh)) => {
             ui.label(format!(
                 "reflective pixels {} · SSR failed on {} · ray traced {} ({:.1}%)",
                 st.reflective_pixels,
                 st.ssr_failed_pixels,
                 st.traced_pixels,
                 100.0 * st.rt_pixel_fraction()
+            ));
+            ui.label(format!(
+                "{} shadows: lit pixels {} · shadow rays {} ({:.1}%)",
+                info.settings.shadows.name(),
+                sh.lit_pixels,
+                sh.traced_pixels,
+                100.0 * sh.ray_fraction()
             ));
         }
         None => {

@@ -21,6 +21,7 @@ use crate::error::{Error, Result};
 use crate::reflection_maps::ReflectionStats;
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
+use crate::shadow_maps::ShadowStats;
 use crate::vk::swapchain::{self, present_mode_name};
 use crate::vk::{Acquired, Buffer, Context, ContextDesc, FrameSync, Swapchain, WindowHandles};
 use crate::Renderer;
@@ -198,7 +199,8 @@ struct Demo {
     frame: u64,
     last_frame: Instant,
     history: History,
-    stats: Option<ReflectionStats>,
+    /// The last counts of the reflections and the shadows (`refresh_stats`).
+    stats: Option<(ReflectionStats, ShadowStats)>,
     /// A frame was submitted since the renderer's images were last made (the counts
     /// read them).
     rendered_since_change: bool,

@@ -210,3 +210,29 @@ fn a_sweep_needs_no_file() {
         );
     }
 }
+
+/// The shadow source is an axis like any setting (by name: map, rays, hybrid); an
+/// unknown source is refused naming the field.
+#[test]
+fn shadows_are_a_tuner_axis() {
+    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = out.to_str().unwrap();
+    let small = ["--scene", "room", "--width", "64", "--height", "40"];
+    ok(&speculum(
+        &[
+            &["tune"][..],
+            &small,
+            &["--axis", "shadows=map,hybrid", "--out", o, "--confirm", "0"],
+        ]
+        .concat(),
+    ));
+    let rows = rows(&out);
+    let column = rows[0].iter().position(|c| c == "shadows").expect("a shadows column");
+    let values: Vec<&str> = rows[1..].iter().map(|r| r[column].as_str()).collect();
+    assert_eq!(values, ["map", "map", "hybrid"], "default, then the points: {rows:?}");
+    let bad = speculum(&[&["tune"][..], &small, &["--axis", "shadows=soft", "--out", o]].concat());
+    assert_eq!(bad.code, 1, "{}", bad.stderr);
+    assert!(bad.stderr.contains("shadows"), "{}", bad.stderr);
+}

@@ -97,20 +97,12 @@ void main() {
         // The next mirror direction stays above the facet.
         hn = clamp_bent_normal(hn, g, -dir);
         vec3 hp = origin + dir * h.t;
-        // Shadows as on the visible surface: the map, a ray, or the map where it is
-        // sure (shadow_map_doubt) and a ray elsewhere. A hit facing away from the sun
-        // is unlit whatever is in the way.
+        // Shadows as on the visible surface: the map, or a ray where shadow_ray_reasons
+        // asks for one (always under `rays`; where the map is unsure under `hybrid`).
         float vis;
-        float ndl = dot(hn, frame.light_dir.xyz);
-        bool ray = pc.shadows == SHADOWS_RAYS && ndl > 0.0;
         if (pc.shadows == SHADOWS_MAP) {
             vis = shadow_visibility(shadow_map, hp);
-        } else if (ndl <= 0.0) {
-            vis = 0.0;
-        } else if (pc.shadows == SHADOWS_HYBRID) {
-            ray = shadow_map_doubt(shadow_map, hp, ndl, vis) != 0u;
-        }
-        if (ray) {
+        } else if (shadow_ray_reasons(shadow_map, hp, dot(hn, frame.light_dir.xyz), pc.shadows, vis) != 0u) {
             vec3 so = hp + g * offset_scale(hp);
             Hit sh = trace_ray(so, frame.light_dir.xyz, 0.0, 3.0e38, pc.static_tris, pc.dynamic_tris, true);
             vis = sh.prim == BVH_INVALID ? 1.0 : 0.0;

@@ -1,10 +1,9 @@
 #version 460
 // shadow.classify: for every pixel, whether the shadow map answers its sun visibility
 // or a shadow ray must: the mask (nonzero: the SHADOW_* reasons it gets a ray) and the
-// visibility where the map answers (-1 where a ray will). `rays` lists every lit pixel (SHADOW_ALL);
-// `hybrid` lists those where shadow_map_doubt is not sure. The sky (visibility 1) and
-// surfaces facing away from the sun (0: n.l <= 0, unlit whatever is in the way) are
-// never listed. shadow.compact lists the mask's pixels, shadow.trace answers them.
+// visibility where the map answers (-1 where a ray will), by shadow_ray_reasons:
+// `rays` lists every lit pixel (SHADOW_ALL); `hybrid` those where the map is not sure.
+// The sky (visibility 1) and surfaces facing away from the sun (0) are never listed. shadow.compact lists the mask's pixels, shadow.trace answers them.
 // CPU reference: cpu_ref::shadows::classify (tests/shadows.rs).
 #include "shading.glsl"
 
@@ -29,16 +28,9 @@ void main() {
     uint doubt = 0u;
     float vis = 1.0;
     if (texelFetch(gb_material, p, 0).r != MATERIAL_NONE) {
-        vec3 n = normalize(texelFetch(gb_normal, p, 0).xyz);
-        float ndl = dot(n, frame.light_dir.xyz);
-        if (ndl <= 0.0) {
-            vis = 0.0;
-        } else if (pc.shadows == SHADOWS_RAYS) {
-            doubt = SHADOW_ALL;
-        } else {
-            vec3 w = world_from_depth(p, texelFetch(gb_depth, p, 0).r);
-            doubt = shadow_map_doubt(shadow_map, w, ndl, vis);
-        }
+        float ndl = dot(normalize(texelFetch(gb_normal, p, 0).xyz), frame.light_dir.xyz);
+        vec3 w = world_from_depth(p, texelFetch(gb_depth, p, 0).r);
+        doubt = shadow_ray_reasons(shadow_map, w, ndl, pc.shadows, vis);
     }
     if (doubt != 0u) {
         vis = -1.0; // shadow.trace's to write: a pixel it missed stays out of 0..1

@@ -88,6 +88,22 @@ uint shadow_map_doubt(sampler2D shadow_map, vec3 w, float ndl, out float vis) {
     return doubt;
 }
 
+// Under traced shadows (`shadows`: SHADOWS_RAYS or SHADOWS_HYBRID), whether the point
+// w, whose normal has n.l = ndl, gets a shadow ray: the SHADOW_* reasons, or 0 when
+// `vis` is the answer already (0 for a surface facing away from the sun, unlit
+// whatever is in the way; else the sure shadow map's). Shared by shadow.classify and
+// the reflection hits of rt.reflect.
+uint shadow_ray_reasons(sampler2D shadow_map, vec3 w, float ndl, uint shadows, out float vis) {
+    vis = 0.0;
+    if (ndl <= 0.0) {
+        return 0u;
+    }
+    if (shadows == SHADOWS_RAYS) {
+        return SHADOW_ALL;
+    }
+    return shadow_map_doubt(shadow_map, w, ndl, vis);
+}
+
 // The material model (README, "Materials"): a base colour, a metallic blend between a
 // dielectric (specular reflectance DIELECTRIC_F0 at normal incidence) and a metal
 // (reflectance = the base colour), Schlick's Fresnel for the angle, and `reflectivity`,

@@ -139,15 +139,14 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
         }
         hn = texture::clamp_bent_normal(hn, g, -dir);
         let hp = origin + dir * h.t;
-        let ndl = hn.dot(frame.light_dir.xyz());
-        let vis = match s.shadows {
-            Shadows::Map => shading::shadow_visibility(frame, s.shadow_map, hp),
-            _ if ndl <= 0.0 => 0.0,
-            Shadows::Rays => shadow_ray(s, hp, g),
-            Shadows::Hybrid => match shading::shadow_map_doubt(frame, s.shadow_map, hp, ndl) {
+        let vis = if s.shadows == Shadows::Map {
+            shading::shadow_visibility(frame, s.shadow_map, hp)
+        } else {
+            let ndl = hn.dot(frame.light_dir.xyz());
+            match shading::shadow_ray_reasons(frame, s.shadow_map, hp, ndl, s.shadows) {
                 (0, vis) => vis,
                 _ => shadow_ray(s, hp, g),
-            },
+            }
         };
         let surface = shading::Surface {
             base: albedo,

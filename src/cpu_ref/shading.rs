@@ -1,7 +1,8 @@
 //! Reference of `glsl/shared/shading.glsl` and `frame.glsl` (light.direct).
 
 use crate::gpu_types::FrameUniforms;
-use crate::shader_defines::{MAX_PCF_RADIUS, SHADOW_EDGE, SHADOW_GRAZING, SHADOW_NEAR, SHADOW_OUTSIDE};
+use crate::settings::Shadows;
+use crate::shader_defines::{MAX_PCF_RADIUS, SHADOW_ALL, SHADOW_EDGE, SHADOW_GRAZING, SHADOW_NEAR, SHADOW_OUTSIDE};
 use glam::{IVec2, Vec2, Vec3, Vec3Swizzles, Vec4, Vec4Swizzles};
 
 /// Sky radiance along unit direction `d` (`sky_radiance`).
@@ -104,6 +105,26 @@ pub fn shadow_map_doubt(frame: &FrameUniforms, map: &ShadowMap<'_>, w: Vec3, ndl
         doubt |= SHADOW_GRAZING;
     }
     (doubt, if pcf > 0.5 { 1.0 } else { 0.0 })
+}
+
+/// `shadow_ray_reasons` under traced `shadows` (`rays` or `hybrid`): the `SHADOW_*`
+/// reasons `w` (n.l = `ndl`) gets a shadow ray, or 0 and its visibility (0 facing away
+/// from the sun, else the sure map's).
+pub fn shadow_ray_reasons(
+    frame: &FrameUniforms,
+    map: &ShadowMap<'_>,
+    w: Vec3,
+    ndl: f32,
+    shadows: Shadows,
+) -> (u32, f32) {
+    assert!(shadows.traces(), "shadow rays under map shadows");
+    if ndl <= 0.0 {
+        (0, 0.0)
+    } else if shadows == Shadows::Rays {
+        (SHADOW_ALL, 0.0)
+    } else {
+        shadow_map_doubt(frame, map, w, ndl)
+    }
 }
 
 /// `DIELECTRIC_F0`: a dielectric's specular reflectance at normal incidence.

@@ -5,7 +5,7 @@ use super::reflect::{self, PathScene};
 use super::shading::{self, ShadowMap};
 use crate::gpu_types::FrameUniforms;
 use crate::settings::Shadows;
-use crate::shader_defines::{MATERIAL_NONE, SHADOW_ALL};
+use crate::shader_defines::MATERIAL_NONE;
 use glam::{IVec2, Vec3, Vec4Swizzles};
 
 /// `shadow.classify` of pixel `p` (G-buffer depth, normal as stored, material): the
@@ -18,18 +18,12 @@ pub fn classify(
     p: IVec2,
     (depth, normal, material): (f32, Vec3, u32),
 ) -> (u32, f32) {
-    assert!(shadows.traces(), "classify under map shadows");
     if material == MATERIAL_NONE {
         return (0, 1.0);
     }
     let ndl = normal.normalize().dot(frame.light_dir.xyz());
-    let (doubt, vis) = if ndl <= 0.0 {
-        (0, 0.0)
-    } else if shadows == Shadows::Rays {
-        (SHADOW_ALL, 1.0)
-    } else {
-        shading::shadow_map_doubt(frame, map, shading::world_from_depth(frame, p, depth), ndl)
-    };
+    let w = shading::world_from_depth(frame, p, depth);
+    let (doubt, vis) = shading::shadow_ray_reasons(frame, map, w, ndl, shadows);
     (doubt, if doubt != 0 { -1.0 } else { vis })
 }
 
@@ -55,6 +49,7 @@ pub fn visibility(s: &PathScene<'_>, p: IVec2, (depth, normal, material): (f32, 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shader_defines::SHADOW_ALL;
 
     /// The sky is lit and never listed; a surface facing away is dark and never listed.
     #[test]

@@ -403,8 +403,7 @@ impl Renderer {
     /// Per pixel of the last frame: whether it reflects, and its fail-mask bits (0 in
     /// `raster` mode). A readback, for stats, debug images and tests.
     pub fn reflection_maps(&self) -> Result<ReflectionMaps> {
-        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.out.normal)?);
-        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.out.material)?);
+        let (normal, material) = self.read_normals_and_materials()?;
         let min = self.settings.reflective_min;
         let reflective = normal
             .iter()
@@ -423,10 +422,16 @@ impl Renderer {
         })
     }
 
+    /// The last frame's G-buffer normals (xyz; w: reflectivity) and material ids.
+    fn read_normals_and_materials(&self) -> Result<(Vec<[f32; 4]>, Vec<u32>)> {
+        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.out.normal)?);
+        let material = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.out.material)?);
+        Ok((normal, material))
+    }
+
     /// The last frame's shadow state (a readback: for stats, tests and images).
     pub fn shadow_maps(&self) -> Result<ShadowMaps> {
-        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.out.normal)?);
-        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.out.material)?);
+        let (normal, material) = self.read_normals_and_materials()?;
         let l = self.uniforms.light_dir.truncate();
         let lit = normal
             .iter()

@@ -1,5 +1,5 @@
 //! `speculum bench shadows`: the three shadow sources of one scene timed in the same
-//! run, a frame of each in turn (map, hybrid, rays, then again) in the settings'
+//! run, a frame of each in turn (map, rays, hybrid, then again) in the settings'
 //! reflection mode, so that drift in the machine's speed touches each alike. Reports
 //! per-pass medians, each source's frame time against `rays` (the median of the
 //! per-round ratios), its `shadow.trace` against the rays' and, against the rays frame,

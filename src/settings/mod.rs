@@ -138,16 +138,6 @@ impl Shadows {
     }
 }
 
-impl std::str::FromStr for Shadows {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self> {
-        Shadows::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| Error::Settings(format!("unknown shadows '{s}' (shadows: map, rays, hybrid)")))
-    }
-}
-
 /// Declares `Settings`, its `Default` and `FIELDS` from one table: each field's
 /// documentation (what it trades), type, default, accepted range, HUD control and how a
 /// change applies.

@@ -1,14 +1,15 @@
 #version 460
-// lbvh.refit (scheduled): the boxes of one height level of internal nodes (all their
-// children are done), each the union of its children's, and its traversal node.
-// CPU reference: cpu_ref::lbvh::fit, the scheduled refit as a whole (tests/lbvh.rs).
+// lbvh.refit (scheduled): one height level of internal nodes (all their children are
+// done), each node's box, the union of its halves, into its parent's half (bvh.glsl,
+// REFIT_NODE).
+// CPU reference: cpu_ref::lbvh::build of the same keys over the moved vertices, the
+// scheduled refit as a whole (tests/lbvh.rs).
 #include "bvh.glsl"
 
 layout(local_size_x = LBVH_WG) in;
 
-layout(binding = 0, std430) buffer Nodes { BvhNode nodes[]; };
+layout(binding = 0, std430) buffer TNodes { TraversalNode tnodes[]; };
 layout(binding = 1, std430) readonly buffer Order { uint order[]; };
-layout(binding = 2, std430) writeonly buffer TNodes { TraversalNode tnodes[]; };
 
 layout(push_constant) uniform Push {
     uint first;
@@ -21,6 +22,6 @@ void main() {
     if (i >= pc.count) {
         return;
     }
-    uint node = order[pc.first + i];
-    UNITE(nodes, tnodes, node, pc.n)
+    uint slot = order[pc.first + i];
+    REFIT_NODE(tnodes, slot)
 }

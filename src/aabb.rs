@@ -1,7 +1,7 @@
 //! Axis-aligned boxes, shared by the GPU LBVH (reading back its bounds), the CPU
 //! references and the scene code.
 
-use crate::gpu_types::BvhNode;
+use crate::gpu_types::TraversalNode;
 use glam::Vec3;
 
 /// An axis-aligned box.
@@ -43,11 +43,17 @@ impl Aabb {
         let d = (self.hi - self.lo).max(Vec3::ZERO);
         2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
     }
-    pub fn of_node(n: &BvhNode) -> Self {
+    /// The box a BVH node holds for its child `side` (0: `child0`, 1: `child1`).
+    pub fn of_half(n: &TraversalNode, side: u32) -> Self {
+        let (lo, hi) = if side == 0 { (n.lo0, n.hi0) } else { (n.lo1, n.hi1) };
         Self {
-            lo: Vec3::from(n.lo),
-            hi: Vec3::from(n.hi),
+            lo: Vec3::from(lo),
+            hi: Vec3::from(hi),
         }
+    }
+    /// A BVH node's own box: the union of its halves.
+    pub fn of_node(n: &TraversalNode) -> Self {
+        Self::of_half(n, 0).union(Self::of_half(n, 1))
     }
 }
 

@@ -82,23 +82,13 @@ const _: () = assert!(std::mem::size_of::<GpuVertex>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 32);
 const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 432);
 
-/// A BVH node (std430, 32 bytes); layout documented in `glsl/shared/bvh.glsl`.
-/// Internal: `left`/`right` are child node indices. Leaf: `left` is
-/// `BVH_LEAF_BIT | triangle id`, `right` is `BVH_INVALID`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    pub lo: [f32; 3],
-    pub left: u32,
-    pub hi: [f32; 3],
-    pub right: u32,
-}
-
-/// A node of the traversal layout (std430, 64 bytes; `glsl/shared/bvh.glsl`): an
-/// internal node of the binary tree with both children's boxes, so one fetch tests
-/// both. `child0`/`child1`: an internal node's index, or `BVH_LEAF_BIT |` the leaf's
-/// position in `TraversalTri` order. The fit and the refit write N-1 of them (one for
-/// a single triangle, whose two children are that leaf).
+/// An internal node of the BVH (std430, 64 bytes; `glsl/shared/bvh.glsl`) with both
+/// children's boxes, so one fetch tests both. `child0`/`child1`: an internal node's
+/// slot, or a leaf (`bvh_leaf_link`: its triangles' range in `TraversalTri` order).
+/// `parent`:
+/// `slot << 1 | side` of the parent's half holding this node's box (`BVH_INVALID` at
+/// the root, slot 0). `unused` is never written. The fit writes N-1 of them (one for a
+/// single triangle, whose two children are that leaf).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TraversalNode {
@@ -107,22 +97,49 @@ pub struct TraversalNode {
     pub hi0: [f32; 3],
     pub child1: u32,
     pub lo1: [f32; 3],
-    pub _pad0: u32,
+    pub parent: u32,
     pub hi1: [f32; 3],
-    pub _pad1: u32,
+    pub unused: u32,
 }
 
-/// A triangle of the traversal layout (std430, 48 bytes), in leaf order: corner `a`,
-/// the edges `b - a` and `c - a` the ray test uses, and the scene's triangle id.
+/// A triangle of the BVH (std430, 48 bytes), in leaf order: corner `a`, the edges
+/// `b - a` and `c - a` the ray test uses, the scene's triangle id, and the link to its
+/// box's half of the parent node (as `TraversalNode::parent`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TraversalTri {
     pub a: [f32; 3],
     pub id: u32,
     pub e1: [f32; 3],
-    pub _pad0: u32,
+    pub parent: u32,
     pub e2: [f32; 3],
-    pub _pad1: u32,
+    pub _pad0: u32,
+}
+
+/// The child link of a BVH leaf of `count` triangles from leaf position `first`.
+pub fn bvh_leaf_link(first: u32, count: u32) -> u32 {
+    use crate::shader_defines::{BVH_LEAF_BIT, BVH_LEAF_COUNT_SHIFT};
+    BVH_LEAF_BIT | (count - 1) << BVH_LEAF_COUNT_SHIFT | first
+}
+
+/// A BVH child link's leaf range (first triangle, count), or `None` for an internal
+/// node's slot.
+pub fn bvh_leaf(link: u32) -> Option<(u32, u32)> {
+    use crate::shader_defines::{BVH_LEAF_BIT, BVH_LEAF_COUNT_SHIFT};
+    (link & BVH_LEAF_BIT != 0).then(|| {
+        (
+            link & ((1 << BVH_LEAF_COUNT_SHIFT) - 1),
+            ((link & !BVH_LEAF_BIT) >> BVH_LEAF_COUNT_SHIFT) + 1,
+        )
+    })
+}
+
+/// A BVH as the GPU holds it, read back: the internal nodes by slot and the triangles
+/// in leaf order (`glsl/shared/bvh.glsl`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackedBvh {
+    pub nodes: Vec<TraversalNode>,
+    pub tris: Vec<TraversalTri>,
 }
 
 /// A ray for `rt.trace` (std430, 32 bytes). Hits count for `tmin < t < tmax`, with t
@@ -149,7 +166,6 @@ pub struct Hit {
     pub v: f32,
 }
 
-const _: () = assert!(std::mem::size_of::<BvhNode>() == 32);
 const _: () = assert!(std::mem::size_of::<TraversalNode>() == 64);
 const _: () = assert!(std::mem::size_of::<TraversalTri>() == 48);
 const _: () = assert!(std::mem::size_of::<Ray>() == 32);

@@ -20,7 +20,7 @@ pub const TEXTURE_NONE: u32 = 0xffff_ffff;
 /// (2r+1)^2 taps bound the cost of the shadow lookup per pixel.
 pub const MAX_PCF_RADIUS: u32 = 4;
 
-/// Workgroup size of the 1D LBVH kernels (bounds, morton, hierarchy, fit) and of
+/// Workgroup size of the 1D LBVH kernels (bounds, morton, fit, refit) and of
 /// `rt.trace` over a ray buffer:
 /// 256 = 32 subgroups on lavapipe, 8 on NVIDIA; enough to hide latency on GPUs.
 pub const LBVH_WG: u32 = 256;
@@ -59,11 +59,17 @@ const _: () = assert!(SORT_WG.is_multiple_of(16) && COMPACT_WG.is_multiple_of(16
 /// 8-lane SIMD groups, 8 NVIDIA warps.
 pub const RT_LIST_WG: u32 = 256;
 
-/// Marks a BVH node's `left` field as a leaf; the low 31 bits are the primitive id.
+/// Marks a BVH child link as a leaf: (count - 1) << `BVH_LEAF_COUNT_SHIFT` | the
+/// position of its first triangle in leaf order.
 pub const BVH_LEAF_BIT: u32 = 0x8000_0000;
+/// Where a leaf's triangle count (minus one) starts in its child link.
+pub const BVH_LEAF_COUNT_SHIFT: u32 = 24;
+/// Most triangles in one BVH leaf (the fit chooses leaves up to this size by SAH).
+pub const BVH_LEAF_MAX: u32 = 4;
+const _: () = assert!(BVH_LEAF_MAX - 1 < 1 << (31 - BVH_LEAF_COUNT_SHIFT));
 /// "No node / no primitive" (parent of the root, the primitive of a miss).
 pub const BVH_INVALID: u32 = 0xffff_ffff;
-/// Traversal stack entries per ray. A 2N-1 node LBVH over one-word keys (a 30-bit
+/// Traversal stack entries per ray. An LBVH over one-word keys (a 30-bit
 /// Morton code and 2 size-class bits) is at most 32 + ceil(log2 N) levels deep (equal
 /// keys split by index), and a walk holds at most one pending child per level: 64 is
 /// enough for every tree the frame builds (`passes::lbvh` asserts it against
@@ -189,6 +195,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("COMPACT_ITEMS", COMPACT_ITEMS),
     ("RT_LIST_WG", RT_LIST_WG),
     ("BVH_LEAF_BIT", BVH_LEAF_BIT),
+    ("BVH_LEAF_COUNT_SHIFT", BVH_LEAF_COUNT_SHIFT),
+    ("BVH_LEAF_MAX", BVH_LEAF_MAX),
     ("BVH_INVALID", BVH_INVALID),
     ("TRACE_STACK", TRACE_STACK),
     ("SSR_REFINE_STEPS", SSR_REFINE_STEPS),

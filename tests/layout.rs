@@ -1,7 +1,7 @@
 //! Rust/GLSL shared structs: member names and byte offsets in the compiled SPIR-V
 //! (std430/std140 as glslang laid them out) equal the `#[repr(C)]` Rust offsets.
 
-use speculum::gpu_types::{BvhNode, FrameUniforms, GpuMaterial, GpuVertex, Hit, Ray, TraversalNode, TraversalTri};
+use speculum::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex, Hit, Ray, TraversalNode, TraversalTri};
 use speculum::passes::compose::ComposePush;
 use speculum::shaders;
 use speculum::vk::spirv::{reflect, words, Reflection};
@@ -65,42 +65,47 @@ fn material_layout_matches_glsl() {
     assert_eq!(r.array_strides["Material"] as usize, size_of::<GpuMaterial>());
 }
 
-/// The tracer's structs (std430): `BvhNode` (32 bytes: both halves of the box with a
-/// link each), `Ray` and `Hit`, as `rt.trace` reads and writes them: offsets and strides.
+/// The tracer's structs (std430): the BVH's `TraversalNode` and `TraversalTri` as the
+/// fit writes them and `rt.trace` reads them, `Ray` and `Hit` as `rt.trace` reads and
+/// writes them: offsets and strides.
 #[test]
 fn tracer_layouts_match_glsl() {
-    let fit = reflected(shaders::LBVH_FIT_COMP);
-    check(&fit, "BvhNode", rust_layout!(BvhNode { lo, left, hi, right }));
-    assert_eq!(fit.array_strides["BvhNode"] as usize, size_of::<BvhNode>());
+    let bvh = [
+        (
+            "TraversalNode",
+            rust_layout!(TraversalNode {
+                lo0,
+                child0,
+                hi0,
+                child1,
+                lo1,
+                parent,
+                hi1,
+                unused
+            }),
+            size_of::<TraversalNode>(),
+        ),
+        (
+            "TraversalTri",
+            rust_layout!(TraversalTri {
+                a,
+                id,
+                e1,
+                parent,
+                e2,
+                _pad0
+            }),
+            size_of::<TraversalTri>(),
+        ),
+    ];
+    for shader in [shaders::LBVH_FIT_COMP, shaders::RT_TRACE_COMP] {
+        let r = reflected(shader);
+        for (name, layout, stride) in &bvh {
+            check(&r, name, layout.clone());
+            assert_eq!(r.array_strides[*name] as usize, *stride, "{name}");
+        }
+    }
     let r = reflected(shaders::RT_TRACE_COMP);
-    check(
-        &r,
-        "TraversalNode",
-        rust_layout!(TraversalNode {
-            lo0,
-            child0,
-            hi0,
-            child1,
-            lo1,
-            _pad0,
-            hi1,
-            _pad1
-        }),
-    );
-    check(
-        &r,
-        "TraversalTri",
-        rust_layout!(TraversalTri {
-            a,
-            id,
-            e1,
-            _pad0,
-            e2,
-            _pad1
-        }),
-    );
-    assert_eq!(r.array_strides["TraversalNode"] as usize, size_of::<TraversalNode>());
-    assert_eq!(r.array_strides["TraversalTri"] as usize, size_of::<TraversalTri>());
     check(
         &r,
         "Ray",
@@ -166,15 +171,16 @@ fn compose_push_layout_matches_glsl() {
 }
 
 /// The push-constant block's size is reflected (pipelines check their push type
-/// against it): 20 B for compose, 4 B for the fit's triangle count and for
-/// light.direct's visibility switch.
+/// against it): 20 B for compose, 8 B for the fit's triangle count and key width, 4 B
+/// for the refit's triangle count and for light.direct's visibility switch.
 #[test]
 fn push_block_sizes_are_reflected() {
     assert_eq!(
         reflected(shaders::COMPOSE_COMP).push_size as usize,
         size_of::<ComposePush>()
     );
-    assert_eq!(reflected(shaders::LBVH_FIT_COMP).push_size, 4);
+    assert_eq!(reflected(shaders::LBVH_FIT_COMP).push_size, 8);
+    assert_eq!(reflected(shaders::LBVH_REFIT_LEAVES_COMP).push_size, 4);
     assert_eq!(
         reflected(shaders::REFLECT_BLUR_COMP).push_size,
         16,

@@ -1,6 +1,6 @@
 //! The GPU LBVH against its CPU references: Morton codes and the radix sort exactly,
-//! the hierarchy's topology exactly, boxes exactly (min/max are exact in f32), the
-//! BVH invariants on random and degenerate inputs, and refit.
+//! the fit's tree (topology, slots, links) exactly, boxes exactly (min/max are exact in
+//! f32), the BVH invariants on random and degenerate inputs, and both refits.
 
 mod common;
 
@@ -8,7 +8,7 @@ use ash::vk;
 use glam::Vec3;
 use rand::Rng;
 use speculum::cpu_ref::lbvh as cref;
-use speculum::gpu_types::GpuVertex;
+use speculum::gpu_types::{GpuVertex, PackedBvh};
 use speculum::passes::lbvh::sort::SortBuffers;
 use speculum::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
 use speculum::scene::soup::{default_size, random_soup};
@@ -41,10 +41,9 @@ impl GpuGeometry {
 
 fn build(ctx: &Arc<Context>, b: &LbvhBuilder, g: &GpuGeometry, bits: MortonBits) -> Bvh {
     let bvh = Bvh::new(ctx, g.tri_count, bits).unwrap();
-    // Poison the nodes and the traversal layout: what the kernels fail to write cannot
-    // pass the checks.
+    // Poison the nodes and triangles: what the kernels fail to write cannot pass the
+    // checks.
     poison_packed(&bvh);
-    bvh.nodes.write(&vec![0xa5u8; bvh.nodes.size as usize]).unwrap();
     let mut timer = GpuTimer::new(ctx, 8).unwrap();
     ctx.one_shot(|cmd| {
         timer.reset(cmd);
@@ -59,16 +58,34 @@ fn poison_packed(bvh: &Bvh) {
     bvh.ttris.write(&vec![0x5au8; bvh.ttris.size as usize]).unwrap();
 }
 
-/// The traversal layout the fit or refit wrote equals the CPU's from the CPU-fitted `want`, byte for
-/// byte (boxes and edges are copies and exact subtractions).
-fn assert_packed(bvh: &Bvh, want: &[speculum::gpu_types::BvhNode], v: &[GpuVertex], i: &[u32], what: &str) {
-    let (tnodes, ttris) = bvh.read_packed().unwrap();
-    let (want_nodes, want_tris) = cref::pack(want, v, i);
-    assert_eq!(tnodes.len(), want_nodes.len(), "{what}: traversal nodes");
-    for (k, (got, exp)) in tnodes.iter().zip(&want_nodes).enumerate() {
-        assert_eq!(got, exp, "{what}: traversal node {k}");
+/// The BVH the fit or a refit wrote equals the CPU's `want` bit for bit (boxes and edges
+/// are copies and exact subtractions), but for the nodes' `unused` words, which no
+/// kernel writes. Returns what the GPU wrote.
+fn assert_packed(bvh: &Bvh, want: &PackedBvh, what: &str) -> PackedBvh {
+    let mut got = bvh.read_packed().unwrap();
+    for nd in &mut got.nodes {
+        nd.unused = 0;
     }
-    assert_eq!(ttris, want_tris, "{what}: triangles in leaf order");
+    assert_eq!(got.nodes.len(), want.nodes.len(), "{what}: nodes");
+    for (k, (g, w)) in got.nodes.iter().zip(&want.nodes).enumerate() {
+        assert_eq!(
+            (g.child0, g.child1, g.parent),
+            (w.child0, w.child1, w.parent),
+            "{what}: links of node {k}"
+        );
+        assert_eq!(g, w, "{what}: node {k}");
+    }
+    assert_eq!(got.tris, want.tris, "{what}: triangles in leaf order");
+    got
+}
+
+/// The CPU's BVH over `v`, `i` from the keys of `keys_from` (the same vertices, or the
+/// ones the tree was built on before they moved).
+fn cpu_bvh(keys_from: &[GpuVertex], v: &[GpuVertex], i: &[u32], bits: MortonBits) -> PackedBvh {
+    let n = i.len() / 3;
+    let keys = cref::morton_keys(keys_from, i, bits.key_words());
+    let (sk, sv) = cref::sort_pairs(&keys, &(0..n as u32).collect::<Vec<_>>());
+    cref::build(&sk, &sv, v, i)
 }
 
 fn keys_u64(raw: &[u32], key_words: u32) -> Vec<u64> {
@@ -173,40 +190,27 @@ fn radix_sort_is_a_stable_sort() {
     }
 }
 
-/// Full builds: links and parents equal Karras on the CPU exactly, boxes equal the CPU
-/// fit exactly, and the invariants hold; with the fit climbing freely and in lockstep
-/// (the variant lavapipe before Mesa 25 gets) alike.
+/// Full builds: the tree (child links, slots, parent links) equals the CPU's top-down
+/// radix tree exactly, boxes and triangles equal the CPU's exactly, and the invariants
+/// hold; with the fit climbing freely and in lockstep (the variant lavapipe before
+/// Mesa 25 gets) alike.
 #[test]
-fn hierarchy_and_fit_match_cpu_exactly() {
+fn fit_matches_cpu_exactly() {
     let ctx = common::context();
     for lockstep in [false, true] {
-        hierarchy_and_fit_match_cpu(&ctx, &LbvhBuilder::with_fit(&ctx, lockstep).unwrap());
+        fit_matches_cpu(&ctx, &LbvhBuilder::with_fit(&ctx, lockstep).unwrap());
     }
 }
 
-fn hierarchy_and_fit_match_cpu(ctx: &Arc<Context>, b: &LbvhBuilder) {
+fn fit_matches_cpu(ctx: &Arc<Context>, b: &LbvhBuilder) {
     for (seed, &n) in [1usize, 2, 3, 1000, 65537].iter().enumerate() {
         let (v, i) = random_soup(n, 3.0, default_size(n) * 3.0, 100 + seed as u64);
         let g = GpuGeometry::new(ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
             let bvh = build(ctx, b, &g, bits);
-            let nodes = bvh.read_nodes().unwrap();
-            let parents: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.parents.read().unwrap());
-            let keys = cref::morton_keys(&v, &i, bits.key_words());
-            let (sk, sv) = cref::sort_pairs(&keys, &(0..n as u32).collect::<Vec<_>>());
-            let (mut want, want_parents) = cref::hierarchy(&sk, &sv, bits.key_words());
-            cref::fit(&mut want, &v, &i);
-            assert_eq!(parents, want_parents, "n={n} {bits:?}: parents");
-            for (k, (got, exp)) in nodes.iter().zip(&want).enumerate() {
-                assert_eq!(
-                    (got.left, got.right),
-                    (exp.left, exp.right),
-                    "n={n} {bits:?}: links of node {k}"
-                );
-                assert_eq!(got, exp, "n={n} {bits:?}: node {k}");
-            }
-            cref::check_bvh(&nodes, Some(&parents), &v, &i).unwrap_or_else(|e| panic!("n={n} {bits:?}: {e}"));
-            assert_packed(&bvh, &want, &v, &i, &format!("n={n} {bits:?}"));
+            let want = cpu_bvh(&v, &v, &i, bits);
+            let got = assert_packed(&bvh, &want, &format!("n={n} {bits:?}"));
+            cref::check_bvh(&got, &v, &i).unwrap_or_else(|e| panic!("n={n} {bits:?}: {e}"));
         }
     }
 }
@@ -292,9 +296,8 @@ fn degenerate_inputs_give_valid_bvhs() {
         let g = GpuGeometry::new(&ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
             let bvh = build(&ctx, &b, &g, bits);
-            let nodes = bvh.read_nodes().unwrap();
-            let parents: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.parents.read().unwrap());
-            cref::check_bvh(&nodes, Some(&parents), &v, &i).unwrap_or_else(|e| panic!("{name} {bits:?}: {e}"));
+            let got = assert_packed(&bvh, &cpu_bvh(&v, &v, &i, bits), &format!("{name} {bits:?}"));
+            cref::check_bvh(&got, &v, &i).unwrap_or_else(|e| panic!("{name} {bits:?}: {e}"));
         }
     }
 }
@@ -303,117 +306,117 @@ fn degenerate_inputs_give_valid_bvhs() {
 #[test]
 fn invariant_checker_rejects_broken_trees() {
     let (v, i) = random_soup(100, 1.0, 0.1, 3);
-    let keys = cref::morton_keys(&v, &i, 1);
-    let (sk, sv) = cref::sort_pairs(&keys, &(0..100).collect::<Vec<_>>());
-    let (mut nodes, parents) = cref::hierarchy(&sk, &sv, 1);
-    cref::fit(&mut nodes, &v, &i);
-    cref::check_bvh(&nodes, Some(&parents), &v, &i).unwrap();
-    let mut shrunk = nodes.clone();
-    shrunk[5].hi[0] -= 1e-3;
-    assert!(cref::check_bvh(&shrunk, None, &v, &i).is_err());
-    let mut dup = nodes.clone();
-    let leaf = dup.len() - 1;
-    dup[leaf].left = dup[leaf - 1].left;
-    assert!(cref::check_bvh(&dup, None, &v, &i).is_err());
-    let mut bad_parent = parents.clone();
-    bad_parent[3] = 0;
-    assert!(cref::check_bvh(&nodes, Some(&bad_parent), &v, &i).is_err() || parents[3] == 0);
+    let good = cpu_bvh(&v, &v, &i, MortonBits::Bits30);
+    cref::check_bvh(&good, &v, &i).unwrap();
+    type Spoil = fn(&mut PackedBvh);
+    let broken: [(&str, Spoil); 6] = [
+        ("a shrunk box", |b| b.nodes[5].hi0[0] -= 1e-3),
+        ("a triangle in two leaves", |b| {
+            let last = b.tris.len() - 1;
+            b.tris[last].id = b.tris[last - 1].id;
+        }),
+        ("a wrong parent link", |b| b.nodes[3].parent ^= 1),
+        ("a leaf's wrong parent link", |b| b.tris[7].parent ^= 2),
+        ("a node reached twice", |b| b.nodes[0].child1 = b.nodes[0].child0),
+        ("a moved edge", |b| b.tris[2].e1[1] += 1e-3),
+    ];
+    for (what, spoil) in broken {
+        let mut b = good.clone();
+        spoil(&mut b);
+        assert!(cref::check_bvh(&b, &v, &i).is_err(), "{what} passed");
+    }
 }
 
-/// Refit after moving every vertex equals a CPU fit of the same tree over the moved
-/// triangles, and passes the invariants.
+fn wave(v: &[GpuVertex]) -> Vec<GpuVertex> {
+    v.iter()
+        .map(|p| {
+            let mut q = *p;
+            q.position[1] += 0.3 * (q.position[0] * 2.0).sin();
+            q
+        })
+        .collect()
+}
+
+/// The fit re-run after every vertex moved (`record_refit`, the tree from the keys
+/// still sorted) equals the CPU's tree of the old keys over the moved triangles, and
+/// passes the invariants.
 #[test]
-fn refit_matches_cpu_fit_after_moving_vertices() {
+fn refit_matches_cpu_after_moving_vertices() {
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
     let n = 20000;
     let (v, i) = random_soup(n, 2.0, default_size(n) * 2.0, 5);
     let g = GpuGeometry::new(&ctx, &v, &i);
     let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
-    let before = bvh.read_nodes().unwrap();
-    // Deform: a wave that keeps topology.
-    let moved: Vec<GpuVertex> = v
-        .iter()
-        .map(|p| {
-            let mut q = *p;
-            q.position[1] += 0.3 * (q.position[0] * 2.0).sin();
-            q
-        })
-        .collect();
+    let before = bvh.read_packed().unwrap();
+    let moved = wave(&v);
     g.vertices.write(bytemuck::cast_slice(&moved)).unwrap();
+    poison_packed(&bvh);
     let mut timer = GpuTimer::new(&ctx, 2).unwrap();
     ctx.one_shot(|cmd| {
         timer.reset(cmd);
         b.record_refit(cmd, &mut timer, g.geometry(), &bvh);
     })
     .unwrap();
-    let after = bvh.read_nodes().unwrap();
-    let mut want = before.clone();
-    cref::fit(&mut want, &moved, &i);
-    assert_eq!(after, want);
-    assert_ne!(after, before, "the boxes moved");
-    cref::check_bvh(&after, None, &moved, &i).unwrap();
-    assert_packed(&bvh, &want, &moved, &i, "refit");
+    let after = assert_packed(&bvh, &cpu_bvh(&v, &moved, &i, MortonBits::Bits30), "refit");
+    assert_ne!(after.nodes, before.nodes, "the boxes moved");
+    cref::check_bvh(&after, &moved, &i).unwrap();
 }
 
 /// The scheduled refit (leaves, then height levels, the top in one workgroup) gives
-/// exactly the CPU fit's boxes after the vertices move, for trees whose levels all fit
-/// the top pass (300 triangles) and ones with big levels of their own (20,000); the
+/// exactly the CPU refit's boxes after the vertices move (leaves kept as built), for trees whose levels all fit the
+/// top pass (300 triangles) and ones with big levels of their own (20,000); the
 /// schedule orders every node after both its children.
 #[test]
-fn scheduled_refit_matches_cpu_fit() {
+fn scheduled_refit_matches_cpu() {
     use speculum::passes::lbvh::{refit_order, RefitSchedule};
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
-    for n in [300usize, 20000] {
+    for n in [1usize, 2, 300, 20000] {
         let (v, i) = random_soup(n, 2.0, default_size(n) * 2.0, 7);
         let g = GpuGeometry::new(&ctx, &v, &i);
         let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
-        let before = bvh.read_nodes().unwrap();
+        let before = bvh.read_packed().unwrap();
         let (order, levels) = refit_order(&before, n as u32);
         assert_eq!(order.len(), n - 1, "every internal node once");
-        let mut rank = vec![usize::MAX; before.len()];
-        for (k, &node) in order.iter().enumerate() {
-            rank[node as usize] = k;
+        let mut rank = vec![usize::MAX; before.nodes.len()];
+        for (k, &s) in order.iter().enumerate() {
+            rank[s as usize] = k;
         }
-        for (k, &node) in order.iter().enumerate() {
-            for c in [before[node as usize].left, before[node as usize].right] {
-                assert!(
-                    (c as usize) >= n - 1 || rank[c as usize] < k,
-                    "node {node} before its child {c}"
-                );
-            }
+        // Every node after its children in the binary tree (the parent links), also
+        // those inside leaves of several triangles.
+        for (s, nd) in before.nodes.iter().enumerate().skip(1) {
+            let p = (nd.parent >> 1) as usize;
+            assert!(rank[s] < rank[p], "node {p} before its child {s}");
         }
         assert!(levels.windows(2).all(|w| w[1][1] <= w[0][1]), "levels never grow");
         let schedule = RefitSchedule::of(&ctx, &bvh).unwrap();
-        let moved: Vec<GpuVertex> = v
-            .iter()
-            .map(|p| {
-                let mut q = *p;
-                q.position[1] += 0.3 * (q.position[0] * 2.0).sin();
-                q
-            })
-            .collect();
+        let moved = wave(&v);
         g.vertices.write(bytemuck::cast_slice(&moved)).unwrap();
-        // Poison the internal boxes: every one must be written.
+        // Poison every box and corner, keeping the tree: each must be written.
         let mut poisoned = before.clone();
-        for nd in &mut poisoned[..n - 1] {
-            nd.lo = [f32::NAN; 3];
-            nd.hi = [f32::NAN; 3];
+        for nd in &mut poisoned.nodes {
+            (nd.lo0, nd.hi0, nd.lo1, nd.hi1) = ([f32::NAN; 3], [f32::NAN; 3], [f32::NAN; 3], [f32::NAN; 3]);
         }
-        bvh.nodes.write(bytemuck::cast_slice(&poisoned)).unwrap();
-        poison_packed(&bvh);
+        for t in &mut poisoned.tris {
+            (t.a, t.e1, t.e2) = ([f32::NAN; 3], [f32::NAN; 3], [f32::NAN; 3]);
+        }
+        bvh.tnodes.write(bytemuck::cast_slice(&poisoned.nodes)).unwrap();
+        bvh.ttris.write(bytemuck::cast_slice(&poisoned.tris)).unwrap();
         let mut timer = GpuTimer::new(&ctx, 2).unwrap();
         ctx.one_shot(|cmd| {
             timer.reset(cmd);
             b.record_refit_scheduled(cmd, &mut timer, g.geometry(), &bvh, &schedule);
         })
         .unwrap();
-        let after = bvh.read_nodes().unwrap();
-        let mut want = before.clone();
-        cref::fit(&mut want, &moved, &i);
-        assert_eq!(after, want, "{n} triangles");
-        assert_packed(&bvh, &want, &moved, &i, &format!("scheduled refit, {n} triangles"));
+        // The same tree and leaves (the fit would choose other leaves over the moved
+        // triangles; the refit keeps them), every box and triangle recomputed.
+        let after = assert_packed(
+            &bvh,
+            &cref::refit(&cpu_bvh(&v, &v, &i, MortonBits::Bits30), &moved, &i),
+            &format!("scheduled refit, {n} triangles"),
+        );
+        cref::check_bvh(&after, &moved, &i).unwrap();
         assert!(levels.iter().any(|l| l[1] > 1024) == (n > 5000), "{n}: {levels:?}");
     }
 }
@@ -433,8 +436,8 @@ fn size_classes_keep_walls_apart() {
         let (v, i) = (&scene.vertices, &scene.indices);
         let g = GpuGeometry::new(&ctx, v, i);
         let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
-        let ratio =
-            cref::sah_cost_nodes(&bvh.read_nodes().unwrap()) / speculum::cpu_ref::trace::CpuBvh::build(v, i).sah_cost();
+        let ratio = cref::sah_cost(&bvh.read_packed().unwrap().nodes, i.len() / 3)
+            / speculum::cpu_ref::trace::CpuBvh::build(v, i).sah_cost();
         println!("{}: SAH {ratio:.3} of binned SAH", scene.name);
         assert!(ratio < 1.4, "{}: SAH ratio {ratio:.3}", scene.name);
         let keys = cref::morton_keys(v, i, 1);

@@ -70,14 +70,13 @@ fn check_stat(v: &Value, what: &str) {
 }
 
 /// The scopes only a dynamic scene runs (these reports are of static scenes).
-const DYNAMIC_SCOPES: [&str; 9] = [
+const DYNAMIC_SCOPES: [&str; 8] = [
     "sim.rigid",
     "sim.transform",
     "sim.cloth",
     "lbvh.bounds",
     "lbvh.morton",
     "lbvh.sort",
-    "lbvh.hierarchy",
     "lbvh.fit",
     "lbvh.refit",
 ];

@@ -145,7 +145,7 @@ fn one_shot_scopes_pass_their_self_check() {
             ),
         }
     };
-    assert_eq!(build.len(), 6, "the build and its five stages: {:?}", build.scopes);
+    assert_eq!(build.len(), 5, "the build and its four stages: {:?}", build.scopes);
     let (lo, hi) = (glam::Vec3::splat(-5.0), glam::Vec3::splat(5.0));
     let rays = speculum::bench::lbvh::incoherent_rays(lo, hi, 50_000, 3);
     let tracer = speculum::passes::rt_trace::TracePass::new(&ctx).unwrap();

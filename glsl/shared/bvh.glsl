@@ -1,30 +1,27 @@
-// BVH node layout (src/gpu_types.rs: BvhNode), shared by the LBVH kernels and the
-// traversal. A BVH over N triangles has 2N-1 nodes: internal nodes 0..N-2 (node 0 is
-// the root), leaves N-1..2N-2 (for N = 1 the root is the single leaf).
+// BVH layout (src/gpu_types.rs: TraversalNode, TraversalTri), written by lbvh.fit and
+// the refit, read by the traversal. A BVH over N triangles is the binary radix tree of
+// its sorted Morton keys (Karras 2012): N leaves in key order and N-1 internal nodes,
+// each internal node stored with both children's boxes, so one 64-byte fetch tests both.
 //
-//   node: | lo.x lo.y lo.z | left  | hi.x hi.y hi.z | right |   32 bytes
-//   internal: left/right = child node indices
-//   leaf:     left = BVH_LEAF_BIT | triangle id, right = BVH_INVALID
+//   node:     | lo0 | child0 | hi0 | child1 | lo1 | parent | hi1 | unused |   64 bytes
+//   triangle: | a | triangle id | b - a | parent | c - a | 0 |               48 bytes
 //
-// The traversal reads a layout the fit and the refit write beside it (src/gpu_types.rs:
-// TraversalNode, TraversalTri): N-1 internal nodes (one for N = 1, whose two children
-// are that leaf), each holding both children's boxes, written by the invocation that
-// computes the node's own box, and the N triangles in leaf order, written with the
-// leaf boxes.
-//
-//   traversal node: | lo0 | child0 | hi0 | child1 | lo1 | 0 | hi1 | 0 |   64 bytes
-//   child: an internal node's index, or BVH_LEAF_BIT | the leaf's position
-//   traversal triangle: | a | triangle id | b - a | 0 | c - a | 0 |      48 bytes
+// child: an internal node's slot, or a leaf: BVH_LEAF_BIT | (count - 1) <<
+// BVH_LEAF_COUNT_SHIFT | the position of its first triangle in key order, its
+// 1..BVH_LEAF_MAX triangles consecutive there.
+// parent: the link to the half of the parent node that holds this node's box,
+// slot << 1 | side (side 0: child0, 1: child1); BVH_INVALID at the root. `unused` is
+// never written. Every internal node of the binary radix tree has its slot and links,
+// also those inside a leaf of several triangles (out of the traversal's reach, their
+// boxes kept by the refit). The internal node that splits keys p | p+1 sits in slot
+//   0      for the root,
+//   p + 1  when p is left of the root's split,
+//   p      when p is right of it,
+// so the root is slot 0 and the N-1 slots are dense. A single triangle has one node
+// (slot 0) whose two children are that leaf, whose link is (0, side 0).
 #ifndef BVH_GLSL
 #define BVH_GLSL
 #include "types.glsl"
-
-struct BvhNode {
-    vec3 lo;
-    uint left;
-    vec3 hi;
-    uint right;
-};
 
 struct TraversalNode {
     vec3 lo0;
@@ -32,60 +29,79 @@ struct TraversalNode {
     vec3 hi0;
     uint child1;
     vec3 lo1;
-    uint _pad0;
+    uint parent;
     vec3 hi1;
-    uint _pad1;
+    uint unused;
 };
 
 struct TraversalTri {
     vec3 a;
     uint id;
     vec3 e1;
-    uint _pad0;
+    uint parent;
     vec3 e2;
-    uint _pad1;
+    uint _pad0;
 };
 
-// The traversal layout's link to node c of a tree over n triangles: internal nodes keep
-// their index, leaves become their position in leaf order.
-uint traversal_ref(uint c, uint n) {
-    return c < n - 1u ? c : (BVH_LEAF_BIT | (c - (n - 1u)));
+// A leaf's child reference: `count` triangles from key position `first`.
+uint bvh_leaf_ref(uint first, uint count) {
+    return BVH_LEAF_BIT | ((count - 1u) << BVH_LEAF_COUNT_SHIFT) | first;
 }
 
-// The traversal node of an internal node with children `l`, `r` and their boxes.
-TraversalNode traversal_node(uint l, vec3 l_lo, vec3 l_hi, uint r, vec3 r_lo, vec3 r_hi, uint n) {
-    return TraversalNode(l_lo, traversal_ref(l, n), l_hi, traversal_ref(r, n), r_lo, 0u, r_hi, 0u);
+// First triangle and count of a leaf's child reference.
+uint bvh_leaf_first(uint ref) {
+    return ref & ((1u << BVH_LEAF_COUNT_SHIFT) - 1u);
+}
+uint bvh_leaf_count(uint ref) {
+    return ((ref & ~BVH_LEAF_BIT) >> BVH_LEAF_COUNT_SHIFT) + 1u;
 }
 
-// The fit's and the refits' two steps, on the includer's buffers (GLSL cannot pass a
-// buffer to a function): `nodes` (BvhNode), `tnodes` (TraversalNode), `ttris`
-// (TraversalTri), over a tree of `n` triangles.
-//
-// FIT_LEAF: leaf j (node n - 1 + j) gets its triangle's box, and its traversal triangle;
-// a single triangle also gets the one traversal node, whose two children are that leaf.
-#define FIT_LEAF(vertices, indices, nodes, tnodes, ttris, j, n)                          \
+// Surface area of a box, without contraction, in the order cpu_ref (Aabb::area) uses:
+// the fit's leaf decisions are bit-exact on both sides.
+float bvh_area(vec3 lo, vec3 hi) {
+    vec3 d = hi - lo;
+    precise float a = 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
+    return a;
+}
+
+// A box into one half of a node: child0's (side 0) or child1's (side 1). A macro on
+// the includer's node buffer (GLSL cannot pass a buffer to a function).
+#define STORE_HALF(tnodes, slot, side, lo, hi)                                           \
+    if ((side) == 0u) {                                                                   \
+        tnodes[slot].lo0 = (lo);                                                          \
+        tnodes[slot].hi0 = (hi);                                                          \
+    } else {                                                                              \
+        tnodes[slot].lo1 = (lo);                                                          \
+        tnodes[slot].hi1 = (hi);                                                          \
+    }
+
+// The refits' two steps on the includer's `tnodes` and `ttris` over n triangles.
+// REFIT_LEAF: leaf j's triangle from the moved vertices, and its box into its parent's
+// half (both halves for a single triangle).
+#define REFIT_LEAF(vertices, indices, tnodes, ttris, j, n)                               \
     {                                                                                     \
-        uint leaf_ = (n) - 1u + (j);                                                      \
-        uint prim_ = nodes[leaf_].left & ~BVH_LEAF_BIT;                                   \
+        uint prim_ = ttris[j].id;                                                         \
+        uint link_ = ttris[j].parent;                                                     \
         TRIANGLE_CORNERS(vertices, indices, prim_, a_, b_, c_)                            \
+        ttris[j].a = a_;                                                                  \
+        ttris[j].e1 = b_ - a_;                                                            \
+        ttris[j].e2 = c_ - a_;                                                            \
         vec3 lo_ = min(a_, min(b_, c_)), hi_ = max(a_, max(b_, c_));                      \
-        nodes[leaf_].lo = lo_;                                                            \
-        nodes[leaf_].hi = hi_;                                                            \
-        ttris[j] = TraversalTri(a_, prim_, b_ - a_, 0u, c_ - a_, 0u);                     \
+        STORE_HALF(tnodes, link_ >> 1u, link_ & 1u, lo_, hi_)                             \
         if ((n) == 1u) {                                                                  \
-            tnodes[0] = traversal_node(0u, lo_, hi_, 0u, lo_, hi_, 1u);                   \
+            STORE_HALF(tnodes, 0u, 1u, lo_, hi_)                                          \
         }                                                                                 \
     }
-// UNITE: internal node `node`'s box, the union of its children's, and its traversal
-// node.
-#define UNITE(nodes, tnodes, node, n)                                                     \
+// REFIT_NODE: internal node `slot`'s box, the union of its halves, into its parent's
+// half (nothing for the root).
+#define REFIT_NODE(tnodes, slot)                                                          \
     {                                                                                     \
-        uint l_ = nodes[node].left, r_ = nodes[node].right;                               \
-        vec3 l_lo_ = nodes[l_].lo, l_hi_ = nodes[l_].hi;                                  \
-        vec3 r_lo_ = nodes[r_].lo, r_hi_ = nodes[r_].hi;                                  \
-        nodes[node].lo = min(l_lo_, r_lo_);                                               \
-        nodes[node].hi = max(l_hi_, r_hi_);                                               \
-        tnodes[node] = traversal_node(l_, l_lo_, l_hi_, r_, r_lo_, r_hi_, (n));           \
+        uint link_ = tnodes[slot].parent;                                                 \
+        if (link_ != BVH_INVALID) {                                                       \
+            vec3 lo_ = min(tnodes[slot].lo0, tnodes[slot].lo1);                           \
+            vec3 hi_ = max(tnodes[slot].hi0, tnodes[slot].hi1);                           \
+            STORE_HALF(tnodes, link_ >> 1u, link_ & 1u, lo_, hi_)                         \
+        }                                                                                 \
     }
 
 // Float <-> uint mapping that preserves order, so atomicMin/atomicMax on uint act as

@@ -7,9 +7,9 @@
 // cpu_ref::trace.
 //
 // The includer defines TRAVERSE_BINDING (first of eight consecutive bindings) first.
-// The walk reads the traversal layout (bvh.glsl): one 64-byte node per step, whose two
-// children's boxes are tested together, and one 48-byte triangle per leaf in leaf
-// order; the scene's vertices and indices serve only the hit's attributes.
+// The walk reads the BVH's layout (bvh.glsl): one 64-byte node per step, whose two
+// children's boxes are tested together, and a leaf's 1..BVH_LEAF_MAX 48-byte triangles
+// in leaf order; the scene's vertices and indices serve only the hit's attributes.
 #ifndef TRAVERSE_GLSL
 #define TRAVERSE_GLSL
 #include "bvh.glsl"
@@ -63,6 +63,33 @@ float box_entry(vec3 lo, vec3 hi, vec3 o, vec3 inv_dir, float tmin, float tmax) 
 }
 
 
+// Tests triangle k (in leaf order) of `bvh`; true when it is hit within (tmin,
+// best.t), or at best.t with a smaller id, and then `best` is that hit.
+bool hit_triangle(uint bvh, uint k, vec3 origin, vec3 dir, float tmin, inout Hit best) {
+    vec3 a, e1, e2;
+    uint t;
+    fetch_triangle(bvh, k, a, e1, e2, t);
+    vec3 p = cross(dir, e2);
+    float det = dot(e1, p);
+    if (det == 0.0) {
+        return false;
+    }
+    float inv_det = 1.0 / det;
+    vec3 s = origin - a;
+    float u = dot(s, p) * inv_det;
+    vec3 q = cross(s, e1);
+    float v = dot(dir, q) * inv_det;
+    float th = dot(e2, q) * inv_det;
+    uint id = t | (bvh << 31);
+    bool inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
+    bool closer = th < best.t || (th == best.t && id < best.prim);
+    if (inside && th > tmin && closer) {
+        best = Hit(th, id, u, v);
+        return true;
+    }
+    return false;
+}
+
 // Vertex `k` (0..2) of hit triangle `prim` (bit 31: dynamic BVH).
 Vertex hit_vertex(uint prim, uint k) {
     uint t = prim & 0x7fffffffu;
@@ -91,27 +118,14 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
         uint node = 0u; // the root, an internal node (or two links to the single leaf)
         while (true) {
             if ((node & BVH_LEAF_BIT) != 0u) {
-                vec3 a, e1, e2;
-                uint t;
-                fetch_triangle(bvh, node & ~BVH_LEAF_BIT, a, e1, e2, t);
-                vec3 p = cross(dir, e2);
-                float det = dot(e1, p);
-                if (det != 0.0) {
-                    float inv_det = 1.0 / det;
-                    vec3 s = origin - a;
-                    float u = dot(s, p) * inv_det;
-                    vec3 q = cross(s, e1);
-                    float v = dot(dir, q) * inv_det;
-                    float th = dot(e2, q) * inv_det;
-                    uint id = t | (bvh << 31);
-                    bool inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
-                    bool closer = th < best.t || (th == best.t && id < best.prim);
-                    if (inside && th > tmin && closer) {
-                        best = Hit(th, id, u, v);
-                        if (any_hit) {
-                            break;
-                        }
-                    }
+                uint first = bvh_leaf_first(node);
+                uint last = first + bvh_leaf_count(node);
+                bool found = false;
+                for (uint k = first; k < last && !found; ++k) {
+                    found = hit_triangle(bvh, k, origin, dir, tmin, best) && any_hit;
+                }
+                if (found) {
+                    break;
                 }
             } else {
                 TraversalNode nd = fetch_node(bvh, node);

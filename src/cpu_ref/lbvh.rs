@@ -2,8 +2,8 @@
 //! checks every built BVH must pass.
 
 pub use crate::aabb::{ordered_to_float, Aabb};
-use crate::gpu_types::{BvhNode, GpuVertex, TraversalNode, TraversalTri};
-use crate::shader_defines::{BVH_INVALID, BVH_LEAF_BIT};
+use crate::gpu_types::{bvh_leaf, bvh_leaf_link, GpuVertex, PackedBvh, TraversalNode, TraversalTri};
+use crate::shader_defines::{BVH_INVALID, BVH_LEAF_MAX};
 use glam::{UVec3, Vec3};
 
 /// Corners of triangle `t`.
@@ -101,207 +101,344 @@ pub fn sort_pairs(keys: &[u64], values: &[u32]) -> (Vec<u64>, Vec<u32>) {
     pairs.into_iter().unzip()
 }
 
-fn delta(keys: &[u64], key_words: u32, i: i64, j: i64) -> i64 {
-    if j < 0 || j >= keys.len() as i64 {
-        return -1;
-    }
-    let bits = 32 * key_words as i64;
-    let x = keys[i as usize] ^ keys[j as usize];
-    if x != 0 {
-        x.leading_zeros() as i64 - (64 - bits)
-    } else {
-        bits + (i as u32 ^ j as u32).leading_zeros() as i64
-    }
+/// Sorted key `i` extended by its index (Karras 2012, section 4), so that every two
+/// positions differ: (key << 32) | i.
+fn ext_key(keys: &[u64], i: usize) -> u128 {
+    ((keys[i] as u128) << 32) | i as u128
 }
 
-/// `lbvh.hierarchy` (Karras 2012): child links of the 2N-1 nodes (boxes left zero) and
-/// the parent of every node, from sorted keys and their primitive ids.
-pub fn hierarchy(keys: &[u64], values: &[u32], key_words: u32) -> (Vec<BvhNode>, Vec<u32>) {
-    let n = keys.len() as i64;
-    let mut nodes = vec![BvhNode::default(); (2 * n - 1).max(0) as usize];
-    let mut parents = vec![0u32; nodes.len()];
-    if n == 0 {
-        return (nodes, parents);
-    }
-    for (i, v) in values.iter().enumerate() {
-        nodes[(n - 1) as usize + i].left = BVH_LEAF_BIT | v;
-        nodes[(n - 1) as usize + i].right = BVH_INVALID;
-    }
-    parents[0] = BVH_INVALID;
-    let delta = |i: i64, j: i64| delta(keys, key_words, i, j);
-    for i in 0..n - 1 {
-        let d = if delta(i, i + 1) - delta(i, i - 1) >= 0 { 1 } else { -1 };
-        let delta_min = delta(i, i - d);
-        let mut l_max = 2;
-        while delta(i, i + l_max * d) > delta_min {
-            l_max *= 2;
-        }
-        let mut l = 0;
-        let mut t = l_max / 2;
-        while t >= 1 {
-            if delta(i, i + (l + t) * d) > delta_min {
-                l += t;
-            }
-            t /= 2;
-        }
-        let j = i + l * d;
-        let delta_node = delta(i, j);
-        let mut s = 0;
-        let mut div = 2;
-        loop {
-            let t = (l + div - 1) / div;
-            if delta(i, i + (s + t) * d) > delta_node {
-                s += t;
-            }
-            if t == 1 {
-                break;
-            }
-            div *= 2;
-        }
-        let gamma = i + s * d + d.min(0);
-        let left = if i.min(j) == gamma { n - 1 + gamma } else { gamma } as u32;
-        let right = if i.max(j) == gamma + 1 {
-            n - 1 + gamma + 1
-        } else {
-            gamma + 1
-        } as u32;
-        nodes[i as usize].left = left;
-        nodes[i as usize].right = right;
-        parents[left as usize] = i as u32;
-        parents[right as usize] = i as u32;
-    }
-    (nodes, parents)
-}
-
-/// `lbvh.fit`: fills the boxes of a tree whose links are set.
-pub fn fit(nodes: &mut [BvhNode], vertices: &[GpuVertex], indices: &[u32]) {
-    fn visit(nodes: &mut [BvhNode], i: usize, vertices: &[GpuVertex], indices: &[u32]) -> Aabb {
-        let nd = nodes[i];
-        let b = if nd.left & BVH_LEAF_BIT != 0 {
-            Aabb::of_triangle(&triangle(vertices, indices, (nd.left & !BVH_LEAF_BIT) as usize))
-        } else {
-            let l = visit(nodes, nd.left as usize, vertices, indices);
-            let r = visit(nodes, nd.right as usize, vertices, indices);
-            l.union(r)
-        };
-        nodes[i].lo = b.lo.to_array();
-        nodes[i].hi = b.hi.to_array();
-        b
-    }
-    if !nodes.is_empty() {
-        visit(nodes, 0, vertices, indices);
-    }
-}
-
-/// The traversal layout `lbvh.fit` and `lbvh.refit` write beside the nodes, from a
-/// fitted tree over `indices.len() / 3` triangles: each internal node with both
-/// children's boxes (a single triangle: one node whose two children are that leaf),
-/// and the triangles in leaf order with their edges.
-pub fn pack(nodes: &[BvhNode], vertices: &[GpuVertex], indices: &[u32]) -> (Vec<TraversalNode>, Vec<TraversalTri>) {
-    let n = indices.len() / 3;
-    let internal = n - 1;
-    let child = |c: u32| {
-        if (c as usize) < internal {
-            c
-        } else {
-            BVH_LEAF_BIT | (c - internal as u32)
-        }
-    };
-    let packed = |l: u32, r: u32| {
-        let (a, b) = (&nodes[l as usize], &nodes[r as usize]);
-        TraversalNode {
-            lo0: a.lo,
-            child0: child(l),
-            hi0: a.hi,
-            child1: child(r),
-            lo1: b.lo,
-            hi1: b.hi,
-            ..Default::default()
-        }
-    };
-    let tnodes = if internal == 0 {
-        vec![packed(0, 0)]
-    } else {
-        nodes[..internal].iter().map(|nd| packed(nd.left, nd.right)).collect()
-    };
-    let tris = nodes[internal..]
-        .iter()
-        .map(|leaf| {
-            let t = leaf.left & !BVH_LEAF_BIT;
-            let [a, b, c] = triangle(vertices, indices, t as usize);
+/// `lbvh.fit`: the binary radix tree of the sorted keys (Karras 2012; equal keys apart by
+/// their index) over their primitive ids, with every box, in the layout of
+/// `glsl/shared/bvh.glsl`; a node of at most `BVH_LEAF_MAX` triangles becomes a leaf
+/// where that costs no more SAH than its split (its slot and links stay). Built
+/// top-down here: a range [l, r] splits after the last key whose first bit differing
+/// between keys l and r is clear; the GPU climbs it bottom-up (Apetrei 2014). `unused`
+/// is 0.
+pub fn build(keys: &[u64], values: &[u32], vertices: &[GpuVertex], indices: &[u32]) -> PackedBvh {
+    let n = keys.len();
+    assert!(n >= 1 && values.len() == n && indices.len() == 3 * n);
+    let tri = |j: usize| {
+        let id = values[j];
+        let [a, b, c] = triangle(vertices, indices, id as usize);
+        (
             TraversalTri {
                 a: a.to_array(),
-                id: t,
+                id,
                 e1: (b - a).to_array(),
                 e2: (c - a).to_array(),
                 ..Default::default()
-            }
-        })
-        .collect();
-    (tnodes, tris)
+            },
+            Aabb::of_triangle(&[a, b, c]),
+        )
+    };
+    if n == 1 {
+        let (mut t, b) = tri(0);
+        t.parent = 0;
+        let leaf = bvh_leaf_link(0, 1);
+        let node = TraversalNode {
+            lo0: b.lo.to_array(),
+            child0: leaf,
+            hi0: b.hi.to_array(),
+            child1: leaf,
+            lo1: b.lo.to_array(),
+            parent: BVH_INVALID,
+            hi1: b.hi.to_array(),
+            unused: 0,
+        };
+        return PackedBvh {
+            nodes: vec![node],
+            tris: vec![t],
+        };
+    }
+    let mut b = Builder {
+        keys,
+        tri: &tri,
+        root_split: 0,
+        out: PackedBvh {
+            nodes: vec![TraversalNode::default(); n - 1],
+            tris: vec![TraversalTri::default(); n],
+        },
+    };
+    b.root_split = b.split(0, n - 1);
+    b.subtree(0, n - 1);
+    b.out.nodes[0].parent = BVH_INVALID;
+    b.out
 }
 
-/// Checks what every BVH over `vertices`/`indices` must satisfy: 2N-1 nodes forming
-/// one tree rooted at 0; every triangle in exactly one leaf; each leaf box equal to its
-/// triangle's box; each parent box containing its children; the root box equal to the
-/// scene box; `parents` consistent with the links (when given).
-pub fn check_bvh(
-    nodes: &[BvhNode],
-    parents: Option<&[u32]>,
-    vertices: &[GpuVertex],
-    indices: &[u32],
-) -> Result<(), String> {
-    let n = indices.len() / 3;
-    if nodes.len() != 2 * n - 1 {
-        return Err(format!("{} nodes for {n} triangles (want {})", nodes.len(), 2 * n - 1));
+struct Builder<'a> {
+    keys: &'a [u64],
+    tri: &'a dyn Fn(usize) -> (TraversalTri, Aabb),
+    root_split: usize,
+    out: PackedBvh,
+}
+
+impl Builder<'_> {
+    /// The split of [l, r]: the last position whose extended key has the first bit in
+    /// which keys l and r differ clear.
+    fn split(&self, l: usize, r: usize) -> usize {
+        let bit = 127 - (ext_key(self.keys, l) ^ ext_key(self.keys, r)).leading_zeros();
+        // The bit is clear at lo and set at hi (keys are sorted and share the bits above).
+        let (mut lo, mut hi) = (l, r);
+        while hi - lo > 1 {
+            let m = (lo + hi) / 2;
+            if ext_key(self.keys, m) >> bit & 1 == 0 {
+                lo = m;
+            } else {
+                hi = m;
+            }
+        }
+        lo
     }
-    let mut seen_node = vec![false; nodes.len()];
-    let mut seen_tri = vec![false; n];
-    let mut stack = vec![(0usize, BVH_INVALID)];
-    while let Some((i, parent)) = stack.pop() {
-        if i >= nodes.len() {
-            return Err(format!("link to node {i} past the end"));
+
+    /// The slot of the node that splits p | p+1.
+    fn slot(&self, p: usize) -> usize {
+        match p.cmp(&self.root_split) {
+            std::cmp::Ordering::Equal => 0,
+            std::cmp::Ordering::Less => p + 1,
+            std::cmp::Ordering::Greater => p,
         }
-        if std::mem::replace(&mut seen_node[i], true) {
-            return Err(format!("node {i} is reached twice"));
+    }
+
+    /// Writes the subtree of [l, r] (post-order: a node once both children are done);
+    /// returns its node in the binary tree, its child link (a leaf's, once collapsed),
+    /// box and SAH cost (in area; unit costs for a node step and a triangle test).
+    fn subtree(&mut self, l: usize, r: usize) -> (Binary, u32, Aabb, f32) {
+        if l == r {
+            let (t, b) = (self.tri)(l);
+            self.out.tris[l] = t;
+            return (Binary::Tri(l), bvh_leaf_link(l as u32, 1), b, b.area());
         }
-        if let Some(p) = parents {
-            if p[i] != parent {
-                return Err(format!("parent of node {i} is {} (want {parent})", p[i]));
+        let p = self.split(l, r);
+        let s = self.slot(p);
+        let (n0, c0, b0, cost0) = self.subtree(l, p);
+        let (n1, c1, b1, cost1) = self.subtree(p + 1, r);
+        // Links of the binary tree, also under a leaf of several triangles: the refit
+        // climbs them.
+        for (side, child) in [(0u32, n0), (1, n1)] {
+            let link = (s as u32) << 1 | side;
+            match child {
+                Binary::Tri(j) => self.out.tris[j].parent = link,
+                Binary::Node(c) => self.out.nodes[c].parent = link,
             }
         }
-        let nd = &nodes[i];
-        let b = Aabb::of_node(nd);
-        if nd.left & BVH_LEAF_BIT != 0 {
-            let t = (nd.left & !BVH_LEAF_BIT) as usize;
-            if t >= n || std::mem::replace(&mut seen_tri[t], true) {
-                return Err(format!("leaf {i}: triangle {t} out of range or in two leaves"));
-            }
-            let want = Aabb::of_triangle(&triangle(vertices, indices, t));
-            if b != want {
-                return Err(format!("leaf {i}: box {b:?} is not its triangle's {want:?}"));
-            }
+        self.out.nodes[s] = TraversalNode {
+            lo0: b0.lo.to_array(),
+            child0: c0,
+            hi0: b0.hi.to_array(),
+            child1: c1,
+            lo1: b1.lo.to_array(),
+            parent: self.out.nodes[s].parent,
+            hi1: b1.hi.to_array(),
+            unused: 0,
+        };
+        let b = b0.union(b1);
+        let count = (r - l + 1) as u32;
+        let area = b.area();
+        let split = area + (cost0 + cost1);
+        let leaf = area * count as f32;
+        if count <= BVH_LEAF_MAX && leaf <= split {
+            (Binary::Node(s), bvh_leaf_link(l as u32, count), b, leaf)
         } else {
-            for c in [nd.left, nd.right] {
-                let cb = Aabb::of_node(
-                    nodes
-                        .get(c as usize)
-                        .ok_or(format!("node {i}: child {c} out of range"))?,
-                );
-                if !b.contains(&cb) {
-                    return Err(format!("node {i}: box {b:?} does not contain child {c}'s {cb:?}"));
-                }
-                stack.push((c as usize, i as u32));
-            }
+            (Binary::Node(s), s as u32, b, split)
         }
     }
-    if let Some(i) = seen_node.iter().position(|s| !s) {
-        return Err(format!("node {i} is not in the tree"));
+}
+
+/// `lbvh.refit` (scheduled): the same tree, links and leaves over moved vertices: every
+/// triangle record and every box recomputed through the binary tree of parent links.
+pub fn refit(bvh: &PackedBvh, vertices: &[GpuVertex], indices: &[u32]) -> PackedBvh {
+    let mut out = bvh.clone();
+    let n = out.tris.len();
+    let mut boxes = Vec::with_capacity(n);
+    for t in &mut out.tris {
+        let [a, b, c] = triangle(vertices, indices, t.id as usize);
+        (t.a, t.e1, t.e2) = (a.to_array(), (b - a).to_array(), (c - a).to_array());
+        boxes.push(Aabb::of_triangle(&[a, b, c]));
     }
-    if let Some(t) = seen_tri.iter().position(|s| !s) {
-        return Err(format!("triangle {t} is in no leaf"));
+    if n == 1 {
+        let nd = &mut out.nodes[0];
+        (nd.lo0, nd.hi0, nd.lo1, nd.hi1) = (
+            boxes[0].lo.to_array(),
+            boxes[0].hi.to_array(),
+            boxes[0].lo.to_array(),
+            boxes[0].hi.to_array(),
+        );
+        return out;
+    }
+    let mut kids = vec![[Binary::Tri(usize::MAX); 2]; out.nodes.len()];
+    for (j, t) in out.tris.iter().enumerate() {
+        kids[(t.parent >> 1) as usize][(t.parent & 1) as usize] = Binary::Tri(j);
+    }
+    for (s, nd) in out.nodes.iter().enumerate().skip(1) {
+        kids[(nd.parent >> 1) as usize][(nd.parent & 1) as usize] = Binary::Node(s);
+    }
+    fn fit(s: usize, kids: &[[Binary; 2]], boxes: &[Aabb], nodes: &mut [TraversalNode]) -> Aabb {
+        let [b0, b1] = kids[s].map(|k| match k {
+            Binary::Tri(j) => boxes[j],
+            Binary::Node(c) => fit(c, kids, boxes, nodes),
+        });
+        let nd = &mut nodes[s];
+        (nd.lo0, nd.hi0, nd.lo1, nd.hi1) = (b0.lo.to_array(), b0.hi.to_array(), b1.lo.to_array(), b1.hi.to_array());
+        b0.union(b1)
+    }
+    fit(0, &kids, &boxes, &mut out.nodes);
+    out
+}
+
+/// A node of the binary radix tree: a triangle (leaf position) or an internal slot.
+#[derive(Clone, Copy)]
+enum Binary {
+    Tri(usize),
+    Node(usize),
+}
+
+/// Checks what every BVH over `vertices`/`indices` must satisfy:
+/// - N-1 nodes (one for a single triangle) and N triangle records, each its scene
+///   triangle (corner, edges, id), every id once;
+/// - from slot 0, every node is reached at most once and every leaf position exactly
+///   once, in leaves of 1 to `BVH_LEAF_MAX` triangles; each half's box is the union of
+///   what it holds (a child node's halves, a leaf's triangles' boxes); a reached node
+///   or lone triangle links back to the half it was reached from;
+/// - the binary tree the refit climbs: each half is named by exactly one parent link
+///   (of a node or triangle, also inside leaves of several triangles) and holds that
+///   one's box; the nodes out of reach are as many as the leaves hide (k - 1 for a leaf
+///   of k triangles);
+/// - the root has no parent link and its box is the scene box.
+pub fn check_bvh(bvh: &PackedBvh, vertices: &[GpuVertex], indices: &[u32]) -> Result<(), String> {
+    let n = indices.len() / 3;
+    let (nodes, tris) = (&bvh.nodes, &bvh.tris);
+    if nodes.len() != (n - 1).max(1) || tris.len() != n {
+        return Err(format!(
+            "{} nodes and {} triangles for {n} triangles (want {} and {n})",
+            nodes.len(),
+            tris.len(),
+            (n - 1).max(1)
+        ));
+    }
+    let mut seen_id = vec![false; n];
+    let mut tri_box = Vec::with_capacity(n);
+    for (j, t) in tris.iter().enumerate() {
+        let id = t.id as usize;
+        if id >= n || std::mem::replace(&mut seen_id[id], true) {
+            return Err(format!(
+                "leaf position {j}: triangle {id} out of range or in two leaves"
+            ));
+        }
+        let tri = triangle(vertices, indices, id);
+        let want = TraversalTri {
+            a: tri[0].to_array(),
+            id: t.id,
+            e1: (tri[1] - tri[0]).to_array(),
+            parent: t.parent,
+            e2: (tri[2] - tri[0]).to_array(),
+            _pad0: 0,
+        };
+        if *t != want {
+            return Err(format!("leaf position {j}: {t:?} is not triangle {id} ({want:?})"));
+        }
+        tri_box.push(Aabb::of_triangle(&tri));
     }
     let (_, scene) = bounds(vertices, indices);
+    if n == 1 {
+        let want = TraversalNode {
+            lo0: tri_box[0].lo.to_array(),
+            child0: bvh_leaf_link(0, 1),
+            hi0: tri_box[0].hi.to_array(),
+            child1: bvh_leaf_link(0, 1),
+            lo1: tri_box[0].lo.to_array(),
+            parent: BVH_INVALID,
+            hi1: tri_box[0].hi.to_array(),
+            unused: nodes[0].unused,
+        };
+        if nodes[0] != want || tris[0].parent != 0 {
+            return Err(format!("a single triangle's node {:?} (want {want:?})", nodes[0]));
+        }
+        return Ok(());
+    }
+    // The tree the traversal walks.
+    let mut seen_node = vec![false; nodes.len()];
+    let mut seen_leaf = vec![false; n];
+    let mut hidden = 0;
+    let mut stack = vec![0usize];
+    while let Some(s) = stack.pop() {
+        if std::mem::replace(&mut seen_node[s], true) {
+            return Err(format!("node {s} is reached twice"));
+        }
+        for (side, c) in [(0u32, nodes[s].child0), (1, nodes[s].child1)] {
+            let half = Aabb::of_half(&nodes[s], side);
+            let link = (s as u32) << 1 | side;
+            match bvh_leaf(c) {
+                Some((first, count)) => {
+                    let (first, count) = (first as usize, count as usize);
+                    if count > BVH_LEAF_MAX as usize || first + count > n {
+                        return Err(format!("node {s}: leaf of {count} triangles from {first}"));
+                    }
+                    let mut b = Aabb::EMPTY;
+                    for j in first..first + count {
+                        if std::mem::replace(&mut seen_leaf[j], true) {
+                            return Err(format!("leaf position {j} is reached twice"));
+                        }
+                        b = b.union(tri_box[j]);
+                    }
+                    if half != b {
+                        return Err(format!(
+                            "node {s}: box {half:?} of leaf {first}+{count} is not its triangles' {b:?}"
+                        ));
+                    }
+                    if count == 1 && tris[first].parent != link {
+                        return Err(format!(
+                            "leaf position {first}: parent link {} (want {link})",
+                            tris[first].parent
+                        ));
+                    }
+                    hidden += count - 1;
+                }
+                None => {
+                    let child = nodes
+                        .get(c as usize)
+                        .ok_or(format!("node {s}: child {c} out of range"))?;
+                    if child.parent != link {
+                        return Err(format!("node {c}: parent link {} (want {link})", child.parent));
+                    }
+                    stack.push(c as usize);
+                }
+            }
+        }
+    }
+    if let Some(j) = seen_leaf.iter().position(|s| !s) {
+        return Err(format!("leaf position {j} is in no leaf"));
+    }
+    let unreached = seen_node.iter().filter(|s| !**s).count();
+    if unreached != hidden {
+        return Err(format!(
+            "{unreached} nodes are out of the traversal's reach, but its leaves hide {hidden}"
+        ));
+    }
+    // The binary tree of parent links.
+    let mut named = vec![false; 2 * nodes.len()];
+    let links = nodes[1..]
+        .iter()
+        .enumerate()
+        .map(|(k, nd)| (format!("node {}", k + 1), nd.parent, Aabb::of_node(nd)))
+        .chain(
+            tris.iter()
+                .enumerate()
+                .map(|(j, t)| (format!("leaf position {j}"), t.parent, tri_box[j])),
+        );
+    for (what, link, b) in links {
+        let s = (link >> 1) as usize;
+        if s >= nodes.len() || std::mem::replace(&mut named[link as usize], true) {
+            return Err(format!("{what}: parent link {link} out of range or named twice"));
+        }
+        if Aabb::of_half(&nodes[s], link & 1) != b {
+            return Err(format!(
+                "{what}: its box {b:?} is not in the half its link {link} names"
+            ));
+        }
+    }
+    if nodes[0].parent != BVH_INVALID {
+        return Err(format!("the root has a parent link {}", nodes[0].parent));
+    }
     if Aabb::of_node(&nodes[0]) != scene {
         return Err(format!(
             "root box {:?} is not the scene box {scene:?}",
@@ -312,11 +449,26 @@ pub fn check_bvh(
 }
 
 /// Surface-area-heuristic cost of a tree (MacDonald & Booth 1990) with unit costs for
-/// a traversal step and a triangle test, relative to the root's area.
-pub fn sah_cost_nodes(nodes: &[BvhNode]) -> f64 {
+/// a traversal step and a triangle test, relative to the root's area: the root, and
+/// every box the traversal can reach, times its triangles for a leaf.
+pub fn sah_cost(nodes: &[TraversalNode], tri_count: usize) -> f64 {
+    if tri_count == 1 {
+        return 1.0;
+    }
     let root = Aabb::of_node(&nodes[0]).area() as f64;
-    nodes
-        .iter()
-        .map(|nd| Aabb::of_node(nd).area() as f64 / root)
-        .sum::<f64>()
+    let mut cost = 1.0;
+    let mut stack = vec![0usize];
+    while let Some(s) = stack.pop() {
+        for (side, c) in [(0u32, nodes[s].child0), (1, nodes[s].child1)] {
+            let area = Aabb::of_half(&nodes[s], side).area() as f64 / root;
+            match bvh_leaf(c) {
+                Some((_, count)) => cost += area * count as f64,
+                None => {
+                    cost += area;
+                    stack.push(c as usize);
+                }
+            }
+        }
+    }
+    cost
 }

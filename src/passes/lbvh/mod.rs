@@ -1,10 +1,11 @@
 //! `lbvh.*`: a linear BVH built on the GPU from Morton codes (Lauterbach et al. 2009;
-//! Karras 2012). Kernels, each under its timer scope:
-//! `lbvh.bounds` → `lbvh.morton` → `lbvh.sort` → `lbvh.hierarchy` → `lbvh.fit`,
-//! or `lbvh.refit` alone when vertices moved but the triangles stayed the same.
-//! Node layout: `glsl/shared/bvh.glsl` (2N-1 nodes of 32 bytes, root at 0); the fit
-//! and the refit also write the layout the traversal reads (`TraversalNode`: both
-//! children's boxes in one 64-byte node; `TraversalTri`: the triangles in leaf order).
+//! Karras 2012; Apetrei 2014). Kernels, each under its timer scope:
+//! `lbvh.bounds` → `lbvh.morton` → `lbvh.sort` → `lbvh.fit` (the tree and its boxes
+//! in one bottom-up pass), or `lbvh.refit` alone when vertices moved but the triangles
+//! stayed the same. One layout, the one the traversal reads (`glsl/shared/bvh.glsl`):
+//! N-1 internal nodes of 64 bytes holding both children's boxes (`TraversalNode`, root
+//! in slot 0) and the triangles in leaf order (`TraversalTri`), each with a link to its
+//! box's half of the parent, which the refit climbs.
 //! CPU reference: `cpu_ref::lbvh` (every stage exactly; tests/lbvh.rs).
 
 pub mod dynamic;
@@ -12,8 +13,8 @@ pub mod sort;
 
 use crate::aabb::{ordered_to_float, Aabb};
 use crate::error::{Error, Result};
-use crate::gpu_types::{BvhNode, TraversalNode, TraversalTri};
-use crate::shader_defines::{LBVH_BOUNDS_ITEMS, LBVH_WG};
+use crate::gpu_types::{PackedBvh, TraversalNode, TraversalTri};
+use crate::shader_defines::{BVH_INVALID, LBVH_BOUNDS_ITEMS, LBVH_WG};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource};
@@ -27,13 +28,14 @@ use std::sync::Arc;
 pub const BOUNDS: &str = "lbvh.bounds";
 pub const MORTON: &str = "lbvh.morton";
 pub const SORT: &str = "lbvh.sort";
-pub const HIERARCHY: &str = "lbvh.hierarchy";
 pub const FIT: &str = "lbvh.fit";
 pub const REFIT: &str = "lbvh.refit";
 
 /// Most triangles in one BVH: 1D dispatches of LBVH_WG invocations, at most 65535
 /// workgroups.
 pub const MAX_TRIANGLES: u32 = 65535 * LBVH_WG;
+// A leaf's first triangle fits below its count in the child link.
+const _: () = assert!(MAX_TRIANGLES <= 1 << crate::shader_defines::BVH_LEAF_COUNT_SHIFT);
 
 // A tree over one-word keys (32 bits) and MAX_TRIANGLES leaves is at most 32 +
 // ceil(log2 MAX_TRIANGLES) deep, and a traversal holds at most one pending child per
@@ -94,15 +96,14 @@ pub struct Geometry<'a> {
 
 /// A BVH on the GPU and the scratch memory to rebuild it.
 pub struct Bvh {
-    /// 2N-1 nodes (`BvhNode`).
-    pub nodes: Buffer,
-    /// The traversal layout (written by the fit and the refit): max(N-1, 1)
-    /// `TraversalNode`s and N `TraversalTri`s.
+    /// max(N-1, 1) `TraversalNode`s (written by the fit and the refit).
     pub tnodes: Buffer,
+    /// N `TraversalTri`s, in leaf order.
     pub ttris: Buffer,
-    /// Parent of every node (`BVH_INVALID` for the root).
-    pub parents: Buffer,
-    visits: Buffer,
+    /// The fit's swap word per internal node (the first child's outer end).
+    ends: Buffer,
+    /// The fit's SAH cost of the subtree in each half of each node.
+    costs: Buffer,
     bounds: Buffer,
     pub sort: SortBuffers,
     pub tri_count: u32,
@@ -124,9 +125,7 @@ impl Bvh {
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let buf = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
-        let nodes = 2 * tri_count as u64 - 1;
         Ok(Self {
-            nodes: buf("lbvh.nodes", nodes * std::mem::size_of::<BvhNode>() as u64)?,
             tnodes: buf(
                 "lbvh.tnodes",
                 (tri_count as u64 - 1).max(1) * std::mem::size_of::<TraversalNode>() as u64,
@@ -135,8 +134,8 @@ impl Bvh {
                 "lbvh.ttris",
                 tri_count as u64 * std::mem::size_of::<TraversalTri>() as u64,
             )?,
-            parents: buf("lbvh.parents", nodes * 4)?,
-            visits: buf("lbvh.visits", (tri_count as u64 - 1).max(1) * 4)?,
+            ends: buf("lbvh.ends", (tri_count as u64 - 1).max(1) * 4)?,
+            costs: buf("lbvh.costs", (tri_count as u64 - 1).max(1) * 2 * 4)?,
             bounds: buf("lbvh.bounds", 12 * 4)?,
             sort: SortBuffers::new(ctx, tri_count, bits.key_words())?,
             tri_count,
@@ -144,10 +143,9 @@ impl Bvh {
         })
     }
 
-    /// Bytes of the BVH itself (nodes, parents and the traversal layout), without the
-    /// rebuild scratch.
+    /// Bytes of the BVH itself (nodes and triangles), without the rebuild scratch.
     pub fn bytes(&self) -> u64 {
-        self.nodes.size + self.parents.size + self.tnodes.size + self.ttris.size
+        self.tnodes.size + self.ttris.size
     }
 
     /// (centroid bounds, scene bounds) from the last `lbvh.bounds`, read back.
@@ -163,17 +161,12 @@ impl Bvh {
         Ok((Aabb { lo: v(0), hi: v(3) }, Aabb { lo: v(6), hi: v(9) }))
     }
 
-    /// The nodes, read back (for tests and benchmarks).
-    pub fn read_nodes(&self) -> Result<Vec<BvhNode>> {
-        Ok(bytemuck::pod_collect_to_vec(&self.nodes.read()?))
-    }
-
-    /// The traversal layout, read back (for tests).
-    pub fn read_packed(&self) -> Result<(Vec<TraversalNode>, Vec<TraversalTri>)> {
-        Ok((
-            bytemuck::pod_collect_to_vec(&self.tnodes.read()?),
-            bytemuck::pod_collect_to_vec(&self.ttris.read()?),
-        ))
+    /// The nodes and triangles, read back (for tests and benchmarks).
+    pub fn read_packed(&self) -> Result<PackedBvh> {
+        Ok(PackedBvh {
+            nodes: bytemuck::pod_collect_to_vec(&self.tnodes.read()?),
+            tris: bytemuck::pod_collect_to_vec(&self.ttris.read()?),
+        })
     }
 }
 
@@ -191,7 +184,7 @@ pub struct RefitSchedule {
 impl RefitSchedule {
     /// The schedule of `bvh` as built now (reads its nodes back; waits for the GPU).
     pub fn of(ctx: &Arc<Context>, bvh: &Bvh) -> Result<Self> {
-        let (order, level_list) = refit_order(&bvh.read_nodes()?, bvh.tri_count);
+        let (order, level_list) = refit_order(&bvh.read_packed()?, bvh.tri_count);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             order: Buffer::with_data(ctx, "lbvh.refit_order", usage, bytemuck::cast_slice(&order))?,
@@ -201,28 +194,31 @@ impl RefitSchedule {
     }
 }
 
-/// Internal nodes ordered by height (leaves are 0), and each level's (first, count).
-pub fn refit_order(nodes: &[BvhNode], tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]>) {
+/// Internal node slots ordered by height (triangles are 0) in the binary tree of parent
+/// links (also the nodes inside leaves of several triangles, whose boxes the refit
+/// keeps), and each level's (first, count).
+pub fn refit_order(bvh: &PackedBvh, tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]>) {
     let internal = tri_count.saturating_sub(1) as usize;
-    let mut height = vec![0u32; nodes.len()];
-    // A post-order walk from the root (children are not numbered above their parents).
-    let mut stack: Vec<(u32, bool)> = if internal > 0 { vec![(0, false)] } else { Vec::new() };
-    while let Some((i, seen)) = stack.pop() {
-        let nd = &nodes[i as usize];
-        if (i as usize) >= internal {
-            continue; // a leaf
-        }
-        if seen {
-            height[i as usize] = 1 + height[nd.left as usize].max(height[nd.right as usize]);
-        } else {
-            stack.push((i, true));
-            stack.push((nd.left, false));
-            stack.push((nd.right, false));
+    // Each node's height, from its children's as they become known: a node is done when
+    // both its halves have reported, then reports to its own parent.
+    let mut height = vec![0u32; internal];
+    let mut reported = vec![0u8; internal];
+    let mut ready: Vec<(u32, u32)> = if internal == 0 {
+        Vec::new()
+    } else {
+        bvh.tris.iter().map(|t| (t.parent, 0)).collect()
+    };
+    while let Some((link, h)) = ready.pop() {
+        let s = (link >> 1) as usize;
+        height[s] = height[s].max(h + 1);
+        reported[s] += 1;
+        if reported[s] == 2 && s != 0 {
+            ready.push((bvh.nodes[s].parent, height[s]));
         }
     }
-    let top = height[..internal].iter().copied().max().unwrap_or(0);
+    let top = height.iter().copied().max().unwrap_or(0);
     let mut levels = vec![[0u32; 2]; top as usize];
-    for h in &height[..internal] {
+    for h in &height {
         levels[*h as usize - 1][1] += 1;
     }
     let mut first = 0;
@@ -232,9 +228,9 @@ pub fn refit_order(nodes: &[BvhNode], tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]
     }
     let mut fill: Vec<u32> = levels.iter().map(|l| l[0]).collect();
     let mut order = vec![0u32; internal];
-    for (i, h) in height[..internal].iter().enumerate() {
+    for (s, h) in height.iter().enumerate() {
         let h = *h as usize - 1;
-        order[fill[h] as usize] = i as u32;
+        order[fill[h] as usize] = s as u32;
         fill[h] += 1;
     }
     (order, levels)
@@ -255,8 +251,8 @@ pub fn lockstep_fit(driver_name: &str, driver_info: &str) -> bool {
     major.is_none_or(|m| m < 25)
 }
 
-/// Push constants of `lbvh_morton.comp` and `lbvh_hierarchy.comp` (`lbvh.bounds` and
-/// `lbvh.fit` push the triangle count alone, as a `u32`).
+/// Push constants of `lbvh_morton.comp` and `lbvh_fit.comp` (`lbvh.bounds` and the
+/// refit push the triangle count alone, as a `u32`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct KeyPush {
@@ -271,7 +267,6 @@ pub struct LbvhBuilder {
     bounds: Pipeline,
     morton: Pipeline,
     pub sort: RadixSort,
-    hierarchy: Pipeline,
     fit: Pipeline,
     refit_leaves: Pipeline,
     refit_level: Pipeline,
@@ -300,8 +295,7 @@ impl LbvhBuilder {
             bounds: Pipeline::compute::<u32>(ctx, BOUNDS, shaders::LBVH_BOUNDS_COMP)?,
             morton: Pipeline::compute::<KeyPush>(ctx, MORTON, shaders::LBVH_MORTON_COMP)?,
             sort: RadixSort::new(ctx)?,
-            hierarchy: Pipeline::compute::<KeyPush>(ctx, HIERARCHY, shaders::LBVH_HIERARCHY_COMP)?,
-            fit: Pipeline::compute_specialized::<u32>(ctx, FIT, shaders::LBVH_FIT_COMP, &[lockstep as u32])?,
+            fit: Pipeline::compute_specialized::<KeyPush>(ctx, FIT, shaders::LBVH_FIT_COMP, &[lockstep as u32])?,
             refit_leaves: Pipeline::compute::<u32>(ctx, REFIT, shaders::LBVH_REFIT_LEAVES_COMP)?,
             refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
             refit_top: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_TOP_COMP)?,
@@ -322,9 +316,6 @@ impl LbvhBuilder {
         timer.begin(cmd, SORT);
         self.sort.record(cmd, &bvh.sort, geom.tri_count);
         timer.end(cmd, SORT);
-        timer.begin(cmd, HIERARCHY);
-        self.record_hierarchy(cmd, bvh);
-        timer.end(cmd, HIERARCHY);
         timer.begin(cmd, FIT);
         self.record_fit(cmd, geom, bvh);
         timer.end(cmd, FIT);
@@ -379,28 +370,9 @@ impl LbvhBuilder {
         barrier::global(&self.ctx.device, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
     }
 
-    /// `lbvh.hierarchy`: node links and parents from the sorted keys.
-    pub fn record_hierarchy(&self, cmd: vk::CommandBuffer, bvh: &Bvh) {
-        let n = bvh.tri_count;
-        self.hierarchy.dispatch(
-            cmd,
-            &[
-                Resource::Buffer(&bvh.sort.keys[0]),
-                Resource::Buffer(&bvh.sort.values[0]),
-                Resource::Buffer(&bvh.nodes),
-                Resource::Buffer(&bvh.parents),
-            ],
-            &KeyPush {
-                tri_count: n,
-                key_words: bvh.bits.key_words(),
-            },
-            Groups::Cover([n, 1, 1]),
-        );
-        // RAW: the fit reads the links and parents.
-        barrier::global(&self.ctx.device, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
-    }
-
-    /// Records a refit: new boxes for the same tree after the vertices moved.
+    /// Records a refit by re-running the fit: new boxes for the same tree after the
+    /// vertices moved (the tree comes from the keys the last build sorted, still in
+    /// `bvh.sort`).
     pub fn record_refit(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, geom: Geometry<'_>, bvh: &Bvh) {
         assert_eq!(geom.tri_count, bvh.tri_count, "BVH sized for another triangle count");
         timer.begin(cmd, REFIT);
@@ -432,7 +404,6 @@ impl LbvhBuilder {
             &[
                 Resource::Buffer(geom.vertices),
                 Resource::Buffer(geom.indices),
-                Resource::Buffer(&bvh.nodes),
                 Resource::Buffer(&bvh.tnodes),
                 Resource::Buffer(&bvh.ttris),
             ],
@@ -446,11 +417,7 @@ impl LbvhBuilder {
             barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
             self.refit_level.dispatch(
                 cmd,
-                &[
-                    Resource::Buffer(&bvh.nodes),
-                    Resource::Buffer(&schedule.order),
-                    Resource::Buffer(&bvh.tnodes),
-                ],
+                &[Resource::Buffer(&bvh.tnodes), Resource::Buffer(&schedule.order)],
                 &RangePush {
                     first: l[0],
                     count: l[1],
@@ -465,10 +432,9 @@ impl LbvhBuilder {
             self.refit_top.dispatch(
                 cmd,
                 &[
-                    Resource::Buffer(&bvh.nodes),
+                    Resource::Buffer(&bvh.tnodes),
                     Resource::Buffer(&schedule.order),
                     Resource::Buffer(&schedule.levels),
-                    Resource::Buffer(&bvh.tnodes),
                 ],
                 &RangePush {
                     first: big as u32,
@@ -483,12 +449,13 @@ impl LbvhBuilder {
         timer.end(cmd, REFIT);
     }
 
-    /// `lbvh.fit`: leaf boxes from the triangles, then the internal boxes bottom-up.
+    /// `lbvh.fit`: the tree over the sorted keys in `bvh.sort` and its boxes, in one
+    /// bottom-up pass.
     pub fn record_fit(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh) {
         let d = &self.ctx.device;
-        unsafe { d.cmd_fill_buffer(cmd, bvh.visits.raw, 0, vk::WHOLE_SIZE, 0) };
-        // RAW: the fit's visit counters start from zero; WAR: earlier reads of the
-        // nodes (traversal) finish before the fit rewrites the boxes.
+        unsafe { d.cmd_fill_buffer(cmd, bvh.ends.raw, 0, vk::WHOLE_SIZE, BVH_INVALID) };
+        // RAW: the fit's swap words start empty; WAR: earlier reads of the nodes
+        // (traversal) finish before the fit rewrites them.
         barrier::record(
             d,
             cmd,
@@ -503,13 +470,17 @@ impl LbvhBuilder {
             &[
                 Resource::Buffer(geom.vertices),
                 Resource::Buffer(geom.indices),
-                Resource::Buffer(&bvh.nodes),
-                Resource::Buffer(&bvh.parents),
-                Resource::Buffer(&bvh.visits),
+                Resource::Buffer(&bvh.sort.keys[0]),
+                Resource::Buffer(&bvh.sort.values[0]),
+                Resource::Buffer(&bvh.ends),
                 Resource::Buffer(&bvh.tnodes),
                 Resource::Buffer(&bvh.ttris),
+                Resource::Buffer(&bvh.costs),
             ],
-            &geom.tri_count,
+            &KeyPush {
+                tri_count: geom.tri_count,
+                key_words: bvh.bits.key_words(),
+            },
             Groups::Cover([geom.tri_count, 1, 1]),
         );
         // RAW: traversal (or a readback) reads the finished boxes.

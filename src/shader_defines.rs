@@ -59,6 +59,14 @@ const _: () = assert!(SORT_WG.is_multiple_of(16) && COMPACT_WG.is_multiple_of(16
 /// 8-lane SIMD groups, 8 NVIDIA warps.
 pub const RT_LIST_WG: u32 = 256;
 
+/// PLOC's search radius (`lbvh.ploc`): each cluster looks for its nearest among this
+/// many clusters on either side (Meister & Bittner 2018 use 16; fewer is faster and
+/// worse).
+pub const PLOC_RADIUS: u32 = 16;
+/// Workgroup of PLOC's per-round scan of tile counts (one workgroup).
+pub const PLOC_SCAN_WG: u32 = 256;
+const _: () = assert!(PLOC_SCAN_WG.is_multiple_of(16) && LBVH_WG.is_multiple_of(16));
+
 /// Marks a BVH child link as a leaf: (count - 1) << `BVH_LEAF_COUNT_SHIFT` | the
 /// position of its first triangle in leaf order.
 pub const BVH_LEAF_BIT: u32 = 0x8000_0000;
@@ -194,6 +202,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("COMPACT_WG", COMPACT_WG),
     ("COMPACT_ITEMS", COMPACT_ITEMS),
     ("RT_LIST_WG", RT_LIST_WG),
+    ("PLOC_RADIUS", PLOC_RADIUS),
+    ("PLOC_SCAN_WG", PLOC_SCAN_WG),
     ("BVH_LEAF_BIT", BVH_LEAF_BIT),
     ("BVH_LEAF_COUNT_SHIFT", BVH_LEAF_COUNT_SHIFT),
     ("BVH_LEAF_MAX", BVH_LEAF_MAX),

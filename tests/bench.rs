@@ -3,8 +3,8 @@
 
 mod common;
 
-use speculum::bench::lbvh::{run_case, Options, STAGES};
-use speculum::passes::lbvh::MortonBits;
+use speculum::bench::lbvh::{run_case, stages, Options};
+use speculum::passes::lbvh::{BvhKind, MortonBits};
 use speculum::scene::soup::{default_size, random_soup};
 
 /// The `room` scene at 160x90: small enough for a quick benchmark run.
@@ -26,31 +26,39 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         rays: 4096,
         check_rays: 500,
         bits: MortonBits::Bits30,
+        builders: BvhKind::ALL.to_vec(),
         file_rays: None,
         keep_hits: false,
     };
-    let c = run_case(&ctx, "soup-5000", &v, &i, &opts, &mut || {}).unwrap();
-    assert!(c.valid, "{c:?}");
-    assert_eq!(c.triangles, 5000);
-    for s in STAGES {
-        assert!(c.stages_ms.median(s) > 0.0, "stage {s} timed");
+    for kind in BvhKind::ALL {
+        let c = run_case(&ctx, "soup-5000", &v, &i, &opts, kind, &mut || {}).unwrap();
+        assert!(c.valid, "{c:?}");
+        assert_eq!((c.triangles, c.builder), (5000, kind));
+        for s in stages(kind) {
+            assert!(c.stages_ms.median(s) > 0.0, "{kind:?}: stage {s} timed");
+        }
+        let sum: f64 = stages(kind).iter().map(|s| c.stages_ms.median(s)).sum();
+        assert!(
+            c.build_ms.median >= 0.9 * sum,
+            "{kind:?}: the whole build ({:?}) covers its stages ({sum})",
+            c.build_ms
+        );
+        assert!(
+            c.sah_ratio > 0.8 && c.sah_ratio < 2.0,
+            "{kind:?}: SAH ratio {}",
+            c.sah_ratio
+        );
+        assert!((c.nodes_per_triangle - 1.0).abs() < 1e-3);
+        assert_eq!(c.untimed_rounds, 0, "{kind:?}: the first submission ends the build");
+        assert_eq!(c.coherent.checked, 500);
+        assert!(c.coherent.hit_fraction > 0.05 && c.incoherent.hit_fraction > 0.05);
+        assert!(c.coherent.mrays_per_s > 0.0 && c.refit_ms.median > 0.0);
+        assert!(c.build_ms.p10 <= c.build_ms.median && c.build_ms.median <= c.build_ms.p90);
+        assert_eq!(
+            (c.build_ms.samples, c.refit_ms.samples, c.coherent.trace_ms.samples),
+            (2, 2, 2)
+        );
     }
-    let sum: f64 = STAGES.iter().map(|s| c.stages_ms.median(s)).sum();
-    assert!(
-        c.build_ms.median >= 0.9 * sum,
-        "the whole build ({:?}) covers its stages ({sum})",
-        c.build_ms
-    );
-    assert!(c.sah_ratio > 0.8 && c.sah_ratio < 2.0, "SAH ratio {}", c.sah_ratio);
-    assert!((c.nodes_per_triangle - 2.0).abs() < 1e-3);
-    assert_eq!(c.coherent.checked, 500);
-    assert!(c.coherent.hit_fraction > 0.05 && c.incoherent.hit_fraction > 0.05);
-    assert!(c.coherent.mrays_per_s > 0.0 && c.refit_ms.median > 0.0);
-    assert!(c.build_ms.p10 <= c.build_ms.median && c.build_ms.median <= c.build_ms.p90);
-    assert_eq!(
-        (c.build_ms.samples, c.refit_ms.samples, c.coherent.trace_ms.samples),
-        (2, 2, 2)
-    );
 }
 
 /// With the Embree anchor built in, `bench lbvh` also builds the same triangles with
@@ -66,13 +74,14 @@ fn lbvh_benchmark_anchors_against_embree() {
         rays: 8192,
         check_rays: 200,
         bits: MortonBits::Bits30,
+        builders: BvhKind::ALL.to_vec(),
         file_rays: None,
         keep_hits: false,
     };
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);
     let room = speculum::scene::builtin::room().unwrap();
     for (name, v, i) in [("soup-3000", &v, &i), ("room", &room.vertices, &room.indices)] {
-        let c = run_case(&ctx, name, v, i, &opts, &mut || {}).unwrap();
+        let c = run_case(&ctx, name, v, i, &opts, BvhKind::Lbvh, &mut || {}).unwrap();
         assert!(c.valid, "{name}: {c:?}");
         if !cfg!(feature = "embree") {
             assert!(c.embree.is_none());
@@ -378,6 +387,8 @@ fn lbvh_traces_a_rays_file_and_dumps_its_hits() {
         "1024",
         "--check-rays",
         "200",
+        "--builder",
+        "lbvh",
         "--rays-file",
         rf.to_str().unwrap(),
         "--dump-rays",

@@ -453,3 +453,56 @@ fn size_classes_keep_walls_apart() {
         "a soup of small triangles is one class"
     );
 }
+
+/// PLOC builds (the static scene's tree): the nodes, slots, links and boxes equal
+/// `cpu_ref::lbvh::ploc` bit for bit after the LBVH's sort, the invariants hold, and a
+/// build whose first submission runs too few rounds is finished by `finish` to the same
+/// tree; its SAH on `room` stays within 1.05x of binned SAH (1.28x for the LBVH).
+#[test]
+fn ploc_matches_cpu_exactly() {
+    use speculum::passes::lbvh::ploc::{PlocBuilder, PlocScratch, ROUNDS};
+    use speculum::shader_defines::PLOC_RADIUS;
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let p = PlocBuilder::new(&ctx).unwrap();
+    let room = speculum::scene::builtin::room().unwrap();
+    let mut cases: Vec<(String, Vec<GpuVertex>, Vec<u32>)> = [1usize, 2, 3, 1000, 65537]
+        .iter()
+        .enumerate()
+        .map(|(seed, &n)| {
+            let (v, i) = random_soup(n, 3.0, default_size(n) * 3.0, 200 + seed as u64);
+            (format!("soup {n}"), v, i)
+        })
+        .collect();
+    cases.push(("room".into(), room.vertices.clone(), room.indices.clone()));
+    for (name, v, i) in &cases {
+        let n = (i.len() / 3) as u32;
+        let g = GpuGeometry::new(&ctx, v, i);
+        let keys = cref::morton_keys(v, i, 1);
+        let (_, sv) = cref::sort_pairs(&keys, &(0..n).collect::<Vec<_>>());
+        let want = cref::ploc(&sv, v, i, PLOC_RADIUS as usize);
+        let scratch = PlocScratch::new(&ctx, n).unwrap();
+        for first_rounds in [ROUNDS, 3] {
+            let bvh = Bvh::new(&ctx, n, MortonBits::Bits30).unwrap();
+            poison_packed(&bvh);
+            ctx.one_shot(|cmd| {
+                b.record_bounds(cmd, g.geometry(), &bvh);
+                b.record_morton(cmd, g.geometry(), &bvh);
+                b.sort.record(cmd, &bvh.sort, n);
+                p.record(cmd, g.geometry(), &bvh, &scratch, first_rounds);
+            })
+            .unwrap();
+            let rounds = p.finish(n, &bvh, &scratch, first_rounds).unwrap();
+            let what = format!("{name}, {first_rounds} rounds first ({rounds} in all)");
+            let got = assert_packed(&bvh, &want, &what);
+            cref::check_bvh(&got, v, i).unwrap_or_else(|e| panic!("{what}: {e}"));
+            if name == "room" {
+                let ratio =
+                    cref::sah_cost(&got.nodes, n as usize) / speculum::cpu_ref::trace::CpuBvh::build(v, i).sah_cost();
+                println!("room: PLOC SAH {ratio:.3} of binned SAH");
+                assert!(ratio < 1.05, "room: PLOC SAH ratio {ratio:.3}");
+            }
+        }
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}

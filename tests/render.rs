@@ -158,9 +158,10 @@ fn resize_renders_what_a_fresh_renderer_renders() {
     }
 }
 
-/// Settings applied in place (a new shadow-map size, bounce count, SSR budget) and a
-/// moved camera render what a fresh renderer made with them renders; the fail-mask
-/// view paints exactly the CPU's `--fail-mask` image of the same frame.
+/// Settings applied in place (a new shadow-map size, bounce count, SSR budget, the
+/// static BVH's builder) and a moved camera render what a fresh renderer made with
+/// them renders, over the same static tree; the fail-mask view paints exactly the
+/// CPU's `--fail-mask` image of the same frame.
 #[test]
 fn live_settings_camera_and_fail_mask_view_match_a_fresh_renderer() {
     let ctx = common::context();
@@ -178,9 +179,16 @@ fn live_settings_camera_and_fail_mask_view_match_a_fresh_renderer() {
         max_bounces: 1,
         ssr_max_steps: 8,
         shadow_slope_bias: 0.5,
+        static_ploc: !base.static_ploc,
         ..base.clone()
     };
     assert!(!r.needs_new_renderer(&changed));
+    let tree = |r: &Renderer| {
+        let mut t = r.static_traceable().bvh.read_packed().unwrap();
+        t.nodes.iter_mut().for_each(|n| n.unused = 0);
+        t
+    };
+    let first_tree = tree(&r);
     r.set_settings(changed.clone()).unwrap();
     let mut camera = r.camera();
     assert_eq!(camera, scene.camera, "the camera is given in world space");
@@ -196,6 +204,10 @@ fn live_settings_camera_and_fail_mask_view_match_a_fresh_renderer() {
     assert!(
         live == fresh.read_output().unwrap(),
         "live changes render as a fresh renderer"
+    );
+    assert!(
+        tree(&r) == tree(&fresh) && tree(&r) != first_tree,
+        "the static BVH was rebuilt"
     );
     // A refused change changes nothing.
     let bad = Settings {

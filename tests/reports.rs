@@ -6,6 +6,7 @@
 mod common;
 
 use serde_json::Value;
+use speculum::passes::lbvh::BvhKind;
 use std::path::Path;
 
 fn speculum(args: &[&str], dir: &Path) -> Value {
@@ -294,14 +295,18 @@ fn bench_reports_follow_the_schema() {
         check_stat(&case[k], k);
     }
     check_stat(&case["coherent"]["trace_ms"], "trace_ms");
-    let stages: Vec<&String> = case["stages_ms"].as_object().unwrap().keys().collect();
-    assert_eq!(
-        stages,
-        speculum::bench::lbvh::STAGES
-            .map(String::from)
-            .iter()
-            .collect::<Vec<_>>()
-    );
+    // One case per builder (both by default), each with its stages in build order.
+    for (case, kind) in lbvh["cases"].as_array().unwrap().iter().zip(BvhKind::ALL) {
+        assert_eq!(case["builder"], kind.name());
+        let stages: Vec<&String> = case["stages_ms"].as_object().unwrap().keys().collect();
+        assert_eq!(
+            stages,
+            speculum::bench::lbvh::stages(kind)
+                .map(String::from)
+                .iter()
+                .collect::<Vec<_>>()
+        );
+    }
 }
 
 #[test]

@@ -1,7 +1,8 @@
-//! `speculum bench lbvh`: GPU LBVH build and traversal on random soups and scenes.
+//! `speculum bench lbvh`: GPU BVH builds (the LBVH, and PLOC for geometry built once)
+//! and traversal on random soups and scenes.
 //!
-//! Per case: per-stage GPU medians over repeated builds, build throughput, refit time,
-//! memory per triangle, the SAH cost of the LBVH relative to a CPU binned-SAH BVH over
+//! Per case and builder: per-stage GPU medians over repeated builds, build throughput, refit time,
+//! memory per triangle, the SAH cost of the tree relative to a CPU binned-SAH BVH over
 //! the same triangles, and traversal throughput for coherent (pinhole camera) and
 //! incoherent (random) rays. Checked in the same run: the BVH invariants after the
 //! timed builds, and a sample of each ray set against the CPU SAH BVH's hits.
@@ -10,7 +11,8 @@ use crate::cpu_ref::lbvh::{check_bvh, sah_cost, triangle};
 use crate::cpu_ref::trace::{intersect, CpuBvh};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
-use crate::passes::lbvh::{self, Bvh, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
+use crate::passes::lbvh::ploc::{PlocScratch, ROUNDS};
+use crate::passes::lbvh::{self, Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
 use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
@@ -32,6 +34,8 @@ pub struct Options {
     /// Rays of each set checked against the CPU.
     pub check_rays: u32,
     pub bits: MortonBits,
+    /// The trees built of each case, in this order.
+    pub builders: Vec<BvhKind>,
     /// Rays from a file (`--rays-file`), traced as a third set.
     #[serde(skip)]
     pub file_rays: Option<Vec<Ray>>,
@@ -60,26 +64,34 @@ pub struct RaySetReport {
 #[derive(Clone, Debug, Serialize)]
 pub struct CaseReport {
     pub name: String,
+    /// How the tree was made from the sorted keys.
+    pub builder: BvhKind,
     pub triangles: u32,
     pub morton_bits: u32,
     /// Stage → GPU milliseconds, in build order.
     pub stages_ms: PassTimes,
-    /// GPU milliseconds of a whole build.
+    /// GPU milliseconds of a whole build (for PLOC, its first submission: `ROUNDS`
+    /// rounds).
     pub build_ms: Stat,
+    /// PLOC rounds a build needed beyond the first submission's (submitted again,
+    /// untimed; 0 for the LBVH).
+    pub untimed_rounds: u32,
     /// Million triangles built per second (at the median build time).
     pub mtris_per_s: f64,
     /// GPU milliseconds of the frame's refit (`record_refit_scheduled`) of the tree
     /// just built.
     pub refit_ms: Stat,
+    /// Internal nodes per triangle.
     pub nodes_per_triangle: f64,
-    /// BVH bytes (nodes, parent links and the traversal layout) per triangle.
+    /// BVH bytes (nodes and triangles) per triangle.
     pub bytes_per_triangle: f64,
     /// Rebuild scratch (sort buffers, counters) per triangle.
     pub scratch_bytes_per_triangle: f64,
-    /// SAH cost (unit traversal and triangle costs, relative to the root area).
-    pub sah_lbvh: f64,
+    /// SAH cost of the tree (unit traversal and triangle costs, relative to the root
+    /// area).
+    pub sah: f64,
     pub sah_cpu_binned: f64,
-    /// `sah_lbvh / sah_cpu_binned`: 1.0 would match the CPU builder.
+    /// `sah / sah_cpu_binned`: 1.0 would match the CPU builder.
     pub sah_ratio: f64,
     /// CPU milliseconds of the reference binned-SAH build (for scale, not a contest).
     pub cpu_sah_build_ms: f64,
@@ -244,13 +256,37 @@ pub fn timed_build(
     })
 }
 
-/// Benchmarks one triangle set.
+/// One whole PLOC build (as `timed_build`): the first submission timed, then the rounds
+/// it left (`finish`) submitted untimed; also returns how many rounds those were.
+pub fn timed_ploc_build(
+    timer: &mut GpuTimer,
+    builder: &LbvhBuilder,
+    geometry: Geometry<'_>,
+    bvh: &Bvh,
+    scratch: &PlocScratch,
+) -> Result<(TimerReadout, u32)> {
+    let readout = timer.one_shot(|cmd, timer| {
+        timer.begin(cmd, BUILD);
+        builder.record_build_ploc(cmd, timer, geometry, bvh, scratch);
+        timer.end(cmd, BUILD);
+    })?;
+    let rounds = builder.ploc.finish(geometry.tri_count, bvh, scratch, ROUNDS)?;
+    Ok((readout, rounds - ROUNDS))
+}
+
+/// The stages of a build of `kind`, in build order.
+pub fn stages(kind: BvhKind) -> [&'static str; 4] {
+    [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, kind.tree_scope()]
+}
+
+/// Benchmarks one triangle set with one builder.
 pub fn run_case(
     ctx: &Arc<Context>,
     name: &str,
     v: &[GpuVertex],
     i: &[u32],
     opts: &Options,
+    kind: BvhKind,
     tick: super::Tick<'_>,
 ) -> Result<CaseReport> {
     let n = (i.len() / 3) as u32;
@@ -264,14 +300,26 @@ pub fn run_case(
     };
     let builder = LbvhBuilder::new(ctx)?;
     let bvh = Bvh::new(ctx, n, opts.bits)?;
+    let scratch = match kind {
+        BvhKind::Ploc => Some(PlocScratch::new(ctx, n)?),
+        BvhKind::Lbvh => None,
+    };
 
     // Builds: one warm-up (pipeline JIT), then `repeats` timed.
     let mut timer = GpuTimer::new(ctx, 8)?;
     let mut stages = Timings::default();
     let mut refits = Vec::new();
     let mut timing = TimingCheck::default();
+    let mut untimed_rounds = 0;
     for rep in 0..=opts.repeats {
-        let times = timed_build(&mut timer, &builder, geometry, &bvh)?;
+        let times = match &scratch {
+            Some(scratch) => {
+                let (times, extra) = timed_ploc_build(&mut timer, &builder, geometry, &bvh, scratch)?;
+                untimed_rounds = untimed_rounds.max(extra);
+                times
+            }
+            None => timed_build(&mut timer, &builder, geometry, &bvh)?,
+        };
         if rep > 0 {
             stages.add(&times);
         }
@@ -287,13 +335,13 @@ pub fn run_case(
         tick();
     }
     timing.merge(stages.check());
-    let stages_ms = PassTimes::of_scopes(&stages, &STAGES);
+    let stages_ms = PassTimes::of_scopes(&stages, &self::stages(kind));
     let build_ms = stages.samples(BUILD).and_then(Stat::of).expect("repeats > 0");
 
     // Checks of the BVH as the timed builds (and refits) left it.
     let packed = bvh.read_packed()?;
     let invariants = check_bvh(&packed, v, i);
-    let sah_lbvh = sah_cost(&packed.nodes, i.len() / 3);
+    let sah = sah_cost(&packed.nodes, i.len() / 3);
     let t0 = std::time::Instant::now();
     let cpu = CpuBvh::build(v, i);
     let cpu_sah_build_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -375,18 +423,20 @@ pub fn run_case(
         && build_ms.median.is_finite();
     Ok(CaseReport {
         name: name.into(),
+        builder: kind,
         triangles: n,
         morton_bits: opts.bits.bits(),
         stages_ms,
         build_ms,
+        untimed_rounds,
         mtris_per_s: n as f64 / (build_ms.median * 1e3),
         refit_ms: Stat::of(&refits).expect("repeats > 0"),
-        nodes_per_triangle: (2 * n - 1) as f64 / n as f64,
+        nodes_per_triangle: (n - 1).max(1) as f64 / n as f64,
         bytes_per_triangle: bvh.bytes() as f64 / n as f64,
         scratch_bytes_per_triangle: (bvh.sort.keys[0].size * 2 + bvh.sort.values[0].size * 2) as f64 / n as f64,
-        sah_lbvh,
+        sah,
         sah_cpu_binned: sah_cpu,
-        sah_ratio: sah_lbvh / sah_cpu,
+        sah_ratio: sah / sah_cpu,
         cpu_sah_build_ms,
         coherent,
         incoherent,
@@ -403,5 +453,5 @@ pub fn run_case(
 /// Timer scope of a whole build.
 pub const BUILD: &str = "lbvh";
 
-/// Stage names in build order, for tables.
+/// The LBVH's stage names in build order, for tables (`stages` of either builder).
 pub const STAGES: [&str; 4] = [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, lbvh::FIT];

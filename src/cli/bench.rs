@@ -4,9 +4,9 @@
 use super::{cell, check_count, check_outputs, progress, GpuArgs, SettingsArgs, Text};
 use anyhow::Result;
 use clap::{Args, Subcommand};
-use speculum::bench::lbvh::{run_case, Options, Report, STAGES};
+use speculum::bench::lbvh::{run_case, stages, Options, Report};
 use speculum::output::Kind;
-use speculum::passes::lbvh::MortonBits;
+use speculum::passes::lbvh::{BvhKind, MortonBits};
 use speculum::renderer::{FRAME, SCOPES};
 use speculum::report::Header;
 use std::path::PathBuf;
@@ -151,6 +151,9 @@ pub struct LbvhArgs {
     /// Morton code width in bits.
     #[arg(long, default_value = "30", value_parser = super::choice(&MortonBits::ALL, MortonBits::name, MortonBits::about))]
     pub bits: MortonBits,
+    /// The trees to build of each case.
+    #[arg(long, num_args = 1.., default_values = ["lbvh", "ploc"], value_parser = super::choice(&BvhKind::ALL, BvhKind::name, BvhKind::about))]
+    pub builder: Vec<BvhKind>,
     /// Timed repetitions of each build and trace (medians are reported).
     #[arg(long, default_value_t = 5)]
     pub repeats: u32,
@@ -466,6 +469,7 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
         rays: args.rays,
         check_rays: args.check_rays,
         bits: args.bits,
+        builders: args.builder.clone(),
         file_rays,
         keep_hits: dumping,
     };
@@ -480,10 +484,10 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
         &inputs,
     )?;
     let cases = lbvh_cases(&args)?;
-    if dumping && cases.len() != 1 {
+    if dumping && cases.len() * args.builder.len() != 1 {
         anyhow::bail!(speculum::Error::Input(format!(
-            "--dump-rays/--dump-hits need a single case (one --tris or one --scene), not {}",
-            cases.len()
+            "--dump-rays/--dump-hits need a single case (one --tris or one --scene, one --builder), not {}",
+            cases.len() * args.builder.len()
         )));
     }
     let text = Text::new(&[c.json.as_deref()], c.quiet);
@@ -494,12 +498,15 @@ fn lbvh(args: LbvhArgs) -> Result<()> {
         args.bits.bits(),
         opts.repeats
     ));
-    let bar = progress(cases.len() as u64 * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
+    let runs = (cases.len() * opts.builders.len()) as u64;
+    let bar = progress(runs * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
     let mut results = Vec::new();
     for (name, v, i) in &cases {
-        let case = run_case(&ctx, name, v, i, &opts, &mut || bar.inc(1))?;
-        bar.suspend(|| print_lbvh_case(&text, &case));
-        results.push(case);
+        for &kind in &opts.builders {
+            let case = run_case(&ctx, name, v, i, &opts, kind, &mut || bar.inc(1))?;
+            bar.suspend(|| print_lbvh_case(&text, &case));
+            results.push(case);
+        }
     }
     bar.finish_and_clear();
     if let Some(kept) = results.first().and_then(|c| c.kept.as_ref()) {
@@ -567,13 +574,17 @@ fn lbvh_cases(args: &LbvhArgs) -> Result<Vec<Case>> {
 /// One case's lines: the build and its stages, tree quality and trace rates with the
 /// checks, and the rays file's trace when there is one.
 fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
-    let stages: Vec<String> = STAGES
+    let stages: Vec<String> = stages(case.builder)
         .iter()
         .map(|s| format!("{} {:.3}", s.trim_start_matches("lbvh."), case.stages_ms.median(s)))
         .collect();
+    let untimed = match case.untimed_rounds {
+        0 => String::new(),
+        r => format!(" (+{r} rounds untimed)"),
+    };
     text.line(format_args!(
-        "{:<14} {:>9} tris  build {} ({:7.2} Mtris/s) [{}]  refit {}",
-        case.name,
+        "{:<14} {:>9} tris  build {}{untimed} ({:7.2} Mtris/s) [{}]  refit {}",
+        format!("{} {}", case.name, case.builder.name()),
         case.triangles,
         cell(Some(case.build_ms)),
         case.mtris_per_s,
@@ -591,7 +602,7 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     text.line(format_args!(
         "{:<14} SAH {:.2} vs CPU binned {:.2} (ratio {:.3}); {:.1} B/tri; coherent {:.2} Mrays/s, incoherent {:.2} Mrays/s; {checks}",
         "",
-        case.sah_lbvh,
+        case.sah,
         case.sah_cpu_binned,
         case.sah_ratio,
         case.bytes_per_triangle,

@@ -472,3 +472,114 @@ pub fn sah_cost(nodes: &[TraversalNode], tri_count: usize) -> f64 {
     }
     cost
 }
+
+/// `lbvh.ploc`: the tree of PLOC (Meister & Bittner 2018, "Parallel Locally-Ordered
+/// Clustering for Bounding Volume Hierarchy Construction") over the triangles in key
+/// order, in the layout of `glsl/shared/bvh.glsl`. Clusters start as the leaves in key
+/// order; each round every cluster finds the one within `radius` positions whose union
+/// box has the least area (ties to the smaller position), mutual pairs merge into a
+/// node at the first one's position, and the clusters close ranks. The round's merges
+/// take the next slots in position order; the last merge, the root, trades slots with
+/// slot 0 at the end. Leaves hold one triangle.
+pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usize) -> PackedBvh {
+    let n = values.len();
+    assert!(n >= 1 && indices.len() == 3 * n && radius >= 1);
+    let mut out = PackedBvh {
+        nodes: vec![TraversalNode::default(); (n - 1).max(1)],
+        tris: Vec::with_capacity(n),
+    };
+    let mut clusters: Vec<(u32, Aabb)> = Vec::with_capacity(n);
+    for (j, &id) in values.iter().enumerate() {
+        let [a, b, c] = triangle(vertices, indices, id as usize);
+        out.tris.push(TraversalTri {
+            a: a.to_array(),
+            id,
+            e1: (b - a).to_array(),
+            e2: (c - a).to_array(),
+            ..Default::default()
+        });
+        clusters.push((bvh_leaf_link(j as u32, 1), Aabb::of_triangle(&[a, b, c])));
+    }
+    if n == 1 {
+        let (leaf, b) = clusters[0];
+        out.nodes[0] = halves(leaf, b, leaf, b, BVH_INVALID);
+        return out;
+    }
+    let mut next = 0usize;
+    while clusters.len() > 1 {
+        let c = clusters.len();
+        let nearest: Vec<usize> = (0..c)
+            .map(|i| {
+                let (mut best, mut area) = (usize::MAX, f32::INFINITY);
+                for j in i.saturating_sub(radius)..(i + radius + 1).min(c) {
+                    if j != i {
+                        let a = clusters[i].1.union(clusters[j].1).area();
+                        if a < area {
+                            (best, area) = (j, a);
+                        }
+                    }
+                }
+                best
+            })
+            .collect();
+        let mut merged = Vec::with_capacity(c);
+        for i in 0..c {
+            let j = nearest[i];
+            if nearest[j] != i {
+                merged.push(clusters[i]);
+            } else if i < j {
+                let ((r0, b0), (r1, b1)) = (clusters[i], clusters[j]);
+                out.nodes[next] = halves(r0, b0, r1, b1, BVH_INVALID);
+                for (side, r) in [(0u32, r0), (1, r1)] {
+                    set_parent(&mut out, r, (next as u32) << 1 | side);
+                }
+                merged.push((next as u32, b0.union(b1)));
+                next += 1;
+            }
+        }
+        clusters = merged;
+    }
+    // The root took the last slot; it trades with slot 0: the half that held slot 0
+    // now holds `root`, and the children of both link to their new slots.
+    let root = n - 2;
+    if root != 0 {
+        out.nodes.swap(0, root);
+        let link = out.nodes[root].parent;
+        let p = match (link >> 1) as usize {
+            s if s == root => 0,
+            s => s,
+        };
+        if link & 1 == 0 {
+            out.nodes[p].child0 = root as u32;
+        } else {
+            out.nodes[p].child1 = root as u32;
+        }
+        for s in [0, root] {
+            let nd = out.nodes[s];
+            for (side, r) in [(0u32, nd.child0), (1, nd.child1)] {
+                set_parent(&mut out, r, (s as u32) << 1 | side);
+            }
+        }
+    }
+    out
+}
+
+fn halves(r0: u32, b0: Aabb, r1: u32, b1: Aabb, parent: u32) -> TraversalNode {
+    TraversalNode {
+        lo0: b0.lo.to_array(),
+        child0: r0,
+        hi0: b0.hi.to_array(),
+        child1: r1,
+        lo1: b1.lo.to_array(),
+        parent,
+        hi1: b1.hi.to_array(),
+        unused: 0,
+    }
+}
+
+fn set_parent(out: &mut PackedBvh, child: u32, link: u32) {
+    match bvh_leaf(child) {
+        Some((first, _)) => out.tris[first as usize].parent = link,
+        None => out.nodes[child as usize].parent = link,
+    }
+}

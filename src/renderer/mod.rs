@@ -27,7 +27,7 @@ use crate::error::Result;
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposePass;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::lbvh::{Bvh, LbvhBuilder, MortonBits};
+use crate::passes::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
 use crate::passes::light_direct::{self, LightDirectPass};
 use crate::passes::reflect_merge::MergePass;
 use crate::passes::rt_reflect::RtReflectPass;
@@ -114,6 +114,15 @@ pub struct Renderer {
     cmd: vk::CommandBuffer,
 }
 
+/// The builder of the static scene's BVH.
+fn static_kind(settings: &Settings) -> BvhKind {
+    if settings.static_ploc {
+        BvhKind::Ploc
+    } else {
+        BvhKind::Lbvh
+    }
+}
+
 impl Renderer {
     /// Uploads the scene and creates every pass at the settings' resolution.
     pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings) -> Result<Self> {
@@ -132,13 +141,9 @@ impl Renderer {
         )?;
         // The static BVH, once: the scene has no dynamic geometry yet.
         let static_bvh = Bvh::new(ctx, scene_buffers.mesh.index_count / 3, MortonBits::Bits30)?;
-        let mut build_timer = GpuTimer::new(ctx, 8)?;
         let builder = LbvhBuilder::new(ctx)?;
-        ctx.one_shot(|cmd| {
-            build_timer.reset(cmd);
-            builder.record_build(cmd, &mut build_timer, scene_buffers.mesh.triangles(), &static_bvh);
-        })?;
-        let static_bvh_build = build_timer.results()?;
+        let (static_bvh_build, _) =
+            builder.build_now(scene_buffers.mesh.triangles(), &static_bvh, static_kind(settings))?;
         let dynamic = if scene.is_dynamic() {
             Some(DynamicGeometry::new(ctx, scene, settings, origin)?)
         } else {
@@ -239,6 +244,13 @@ impl Renderer {
             self.rt.resize(e)?;
             self.merge.resize(e)?;
             self.compose.resize(e)?;
+        }
+        if !old.changed(&settings, Applies::StaticBvh).is_empty() {
+            // WAR: frames in flight still walk the old tree.
+            self.ctx.wait_idle()?;
+            (self.static_bvh_build, _) =
+                self.builder
+                    .build_now(self.scene.mesh.triangles(), &self.static_bvh, static_kind(&settings))?;
         }
         if !old.changed(&settings, Applies::ShadowMap).is_empty() {
             self.ctx.wait_idle()?;

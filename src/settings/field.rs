@@ -56,6 +56,8 @@ pub enum Applies {
     Resize,
     /// Recreates the shadow map (waits for the GPU).
     ShadowMap,
+    /// Rebuilds the static scene's BVH (waits for the GPU).
+    StaticBvh,
     /// A dynamic scene's simulation is made with it: a new renderer (the animation
     /// restarts); a static scene's applies it next frame.
     NewRenderer,
@@ -74,6 +76,7 @@ impl Applies {
             Applies::NextFrame => "next frame",
             Applies::Resize => "resize",
             Applies::ShadowMap => "new shadow map",
+            Applies::StaticBvh => "static BVH rebuilt",
             Applies::NewRenderer => "new renderer (dynamic scenes)",
         }
     }

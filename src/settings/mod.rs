@@ -279,6 +279,11 @@ settings_table! {
     /// k is the same image in every run): smaller is smoother motion and more frames
     /// for the same animation.
     sim_dt: f32 = 1.0 / 60.0, Range::F32 { min: 0.0, max: 1.0, open_min: true }, log_slider(0.001, 0.1), NewRenderer;
+    /// Build the static scene's BVH (once, at load) with PLOC instead of the LBVH:
+    /// its tree is close to a binned-SAH builder's, so every ray walks fewer nodes, at
+    /// a slower build (dynamic geometry, rebuilt or refit per frame, always gets the
+    /// LBVH).
+    static_ploc: bool = true, Range::Any, Hud::Checkbox, StaticBvh;
     /// Rebuild the dynamic BVH of a scene whose only dynamic geometry is cloth every
     /// frame instead of refitting it (refit is cheaper; its tree loosens as the cloth
     /// deforms).
@@ -496,7 +501,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 27);
+        assert_eq!(Settings::field_names().len(), 28);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).

@@ -9,6 +9,7 @@
 //! CPU reference: `cpu_ref::lbvh` (every stage exactly; tests/lbvh.rs).
 
 pub mod dynamic;
+pub mod ploc;
 pub mod sort;
 
 use crate::aabb::{ordered_to_float, Aabb};
@@ -82,6 +83,42 @@ impl MortonBits {
         match self {
             MortonBits::Bits30 => 1,
             MortonBits::Bits63 => 2,
+        }
+    }
+}
+
+/// How a BVH's tree is made from the sorted keys: the LBVH's radix tree (`lbvh.fit`:
+/// the fastest build, a looser tree) or PLOC's clustering (`lbvh.ploc`: a tree close to
+/// binned SAH, a slower build), for geometry built once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BvhKind {
+    Lbvh,
+    Ploc,
+}
+
+impl BvhKind {
+    pub const ALL: [BvhKind; 2] = [BvhKind::Lbvh, BvhKind::Ploc];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BvhKind::Lbvh => "lbvh",
+            BvhKind::Ploc => "ploc",
+        }
+    }
+
+    pub fn about(self) -> &'static str {
+        match self {
+            BvhKind::Lbvh => "the LBVH's radix tree with SAH-chosen leaves: the fastest build, a looser tree",
+            BvhKind::Ploc => "PLOC's clustering after the same sort: a tree close to binned SAH, a slower build",
+        }
+    }
+
+    /// The timer scope of the stage that makes the tree.
+    pub fn tree_scope(self) -> &'static str {
+        match self {
+            BvhKind::Lbvh => FIT,
+            BvhKind::Ploc => ploc::PLOC,
         }
     }
 }
@@ -236,6 +273,24 @@ pub fn refit_order(bvh: &PackedBvh, tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]>)
     (order, levels)
 }
 
+/// Stack entries a walk of this tree can need at most: the internal nodes on its
+/// longest path from the root (a walk holds at most one pending child per node it
+/// descends through).
+pub fn stack_need(nodes: &[TraversalNode]) -> u32 {
+    let mut deepest = 0;
+    let mut stack = vec![(0u32, 1u32)];
+    while let Some((s, depth)) = stack.pop() {
+        deepest = deepest.max(depth);
+        let nd = &nodes[s as usize];
+        for c in [nd.child0, nd.child1] {
+            if crate::gpu_types::bvh_leaf(c).is_none() {
+                stack.push((c, depth + 1));
+            }
+        }
+    }
+    deepest
+}
+
 /// Whether `lbvh.fit` must climb in workgroup lockstep: on lavapipe before Mesa 25
 /// (Mesa 22.3 treats a memory barrier in divergent control flow like a workgroup
 /// barrier and loses invocations; the free climb is tested on Mesa 25 only). Every
@@ -271,6 +326,7 @@ pub struct LbvhBuilder {
     refit_leaves: Pipeline,
     refit_level: Pipeline,
     refit_top: Pipeline,
+    pub ploc: ploc::PlocBuilder,
 }
 
 #[repr(C)]
@@ -299,6 +355,7 @@ impl LbvhBuilder {
             refit_leaves: Pipeline::compute::<u32>(ctx, REFIT, shaders::LBVH_REFIT_LEAVES_COMP)?,
             refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
             refit_top: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_TOP_COMP)?,
+            ploc: ploc::PlocBuilder::new(ctx)?,
         })
     }
 
@@ -306,6 +363,55 @@ impl LbvhBuilder {
     /// geometry must be visible to compute reads; the nodes end visible to all later
     /// reads. Earlier GPU use of the BVH's buffers must be complete (caller's barrier).
     pub fn record_build(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, geom: Geometry<'_>, bvh: &Bvh) {
+        self.record_keys(cmd, timer, geom, bvh);
+        timer.begin(cmd, FIT);
+        self.record_fit(cmd, geom, bvh);
+        timer.end(cmd, FIT);
+    }
+
+    /// Records a PLOC build of `bvh` over `geom`: the LBVH's bounds, codes and sort,
+    /// then `ploc::ROUNDS` rounds of `lbvh.ploc`, each stage under its timer scope. After
+    /// the submission, `self.ploc.finish` ends a build that needed more rounds.
+    pub fn record_build_ploc(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: &mut GpuTimer,
+        geom: Geometry<'_>,
+        bvh: &Bvh,
+        scratch: &ploc::PlocScratch,
+    ) {
+        self.record_keys(cmd, timer, geom, bvh);
+        timer.begin(cmd, ploc::PLOC);
+        self.ploc.record(cmd, geom, bvh, scratch, ploc::ROUNDS);
+        timer.end(cmd, ploc::PLOC);
+    }
+
+    /// Builds `bvh` over `geom` now (submits and waits), for geometry built once, with
+    /// `kind`. A PLOC tree deeper than the traversal's stack can walk (none seen: PLOC
+    /// trees are shallower than the LBVH's) is replaced by the LBVH, whose depth the
+    /// key width bounds. Returns each stage's GPU milliseconds and the kind built.
+    pub fn build_now(
+        &self,
+        geom: Geometry<'_>,
+        bvh: &Bvh,
+        kind: BvhKind,
+    ) -> Result<(Vec<(&'static str, f64)>, BvhKind)> {
+        let mut timer = GpuTimer::new(&self.ctx, 8)?;
+        if kind == BvhKind::Ploc {
+            let scratch = ploc::PlocScratch::new(&self.ctx, geom.tri_count)?;
+            let first = timer.one_shot(|cmd, timer| self.record_build_ploc(cmd, timer, geom, bvh, &scratch))?;
+            self.ploc.finish(geom.tri_count, bvh, &scratch, ploc::ROUNDS)?;
+            if stack_need(&bvh.read_packed()?.nodes) <= crate::shader_defines::TRACE_STACK {
+                return Ok((first.scopes, BvhKind::Ploc));
+            }
+        }
+        let readout = timer.one_shot(|cmd, timer| self.record_build(cmd, timer, geom, bvh))?;
+        Ok((readout.scopes, BvhKind::Lbvh))
+    }
+
+    /// Records what both builders start with, each under its timer scope: bounds,
+    /// Morton codes, and the sort of (code, triangle id), left in `bvh.sort`.
+    fn record_keys(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, geom: Geometry<'_>, bvh: &Bvh) {
         assert_eq!(geom.tri_count, bvh.tri_count, "BVH sized for another triangle count");
         timer.begin(cmd, BOUNDS);
         self.record_bounds(cmd, geom, bvh);
@@ -316,9 +422,6 @@ impl LbvhBuilder {
         timer.begin(cmd, SORT);
         self.sort.record(cmd, &bvh.sort, geom.tri_count);
         timer.end(cmd, SORT);
-        timer.begin(cmd, FIT);
-        self.record_fit(cmd, geom, bvh);
-        timer.end(cmd, FIT);
     }
 
     /// `lbvh.bounds`: centroid and scene bounds into the BVH's bounds buffer.
@@ -490,7 +593,33 @@ impl LbvhBuilder {
 
 #[cfg(test)]
 mod tests {
-    use super::lockstep_fit;
+    use super::{lockstep_fit, stack_need};
+    use crate::gpu_types::{bvh_leaf_link, TraversalNode};
+
+    /// A walk needs one stack entry per internal node on the longest path: a chain of
+    /// k nodes (each with a leaf beside the next) needs k, a single node 1.
+    #[test]
+    fn stack_need_is_the_longest_path_in_nodes() {
+        let node = |c0: u32, c1: u32| TraversalNode {
+            child0: c0,
+            child1: c1,
+            ..Default::default()
+        };
+        let leaf = |j| bvh_leaf_link(j, 1);
+        assert_eq!(stack_need(&[node(leaf(0), leaf(0))]), 1);
+        let chain: Vec<TraversalNode> = (0..70u32)
+            .map(|s| {
+                if s < 69 {
+                    node(leaf(s), s + 1)
+                } else {
+                    node(leaf(s), leaf(s + 1))
+                }
+            })
+            .collect();
+        assert_eq!(stack_need(&chain), 70);
+        let balanced = [node(1, 2), node(leaf(0), leaf(1)), node(leaf(2), leaf(3))];
+        assert_eq!(stack_need(&balanced), 2);
+    }
 
     #[test]
     fn the_fit_climbs_in_lockstep_only_on_lavapipe_before_mesa_25() {

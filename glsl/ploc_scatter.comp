@@ -1,0 +1,56 @@
+#version 460
+// lbvh.ploc, round step 4: the clusters close ranks into the other array; the first
+// of each mutual pair writes their node (both halves) into its slot, links both
+// children to it, and goes on as the merged cluster. Indirect: ceil(count / LBVH_WG)
+// workgroups. A node's own parent link is written when it is merged in turn.
+// CPU reference: cpu_ref::lbvh::ploc (tests/lbvh.rs).
+#include "ploc.glsl"
+#define WG_SCAN_SIZE LBVH_WG
+#include "wg_scan.glsl"
+
+layout(local_size_x = LBVH_WG) in;
+
+layout(binding = 0, std430) readonly buffer Clusters { Cluster clusters[]; };
+layout(binding = 1, std430) writeonly buffer NextClusters { Cluster next_clusters[]; };
+layout(binding = 2, std430) readonly buffer Nearest { uint nearest[]; };
+layout(binding = 3, std430) readonly buffer TileOffsets { uvec2 tile_offsets[]; };
+layout(binding = 4, std430) readonly buffer State { PlocState state; };
+layout(binding = 5, std430) buffer TNodes { TraversalNode tnodes[]; };
+layout(binding = 6, std430) buffer TTris { TraversalTri ttris[]; };
+
+
+void main() {
+    uint c = state.count[pc.parity];
+    uint i = gl_GlobalInvocationID.x;
+    bool keep = false, merge = false;
+    uint j = 0u;
+    if (i < c) {
+        PLOC_FLAGS(nearest, i, k_, m_)
+        keep = k_;
+        merge = m_;
+        j = nn_;
+    }
+    uint total;
+    uint run = wg_exclusive_scan((keep ? 1u : 0u) | (merge ? 1u << 16 : 0u), total);
+    if (!keep) {
+        return;
+    }
+    uvec2 off = tile_offsets[gl_WorkGroupID.x];
+    uint pos = off.x + (run & 0xffffu);
+    Cluster a = clusters[i];
+    if (!merge) {
+        next_clusters[pos] = a;
+        return;
+    }
+    Cluster b = clusters[j];
+    uint slot = state.base_slot + off.y + (run >> 16);
+    tnodes[slot].lo0 = a.lo;
+    tnodes[slot].child0 = a.ref;
+    tnodes[slot].hi0 = a.hi;
+    tnodes[slot].child1 = b.ref;
+    tnodes[slot].lo1 = b.lo;
+    tnodes[slot].hi1 = b.hi;
+    LINK_CHILD(tnodes, ttris, a.ref, slot << 1u);
+    LINK_CHILD(tnodes, ttris, b.ref, (slot << 1u) | 1u);
+    next_clusters[pos] = Cluster(min(a.lo, b.lo), slot, max(a.hi, b.hi), 0u);
+}

@@ -1,7 +1,8 @@
 #version 460
 // lbvh.ploc, before the rounds: each triangle in key order into the BVH's triangles,
 // and as a one-triangle leaf into the first cluster array; the state's count (N) and
-// the first round's dispatch. A single triangle is its own tree (bvh.glsl).
+// the first round's dispatch; the root's parent link. A single triangle is its own
+// tree (bvh.glsl).
 // CPU reference: cpu_ref::lbvh::ploc (tests/lbvh.rs).
 #include "ploc.glsl"
 
@@ -32,8 +33,10 @@ void main() {
     uint leaf = bvh_leaf_ref(j, 1u);
     // The parent link is written by the merge (0 for a single triangle).
     ttris[j] = TraversalTri(a, prim, b - a, 0u, c - a, 0u);
-    clusters[j] = Cluster(lo, leaf, hi, 0u);
+    clusters[j] = Cluster(lo, leaf, hi, bvh_area(lo, hi), leaf, j, 1u, 0u);
     if (pc.n == 1u) {
         tnodes[0] = TraversalNode(lo, leaf, hi, leaf, lo, BVH_INVALID, hi, 0u);
+    } else if (j == 0u) {
+        tnodes[0].parent = BVH_INVALID; // the root, the last merge, is never linked
     }
 }

@@ -1,7 +1,8 @@
 #version 460
 // lbvh.ploc, round step 4: the clusters close ranks into the other array; the first
-// of each mutual pair writes their node (both halves) into its slot, links both
-// children to it, and goes on as the merged cluster. Indirect: ceil(count / LBVH_WG)
+// of each mutual pair writes their node (both halves) into its slot (ploc.glsl), links
+// both children to it, and goes on as the merged cluster, a leaf when its triangles
+// are one run of at most BVH_LEAF_MAX and that costs no more SAH than the split. Indirect: ceil(count / LBVH_WG)
 // workgroups. A node's own parent link is written when it is merged in turn.
 // CPU reference: cpu_ref::lbvh::ploc (tests/lbvh.rs).
 #include "ploc.glsl"
@@ -43,14 +44,24 @@ void main() {
         return;
     }
     Cluster b = clusters[j];
-    uint slot = state.base_slot + off.y + (run >> 16);
+    uint slot = pc.n - 2u - (state.base_slot + off.y + (run >> 16));
     tnodes[slot].lo0 = a.lo;
     tnodes[slot].child0 = a.ref;
     tnodes[slot].hi0 = a.hi;
     tnodes[slot].child1 = b.ref;
     tnodes[slot].lo1 = b.lo;
     tnodes[slot].hi1 = b.hi;
-    LINK_CHILD(tnodes, ttris, a.ref, slot << 1u);
-    LINK_CHILD(tnodes, ttris, b.ref, (slot << 1u) | 1u);
-    next_clusters[pos] = Cluster(min(a.lo, b.lo), slot, max(a.hi, b.hi), 0u);
+    LINK_NODE(tnodes, ttris, a.node, slot << 1u);
+    LINK_NODE(tnodes, ttris, b.node, (slot << 1u) | 1u);
+    vec3 lo = min(a.lo, b.lo), hi = max(a.hi, b.hi);
+    float area = bvh_area(lo, hi);
+    precise float split = area + (a.cost + b.cost);
+    uint count = (a.count & ~PLOC_SCATTERED) + (b.count & ~PLOC_SCATTERED);
+    bool run_of_leaves = ((a.count | b.count) & PLOC_SCATTERED) == 0u
+        && (a.first + a.count == b.first || b.first + b.count == a.first);
+    uint first = min(a.first, b.first);
+    precise float leaf = area * float(count);
+    bool collapse = run_of_leaves && count <= BVH_LEAF_MAX && leaf <= split;
+    next_clusters[pos] = Cluster(lo, collapse ? bvh_leaf_ref(first, count) : slot, hi, collapse ? leaf : split, slot,
+                                 first, count | (run_of_leaves ? 0u : PLOC_SCATTERED), 0u);
 }

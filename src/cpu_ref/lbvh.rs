@@ -478,9 +478,10 @@ pub fn sah_cost(nodes: &[TraversalNode], tri_count: usize) -> f64 {
 /// order, in the layout of `glsl/shared/bvh.glsl`. Clusters start as the leaves in key
 /// order; each round every cluster finds the one within `radius` positions whose union
 /// box has the least area (ties to the smaller position), mutual pairs merge into a
-/// node at the first one's position, and the clusters close ranks. The round's merges
-/// take the next slots in position order; the last merge, the root, trades slots with
-/// slot 0 at the end. Leaves hold one triangle.
+/// node at the first one's position, and the clusters close ranks. The k-th merge (by
+/// round, then position) takes slot N-2-k, so the root is slot 0. A merged cluster of at
+/// most `BVH_LEAF_MAX` triangles whose leaf positions are one run becomes a leaf where
+/// that costs no more SAH than its split (as `build` decides; its node stays).
 pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usize) -> PackedBvh {
     let n = values.len();
     assert!(n >= 1 && indices.len() == 3 * n && radius >= 1);
@@ -488,7 +489,7 @@ pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usi
         nodes: vec![TraversalNode::default(); (n - 1).max(1)],
         tris: Vec::with_capacity(n),
     };
-    let mut clusters: Vec<(u32, Aabb)> = Vec::with_capacity(n);
+    let mut clusters: Vec<Cluster> = Vec::with_capacity(n);
     for (j, &id) in values.iter().enumerate() {
         let [a, b, c] = triangle(vertices, indices, id as usize);
         out.tris.push(TraversalTri {
@@ -498,14 +499,23 @@ pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usi
             e2: (c - a).to_array(),
             ..Default::default()
         });
-        clusters.push((bvh_leaf_link(j as u32, 1), Aabb::of_triangle(&[a, b, c])));
+        let bounds = Aabb::of_triangle(&[a, b, c]);
+        clusters.push(Cluster {
+            link: bvh_leaf_link(j as u32, 1),
+            node: Binary::Tri(j),
+            bounds,
+            cost: bounds.area(),
+            first: j,
+            count: 1,
+            run: true,
+        });
     }
     if n == 1 {
-        let (leaf, b) = clusters[0];
-        out.nodes[0] = halves(leaf, b, leaf, b, BVH_INVALID);
+        let c = &clusters[0];
+        out.nodes[0] = halves(c.link, c.bounds, c.link, c.bounds, BVH_INVALID);
         return out;
     }
-    let mut next = 0usize;
+    let mut merges = 0usize;
     while clusters.len() > 1 {
         let c = clusters.len();
         let nearest: Vec<usize> = (0..c)
@@ -513,7 +523,7 @@ pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usi
                 let (mut best, mut area) = (usize::MAX, f32::INFINITY);
                 for j in i.saturating_sub(radius)..(i + radius + 1).min(c) {
                     if j != i {
-                        let a = clusters[i].1.union(clusters[j].1).area();
+                        let a = clusters[i].bounds.union(clusters[j].bounds).area();
                         if a < area {
                             (best, area) = (j, a);
                         }
@@ -528,40 +538,57 @@ pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usi
             if nearest[j] != i {
                 merged.push(clusters[i]);
             } else if i < j {
-                let ((r0, b0), (r1, b1)) = (clusters[i], clusters[j]);
-                out.nodes[next] = halves(r0, b0, r1, b1, BVH_INVALID);
-                for (side, r) in [(0u32, r0), (1, r1)] {
-                    set_parent(&mut out, r, (next as u32) << 1 | side);
+                let (a, b) = (clusters[i], clusters[j]);
+                let slot = n - 2 - merges;
+                merges += 1;
+                out.nodes[slot] = halves(a.link, a.bounds, b.link, b.bounds, out.nodes[slot].parent);
+                for (side, node) in [(0u32, a.node), (1, b.node)] {
+                    let link = (slot as u32) << 1 | side;
+                    match node {
+                        Binary::Tri(t) => out.tris[t].parent = link,
+                        Binary::Node(s) => out.nodes[s].parent = link,
+                    }
                 }
-                merged.push((next as u32, b0.union(b1)));
-                next += 1;
+                let bounds = a.bounds.union(b.bounds);
+                let area = bounds.area();
+                let split = area + (a.cost + b.cost);
+                let count = a.count + b.count;
+                let run = a.run && b.run && (a.first + a.count == b.first || b.first + b.count == a.first);
+                let first = a.first.min(b.first);
+                let leaf = area * count as f32;
+                let collapse = run && count <= BVH_LEAF_MAX as usize && leaf <= split;
+                merged.push(Cluster {
+                    link: if collapse {
+                        bvh_leaf_link(first as u32, count as u32)
+                    } else {
+                        slot as u32
+                    },
+                    node: Binary::Node(slot),
+                    bounds,
+                    cost: if collapse { leaf } else { split },
+                    first,
+                    count,
+                    run,
+                });
             }
         }
         clusters = merged;
     }
-    // The root took the last slot; it trades with slot 0: the half that held slot 0
-    // now holds `root`, and the children of both link to their new slots.
-    let root = n - 2;
-    if root != 0 {
-        out.nodes.swap(0, root);
-        let link = out.nodes[root].parent;
-        let p = match (link >> 1) as usize {
-            s if s == root => 0,
-            s => s,
-        };
-        if link & 1 == 0 {
-            out.nodes[p].child0 = root as u32;
-        } else {
-            out.nodes[p].child1 = root as u32;
-        }
-        for s in [0, root] {
-            let nd = out.nodes[s];
-            for (side, r) in [(0u32, nd.child0), (1, nd.child1)] {
-                set_parent(&mut out, r, (s as u32) << 1 | side);
-            }
-        }
-    }
+    out.nodes[0].parent = BVH_INVALID;
     out
+}
+
+/// A PLOC cluster: its child link for the traversal, its node in the binary tree, its
+/// box and SAH cost, and its leaf positions (`run`: they are first..first+count).
+#[derive(Clone, Copy)]
+struct Cluster {
+    link: u32,
+    node: Binary,
+    bounds: Aabb,
+    cost: f32,
+    first: usize,
+    count: usize,
+    run: bool,
 }
 
 fn halves(r0: u32, b0: Aabb, r1: u32, b1: Aabb, parent: u32) -> TraversalNode {
@@ -574,12 +601,5 @@ fn halves(r0: u32, b0: Aabb, r1: u32, b1: Aabb, parent: u32) -> TraversalNode {
         parent,
         hi1: b1.hi.to_array(),
         unused: 0,
-    }
-}
-
-fn set_parent(out: &mut PackedBvh, child: u32, link: u32) {
-    match bvh_leaf(child) {
-        Some((first, _)) => out.tris[first as usize].parent = link,
-        None => out.nodes[child as usize].parent = link,
     }
 }

@@ -4,8 +4,9 @@
 //! `glsl/shared/ploc.glsl`). Rounds of nearest-neighbour search, merge and compaction
 //! run until one cluster is left; their count is the data's, so their sizes live on
 //! the GPU (indirect dispatches) and `finish` records more rounds when the first
-//! submission did not end the build. Leaves hold one triangle; the refit follows the
-//! parent links as for the LBVH.
+//! submission did not end the build. A merged cluster of at most `BVH_LEAF_MAX`
+//! triangles that are one run in key order becomes a leaf where that costs no more SAH
+//! than its split; the refit follows the parent links as for the LBVH.
 //! CPU reference: `cpu_ref::lbvh::ploc` (tests/lbvh.rs).
 
 use super::{Bvh, Geometry};
@@ -57,8 +58,8 @@ impl PlocScratch {
         let indirect = vk::BufferUsageFlags::INDIRECT_BUFFER;
         Ok(Self {
             clusters: [
-                buf("ploc.clusters0", n * 32, none)?,
-                buf("ploc.clusters1", n * 32, none)?,
+                buf("ploc.clusters0", n * 48, none)?,
+                buf("ploc.clusters1", n * 48, none)?,
             ],
             nearest: buf("ploc.nearest", n * 4, none)?,
             tile_counts: buf("ploc.tile_counts", tiles * 4, none)?,
@@ -84,7 +85,6 @@ pub struct PlocBuilder {
     count: Pipeline,
     scan: Pipeline,
     scatter: Pipeline,
-    root: Pipeline,
 }
 
 impl PlocBuilder {
@@ -97,13 +97,12 @@ impl PlocBuilder {
             count: p("lbvh.ploc.count", shaders::PLOC_COUNT_COMP)?,
             scan: p("lbvh.ploc.scan", shaders::PLOC_SCAN_COMP)?,
             scatter: p("lbvh.ploc.scatter", shaders::PLOC_SCATTER_COMP)?,
-            root: p("lbvh.ploc.root", shaders::PLOC_ROOT_COMP)?,
         })
     }
 
     /// Records the leaves (from the ids `bvh.sort` left in key order) and `rounds`
-    /// rounds, then the root's move to slot 0 if one cluster is left by then. The
-    /// sorted ids must be visible to compute reads; the BVH ends visible to all reads.
+    /// rounds. The sorted ids must be visible to compute reads; the BVH ends visible to
+    /// all reads.
     pub fn record(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh, s: &PlocScratch, rounds: u32) {
         assert!(
             geom.tri_count <= s.capacity,
@@ -133,7 +132,7 @@ impl PlocBuilder {
         self.record_rounds(cmd, n, bvh, s, 0, rounds);
     }
 
-    /// Records `rounds` more rounds after the first `done`, then the root's move.
+    /// Records `rounds` more rounds after the first `done`.
     pub fn record_rounds(&self, cmd: vk::CommandBuffer, n: u32, bvh: &Bvh, s: &PlocScratch, done: u32, rounds: u32) {
         let d = &self.ctx.device;
         let rw = access::COMPUTE_READ_WRITE;
@@ -195,21 +194,6 @@ impl PlocBuilder {
                 Groups::Indirect(&s.args[p]),
             );
         }
-        // RAW: the root's move reads the last round's nodes and count.
-        barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
-        self.root.dispatch(
-            cmd,
-            &[
-                Resource::Buffer(&s.state),
-                Resource::Buffer(&bvh.tnodes),
-                Resource::Buffer(&bvh.ttris),
-            ],
-            &PlocPush {
-                n,
-                parity: (done + rounds) % 2,
-            },
-            Groups::Exact([1, 1, 1]),
-        );
         // RAW: traversal, a readback or the next build reads the tree and the state.
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::ALL_READ_WRITE);
     }

@@ -347,8 +347,9 @@ fn the_moved_dynamic_bvh_equals_brute_force() {
 
 /// A tree deeper than the traversal stack is reported, never silently wrong. 65
 /// triangles whose 63-bit keys each set one bit (centroids at (2^b + 1/2) / 2^21 along
-/// one axis, plus 0 and 1), sixteen copies each (two levels above four leaves of four:
-/// leaves hold at most `BVH_LEAF_MAX`), build a chain 66 levels deep. Every box
+/// one axis, plus 0 and 1), thirty-two copies each (three levels of nodes above eight
+/// leaves of four: leaves hold at most `BVH_LEAF_MAX`, and the walk tests a leaf where
+/// it finds it instead of stacking it), build a chain 67 levels deep. Every box
 /// starts at x = -1, where a ray along x starts, so all entries tie at t = 0 and the
 /// walk takes the first child (the chain) and holds the other at every level: 65
 /// pending subtrees overflow its 64 entries, and `rt.trace` returns t = -1. With 30-bit
@@ -372,7 +373,7 @@ fn a_tree_deeper_than_the_stack_is_reported() {
         // a rounding far below a key bit's width, hence the half).
         let (v1, v2) = (Vec3::new(-1.0, -1.0, -1.0), Vec3::new(-1.0, 2.0, 2.0));
         let v3 = 3.0 * *p - v1 - v2;
-        for _copy in 0..4 * BVH_LEAF_MAX {
+        for _copy in 0..8 * BVH_LEAF_MAX {
             for c in [v1, v2, v3] {
                 i.push(v.len() as u32);
                 v.push(GpuVertex {

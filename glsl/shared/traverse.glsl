@@ -1,5 +1,7 @@
 // BVH traversal shared by rt.trace and the reflection tracer: closest hit or any hit
-// over two BVHs (static, dynamic), stack-based, nearest child first. Moller-Trumbore,
+// over two BVHs (static, dynamic), stack-based, nearest child first, a leaf's
+// triangles tested in the step that hits its box (the stack holds internal nodes
+// only). Moller-Trumbore,
 // double-sided. Epsilon policy: a triangle whose determinant is exactly 0 (parallel to
 // the ray or zero area) is never hit; a hit counts when tmin < t < tmax and it is
 // closer than the best so far, equal t going to the smaller (bvh, triangle) id. No
@@ -90,6 +92,19 @@ bool hit_triangle(uint bvh, uint k, vec3 origin, vec3 dir, float tmin, inout Hit
     return false;
 }
 
+// Tests the triangles of leaf `ref` (hit_triangle); true when `any_hit` and one was
+// hit (the walk can stop).
+bool hit_leaf(uint bvh, uint ref, vec3 origin, vec3 dir, float tmin, bool any_hit, inout Hit best) {
+    uint first = bvh_leaf_first(ref);
+    uint last = first + bvh_leaf_count(ref);
+    for (uint k = first; k < last; ++k) {
+        if (hit_triangle(bvh, k, origin, dir, tmin, best) && any_hit) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // Vertex `k` (0..2) of hit triangle `prim` (bit 31: dynamic BVH).
 Vertex hit_vertex(uint prim, uint k) {
     uint t = prim & 0x7fffffffu;
@@ -116,37 +131,39 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
         }
         uint sp = 0u;
         uint node = 0u; // the root, an internal node (or two links to the single leaf)
+        // The stack holds internal nodes only: a leaf is tested in the step that hits
+        // its box.
         while (true) {
-            if ((node & BVH_LEAF_BIT) != 0u) {
-                uint first = bvh_leaf_first(node);
-                uint last = first + bvh_leaf_count(node);
-                bool found = false;
-                for (uint k = first; k < last && !found; ++k) {
-                    found = hit_triangle(bvh, k, origin, dir, tmin, best) && any_hit;
+            TraversalNode nd = fetch_node(bvh, node);
+            float t0 = box_entry(nd.lo0, nd.hi0, origin, inv_dir, tmin, best.t);
+            float t1 = box_entry(nd.lo1, nd.hi1, origin, inv_dir, tmin, best.t);
+            bool hit0 = t0 != 1.0 / 0.0;
+            bool hit1 = t1 != 1.0 / 0.0;
+            bool found = false;
+            if (hit0 && (nd.child0 & BVH_LEAF_BIT) != 0u) {
+                found = hit_leaf(bvh, nd.child0, origin, dir, tmin, any_hit, best);
+                hit0 = false;
+            }
+            if (hit1 && !found && (nd.child1 & BVH_LEAF_BIT) != 0u) {
+                found = hit_leaf(bvh, nd.child1, origin, dir, tmin, any_hit, best);
+                hit1 = false;
+            }
+            if (found) {
+                break;
+            }
+            if (hit0 && hit1) {
+                uint near = t0 <= t1 ? nd.child0 : nd.child1;
+                uint far = t0 <= t1 ? nd.child1 : nd.child0;
+                if (sp < TRACE_STACK) {
+                    stack[sp++] = far;
+                } else {
+                    overflow = true;
                 }
-                if (found) {
-                    break;
-                }
-            } else {
-                TraversalNode nd = fetch_node(bvh, node);
-                float t0 = box_entry(nd.lo0, nd.hi0, origin, inv_dir, tmin, best.t);
-                float t1 = box_entry(nd.lo1, nd.hi1, origin, inv_dir, tmin, best.t);
-                bool hit0 = t0 != 1.0 / 0.0;
-                bool hit1 = t1 != 1.0 / 0.0;
-                if (hit0 && hit1) {
-                    uint near = t0 <= t1 ? nd.child0 : nd.child1;
-                    uint far = t0 <= t1 ? nd.child1 : nd.child0;
-                    if (sp < TRACE_STACK) {
-                        stack[sp++] = far;
-                    } else {
-                        overflow = true;
-                    }
-                    node = near;
-                    continue;
-                } else if (hit0 || hit1) {
-                    node = hit0 ? nd.child0 : nd.child1;
-                    continue;
-                }
+                node = near;
+                continue;
+            } else if (hit0 || hit1) {
+                node = hit0 ? nd.child0 : nd.child1;
+                continue;
             }
             if (sp == 0u) {
                 break;

@@ -133,11 +133,12 @@ void store_half(Climber c, uint link) {
 
 // The second child at its parent: the climber becomes the parent, covering up to the
 // sibling's end `other` and the sibling's box, a leaf of its triangles when that
-// costs no more than the split (bvh.glsl: bvh_area, the cost's order of additions).
+// costs no more than the split (bvh.glsl: bvh_collapse).
 void unite(inout Climber c, uint link, uint other) {
     uint slot = link >> 1u;
     float sibling = costs[link ^ 1u];
-    precise float children = c.left ? c.cost + sibling : sibling + c.cost;
+    float left_cost = c.left ? c.cost : sibling;
+    float right_cost = c.left ? sibling : c.cost;
     vec3 lo, hi;
     if (c.left) {
         lo = tnodes[slot].lo1;
@@ -153,16 +154,8 @@ void unite(inout Climber c, uint link, uint other) {
     c.lo = min(c.lo, lo);
     c.hi = max(c.hi, hi);
     uint count = c.r - c.l + 1u;
-    float area = bvh_area(c.lo, c.hi);
-    precise float split = area + children;
-    precise float leaf = area * float(count);
-    if (count <= BVH_LEAF_MAX && leaf <= split) {
-        c.cost = leaf;
-        c.ref = bvh_leaf_ref(c.l, count);
-    } else {
-        c.cost = split;
-        c.ref = slot;
-    }
+    bool leaf = bvh_collapse(bvh_area(c.lo, c.hi), left_cost, right_cost, count, true, c.cost);
+    c.ref = leaf ? bvh_leaf_ref(c.l, count) : slot;
 }
 
 // Leaf j: its triangle in the traversal layout, and the climber it starts; returns the

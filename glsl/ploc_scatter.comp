@@ -54,14 +54,12 @@ void main() {
     LINK_NODE(tnodes, ttris, a.node, slot << 1u);
     LINK_NODE(tnodes, ttris, b.node, (slot << 1u) | 1u);
     vec3 lo = min(a.lo, b.lo), hi = max(a.hi, b.hi);
-    float area = bvh_area(lo, hi);
-    precise float split = area + (a.cost + b.cost);
     uint count = (a.count & ~PLOC_SCATTERED) + (b.count & ~PLOC_SCATTERED);
     bool run_of_leaves = ((a.count | b.count) & PLOC_SCATTERED) == 0u
         && (a.first + a.count == b.first || b.first + b.count == a.first);
     uint first = min(a.first, b.first);
-    precise float leaf = area * float(count);
-    bool collapse = run_of_leaves && count <= BVH_LEAF_MAX && leaf <= split;
-    next_clusters[pos] = Cluster(lo, collapse ? bvh_leaf_ref(first, count) : slot, hi, collapse ? leaf : split, slot,
-                                 first, count | (run_of_leaves ? 0u : PLOC_SCATTERED), 0u);
+    float cost;
+    bool leaf = bvh_collapse(bvh_area(lo, hi), a.cost, b.cost, count, run_of_leaves, cost);
+    next_clusters[pos] = Cluster(lo, leaf ? bvh_leaf_ref(first, count) : slot, hi, cost, slot, first,
+                                 count | (run_of_leaves ? 0u : PLOC_SCATTERED), 0u);
 }

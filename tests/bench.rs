@@ -3,7 +3,7 @@
 
 mod common;
 
-use speculum::bench::lbvh::{run_case, stages, Options};
+use speculum::bench::lbvh::{run_case, Options};
 use speculum::passes::lbvh::{BvhKind, MortonBits};
 use speculum::scene::soup::{default_size, random_soup};
 
@@ -34,10 +34,10 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         let c = run_case(&ctx, "soup-5000", &v, &i, &opts, kind, &mut || {}).unwrap();
         assert!(c.valid, "{c:?}");
         assert_eq!((c.triangles, c.builder), (5000, kind));
-        for s in stages(kind) {
+        for s in kind.stages() {
             assert!(c.stages_ms.median(s) > 0.0, "{kind:?}: stage {s} timed");
         }
-        let sum: f64 = stages(kind).iter().map(|s| c.stages_ms.median(s)).sum();
+        let sum: f64 = kind.stages().iter().map(|s| c.stages_ms.median(s)).sum();
         assert!(
             c.build_ms.median >= 0.9 * sum,
             "{kind:?}: the whole build ({:?}) covers its stages ({sum})",

@@ -299,13 +299,7 @@ fn bench_reports_follow_the_schema() {
     for (case, kind) in lbvh["cases"].as_array().unwrap().iter().zip(BvhKind::ALL) {
         assert_eq!(case["builder"], kind.name());
         let stages: Vec<&String> = case["stages_ms"].as_object().unwrap().keys().collect();
-        assert_eq!(
-            stages,
-            speculum::bench::lbvh::stages(kind)
-                .map(String::from)
-                .iter()
-                .collect::<Vec<_>>()
-        );
+        assert_eq!(stages, kind.stages().map(String::from).iter().collect::<Vec<_>>());
     }
 }
 

@@ -64,6 +64,19 @@ float bvh_area(vec3 lo, vec3 hi) {
     return a;
 }
 
+// The leaf rule of both builders (cpu_ref::lbvh::collapse, the same additions): a node
+// of `count` triangles with this `area` and its children's SAH costs (left, right)
+// becomes a leaf when its triangles are `one_run` in key order, it holds at most
+// BVH_LEAF_MAX and that costs no more than the split (unit costs for a node step and
+// a triangle test). Returns whether it does; `cost` gets the node's cost.
+bool bvh_collapse(float area, float left_cost, float right_cost, uint count, bool one_run, out float cost) {
+    precise float split = area + (left_cost + right_cost);
+    precise float leaf = area * float(count);
+    bool collapse = one_run && count <= BVH_LEAF_MAX && leaf <= split;
+    cost = collapse ? leaf : split;
+    return collapse;
+}
+
 // A box into one half of a node: child0's (side 0) or child1's (side 1). A macro on
 // the includer's node buffer (GLSL cannot pass a buffer to a function).
 #define STORE_HALF(tnodes, slot, side, lo, hi)                                           \

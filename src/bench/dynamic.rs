@@ -27,7 +27,7 @@ use serde::Serialize;
 use std::sync::Arc;
 
 /// The dynamic BVH's build stages, summed into `rebuild_ms`.
-const BUILD: [&str; 4] = [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, lbvh::FIT];
+const BUILD: [&str; 4] = lbvh::BvhKind::Lbvh.stages();
 
 /// One body count.
 #[derive(Clone, Debug, Serialize)]

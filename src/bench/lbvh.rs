@@ -12,7 +12,7 @@ use crate::cpu_ref::trace::{intersect, CpuBvh};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::lbvh::ploc::{PlocScratch, ROUNDS};
-use crate::passes::lbvh::{self, Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
+use crate::passes::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
 use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
@@ -274,11 +274,6 @@ pub fn timed_ploc_build(
     Ok((readout, rounds - ROUNDS))
 }
 
-/// The stages of a build of `kind`, in build order.
-pub fn stages(kind: BvhKind) -> [&'static str; 4] {
-    [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, kind.tree_scope()]
-}
-
 /// Benchmarks one triangle set with one builder.
 pub fn run_case(
     ctx: &Arc<Context>,
@@ -335,7 +330,7 @@ pub fn run_case(
         tick();
     }
     timing.merge(stages.check());
-    let stages_ms = PassTimes::of_scopes(&stages, &self::stages(kind));
+    let stages_ms = PassTimes::of_scopes(&stages, &kind.stages());
     let build_ms = stages.samples(BUILD).and_then(Stat::of).expect("repeats > 0");
 
     // Checks of the BVH as the timed builds (and refits) left it.
@@ -453,5 +448,6 @@ pub fn run_case(
 /// Timer scope of a whole build.
 pub const BUILD: &str = "lbvh";
 
-/// The LBVH's stage names in build order, for tables (`stages` of either builder).
-pub const STAGES: [&str; 4] = [lbvh::BOUNDS, lbvh::MORTON, lbvh::SORT, lbvh::FIT];
+/// The LBVH's stage names in build order, for tables (`BvhKind::stages` of either
+/// builder).
+pub const STAGES: [&str; 4] = BvhKind::Lbvh.stages();

@@ -4,7 +4,7 @@
 use super::{cell, check_count, check_outputs, progress, GpuArgs, SettingsArgs, Text};
 use anyhow::Result;
 use clap::{Args, Subcommand};
-use speculum::bench::lbvh::{run_case, stages, Options, Report};
+use speculum::bench::lbvh::{run_case, Options, Report};
 use speculum::output::Kind;
 use speculum::passes::lbvh::{BvhKind, MortonBits};
 use speculum::renderer::{FRAME, SCOPES};
@@ -574,7 +574,9 @@ fn lbvh_cases(args: &LbvhArgs) -> Result<Vec<Case>> {
 /// One case's lines: the build and its stages, tree quality and trace rates with the
 /// checks, and the rays file's trace when there is one.
 fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
-    let stages: Vec<String> = stages(case.builder)
+    let stages: Vec<String> = case
+        .builder
+        .stages()
         .iter()
         .map(|s| format!("{} {:.3}", s.trim_start_matches("lbvh."), case.stages_ms.median(s)))
         .collect();

@@ -107,6 +107,43 @@ fn ext_key(keys: &[u64], i: usize) -> u128 {
     ((keys[i] as u128) << 32) | i as u128
 }
 
+/// Triangle `id` as the BVH holds it (corner, edges, id; parent link 0) and its box.
+fn packed_triangle(vertices: &[GpuVertex], indices: &[u32], id: u32) -> (TraversalTri, Aabb) {
+    let [a, b, c] = triangle(vertices, indices, id as usize);
+    let t = TraversalTri {
+        a: a.to_array(),
+        id,
+        e1: (b - a).to_array(),
+        e2: (c - a).to_array(),
+        ..Default::default()
+    };
+    (t, Aabb::of_triangle(&[a, b, c]))
+}
+
+/// The leaf rule of both builders (`bvh_collapse` in bvh.glsl, the same additions in
+/// f32): a node of `count` triangles with this `area` and children's costs becomes a
+/// leaf when its triangles are `one_run` in key order, it holds at most `BVH_LEAF_MAX`
+/// and that costs no more than the split. Returns whether it does and the node's cost.
+fn collapse(area: f32, left_cost: f32, right_cost: f32, count: usize, one_run: bool) -> (bool, f32) {
+    let split = area + (left_cost + right_cost);
+    let leaf = area * count as f32;
+    if one_run && count <= BVH_LEAF_MAX as usize && leaf <= split {
+        (true, leaf)
+    } else {
+        (false, split)
+    }
+}
+
+/// A single triangle's tree: one node whose two children are that leaf.
+fn single(vertices: &[GpuVertex], indices: &[u32], id: u32) -> PackedBvh {
+    let (t, b) = packed_triangle(vertices, indices, id);
+    let leaf = bvh_leaf_link(0, 1);
+    PackedBvh {
+        nodes: vec![halves(leaf, b, leaf, b, BVH_INVALID)],
+        tris: vec![t],
+    }
+}
+
 /// `lbvh.fit`: the binary radix tree of the sorted keys (Karras 2012; equal keys apart by
 /// their index) over their primitive ids, with every box, in the layout of
 /// `glsl/shared/bvh.glsl`; a node of at most `BVH_LEAF_MAX` triangles becomes a leaf
@@ -117,38 +154,9 @@ fn ext_key(keys: &[u64], i: usize) -> u128 {
 pub fn build(keys: &[u64], values: &[u32], vertices: &[GpuVertex], indices: &[u32]) -> PackedBvh {
     let n = keys.len();
     assert!(n >= 1 && values.len() == n && indices.len() == 3 * n);
-    let tri = |j: usize| {
-        let id = values[j];
-        let [a, b, c] = triangle(vertices, indices, id as usize);
-        (
-            TraversalTri {
-                a: a.to_array(),
-                id,
-                e1: (b - a).to_array(),
-                e2: (c - a).to_array(),
-                ..Default::default()
-            },
-            Aabb::of_triangle(&[a, b, c]),
-        )
-    };
+    let tri = |j: usize| packed_triangle(vertices, indices, values[j]);
     if n == 1 {
-        let (mut t, b) = tri(0);
-        t.parent = 0;
-        let leaf = bvh_leaf_link(0, 1);
-        let node = TraversalNode {
-            lo0: b.lo.to_array(),
-            child0: leaf,
-            hi0: b.hi.to_array(),
-            child1: leaf,
-            lo1: b.lo.to_array(),
-            parent: BVH_INVALID,
-            hi1: b.hi.to_array(),
-            unused: 0,
-        };
-        return PackedBvh {
-            nodes: vec![node],
-            tris: vec![t],
-        };
+        return single(vertices, indices, values[0]);
     }
     let mut b = Builder {
         keys,
@@ -221,25 +229,12 @@ impl Builder<'_> {
                 Binary::Node(c) => self.out.nodes[c].parent = link,
             }
         }
-        self.out.nodes[s] = TraversalNode {
-            lo0: b0.lo.to_array(),
-            child0: c0,
-            hi0: b0.hi.to_array(),
-            child1: c1,
-            lo1: b1.lo.to_array(),
-            parent: self.out.nodes[s].parent,
-            hi1: b1.hi.to_array(),
-            unused: 0,
-        };
+        self.out.nodes[s] = halves(c0, b0, c1, b1, self.out.nodes[s].parent);
         let b = b0.union(b1);
-        let count = (r - l + 1) as u32;
-        let area = b.area();
-        let split = area + (cost0 + cost1);
-        let leaf = area * count as f32;
-        if count <= BVH_LEAF_MAX && leaf <= split {
-            (Binary::Node(s), bvh_leaf_link(l as u32, count), b, leaf)
-        } else {
-            (Binary::Node(s), s as u32, b, split)
+        let count = r - l + 1;
+        match collapse(b.area(), cost0, cost1, count, true) {
+            (true, cost) => (Binary::Node(s), bvh_leaf_link(l as u32, count as u32), b, cost),
+            (false, cost) => (Binary::Node(s), s as u32, b, cost),
         }
     }
 }
@@ -247,23 +242,18 @@ impl Builder<'_> {
 /// `lbvh.refit` (scheduled): the same tree, links and leaves over moved vertices: every
 /// triangle record and every box recomputed through the binary tree of parent links.
 pub fn refit(bvh: &PackedBvh, vertices: &[GpuVertex], indices: &[u32]) -> PackedBvh {
-    let mut out = bvh.clone();
-    let n = out.tris.len();
-    let mut boxes = Vec::with_capacity(n);
-    for t in &mut out.tris {
-        let [a, b, c] = triangle(vertices, indices, t.id as usize);
-        (t.a, t.e1, t.e2) = (a.to_array(), (b - a).to_array(), (c - a).to_array());
-        boxes.push(Aabb::of_triangle(&[a, b, c]));
+    if bvh.tris.len() == 1 {
+        return single(vertices, indices, bvh.tris[0].id);
     }
-    if n == 1 {
-        let nd = &mut out.nodes[0];
-        (nd.lo0, nd.hi0, nd.lo1, nd.hi1) = (
-            boxes[0].lo.to_array(),
-            boxes[0].hi.to_array(),
-            boxes[0].lo.to_array(),
-            boxes[0].hi.to_array(),
-        );
-        return out;
+    let mut out = bvh.clone();
+    let mut boxes = Vec::with_capacity(out.tris.len());
+    for t in &mut out.tris {
+        let (moved, b) = packed_triangle(vertices, indices, t.id);
+        *t = TraversalTri {
+            parent: t.parent,
+            ..moved
+        };
+        boxes.push(b);
     }
     let mut kids = vec![[Binary::Tri(usize::MAX); 2]; out.nodes.len()];
     for (j, t) in out.tris.iter().enumerate() {
@@ -277,8 +267,8 @@ pub fn refit(bvh: &PackedBvh, vertices: &[GpuVertex], indices: &[u32]) -> Packed
             Binary::Tri(j) => boxes[j],
             Binary::Node(c) => fit(c, kids, boxes, nodes),
         });
-        let nd = &mut nodes[s];
-        (nd.lo0, nd.hi0, nd.lo1, nd.hi1) = (b0.lo.to_array(), b0.hi.to_array(), b1.lo.to_array(), b1.hi.to_array());
+        let nd = nodes[s];
+        nodes[s] = halves(nd.child0, b0, nd.child1, b1, nd.parent);
         b0.union(b1)
     }
     fit(0, &kids, &boxes, &mut out.nodes);
@@ -324,31 +314,21 @@ pub fn check_bvh(bvh: &PackedBvh, vertices: &[GpuVertex], indices: &[u32]) -> Re
                 "leaf position {j}: triangle {id} out of range or in two leaves"
             ));
         }
-        let tri = triangle(vertices, indices, id);
+        let (want, b) = packed_triangle(vertices, indices, t.id);
         let want = TraversalTri {
-            a: tri[0].to_array(),
-            id: t.id,
-            e1: (tri[1] - tri[0]).to_array(),
             parent: t.parent,
-            e2: (tri[2] - tri[0]).to_array(),
-            _pad0: 0,
+            ..want
         };
         if *t != want {
             return Err(format!("leaf position {j}: {t:?} is not triangle {id} ({want:?})"));
         }
-        tri_box.push(Aabb::of_triangle(&tri));
+        tri_box.push(b);
     }
     let (_, scene) = bounds(vertices, indices);
     if n == 1 {
         let want = TraversalNode {
-            lo0: tri_box[0].lo.to_array(),
-            child0: bvh_leaf_link(0, 1),
-            hi0: tri_box[0].hi.to_array(),
-            child1: bvh_leaf_link(0, 1),
-            lo1: tri_box[0].lo.to_array(),
-            parent: BVH_INVALID,
-            hi1: tri_box[0].hi.to_array(),
             unused: nodes[0].unused,
+            ..single(vertices, indices, tris[0].id).nodes[0]
         };
         if nodes[0] != want || tris[0].parent != 0 {
             return Err(format!("a single triangle's node {:?} (want {want:?})", nodes[0]));
@@ -485,21 +465,17 @@ pub fn sah_cost(nodes: &[TraversalNode], tri_count: usize) -> f64 {
 pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usize) -> PackedBvh {
     let n = values.len();
     assert!(n >= 1 && indices.len() == 3 * n && radius >= 1);
+    if n == 1 {
+        return single(vertices, indices, values[0]);
+    }
     let mut out = PackedBvh {
-        nodes: vec![TraversalNode::default(); (n - 1).max(1)],
+        nodes: vec![TraversalNode::default(); n - 1],
         tris: Vec::with_capacity(n),
     };
     let mut clusters: Vec<Cluster> = Vec::with_capacity(n);
     for (j, &id) in values.iter().enumerate() {
-        let [a, b, c] = triangle(vertices, indices, id as usize);
-        out.tris.push(TraversalTri {
-            a: a.to_array(),
-            id,
-            e1: (b - a).to_array(),
-            e2: (c - a).to_array(),
-            ..Default::default()
-        });
-        let bounds = Aabb::of_triangle(&[a, b, c]);
+        let (t, bounds) = packed_triangle(vertices, indices, id);
+        out.tris.push(t);
         clusters.push(Cluster {
             link: bvh_leaf_link(j as u32, 1),
             node: Binary::Tri(j),
@@ -509,11 +485,6 @@ pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usi
             count: 1,
             run: true,
         });
-    }
-    if n == 1 {
-        let c = &clusters[0];
-        out.nodes[0] = halves(c.link, c.bounds, c.link, c.bounds, BVH_INVALID);
-        return out;
     }
     let mut merges = 0usize;
     while clusters.len() > 1 {
@@ -550,22 +521,19 @@ pub fn ploc(values: &[u32], vertices: &[GpuVertex], indices: &[u32], radius: usi
                     }
                 }
                 let bounds = a.bounds.union(b.bounds);
-                let area = bounds.area();
-                let split = area + (a.cost + b.cost);
                 let count = a.count + b.count;
                 let run = a.run && b.run && (a.first + a.count == b.first || b.first + b.count == a.first);
                 let first = a.first.min(b.first);
-                let leaf = area * count as f32;
-                let collapse = run && count <= BVH_LEAF_MAX as usize && leaf <= split;
+                let (leaf, cost) = collapse(bounds.area(), a.cost, b.cost, count, run);
                 merged.push(Cluster {
-                    link: if collapse {
+                    link: if leaf {
                         bvh_leaf_link(first as u32, count as u32)
                     } else {
                         slot as u32
                     },
                     node: Binary::Node(slot),
                     bounds,
-                    cost: if collapse { leaf } else { split },
+                    cost,
                     first,
                     count,
                     run,

@@ -5,7 +5,7 @@
 //! No kernel of its own: a policy over `LbvhBuilder`'s build and refit.
 
 use super::{Bvh, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
-use super::{BOUNDS, FIT, MORTON, REFIT, SORT};
+use super::{BvhKind, REFIT};
 use crate::error::Result;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Context, GpuTimer};
@@ -26,7 +26,10 @@ pub struct DynamicBvh {
 
 impl DynamicBvh {
     /// Every timer scope `record` may open, in order.
-    pub const SCOPES: [&'static str; 5] = [BOUNDS, MORTON, SORT, FIT, REFIT];
+    pub const SCOPES: [&'static str; 5] = {
+        let [bounds, morton, sort, fit] = BvhKind::Lbvh.stages();
+        [bounds, morton, sort, fit, REFIT]
+    };
 
     /// A BVH over `tri_count` triangles, refit between builds when `refit` is set (the
     /// triangles' topology never changes), rebuilt at least every `rebuild_every`

@@ -115,11 +115,16 @@ impl BvhKind {
     }
 
     /// The timer scope of the stage that makes the tree.
-    pub fn tree_scope(self) -> &'static str {
+    pub const fn tree_scope(self) -> &'static str {
         match self {
             BvhKind::Lbvh => FIT,
             BvhKind::Ploc => ploc::PLOC,
         }
+    }
+
+    /// The timer scopes of a build, in build order.
+    pub const fn stages(self) -> [&'static str; 4] {
+        [BOUNDS, MORTON, SORT, self.tree_scope()]
     }
 }
 
@@ -401,7 +406,8 @@ impl LbvhBuilder {
             let scratch = ploc::PlocScratch::new(&self.ctx, geom.tri_count)?;
             let first = timer.one_shot(|cmd, timer| self.record_build_ploc(cmd, timer, geom, bvh, &scratch))?;
             self.ploc.finish(geom.tri_count, bvh, &scratch, ploc::ROUNDS)?;
-            if stack_need(&bvh.read_packed()?.nodes) <= crate::shader_defines::TRACE_STACK {
+            let nodes: Vec<TraversalNode> = bytemuck::pod_collect_to_vec(&bvh.tnodes.read()?);
+            if stack_need(&nodes) <= crate::shader_defines::TRACE_STACK {
                 return Ok((first.scopes, BvhKind::Ploc));
             }
         }

@@ -1,7 +1,7 @@
 #version 460
 // lbvh.sort, step 2 of 3 per pass: exclusive prefix sum of the digit-major tile
 // histograms, in place, by a single workgroup (the array holds SORT_BINS entries per
-// tile of SORT_WG * SORT_ITEMS keys: 4096 entries for 1M keys). Each invocation sums
+// tile: 1024 entries for 1M keys in tiles of 16K). Each invocation sums
 // a contiguous segment, the workgroup scans the segment sums, each segment is
 // rewritten with its offset. No workgroup waits on another.
 // CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).

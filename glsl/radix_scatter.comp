@@ -1,10 +1,14 @@
 #version 460
 // lbvh.sort, step 3 of 3 per pass: stable scatter. Each invocation owns SORT_ITEMS
-// consecutive keys of the tile. Its per-digit counts go to shared memory digit-major
-// (s_counts[digit * SORT_WG + invocation]); an exclusive scan of that array gives,
-// for every (digit, invocation), how many keys of that digit come earlier in the tile.
-// Adding the scanned global offset of (digit, tile) gives each key its output slot,
-// in input order within equal digits: the sort is stable (LSD radix sort needs it).
+// consecutive keys of the tile and counts their digits in registers: a packed
+// histogram of 4 bins per word, 8 bits per bin (SORT_ITEMS < 256). Its column of
+// counts goes to shared memory digit-major (s_counts[digit * SORT_WG + invocation]);
+// an exclusive scan of that array gives, for every (digit, invocation), how many keys
+// of that digit come earlier in the tile. Adding the scanned global offset of
+// (digit, tile) gives each invocation's first slot per digit; its keys then take
+// consecutive slots in input order, counted again in registers: the sort is stable
+// (LSD radix sort needs it). No shared-memory read-modify-write per key (a per-lane
+// scatter is the slow step on a CPU driver, which runs lanes as SIMD vectors).
 // CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
 #include "radix.glsl"
 #define WG_SCAN_SIZE SORT_WG
@@ -19,21 +23,22 @@ layout(binding = 3, std430) writeonly buffer ValuesOut { uint values_out[]; };
 layout(binding = 4, std430) readonly buffer Offsets { uint offsets[]; };
 
 shared uint s_counts[SORT_BINS * SORT_WG];
+shared uint s_base[SORT_BINS];
 
 void main() {
     uint l = gl_LocalInvocationID.x;
     uint tile = gl_WorkGroupID.x;
     uint base = tile * SORT_TILE + l * SORT_ITEMS;
 
-    for (uint d = 0u; d < SORT_BINS; ++d) {
-        s_counts[d * SORT_WG + l] = 0u;
-    }
-    // Own column only: no other invocation touches s_counts[* + l] until the barrier.
+    uvec4 h = uvec4(0u);
     for (uint k = 0u; k < SORT_ITEMS; ++k) {
         uint i = base + k;
         if (i < pc.n) {
-            s_counts[DIGIT_OF(keys_in, i) * SORT_WG + l] += 1u;
+            h += digit_one(DIGIT_OF(keys_in, i));
         }
+    }
+    for (uint d = 0u; d < SORT_BINS; ++d) {
+        s_counts[d * SORT_WG + l] = digit_count(h, d);
     }
     barrier();
 
@@ -53,18 +58,23 @@ void main() {
     }
     barrier();
 
-    // Keys of digit d before this invocation's keys, counted from the tile's first key
-    // of digit d: s_counts[d * SORT_WG + l] - s_counts[d * SORT_WG].
-    uint seen[SORT_BINS];
-    for (uint d = 0u; d < SORT_BINS; ++d) {
-        seen[d] = 0u;
+    // The tile's first slot of each digit, less the scanned count before its first
+    // invocation; added to this invocation's column, its first slot of each digit.
+    if (l < SORT_BINS) {
+        s_base[l] = offsets[l * pc.num_tiles + tile] - s_counts[l * SORT_WG];
     }
+    barrier();
+    for (uint d = 0u; d < SORT_BINS; ++d) {
+        s_counts[d * SORT_WG + l] += s_base[d]; // own column only
+    }
+
+    h = uvec4(0u);
     for (uint k = 0u; k < SORT_ITEMS; ++k) {
         uint i = base + k;
         if (i < pc.n) {
             uint d = DIGIT_OF(keys_in, i);
-            uint slot = offsets[d * pc.num_tiles + tile] + (s_counts[d * SORT_WG + l] - s_counts[d * SORT_WG]) + seen[d];
-            seen[d] += 1u;
+            uint slot = s_counts[d * SORT_WG + l] + digit_count(h, d);
+            h += digit_one(d);
             for (uint w = 0u; w < pc.key_words; ++w) {
                 keys_out[slot * pc.key_words + w] = keys_in[i * pc.key_words + w];
             }

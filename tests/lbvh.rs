@@ -9,9 +9,10 @@ use glam::Vec3;
 use rand::Rng;
 use speculum::cpu_ref::lbvh as cref;
 use speculum::gpu_types::{GpuVertex, PackedBvh};
-use speculum::passes::lbvh::sort::SortBuffers;
+use speculum::passes::lbvh::sort::{RadixSort, SortBuffers};
 use speculum::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
 use speculum::scene::soup::{default_size, random_soup};
+use speculum::shader_defines::{SORT_ITEMS_CPU, SORT_ITEMS_GPU, SORT_ITEMS_MAX};
 use speculum::vk::{Buffer, Context, GpuTimer};
 use std::sync::Arc;
 
@@ -142,49 +143,52 @@ fn bounds_morton_and_sort_match_cpu_exactly() {
 }
 
 /// The radix sort alone on random keys with many duplicates (few distinct values and
-/// full-range values), random payloads, 1- and 2-word keys: equal to a stable sort.
+/// full-range values), random payloads, 1- and 2-word keys, with each tile size a
+/// device can get and the largest allowed: equal to a stable sort.
 #[test]
 fn radix_sort_is_a_stable_sort() {
     let ctx = common::context();
-    let b = LbvhBuilder::new(&ctx).unwrap();
     let mut rng = common::rng(7);
-    for &n in &[1u32, 2, 3, 1000, 4096, 4097, 65537, 300000] {
-        for kw in [1u32, 2] {
-            for distinct in [Some(5u64), None] {
-                let keys: Vec<u64> = (0..n)
-                    .map(|_| {
-                        let k: u64 = rng.random();
-                        let k = distinct.map_or(k, |d| (k % d).wrapping_mul(0x9e37_79b9_7f4a_7c15));
-                        if kw == 1 {
-                            k & 0xffff_ffff
-                        } else {
-                            k
-                        }
-                    })
-                    .collect();
-                let values: Vec<u32> = (0..n).map(|_| rng.random()).collect();
-                let bufs = SortBuffers::new(&ctx, n, kw).unwrap();
-                let raw: Vec<u32> = if kw == 1 {
-                    keys.iter().map(|&k| k as u32).collect()
-                } else {
-                    keys.iter().flat_map(|&k| [k as u32, (k >> 32) as u32]).collect()
-                };
-                bufs.keys[0].write(bytemuck::cast_slice(&raw)).unwrap();
-                bufs.values[0].write(bytemuck::cast_slice(&values)).unwrap();
-                bufs.keys[1].write(&vec![0x5au8; bufs.keys[1].size as usize]).unwrap();
-                ctx.one_shot(|cmd| b.sort.record(cmd, &bufs, n)).unwrap();
-                let got_k = keys_u64(
-                    &bytemuck::pod_collect_to_vec(&bufs.keys[0].read().unwrap())[..(n * kw) as usize],
-                    kw,
-                );
-                let got_v: Vec<u32> = bytemuck::pod_collect_to_vec(&bufs.values[0].read().unwrap());
-                let (want_k, want_v) = cref::sort_pairs(&keys, &values);
-                assert_eq!(got_k, want_k, "n={n} kw={kw} distinct={distinct:?}");
-                assert_eq!(
-                    &got_v[..n as usize],
-                    &want_v[..],
-                    "n={n} kw={kw} distinct={distinct:?}: payload order"
-                );
+    for items in [SORT_ITEMS_GPU, SORT_ITEMS_CPU, SORT_ITEMS_MAX] {
+        let sort = RadixSort::with_items(&ctx, items).unwrap();
+        for &n in &[1u32, 2, 3, 1000, 4096, 4097, 65537, 300000] {
+            for kw in [1u32, 2] {
+                for distinct in [Some(5u64), None] {
+                    let keys: Vec<u64> = (0..n)
+                        .map(|_| {
+                            let k: u64 = rng.random();
+                            let k = distinct.map_or(k, |d| (k % d).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+                            if kw == 1 {
+                                k & 0xffff_ffff
+                            } else {
+                                k
+                            }
+                        })
+                        .collect();
+                    let values: Vec<u32> = (0..n).map(|_| rng.random()).collect();
+                    let bufs = SortBuffers::new(&ctx, n, kw).unwrap();
+                    let raw: Vec<u32> = if kw == 1 {
+                        keys.iter().map(|&k| k as u32).collect()
+                    } else {
+                        keys.iter().flat_map(|&k| [k as u32, (k >> 32) as u32]).collect()
+                    };
+                    bufs.keys[0].write(bytemuck::cast_slice(&raw)).unwrap();
+                    bufs.values[0].write(bytemuck::cast_slice(&values)).unwrap();
+                    bufs.keys[1].write(&vec![0x5au8; bufs.keys[1].size as usize]).unwrap();
+                    ctx.one_shot(|cmd| sort.record(cmd, &bufs, n)).unwrap();
+                    let got_k = keys_u64(
+                        &bytemuck::pod_collect_to_vec(&bufs.keys[0].read().unwrap())[..(n * kw) as usize],
+                        kw,
+                    );
+                    let got_v: Vec<u32> = bytemuck::pod_collect_to_vec(&bufs.values[0].read().unwrap());
+                    let (want_k, want_v) = cref::sort_pairs(&keys, &values);
+                    assert_eq!(got_k, want_k, "items={items} n={n} kw={kw} distinct={distinct:?}");
+                    assert_eq!(
+                        &got_v[..n as usize],
+                        &want_v[..],
+                        "items={items} n={n} kw={kw} distinct={distinct:?}: payload order"
+                    );
+                }
             }
         }
     }

@@ -7,10 +7,25 @@ layout(push_constant) uniform Push {
     uint n;         // number of keys
     uint shift;     // bit position of this pass's digit (a multiple of SORT_RADIX_BITS)
     uint key_words; // 32-bit words per key
-    uint num_tiles; // ceil(n / (SORT_WG * SORT_ITEMS))
+    uint num_tiles; // ceil(n / SORT_TILE)
 } pc;
 
+// Keys each invocation owns (sort.rs: SORT_ITEMS_GPU or SORT_ITEMS_CPU, at most
+// SORT_ITEMS_MAX = 255: the packed histograms below count to 255).
+layout(constant_id = 0) const uint SORT_ITEMS = 16u;
 #define SORT_TILE (SORT_WG * SORT_ITEMS)
 
 #define DIGIT_OF(keys, i) ((keys[(i) * pc.key_words + (pc.shift >> 5)] >> (pc.shift & 31u)) & (SORT_BINS - 1u))
+
+// A packed histogram of the SORT_BINS = 16 digits in registers: digit d's count in
+// byte d % 4 of word d / 4, so counts up to 255 (a thread counts at most SORT_ITEMS
+// keys). digit_one(d) is the histogram of one d.
+uvec4 digit_one(uint d) {
+    return uvec4(equal(uvec4(d >> 2u), uvec4(0u, 1u, 2u, 3u))) << ((d & 3u) * 8u);
+}
+uint digit_count(uvec4 h, uint d) {
+    uint q = d >> 2u;
+    uint w = q == 0u ? h.x : (q == 1u ? h.y : (q == 2u ? h.z : h.w));
+    return (w >> ((d & 3u) * 8u)) & 0xffu;
+}
 #endif

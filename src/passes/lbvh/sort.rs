@@ -1,9 +1,10 @@
 //! `lbvh.sort`: stable LSD radix sort of (key, value) pairs, 4 bits per pass, each pass
-//! count → scan → scatter (reduce-then-scan: no workgroup waits on another).
+//! count → scan → scatter (reduce-then-scan: no workgroup waits on another). Tiles of
+//! SORT_WG x `items` keys, `items` chosen for the device (`RadixSort::items_for`).
 //! CPU reference: `cpu_ref::lbvh::sort_pairs` (tests/lbvh.rs).
 
 use crate::error::{Error, Result};
-use crate::shader_defines::{SORT_BINS, SORT_ITEMS, SORT_RADIX_BITS, SORT_WG};
+use crate::shader_defines::{SORT_BINS, SORT_ITEMS_CPU, SORT_ITEMS_GPU, SORT_ITEMS_MAX, SORT_RADIX_BITS, SORT_WG};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
@@ -12,10 +13,11 @@ use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
-/// Keys per tile (one workgroup of the count and scatter kernels).
-pub const TILE: u32 = SORT_WG * SORT_ITEMS;
-/// Most keys one sort handles: the scan kernel's array and the 65535-workgroup limit.
-pub const MAX_KEYS: u32 = 65535 * TILE;
+/// Keys per tile (one workgroup of the count and scatter kernels) at the smallest
+/// `items` a sort uses: the counts buffer is sized for that many tiles.
+const MIN_TILE: u32 = SORT_WG * SORT_ITEMS_GPU;
+/// Most keys one sort handles: the 65535-workgroup limit at the smallest tile.
+pub const MAX_KEYS: u32 = 65535 * MIN_TILE;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -50,7 +52,7 @@ impl SortBuffers {
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let buf = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
         let n = capacity.max(1) as u64;
-        let tiles = capacity.div_ceil(TILE).max(1) as u64;
+        let tiles = capacity.div_ceil(MIN_TILE).max(1) as u64;
         Ok(Self {
             keys: [
                 buf("sort.keys0", n * 4 * key_words as u64)?,
@@ -66,18 +68,48 @@ impl SortBuffers {
 
 pub struct RadixSort {
     ctx: Arc<Context>,
+    /// Keys per thread of the count and scatter kernels (their SORT_ITEMS).
+    pub items: u32,
     count: Pipeline,
     scan: Pipeline,
     scatter: Pipeline,
 }
 
 impl RadixSort {
+    /// The kernels with the tile size for this device (`items_for`).
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        Self::with_items(ctx, Self::items_for(ctx.device_type))
+    }
+
+    /// Keys per thread for a device type: longer tiles on a CPU device, whose cost is
+    /// per tile (ranking, barriers), while a GPU needs enough workgroups to fill it.
+    pub fn items_for(kind: vk::PhysicalDeviceType) -> u32 {
+        if kind == vk::PhysicalDeviceType::CPU {
+            SORT_ITEMS_CPU
+        } else {
+            SORT_ITEMS_GPU
+        }
+    }
+
+    /// The kernels with `items` keys per thread, whatever the device (tests run both
+    /// sizes on one device); `SORT_ITEMS_GPU..=SORT_ITEMS_MAX`.
+    pub fn with_items(ctx: &Arc<Context>, items: u32) -> Result<Self> {
+        assert!(
+            (SORT_ITEMS_GPU..=SORT_ITEMS_MAX).contains(&items),
+            "{items} keys per sort thread"
+        );
+        let c = [items];
         Ok(Self {
             ctx: ctx.clone(),
-            count: Pipeline::compute::<SortPush>(ctx, "lbvh.sort.count", shaders::RADIX_COUNT_COMP)?,
+            items,
+            count: Pipeline::compute_specialized::<SortPush>(ctx, "lbvh.sort.count", shaders::RADIX_COUNT_COMP, &c)?,
             scan: Pipeline::compute::<SortPush>(ctx, "lbvh.sort.scan", shaders::RADIX_SCAN_COMP)?,
-            scatter: Pipeline::compute::<SortPush>(ctx, "lbvh.sort.scatter", shaders::RADIX_SCATTER_COMP)?,
+            scatter: Pipeline::compute_specialized::<SortPush>(
+                ctx,
+                "lbvh.sort.scatter",
+                shaders::RADIX_SCATTER_COMP,
+                &c,
+            )?,
         })
     }
 
@@ -90,7 +122,7 @@ impl RadixSort {
             return;
         }
         let d = &self.ctx.device;
-        let num_tiles = n.div_ceil(TILE);
+        let num_tiles = n.div_ceil(SORT_WG * self.items);
         let passes = 32 * b.key_words / SORT_RADIX_BITS;
         let rw = access::COMPUTE_READ_WRITE;
         let tiles = Groups::Exact([num_tiles, 1, 1]);

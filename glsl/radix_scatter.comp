@@ -59,9 +59,11 @@ void main() {
     barrier();
 
     // The tile's first slot of each digit, less the scanned count before its first
-    // invocation; added to this invocation's column, its first slot of each digit.
+    // invocation; added to this invocation's column, its first slot of each digit. A
+    // single tile's scan already counts every earlier key: no global offsets (the
+    // count and scan kernels do not run).
     if (l < SORT_BINS) {
-        s_base[l] = offsets[l * pc.num_tiles + tile] - s_counts[l * SORT_WG];
+        s_base[l] = pc.num_tiles == 1u ? 0u : offsets[l * pc.num_tiles + tile] - s_counts[l * SORT_WG];
     }
     barrier();
     for (uint d = 0u; d < SORT_BINS; ++d) {

@@ -134,14 +134,18 @@ impl RadixSort {
                 key_words: b.key_words,
                 num_tiles,
             };
-            let count = [Resource::Buffer(&b.keys[i]), Resource::Buffer(&b.counts)];
-            self.count.dispatch(cmd, &count, &push, tiles);
-            // RAW: the scan reads the histograms just written.
-            barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
-            let scan = [Resource::Buffer(&b.counts)];
-            self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
-            // RAW: the scatter reads the scanned offsets.
-            barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+            // One tile ranks its keys without global offsets (radix_scatter.comp): a
+            // small sort (a few bodies, `room`) is one dispatch per pass, not three.
+            if num_tiles > 1 {
+                let count = [Resource::Buffer(&b.keys[i]), Resource::Buffer(&b.counts)];
+                self.count.dispatch(cmd, &count, &push, tiles);
+                // RAW: the scan reads the histograms just written.
+                barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+                let scan = [Resource::Buffer(&b.counts)];
+                self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
+                // RAW: the scatter reads the scanned offsets.
+                barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+            }
             let scatter = [
                 Resource::Buffer(&b.keys[i]),
                 Resource::Buffer(&b.values[i]),

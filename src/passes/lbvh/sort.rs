@@ -69,7 +69,7 @@ impl SortBuffers {
 pub struct RadixSort {
     ctx: Arc<Context>,
     /// Keys per thread of the count and scatter kernels (their SORT_ITEMS).
-    pub items: u32,
+    items: u32,
     count: Pipeline,
     scan: Pipeline,
     scatter: Pipeline,

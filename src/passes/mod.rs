@@ -140,14 +140,14 @@ impl<'a> TraceScene<'a> {
         let s = self.static_bvh.unwrap_or(any);
         let d = self.dynamic_bvh.unwrap_or(any);
         let resources = [
-            Resource::Buffer(&s.bvh.tnodes),
+            Resource::Texels(&s.bvh.node_texels),
             Resource::Buffer(s.geometry.vertices),
             Resource::Buffer(s.geometry.indices),
-            Resource::Buffer(&d.bvh.tnodes),
+            Resource::Texels(&d.bvh.node_texels),
             Resource::Buffer(d.geometry.vertices),
             Resource::Buffer(d.geometry.indices),
-            Resource::Buffer(&s.bvh.ttris),
-            Resource::Buffer(&d.bvh.ttris),
+            Resource::Texels(&s.bvh.tri_texels),
+            Resource::Texels(&d.bvh.tri_texels),
         ];
         let count = |b: Option<Traceable<'_>>| b.map_or(0, |b| b.geometry.tri_count);
         (resources, count(self.static_bvh), count(self.dynamic_bvh))

@@ -39,6 +39,17 @@ impl Buffer {
             let limit = ctx.limits.max_uniform_buffer_range as u64;
             ctx.check_limit(what, size, "bytes", "maxUniformBufferRange", limit)?;
         }
+        if usage.contains(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER) {
+            // Viewed whole as 16-byte texels (`TexelView`).
+            let limit = ctx.limits.max_texel_buffer_elements as u64;
+            ctx.check_limit(
+                what,
+                size.div_ceil(16),
+                "16-byte texels",
+                "maxTexelBufferElements",
+                limit,
+            )?;
+        }
         let info = vk::BufferCreateInfo::default().size(size).usage(usage);
         let raw = unsafe { ctx.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
@@ -183,6 +194,33 @@ impl Buffer {
         vk::DescriptorBufferInfo::default()
             .buffer(self.raw)
             .range(vk::WHOLE_SIZE)
+    }
+}
+
+/// A whole buffer seen as a uniform texel buffer of `R32G32B32A32_UINT` texels (its
+/// size a multiple of 16 bytes, its usage with `UNIFORM_TEXEL_BUFFER`): what kernels
+/// read with `texelFetch` on a `utextureBuffer`. Destroyed on drop.
+pub struct TexelView {
+    ctx: Arc<Context>,
+    pub raw: vk::BufferView,
+}
+
+impl TexelView {
+    pub fn new(ctx: &Arc<Context>, buffer: &Buffer) -> Result<Self> {
+        debug_assert!(buffer.size.is_multiple_of(16));
+        let info = vk::BufferViewCreateInfo::default()
+            .buffer(buffer.raw)
+            .format(vk::Format::R32G32B32A32_UINT)
+            .offset(0)
+            .range(vk::WHOLE_SIZE);
+        let raw = unsafe { ctx.device.create_buffer_view(&info, None) }.vk("vkCreateBufferView")?;
+        Ok(Self { ctx: ctx.clone(), raw })
+    }
+}
+
+impl Drop for TexelView {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_buffer_view(self.raw, None) };
     }
 }
 

@@ -10,7 +10,7 @@ pub mod spirv;
 pub mod swapchain;
 pub mod timing;
 
-pub use buffer::Buffer;
+pub use buffer::{Buffer, TexelView};
 pub use context::{list_devices, Context, ContextDesc, DeviceInfo, Surface, WindowHandles};
 pub use frame_sync::{Acquired, FrameSync};
 pub use image::{Image, Sampler};

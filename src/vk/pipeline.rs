@@ -35,6 +35,8 @@ pub enum Resource<'a> {
     StorageImage(&'a Image),
     /// A combined image sampler in `SHADER_READ_ONLY_OPTIMAL` layout.
     Sampled(&'a Image, &'a Sampler),
+    /// A uniform texel buffer (`utextureBuffer`).
+    Texels(&'a super::TexelView),
 }
 
 /// A shader given by name (for errors) and SPIR-V bytes.
@@ -351,6 +353,7 @@ impl Pipeline {
         enum Info {
             Buffer(vk::DescriptorBufferInfo),
             Image(vk::DescriptorImageInfo),
+            Texels(vk::BufferView),
         }
         let infos: Vec<(u32, vk::DescriptorType, Info)> = self
             .bindings
@@ -375,6 +378,7 @@ impl Pipeline {
                             .sampler(s.raw)
                             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
                     ),
+                    (Resource::Texels(view), vk::DescriptorType::UNIFORM_TEXEL_BUFFER) => Info::Texels(view.raw),
                     _ => panic!("binding {b}: the shader wants {ty:?}, a different kind of resource was given"),
                 };
                 (b, ty, info)
@@ -390,6 +394,7 @@ impl Pipeline {
                 match info {
                     Info::Buffer(i) => w.buffer_info(std::slice::from_ref(i)),
                     Info::Image(i) => w.image_info(std::slice::from_ref(i)),
+                    Info::Texels(v) => w.texel_buffer_view(std::slice::from_ref(v)),
                 }
             })
             .collect();

@@ -18,6 +18,8 @@ const OP_TYPE_MATRIX: u32 = 24;
 const OP_TYPE_IMAGE: u32 = 25;
 const OP_TYPE_SAMPLER: u32 = 26;
 const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
+/// OpTypeImage's Dim operand for texel buffers.
+const DIM_BUFFER: u32 = 5;
 const OP_TYPE_ARRAY: u32 = 28;
 const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
 const OP_TYPE_STRUCT: u32 = 30;
@@ -179,6 +181,14 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
             (SC_UNIFORM_CONSTANT, Some((OP_TYPE_SAMPLED_IMAGE, _))) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             (SC_UNIFORM_CONSTANT, Some((OP_TYPE_SAMPLER, _))) => vk::DescriptorType::SAMPLER,
             // OpTypeImage operands after the result: sampled type, dim, depth, arrayed, ms, sampled.
+            // A texel buffer is an image of dim Buffer (`utextureBuffer`, `imageBuffer`).
+            (SC_UNIFORM_CONSTANT, Some((OP_TYPE_IMAGE, ops))) if ops.len() >= 6 && ops[1] == DIM_BUFFER => {
+                if ops[5] == 2 {
+                    vk::DescriptorType::STORAGE_TEXEL_BUFFER
+                } else {
+                    vk::DescriptorType::UNIFORM_TEXEL_BUFFER
+                }
+            }
             (SC_UNIFORM_CONSTANT, Some((OP_TYPE_IMAGE, ops))) if ops.len() >= 6 && ops[5] == 2 => {
                 vk::DescriptorType::STORAGE_IMAGE
             }

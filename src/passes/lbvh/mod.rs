@@ -18,7 +18,7 @@ use crate::gpu_types::{PackedBvh, TraversalNode, TraversalTri};
 use crate::shader_defines::{BVH_INVALID, LBVH_BOUNDS_ITEMS, LBVH_WG};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource};
+use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource, TexelView};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -142,6 +142,9 @@ pub struct Bvh {
     pub tnodes: Buffer,
     /// N `TraversalTri`s, in leaf order.
     pub ttris: Buffer,
+    /// `tnodes` and `ttris` as the traversal reads them (texel buffers).
+    pub node_texels: TexelView,
+    pub tri_texels: TexelView,
     /// The fit's swap word per internal node (the first child's outer end).
     ends: Buffer,
     /// The fit's SAH cost of the subtree in each half of each node.
@@ -167,15 +170,29 @@ impl Bvh {
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let buf = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        // What the traversal reads, also as texel buffers (TexelView).
+        let texels = |name: &str, bytes: u64| {
+            Buffer::new(
+                ctx,
+                name,
+                bytes,
+                usage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+                MemoryLocation::GpuOnly,
+            )
+        };
+        let tnodes = texels(
+            "lbvh.tnodes",
+            (tri_count as u64 - 1).max(1) * std::mem::size_of::<TraversalNode>() as u64,
+        )?;
+        let ttris = texels(
+            "lbvh.ttris",
+            tri_count as u64 * std::mem::size_of::<TraversalTri>() as u64,
+        )?;
         Ok(Self {
-            tnodes: buf(
-                "lbvh.tnodes",
-                (tri_count as u64 - 1).max(1) * std::mem::size_of::<TraversalNode>() as u64,
-            )?,
-            ttris: buf(
-                "lbvh.ttris",
-                tri_count as u64 * std::mem::size_of::<TraversalTri>() as u64,
-            )?,
+            node_texels: TexelView::new(ctx, &tnodes)?,
+            tri_texels: TexelView::new(ctx, &ttris)?,
+            tnodes,
+            ttris,
             ends: buf("lbvh.ends", (tri_count as u64 - 1).max(1) * 4)?,
             costs: buf("lbvh.costs", (tri_count as u64 - 1).max(1) * 2 * 4)?,
             bounds: buf("lbvh.bounds", 12 * 4)?,

@@ -7,7 +7,7 @@
 
 layout(local_size_x = SORT_WG) in;
 
-layout(binding = 0, std430) readonly buffer Keys { uint keys[]; };
+layout(binding = 0) uniform utextureBuffer keys;
 layout(binding = 1, std430) writeonly buffer Counts { uint counts[]; };
 
 shared uint s_hist[SORT_BINS];
@@ -20,10 +20,17 @@ void main() {
     }
     barrier();
     uint base = tile * SORT_TILE + l * SORT_ITEMS;
-    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+    for (uint k = 0u; k < SORT_ITEMS; k += 4u) {
         uint i = base + k;
         if (i < pc.n) {
-            atomicAdd(s_hist[DIGIT_OF(keys, i)], 1u);
+            uvec4 lo, hi;
+            load_quad(keys, i, lo, hi);
+            uvec4 d = quad_digits(lo, hi);
+            for (uint c = 0u; c < 4u; ++c) {
+                if (i + c < pc.n) {
+                    atomicAdd(s_hist[d[c]], 1u);
+                }
+            }
         }
     }
     barrier();

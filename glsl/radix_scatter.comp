@@ -16,8 +16,8 @@
 
 layout(local_size_x = SORT_WG) in;
 
-layout(binding = 0, std430) readonly buffer KeysIn { uint keys_in[]; };
-layout(binding = 1, std430) readonly buffer ValuesIn { uint values_in[]; };
+layout(binding = 0) uniform utextureBuffer keys_in;
+layout(binding = 1) uniform utextureBuffer values_in;
 layout(binding = 2, std430) writeonly buffer KeysOut { uint keys_out[]; };
 layout(binding = 3, std430) writeonly buffer ValuesOut { uint values_out[]; };
 layout(binding = 4, std430) readonly buffer Offsets { uint offsets[]; };
@@ -31,10 +31,17 @@ void main() {
     uint base = tile * SORT_TILE + l * SORT_ITEMS;
 
     uvec4 h = uvec4(0u);
-    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+    for (uint k = 0u; k < SORT_ITEMS; k += 4u) {
         uint i = base + k;
         if (i < pc.n) {
-            h += digit_one(DIGIT_OF(keys_in, i));
+            uvec4 lo, hi;
+            load_quad(keys_in, i, lo, hi);
+            uvec4 d = quad_digits(lo, hi);
+            for (uint c = 0u; c < 4u; ++c) {
+                if (i + c < pc.n) {
+                    h += digit_one(d[c]);
+                }
+            }
         }
     }
     for (uint d = 0u; d < SORT_BINS; ++d) {
@@ -71,16 +78,26 @@ void main() {
     }
 
     h = uvec4(0u);
-    for (uint k = 0u; k < SORT_ITEMS; ++k) {
+    for (uint k = 0u; k < SORT_ITEMS; k += 4u) {
         uint i = base + k;
         if (i < pc.n) {
-            uint d = DIGIT_OF(keys_in, i);
-            uint slot = s_counts[d * SORT_WG + l] + digit_count(h, d);
-            h += digit_one(d);
-            for (uint w = 0u; w < pc.key_words; ++w) {
-                keys_out[slot * pc.key_words + w] = keys_in[i * pc.key_words + w];
+            uvec4 lo, hi;
+            load_quad(keys_in, i, lo, hi);
+            uvec4 d = quad_digits(lo, hi);
+            uvec4 v = texelFetch(values_in, int(i >> 2u));
+            for (uint c = 0u; c < 4u; ++c) {
+                if (i + c < pc.n) {
+                    uint slot = s_counts[d[c] * SORT_WG + l] + digit_count(h, d[c]);
+                    h += digit_one(d[c]);
+                    if (pc.key_words == 1u) {
+                        keys_out[slot] = lo[c];
+                    } else {
+                        keys_out[2u * slot] = lo[c];
+                        keys_out[2u * slot + 1u] = hi[c];
+                    }
+                    values_out[slot] = v[c];
+                }
             }
-            values_out[slot] = values_in[i];
         }
     }
 }

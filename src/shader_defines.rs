@@ -50,10 +50,12 @@ pub const SORT_ITEMS_GPU: u32 = 16;
 /// ... on a CPU device (lavapipe), fewer and longer tiles: the per-tile ranking and
 /// barriers are the cost there (`bench lbvh`, 200K keys: 19.5 ms with 16, 14.6 with 64).
 pub const SORT_ITEMS_CPU: u32 = 64;
-/// The scatter counts a thread's digits in registers, 16 bins of 8 bits (radix.glsl).
-pub const SORT_ITEMS_MAX: u32 = 255;
+/// The scatter counts a thread's digits in registers, 16 bins of 8 bits (radix.glsl);
+/// the kernels read keys in quads, so every tile size is a multiple of 4.
+pub const SORT_ITEMS_MAX: u32 = 252;
 const _: () = assert!(SORT_BINS == 16 && SORT_ITEMS_GPU <= SORT_ITEMS_MAX && SORT_ITEMS_CPU <= SORT_ITEMS_MAX);
 const _: () = assert!(SORT_ITEMS_GPU <= SORT_ITEMS_CPU);
+const _: () = assert!(SORT_ITEMS_GPU.is_multiple_of(4) && SORT_ITEMS_CPU.is_multiple_of(4) && SORT_ITEMS_MAX.is_multiple_of(4));
 
 /// Threads per workgroup of the `ssr.compact` count, scan and scatter kernels (each
 /// thread owns COMPACT_ITEMS consecutive slots of the 8x8-block order): the scan of the

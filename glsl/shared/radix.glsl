@@ -2,6 +2,7 @@
 // Keys are `key_words` 32-bit words each (1 or 2, low word first).
 #ifndef RADIX_GLSL
 #define RADIX_GLSL
+#extension GL_EXT_samplerless_texture_functions : require
 
 layout(push_constant) uniform Push {
     uint n;         // number of keys
@@ -15,7 +16,26 @@ layout(push_constant) uniform Push {
 layout(constant_id = 0) const uint SORT_ITEMS = 16u;
 #define SORT_TILE (SORT_WG * SORT_ITEMS)
 
-#define DIGIT_OF(keys, i) ((keys[(i) * pc.key_words + (pc.shift >> 5)] >> (pc.shift & 31u)) & (SORT_BINS - 1u))
+// The keys and values are read as texel buffers of uvec4 (4 words a fetch: lavapipe
+// loads a storage buffer one lane and one word at a time, each behind a branch), in
+// quads: keys i..i+3, i a multiple of 4 (SORT_ITEMS is one), their low words and high
+// words (0 for one-word keys). The buffers hold whole quads (sort.rs).
+void load_quad(utextureBuffer keys, uint i, out uvec4 lo, out uvec4 hi) {
+    if (pc.key_words == 1u) {
+        lo = texelFetch(keys, int(i >> 2u));
+        hi = uvec4(0u);
+    } else {
+        uvec4 a = texelFetch(keys, int(i >> 1u));
+        uvec4 b = texelFetch(keys, int((i >> 1u) + 1u));
+        lo = uvec4(a.x, a.z, b.x, b.z);
+        hi = uvec4(a.y, a.w, b.y, b.w);
+    }
+}
+
+// This pass's digits of a quad of keys.
+uvec4 quad_digits(uvec4 lo, uvec4 hi) {
+    return ((pc.shift >= 32u ? hi : lo) >> (pc.shift & 31u)) & (SORT_BINS - 1u);
+}
 
 // A packed histogram of the SORT_BINS = 16 digits in registers: digit d's count in
 // byte d % 4 of word d / 4, so counts up to 255 (a thread counts at most SORT_ITEMS

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::shader_defines::{SORT_BINS, SORT_ITEMS_CPU, SORT_ITEMS_GPU, SORT_ITEMS_MAX, SORT_RADIX_BITS, SORT_WG};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
+use crate::vk::{Buffer, Context, Groups, Pipeline, Resource, TexelView};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -34,6 +34,9 @@ pub struct SortBuffers {
     pub keys: [Buffer; 2],
     /// Values; the sorted result is in `values[0]`.
     pub values: [Buffer; 2],
+    /// `keys` and `values` as the kernels read them: texel buffers of uvec4.
+    key_texels: [TexelView; 2],
+    value_texels: [TexelView; 2],
     counts: Buffer,
     pub capacity: u32,
     pub key_words: u32,
@@ -51,14 +54,23 @@ impl SortBuffers {
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let buf = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
-        let n = capacity.max(1) as u64;
+        let texels = |name: &str, bytes: u64| {
+            let usage = usage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+            Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)
+        };
+        // Whole quads of keys: the kernels read keys and values 4 at a time.
+        let n = capacity.max(1).next_multiple_of(4) as u64;
         let tiles = capacity.div_ceil(MIN_TILE).max(1) as u64;
+        let keys = [
+            texels("sort.keys0", n * 4 * key_words as u64)?,
+            texels("sort.keys1", n * 4 * key_words as u64)?,
+        ];
+        let values = [texels("sort.values0", n * 4)?, texels("sort.values1", n * 4)?];
         Ok(Self {
-            keys: [
-                buf("sort.keys0", n * 4 * key_words as u64)?,
-                buf("sort.keys1", n * 4 * key_words as u64)?,
-            ],
-            values: [buf("sort.values0", n * 4)?, buf("sort.values1", n * 4)?],
+            key_texels: [TexelView::new(ctx, &keys[0])?, TexelView::new(ctx, &keys[1])?],
+            value_texels: [TexelView::new(ctx, &values[0])?, TexelView::new(ctx, &values[1])?],
+            keys,
+            values,
             counts: buf("sort.counts", tiles * SORT_BINS as u64 * 4)?,
             capacity,
             key_words,
@@ -92,10 +104,10 @@ impl RadixSort {
     }
 
     /// The kernels with `items` keys per thread, whatever the device (tests run both
-    /// sizes on one device); `SORT_ITEMS_GPU..=SORT_ITEMS_MAX`.
+    /// sizes on one device); `SORT_ITEMS_GPU..=SORT_ITEMS_MAX`, a multiple of 4.
     pub fn with_items(ctx: &Arc<Context>, items: u32) -> Result<Self> {
         assert!(
-            (SORT_ITEMS_GPU..=SORT_ITEMS_MAX).contains(&items),
+            (SORT_ITEMS_GPU..=SORT_ITEMS_MAX).contains(&items) && items.is_multiple_of(4),
             "{items} keys per sort thread"
         );
         let c = [items];
@@ -137,7 +149,7 @@ impl RadixSort {
             // One tile ranks its keys without global offsets (radix_scatter.comp): a
             // small sort (a few bodies, `room`) is one dispatch per pass, not three.
             if num_tiles > 1 {
-                let count = [Resource::Buffer(&b.keys[i]), Resource::Buffer(&b.counts)];
+                let count = [Resource::Texels(&b.key_texels[i]), Resource::Buffer(&b.counts)];
                 self.count.dispatch(cmd, &count, &push, tiles);
                 // RAW: the scan reads the histograms just written.
                 barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
@@ -147,8 +159,8 @@ impl RadixSort {
                 barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
             }
             let scatter = [
-                Resource::Buffer(&b.keys[i]),
-                Resource::Buffer(&b.values[i]),
+                Resource::Texels(&b.key_texels[i]),
+                Resource::Texels(&b.value_texels[i]),
                 Resource::Buffer(&b.keys[o]),
                 Resource::Buffer(&b.values[o]),
                 Resource::Buffer(&b.counts),

@@ -543,7 +543,11 @@ impl LbvhBuilder {
             barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
             self.refit_level.dispatch(
                 cmd,
-                &[Resource::Buffer(&bvh.tnodes), Resource::Buffer(&schedule.order)],
+                &[
+                    Resource::Buffer(&bvh.tnodes),
+                    Resource::Buffer(&schedule.order),
+                    Resource::Texels(&bvh.node_texels),
+                ],
                 &RangePush {
                     first: l[0],
                     count: l[1],

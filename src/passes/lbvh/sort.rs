@@ -35,8 +35,8 @@ pub struct SortBuffers {
     /// Values; the sorted result is in `values[0]`.
     pub values: [Buffer; 2],
     /// `keys` and `values` as the kernels read them: texel buffers of uvec4.
-    key_texels: [TexelView; 2],
-    value_texels: [TexelView; 2],
+    pub key_texels: [TexelView; 2],
+    pub value_texels: [TexelView; 2],
     counts: Buffer,
     pub capacity: u32,
     pub key_words: u32,

@@ -32,7 +32,7 @@ void main() {
     [[dont_unroll]] for (uint k = 0u; k < LBVH_BOUNDS_ITEMS; ++k) {
         uint t = first + k * LBVH_WG;
         if (t < pc.tri_count) {
-            TRIANGLE_CORNERS(vertices, indices, t, a, b, c)
+            TRIANGLE_CORNERS_STORAGE(vertices, indices, t, a, b, c)
             vec3 center = (a + b + c) * (1.0 / 3.0);
             cmin = min(cmin, center);
             cmax = max(cmax, center);

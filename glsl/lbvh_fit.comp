@@ -32,8 +32,9 @@
 
 layout(local_size_x = LBVH_WG) in;
 
-layout(binding = 0, std430) readonly buffer Vertices { Vertex vertices[]; };
-layout(binding = 1, std430) readonly buffer Indices { uint indices[]; };
+// The triangles' vertices and indices as texels (bvh.glsl: TRIANGLE_CORNERS).
+layout(binding = 0) uniform utextureBuffer vertices;
+layout(binding = 1) uniform utextureBuffer indices;
 layout(binding = 2, std430) readonly buffer Keys { uint keys[]; };
 layout(binding = 3, std430) readonly buffer Values { uint values[]; };
 layout(binding = 4, std430) coherent buffer Ends { uint ends[]; };

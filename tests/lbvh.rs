@@ -4,39 +4,30 @@
 
 mod common;
 
-use ash::vk;
 use glam::Vec3;
 use rand::Rng;
 use speculum::cpu_ref::lbvh as cref;
 use speculum::gpu_types::{GpuVertex, PackedBvh};
 use speculum::passes::lbvh::sort::{RadixSort, SortBuffers};
-use speculum::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
+use speculum::passes::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::shader_defines::{SORT_ITEMS_CPU, SORT_ITEMS_GPU, SORT_ITEMS_MAX};
-use speculum::vk::{Buffer, Context, GpuTimer};
+use speculum::vk::{Context, GpuTimer};
 use std::sync::Arc;
 
-pub struct GpuGeometry {
-    pub vertices: Buffer,
-    pub indices: Buffer,
-    pub tri_count: u32,
+/// The test's triangles on the GPU, as the build kernels read them.
+pub struct GpuGeometry(UploadedTriangles);
+
+impl std::ops::Deref for GpuGeometry {
+    type Target = UploadedTriangles;
+    fn deref(&self) -> &UploadedTriangles {
+        &self.0
+    }
 }
 
 impl GpuGeometry {
     pub fn new(ctx: &Arc<Context>, vertices: &[GpuVertex], indices: &[u32]) -> Self {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        Self {
-            vertices: Buffer::with_data(ctx, "test.vertices", usage, bytemuck::cast_slice(vertices)).unwrap(),
-            indices: Buffer::with_data(ctx, "test.indices", usage, bytemuck::cast_slice(indices)).unwrap(),
-            tri_count: (indices.len() / 3) as u32,
-        }
-    }
-    pub fn geometry(&self) -> Geometry<'_> {
-        Geometry {
-            vertices: &self.vertices,
-            indices: &self.indices,
-            tri_count: self.tri_count,
-        }
+        Self(UploadedTriangles::new(ctx, "test", vertices, indices).unwrap())
     }
 }
 

@@ -11,7 +11,6 @@ mod common;
 /// call those timings untrustworthy.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
-use ash::vk;
 use speculum::vk::GpuTimer;
 use speculum::{Renderer, Settings};
 
@@ -117,14 +116,8 @@ fn one_shot_scopes_pass_their_self_check() {
         }
     }
     let (v, i) = speculum::scene::soup::random_soup(20_000, 1.0, 10.0, 5);
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let vertices = speculum::vk::Buffer::with_data(&ctx, "t.v", usage, bytemuck::cast_slice(&v)).unwrap();
-    let indices = speculum::vk::Buffer::with_data(&ctx, "t.i", usage, bytemuck::cast_slice(&i)).unwrap();
-    let geometry = speculum::passes::lbvh::Geometry {
-        vertices: &vertices,
-        indices: &indices,
-        tri_count: 20_000,
-    };
+    let triangles = speculum::passes::lbvh::UploadedTriangles::new(&ctx, "t", &v, &i).unwrap();
+    let geometry = triangles.geometry();
     let builder = speculum::passes::lbvh::LbvhBuilder::new(&ctx).unwrap();
     let bvh = speculum::passes::lbvh::Bvh::new(&ctx, 20_000, speculum::passes::lbvh::MortonBits::Bits30).unwrap();
     let mut timer = GpuTimer::new(&ctx, 8).unwrap();

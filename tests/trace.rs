@@ -4,42 +4,34 @@
 
 mod common;
 
-use ash::vk;
 use glam::Vec3;
 use rand::Rng;
 use speculum::cpu_ref::lbvh::triangle;
 use speculum::cpu_ref::trace::{brute_force, intersect, CpuBvh};
 use speculum::gpu_types::{GpuVertex, Hit, Ray};
-use speculum::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
+use speculum::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits, UploadedTriangles};
 use speculum::passes::rt_trace::TracePass;
 use speculum::passes::{TraceScene, Traceable};
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::shader_defines::{BVH_INVALID, BVH_LEAF_MAX};
-use speculum::vk::{Buffer, Context, GpuTimer};
+use speculum::vk::{Context, GpuTimer};
 use std::sync::Arc;
 
 struct Built {
-    vertices: Buffer,
-    indices: Buffer,
+    triangles: UploadedTriangles,
     bvh: Bvh,
 }
 
 impl Built {
     fn new(ctx: &Arc<Context>, b: &LbvhBuilder, v: &[GpuVertex], i: &[u32], bits: MortonBits) -> Self {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let vertices = Buffer::with_data(ctx, "t.vertices", usage, bytemuck::cast_slice(v)).unwrap();
-        let indices = Buffer::with_data(ctx, "t.indices", usage, bytemuck::cast_slice(i)).unwrap();
+        let triangles = UploadedTriangles::new(ctx, "t", v, i).unwrap();
         let bvh = Bvh::new(ctx, (i.len() / 3) as u32, bits).unwrap();
-        let built = Self { vertices, indices, bvh };
+        let built = Self { triangles, bvh };
         built.rebuild(ctx, b);
         built
     }
     fn geometry(&self) -> Geometry<'_> {
-        Geometry {
-            vertices: &self.vertices,
-            indices: &self.indices,
-            tri_count: self.bvh.tri_count,
-        }
+        self.triangles.geometry()
     }
     fn traceable(&self) -> Traceable<'_> {
         Traceable {
@@ -251,7 +243,7 @@ fn refit_traces_like_a_fresh_build() {
             q
         })
         .collect();
-    refit.vertices.write(bytemuck::cast_slice(&moved)).unwrap();
+    refit.triangles.vertices.write(bytemuck::cast_slice(&moved)).unwrap();
     let mut timer = GpuTimer::new(&ctx, 2).unwrap();
     ctx.one_shot(|cmd| {
         timer.reset(cmd);

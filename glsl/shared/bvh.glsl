@@ -21,6 +21,7 @@
 // (slot 0) whose two children are that leaf, whose link is (0, side 0).
 #ifndef BVH_GLSL
 #define BVH_GLSL
+#extension GL_EXT_samplerless_texture_functions : require
 #include "types.glsl"
 
 struct TraversalNode {
@@ -127,9 +128,41 @@ float ordered_to_float(uint u) {
     return uintBitsToFloat((u & 0x80000000u) != 0u ? (u & 0x7fffffffu) : ~u);
 }
 
-// The three corners of triangle `t` from an indexed vertex buffer.
-#define TRIANGLE_CORNERS(vertices, indices, t, a, b, c)                                 \
+// The three indices of triangle `t` from an index buffer seen as texels of uvec4
+// (passes/lbvh: TriangleTexels; the buffer holds whole quads). Texels, not a storage
+// buffer: lavapipe fetches a texel for all lanes without a branch, where it loads a
+// storage buffer one lane and one word at a time, each behind a branch.
+uvec3 triangle_indices(utextureBuffer indices, uint t) {
+    uint w = 3u * t;
+    uvec4 q0 = texelFetch(indices, int(w >> 2u));
+    uvec4 q1 = texelFetch(indices, int((w + 2u) >> 2u)); // q0 when all three are in q0
+    uint s = w & 3u;
+    uvec3 r;
+    r.x = q0[s];
+    r.y = s < 3u ? q0[s + 1u] : q1[0];
+    r.z = s < 2u ? q0[s + 2u] : q1[(s + 2u) & 3u];
+    return r;
+}
+
+// The position of vertex `v` from a vertex buffer seen as texels of uvec4 (2 per
+// Vertex, the position in the first's xyz).
+vec3 vertex_position(utextureBuffer vertices, uint v) {
+    return uintBitsToFloat(texelFetch(vertices, int(2u * v)).xyz);
+}
+
+// The three corners of triangle `t` from an indexed vertex buffer read as storage
+// buffers (lbvh.bounds: its strided loop over 64 triangles a thread ran 2.4x as long
+// at 1M triangles with the texel fetches below).
+#define TRIANGLE_CORNERS_STORAGE(vertices, indices, t, a, b, c)                         \
     vec3 a = vertices[indices[3u * (t)]].position;                                      \
     vec3 b = vertices[indices[3u * (t) + 1u]].position;                                 \
     vec3 c = vertices[indices[3u * (t) + 2u]].position;
+
+// The three corners of triangle `t` from its texel views (triangle_indices,
+// vertex_position).
+#define TRIANGLE_CORNERS(vertices, indices, t, a, b, c)                                 \
+    uvec3 corner_ids_ = triangle_indices(indices, t);                                   \
+    vec3 a = vertex_position(vertices, corner_ids_.x);                                  \
+    vec3 b = vertex_position(vertices, corner_ids_.y);                                  \
+    vec3 c = vertex_position(vertices, corner_ids_.z);
 #endif

@@ -12,13 +12,12 @@ use crate::cpu_ref::trace::{intersect, CpuBvh};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::lbvh::ploc::{PlocScratch, ROUNDS};
-use crate::passes::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
+use crate::passes::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule, UploadedTriangles};
 use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
 use crate::shader_defines::BVH_INVALID;
-use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
-use ash::vk;
+use crate::vk::{Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
@@ -285,14 +284,8 @@ pub fn run_case(
     tick: super::Tick<'_>,
 ) -> Result<CaseReport> {
     let n = (i.len() / 3) as u32;
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let vertices = Buffer::with_data(ctx, "bench.vertices", usage, bytemuck::cast_slice(v))?;
-    let indices = Buffer::with_data(ctx, "bench.indices", usage, bytemuck::cast_slice(i))?;
-    let geometry = Geometry {
-        vertices: &vertices,
-        indices: &indices,
-        tri_count: n,
-    };
+    let triangles = UploadedTriangles::new(ctx, "bench", v, i)?;
+    let geometry = triangles.geometry();
     let builder = LbvhBuilder::new(ctx)?;
     let bvh = Bvh::new(ctx, n, opts.bits)?;
     let scratch = match kind {

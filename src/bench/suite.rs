@@ -15,12 +15,11 @@
 
 use super::lbvh::{timed_build, BUILD, STAGES};
 use crate::error::{Error, Result};
-use crate::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits};
+use crate::passes::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
 use crate::report::{Header, Stat};
 use crate::settings::{Mode, Settings};
-use crate::vk::{Buffer, Context, GpuTimer, TimingCheck, Timings};
+use crate::vk::{Context, GpuTimer, TimingCheck, Timings};
 use crate::Renderer;
-use ash::vk;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -186,14 +185,8 @@ pub fn run_case(
         Case::Lbvh { triangles } => {
             let n = *triangles as usize;
             let (v, i) = crate::scene::soup::random_soup(n, 1.0, crate::scene::soup::default_size(n), 42);
-            let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-            let vertices = Buffer::with_data(ctx, "suite.vertices", usage, bytemuck::cast_slice(&v))?;
-            let indices = Buffer::with_data(ctx, "suite.indices", usage, bytemuck::cast_slice(&i))?;
-            let geometry = Geometry {
-                vertices: &vertices,
-                indices: &indices,
-                tri_count: *triangles,
-            };
+            let uploaded = UploadedTriangles::new(ctx, "suite", &v, &i)?;
+            let geometry = uploaded.geometry();
             let builder = LbvhBuilder::new(ctx)?;
             let bvh = Bvh::new(ctx, *triangles, MortonBits::Bits30)?;
             let mut timer = GpuTimer::new(ctx, 8)?;

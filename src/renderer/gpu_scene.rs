@@ -6,7 +6,7 @@
 use crate::error::Result;
 use crate::gpu_types::{GpuMaterial, GpuVertex};
 use crate::passes::lbvh::dynamic::DynamicBvh;
-use crate::passes::lbvh::Geometry;
+use crate::passes::lbvh::{self, Geometry, TriangleTexels};
 use crate::passes::sim_cloth::ClothState;
 use crate::passes::sim_transform::{self, RigidBodies};
 use crate::passes::Traceable;
@@ -27,21 +27,26 @@ pub(super) struct MeshBuffers {
     pub uvs: Buffer,
     pub indices: Buffer,
     pub index_count: u32,
+    /// `vertices` and `indices` as the BVH kernels read them.
+    texels: TriangleTexels,
 }
 
 impl MeshBuffers {
-    /// `vertices` (already made) with `uvs` and `indices` uploaded beside them.
+    /// `vertices` (already made, with `lbvh::VERTEX_USAGE`) with `uvs` and `indices`
+    /// uploaded beside them.
     fn new(ctx: &Arc<Context>, name: &str, vertices: Buffer, uvs: &[[f32; 2]], indices: &[u32]) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let index_buffer = lbvh::index_buffer(
+            ctx,
+            &format!("{name}.indices"),
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            indices,
+        )?;
         Ok(Self {
+            texels: TriangleTexels::new(ctx, &vertices, &index_buffer)?,
             vertices,
             uvs: Buffer::with_data(ctx, &format!("{name}.uvs"), storage, bytemuck::cast_slice(uvs))?,
-            indices: Buffer::with_data(
-                ctx,
-                &format!("{name}.indices"),
-                vk::BufferUsageFlags::INDEX_BUFFER | storage,
-                bytemuck::cast_slice(indices),
-            )?,
+            indices: index_buffer,
             index_count: indices.len() as u32,
         })
     }
@@ -60,6 +65,7 @@ impl MeshBuffers {
         Geometry {
             vertices: &self.vertices,
             indices: &self.indices,
+            texels: &self.texels,
             tri_count: self.index_count / 3,
         }
     }
@@ -92,7 +98,12 @@ impl SceneBuffers {
                 .collect::<Vec<_>>();
             &shifted
         };
-        let vertices = Buffer::with_data(ctx, "scene.vertices", storage, bytemuck::cast_slice(vertices))?;
+        let vertices = Buffer::with_data(
+            ctx,
+            "scene.vertices",
+            lbvh::VERTEX_USAGE,
+            bytemuck::cast_slice(vertices),
+        )?;
         Ok(Self {
             mesh: MeshBuffers::new(ctx, "scene", vertices, &scene.uvs, &scene.indices)?,
             materials: Buffer::with_data(ctx, "scene.materials", storage, bytemuck::cast_slice(&materials))?,
@@ -155,7 +166,7 @@ impl DynamicGeometry {
             ctx,
             "dynamic.vertices",
             std::mem::size_of_val(meshes.vertices.as_slice()) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            lbvh::VERTEX_USAGE | vk::BufferUsageFlags::TRANSFER_SRC,
             gpu_allocator::MemoryLocation::GpuOnly,
         )?;
         let mut cloths = Vec::new();

@@ -117,8 +117,8 @@ impl PlocBuilder {
         self.init.dispatch(
             cmd,
             &[
-                Resource::Buffer(geom.vertices),
-                Resource::Buffer(geom.indices),
+                Resource::Texels(&geom.texels.vertices),
+                Resource::Texels(&geom.texels.indices),
                 Resource::Buffer(&bvh.sort.values[0]),
                 Resource::Buffer(&s.clusters[0]),
                 Resource::Buffer(&bvh.tnodes),

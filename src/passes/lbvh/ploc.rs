@@ -14,7 +14,7 @@ use crate::error::Result;
 use crate::shader_defines::LBVH_WG;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
+use crate::vk::{Buffer, Context, Groups, Pipeline, Resource, TexelView};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -36,6 +36,8 @@ struct PlocPush {
 /// The scratch memory of a PLOC build over up to `capacity` triangles.
 pub struct PlocScratch {
     clusters: [Buffer; 2],
+    /// `clusters` as texels, what the nearest-neighbour search reads.
+    cluster_texels: [TexelView; 2],
     nearest: Buffer,
     tile_counts: Buffer,
     tile_offsets: Buffer,
@@ -56,11 +58,14 @@ impl PlocScratch {
         let tiles = capacity.div_ceil(LBVH_WG).max(1) as u64;
         let none = vk::BufferUsageFlags::empty();
         let indirect = vk::BufferUsageFlags::INDIRECT_BUFFER;
+        let texels = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+        let clusters = [
+            buf("ploc.clusters0", n * 48, texels)?,
+            buf("ploc.clusters1", n * 48, texels)?,
+        ];
         Ok(Self {
-            clusters: [
-                buf("ploc.clusters0", n * 48, none)?,
-                buf("ploc.clusters1", n * 48, none)?,
-            ],
+            cluster_texels: [TexelView::new(ctx, &clusters[0])?, TexelView::new(ctx, &clusters[1])?],
+            clusters,
             nearest: buf("ploc.nearest", n * 4, none)?,
             tile_counts: buf("ploc.tile_counts", tiles * 4, none)?,
             tile_offsets: buf("ploc.tile_offsets", tiles * 8, none)?,
@@ -145,7 +150,7 @@ impl PlocBuilder {
             self.nearest.dispatch(
                 cmd,
                 &[
-                    Resource::Buffer(&s.clusters[p]),
+                    Resource::Texels(&s.cluster_texels[p]),
                     Resource::Buffer(&s.nearest),
                     Resource::Buffer(&s.state),
                 ],

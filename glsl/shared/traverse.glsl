@@ -139,6 +139,56 @@ Vertex hit_vertex(uint prim, uint k) {
     return d_vertices[d_indices[3u * t + k]];
 }
 
+// The walk's stack of internal nodes still to visit (a leaf is tested in the step that
+// hits its box); one for both walks.
+uint trace_stack[TRACE_STACK];
+
+// One ray's walk of BVH `bvh` (0: static, 1: dynamic). Called with a constant `bvh`,
+// so each call compiles to the fetches of its own BVH only. Sets `overflow` when a
+// push would pass TRACE_STACK (the push is dropped).
+void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool any_hit, inout Hit best,
+              inout bool overflow) {
+    uint sp = 0u;
+    uint node = 0u; // the root, an internal node (or two links to the single leaf)
+    while (true) {
+        TraversalNode nd = fetch_node(bvh, node);
+        float t0 = box_entry(nd.lo0, nd.hi0, origin, inv_dir, tmin, best.t);
+        float t1 = box_entry(nd.lo1, nd.hi1, origin, inv_dir, tmin, best.t);
+        bool hit0 = t0 != 1.0 / 0.0;
+        bool hit1 = t1 != 1.0 / 0.0;
+        bool found = false;
+        if (hit0 && (nd.child0 & BVH_LEAF_BIT) != 0u) {
+            found = hit_leaf(bvh, nd.child0, origin, dir, tmin, any_hit, best);
+            hit0 = false;
+        }
+        if (hit1 && !found && (nd.child1 & BVH_LEAF_BIT) != 0u) {
+            found = hit_leaf(bvh, nd.child1, origin, dir, tmin, any_hit, best);
+            hit1 = false;
+        }
+        if (found) {
+            break;
+        }
+        if (hit0 && hit1) {
+            uint near = t0 <= t1 ? nd.child0 : nd.child1;
+            uint far = t0 <= t1 ? nd.child1 : nd.child0;
+            if (sp < TRACE_STACK) {
+                trace_stack[sp++] = far;
+            } else {
+                overflow = true;
+            }
+            node = near;
+            continue;
+        } else if (hit0 || hit1) {
+            node = hit0 ? nd.child0 : nd.child1;
+            continue;
+        }
+        if (sp == 0u) {
+            break;
+        }
+        node = trace_stack[--sp];
+    }
+}
+
 // Traces one ray through both BVHs (a BVH with 0 triangles is skipped). Returns the
 // closest hit, or with any_hit the first found; t = -1 if the stack overflowed.
 Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, uint dynamic_tris, bool any_hit) {
@@ -147,54 +197,11 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
     vec3 inv_dir = 1.0 / safe_dir;
     Hit best = Hit(tmax, BVH_INVALID, 0.0, 0.0);
     bool overflow = false;
-    uint stack[TRACE_STACK];
-
-    for (uint bvh = 0u; bvh < 2u; ++bvh) {
-        uint tris = bvh == 0u ? static_tris : dynamic_tris;
-        if (tris == 0u || (any_hit && best.prim != BVH_INVALID)) {
-            continue;
-        }
-        uint sp = 0u;
-        uint node = 0u; // the root, an internal node (or two links to the single leaf)
-        // The stack holds internal nodes only: a leaf is tested in the step that hits
-        // its box.
-        while (true) {
-            TraversalNode nd = fetch_node(bvh, node);
-            float t0 = box_entry(nd.lo0, nd.hi0, origin, inv_dir, tmin, best.t);
-            float t1 = box_entry(nd.lo1, nd.hi1, origin, inv_dir, tmin, best.t);
-            bool hit0 = t0 != 1.0 / 0.0;
-            bool hit1 = t1 != 1.0 / 0.0;
-            bool found = false;
-            if (hit0 && (nd.child0 & BVH_LEAF_BIT) != 0u) {
-                found = hit_leaf(bvh, nd.child0, origin, dir, tmin, any_hit, best);
-                hit0 = false;
-            }
-            if (hit1 && !found && (nd.child1 & BVH_LEAF_BIT) != 0u) {
-                found = hit_leaf(bvh, nd.child1, origin, dir, tmin, any_hit, best);
-                hit1 = false;
-            }
-            if (found) {
-                break;
-            }
-            if (hit0 && hit1) {
-                uint near = t0 <= t1 ? nd.child0 : nd.child1;
-                uint far = t0 <= t1 ? nd.child1 : nd.child0;
-                if (sp < TRACE_STACK) {
-                    stack[sp++] = far;
-                } else {
-                    overflow = true;
-                }
-                node = near;
-                continue;
-            } else if (hit0 || hit1) {
-                node = hit0 ? nd.child0 : nd.child1;
-                continue;
-            }
-            if (sp == 0u) {
-                break;
-            }
-            node = stack[--sp];
-        }
+    if (static_tris != 0u) {
+        walk_bvh(0u, origin, dir, inv_dir, tmin, any_hit, best, overflow);
+    }
+    if (dynamic_tris != 0u && !(any_hit && best.prim != BVH_INVALID)) {
+        walk_bvh(1u, origin, dir, inv_dir, tmin, any_hit, best, overflow);
     }
     if (overflow) {
         best = Hit(-1.0, BVH_INVALID, 0.0, 0.0); // reported as an error, never silently wrong

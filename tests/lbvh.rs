@@ -16,22 +16,11 @@ use speculum::vk::{Context, GpuTimer};
 use std::sync::Arc;
 
 /// The test's triangles on the GPU, as the build kernels read them.
-pub struct GpuGeometry(UploadedTriangles);
-
-impl std::ops::Deref for GpuGeometry {
-    type Target = UploadedTriangles;
-    fn deref(&self) -> &UploadedTriangles {
-        &self.0
-    }
+fn upload(ctx: &Arc<Context>, vertices: &[GpuVertex], indices: &[u32]) -> UploadedTriangles {
+    UploadedTriangles::new(ctx, "test", vertices, indices).unwrap()
 }
 
-impl GpuGeometry {
-    pub fn new(ctx: &Arc<Context>, vertices: &[GpuVertex], indices: &[u32]) -> Self {
-        Self(UploadedTriangles::new(ctx, "test", vertices, indices).unwrap())
-    }
-}
-
-fn build(ctx: &Arc<Context>, b: &LbvhBuilder, g: &GpuGeometry, bits: MortonBits) -> Bvh {
+fn build(ctx: &Arc<Context>, b: &LbvhBuilder, g: &UploadedTriangles, bits: MortonBits) -> Bvh {
     let bvh = Bvh::new(ctx, g.tri_count, bits).unwrap();
     // Poison the nodes and triangles: what the kernels fail to write cannot pass the
     // checks.
@@ -96,7 +85,7 @@ fn bounds_morton_and_sort_match_cpu_exactly() {
     let b = LbvhBuilder::new(&ctx).unwrap();
     for (seed, &n) in [1usize, 2, 3, 1000, 65537, 300000].iter().enumerate() {
         let (v, i) = random_soup(n, 10.0, default_size(n) * 10.0, seed as u64);
-        let g = GpuGeometry::new(&ctx, &v, &i);
+        let g = upload(&ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
             let kw = bits.key_words();
             let bvh = Bvh::new(&ctx, g.tri_count, bits).unwrap();
@@ -200,7 +189,7 @@ fn fit_matches_cpu_exactly() {
 fn fit_matches_cpu(ctx: &Arc<Context>, b: &LbvhBuilder) {
     for (seed, &n) in [1usize, 2, 3, 1000, 65537].iter().enumerate() {
         let (v, i) = random_soup(n, 3.0, default_size(n) * 3.0, 100 + seed as u64);
-        let g = GpuGeometry::new(ctx, &v, &i);
+        let g = upload(ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
             let bvh = build(ctx, b, &g, bits);
             let want = cpu_bvh(&v, &v, &i, bits);
@@ -288,7 +277,7 @@ fn degenerate_inputs_give_valid_bvhs() {
     ];
     for (name, tris) in cases {
         let (v, i) = soup_from(&tris);
-        let g = GpuGeometry::new(&ctx, &v, &i);
+        let g = upload(&ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
             let bvh = build(&ctx, &b, &g, bits);
             let got = assert_packed(&bvh, &cpu_bvh(&v, &v, &i, bits), &format!("{name} {bits:?}"));
@@ -341,7 +330,7 @@ fn refit_matches_cpu_after_moving_vertices() {
     let b = LbvhBuilder::new(&ctx).unwrap();
     let n = 20000;
     let (v, i) = random_soup(n, 2.0, default_size(n) * 2.0, 5);
-    let g = GpuGeometry::new(&ctx, &v, &i);
+    let g = upload(&ctx, &v, &i);
     let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
     let before = bvh.read_packed().unwrap();
     let moved = wave(&v);
@@ -369,7 +358,7 @@ fn scheduled_refit_matches_cpu() {
     let b = LbvhBuilder::new(&ctx).unwrap();
     for n in [1usize, 2, 300, 20000] {
         let (v, i) = random_soup(n, 2.0, default_size(n) * 2.0, 7);
-        let g = GpuGeometry::new(&ctx, &v, &i);
+        let g = upload(&ctx, &v, &i);
         let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
         let before = bvh.read_packed().unwrap();
         let (order, levels) = refit_order(&before, n as u32);
@@ -429,7 +418,7 @@ fn size_classes_keep_walls_apart() {
         speculum::scene::builtin::mirrors().unwrap(),
     ] {
         let (v, i) = (&scene.vertices, &scene.indices);
-        let g = GpuGeometry::new(&ctx, v, i);
+        let g = upload(&ctx, v, i);
         let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
         let ratio = cref::sah_cost(&bvh.read_packed().unwrap().nodes, i.len() / 3)
             / speculum::cpu_ref::trace::CpuBvh::build(v, i).sah_cost();
@@ -472,7 +461,7 @@ fn ploc_matches_cpu_exactly() {
     cases.push(("room".into(), room.vertices.clone(), room.indices.clone()));
     for (name, v, i) in &cases {
         let n = (i.len() / 3) as u32;
-        let g = GpuGeometry::new(&ctx, v, i);
+        let g = upload(&ctx, v, i);
         let keys = cref::morton_keys(v, i, 1);
         let (_, sv) = cref::sort_pairs(&keys, &(0..n).collect::<Vec<_>>());
         let want = cref::ploc(&sv, v, i, PLOC_RADIUS as usize);

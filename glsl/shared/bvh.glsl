@@ -106,17 +106,33 @@ bool bvh_collapse(float area, float left_cost, float right_cost, uint count, boo
             STORE_HALF(tnodes, 0u, 1u, lo_, hi_)                                          \
         }                                                                                 \
     }
-// REFIT_NODE: internal node `slot`'s box, the union of its halves, into its parent's
-// half (nothing for the root).
+// REFIT_UNION: an internal node's box, the union of its halves (lo0, hi0) and (lo1,
+// hi1), into the half of its parent its `link` names (nothing for the root).
+#define REFIT_UNION(tnodes, link, lo0, hi0, lo1, hi1)                                     \
+    if ((link) != BVH_INVALID) {                                                          \
+        vec3 lo_ = min(lo0, lo1), hi_ = max(hi0, hi1); /* once: STORE_HALF has 2 sides */ \
+        STORE_HALF(tnodes, (link) >> 1u, (link) & 1u, lo_, hi_)                           \
+    }
+// REFIT_NODE: REFIT_UNION of internal node `slot`, read from `tnodes`.
 #define REFIT_NODE(tnodes, slot)                                                          \
     {                                                                                     \
         uint link_ = tnodes[slot].parent;                                                 \
-        if (link_ != BVH_INVALID) {                                                       \
-            vec3 lo_ = min(tnodes[slot].lo0, tnodes[slot].lo1);                           \
-            vec3 hi_ = max(tnodes[slot].hi0, tnodes[slot].hi1);                           \
-            STORE_HALF(tnodes, link_ >> 1u, link_ & 1u, lo_, hi_)                         \
-        }                                                                                 \
+        REFIT_UNION(tnodes, link_, tnodes[slot].lo0, tnodes[slot].hi0, tnodes[slot].lo1,  \
+                    tnodes[slot].hi1)                                                     \
     }
+
+// Node `i` from a node buffer seen as texels of uvec4 (4 per node, in the layout
+// above): what the walk and the refit's levels read. Texels, not a storage buffer:
+// lavapipe fetches a texel for all lanes without a branch, where it loads a storage
+// buffer one lane and one word at a time, each behind a branch.
+TraversalNode node_from_texels(utextureBuffer nodes, uint i) {
+    uvec4 w0 = texelFetch(nodes, int(4u * i));
+    uvec4 w1 = texelFetch(nodes, int(4u * i + 1u));
+    uvec4 w2 = texelFetch(nodes, int(4u * i + 2u));
+    uvec4 w3 = texelFetch(nodes, int(4u * i + 3u));
+    return TraversalNode(uintBitsToFloat(w0.xyz), w0.w, uintBitsToFloat(w1.xyz), w1.w, uintBitsToFloat(w2.xyz),
+                         w2.w, uintBitsToFloat(w3.xyz), w3.w);
+}
 
 // Float <-> uint mapping that preserves order, so atomicMin/atomicMax on uint act as
 // float min/max (negative floats: all bits flipped; positive: the sign bit set).

@@ -12,7 +12,8 @@ layout(push_constant) uniform Push {
 } pc;
 
 // Keys each invocation owns (sort.rs: SORT_ITEMS_GPU or SORT_ITEMS_CPU, at most
-// SORT_ITEMS_MAX = 255: the packed histograms below count to 255).
+// SORT_ITEMS_MAX = 252: the packed histograms below count to 255, and keys are read in
+// quads).
 layout(constant_id = 0) const uint SORT_ITEMS = 16u;
 #define SORT_TILE (SORT_WG * SORT_ITEMS)
 

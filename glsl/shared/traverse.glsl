@@ -17,7 +17,6 @@
 // buffer one lane and one word at a time, each behind a branch (1.2-1.4x the rays/s).
 #ifndef TRAVERSE_GLSL
 #define TRAVERSE_GLSL
-#extension GL_EXT_samplerless_texture_functions : require
 #include "bvh.glsl"
 
 struct Hit {
@@ -37,45 +36,25 @@ layout(binding = TRAVERSE_BINDING + 6) uniform utextureBuffer s_tris;
 layout(binding = TRAVERSE_BINDING + 7) uniform utextureBuffer d_tris;
 
 TraversalNode fetch_node(uint bvh, uint i) {
-    uvec4 w0, w1, w2, w3;
-    if (bvh == 0u) {
-        w0 = texelFetch(s_nodes, int(4u * i));
-        w1 = texelFetch(s_nodes, int(4u * i + 1u));
-        w2 = texelFetch(s_nodes, int(4u * i + 2u));
-        w3 = texelFetch(s_nodes, int(4u * i + 3u));
-    } else {
-        w0 = texelFetch(d_nodes, int(4u * i));
-        w1 = texelFetch(d_nodes, int(4u * i + 1u));
-        w2 = texelFetch(d_nodes, int(4u * i + 2u));
-        w3 = texelFetch(d_nodes, int(4u * i + 3u));
-    }
-    TraversalNode nd;
-    nd.lo0 = uintBitsToFloat(w0.xyz);
-    nd.child0 = w0.w;
-    nd.hi0 = uintBitsToFloat(w1.xyz);
-    nd.child1 = w1.w;
-    nd.lo1 = uintBitsToFloat(w2.xyz);
-    nd.parent = w2.w;
-    nd.hi1 = uintBitsToFloat(w3.xyz);
-    nd.unused = w3.w;
-    return nd;
+    return bvh == 0u ? node_from_texels(s_nodes, i) : node_from_texels(d_nodes, i);
+}
+
+// Triangle `k` (in leaf order) from a triangle buffer seen as texels of uvec4 (3 per
+// TraversalTri).
+void triangle_from_texels(utextureBuffer tris, uint k, out vec3 a, out vec3 e1, out vec3 e2, out uint id) {
+    uvec4 w0 = texelFetch(tris, int(3u * k));
+    a = uintBitsToFloat(w0.xyz);
+    id = w0.w;
+    e1 = uintBitsToFloat(texelFetch(tris, int(3u * k + 1u)).xyz);
+    e2 = uintBitsToFloat(texelFetch(tris, int(3u * k + 2u)).xyz);
 }
 
 void fetch_triangle(uint bvh, uint k, out vec3 a, out vec3 e1, out vec3 e2, out uint id) {
-    uvec4 w0, w1, w2;
     if (bvh == 0u) {
-        w0 = texelFetch(s_tris, int(3u * k));
-        w1 = texelFetch(s_tris, int(3u * k + 1u));
-        w2 = texelFetch(s_tris, int(3u * k + 2u));
+        triangle_from_texels(s_tris, k, a, e1, e2, id);
     } else {
-        w0 = texelFetch(d_tris, int(3u * k));
-        w1 = texelFetch(d_tris, int(3u * k + 1u));
-        w2 = texelFetch(d_tris, int(3u * k + 2u));
+        triangle_from_texels(d_tris, k, a, e1, e2, id);
     }
-    a = uintBitsToFloat(w0.xyz);
-    id = w0.w;
-    e1 = uintBitsToFloat(w1.xyz);
-    e2 = uintBitsToFloat(w2.xyz);
 }
 
 // Entry distance of the ray into the box, or +inf when it misses within [tmin, tmax].

@@ -119,7 +119,10 @@ Vertex hit_vertex(uint prim, uint k) {
 }
 
 // The walk's stack of internal nodes still to visit (a leaf is tested in the step that
-// hits its box); one for both walks.
+// hits its box); one for both walks. Its top entry is kept in a register (`top` in
+// walk_bvh) and spilled to the array only under a new push: most pops then take the
+// register, not a private array that lavapipe reads and writes lane by lane (rays/s
+// about 1.04x, rt.reflect 0.95-0.98x).
 uint trace_stack[TRACE_STACK];
 
 // One ray's walk of BVH `bvh` (0: static, 1: dynamic). Called with a constant `bvh`,
@@ -128,6 +131,7 @@ uint trace_stack[TRACE_STACK];
 void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool any_hit, inout Hit best,
               inout bool overflow) {
     uint sp = 0u;
+    uint top = BVH_INVALID; // the stack's top entry when set (entries: sp, the array sp - 1)
     uint node = 0u; // the root, an internal node (or two links to the single leaf)
     while (true) {
         TraversalNode nd = fetch_node(bvh, node);
@@ -151,7 +155,11 @@ void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool an
             uint near = t0 <= t1 ? nd.child0 : nd.child1;
             uint far = t0 <= t1 ? nd.child1 : nd.child0;
             if (sp < TRACE_STACK) {
-                trace_stack[sp++] = far;
+                if (top != BVH_INVALID) {
+                    trace_stack[sp - 1u] = top;
+                }
+                top = far;
+                ++sp;
             } else {
                 overflow = true;
             }
@@ -164,7 +172,13 @@ void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool an
         if (sp == 0u) {
             break;
         }
-        node = trace_stack[--sp];
+        --sp;
+        if (top != BVH_INVALID) {
+            node = top;
+            top = BVH_INVALID;
+        } else {
+            node = trace_stack[sp];
+        }
     }
 }
 

@@ -20,22 +20,9 @@ void main() {
     }
     barrier();
     uint base = tile * SORT_TILE + l * SORT_ITEMS;
-    // This invocation's keys counted in registers (radix.glsl: digit_one), then added
-    // to the tile's histogram once per digit.
-    uvec4 h = uvec4(0u);
-    for (uint k = 0u; k < SORT_ITEMS; k += 4u) {
-        uint i = base + k;
-        if (i < pc.n) {
-            uvec4 lo, hi;
-            load_quad(keys, i, lo, hi);
-            uvec4 d = quad_digits(lo, hi);
-            for (uint c = 0u; c < 4u; ++c) {
-                if (i + c < pc.n) {
-                    h += digit_one(d[c]);
-                }
-            }
-        }
-    }
+    // This invocation's keys counted in registers (radix.glsl: count_digits), then
+    // added to the tile's histogram once per digit.
+    uvec4 h = count_digits(keys, base);
     if (any(notEqual(h, uvec4(0u)))) {
         for (uint d = 0u; d < SORT_BINS; ++d) {
             uint c = digit_count(h, d);

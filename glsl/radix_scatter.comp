@@ -30,20 +30,7 @@ void main() {
     uint tile = gl_WorkGroupID.x;
     uint base = tile * SORT_TILE + l * SORT_ITEMS;
 
-    uvec4 h = uvec4(0u);
-    for (uint k = 0u; k < SORT_ITEMS; k += 4u) {
-        uint i = base + k;
-        if (i < pc.n) {
-            uvec4 lo, hi;
-            load_quad(keys_in, i, lo, hi);
-            uvec4 d = quad_digits(lo, hi);
-            for (uint c = 0u; c < 4u; ++c) {
-                if (i + c < pc.n) {
-                    h += digit_one(d[c]);
-                }
-            }
-        }
-    }
+    uvec4 h = count_digits(keys_in, base);
     for (uint d = 0u; d < SORT_BINS; ++d) {
         s_counts[d * SORT_WG + l] = digit_count(h, d);
     }

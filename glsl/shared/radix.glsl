@@ -49,4 +49,24 @@ uint digit_count(uvec4 h, uint d) {
     uint w = q == 0u ? h.x : (q == 1u ? h.y : (q == 2u ? h.z : h.w));
     return (w >> ((d & 3u) * 8u)) & 0xffu;
 }
+
+// The packed histogram of the SORT_ITEMS keys from `base` (those below pc.n): what the
+// count adds to its tile's and the scatter ranks by.
+uvec4 count_digits(utextureBuffer keys, uint base) {
+    uvec4 h = uvec4(0u);
+    for (uint k = 0u; k < SORT_ITEMS; k += 4u) {
+        uint i = base + k;
+        if (i < pc.n) {
+            uvec4 lo, hi;
+            load_quad(keys, i, lo, hi);
+            uvec4 d = quad_digits(lo, hi);
+            for (uint c = 0u; c < 4u; ++c) {
+                if (i + c < pc.n) {
+                    h += digit_one(d[c]);
+                }
+            }
+        }
+    }
+    return h;
+}
 #endif

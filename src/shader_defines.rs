@@ -50,8 +50,8 @@ pub const SORT_ITEMS_GPU: u32 = 16;
 /// ... on a CPU device (lavapipe), fewer and longer tiles: the per-tile ranking and
 /// barriers are the cost there (`bench lbvh`, 200K keys: 19.5 ms with 16, 14.6 with 64;
 /// with the count's register histograms, 1M keys: 46-49 ms with 64, 40.5-42 with 128,
-/// 40-42 with 160 and 252, but the 69K-key bunny 3.8 ms with 128, 4.5-6.1 with 192 and
-/// 252: fewer tiles than worker threads, or one more, leave a thread idle).
+/// 39.5-40.5 with 160 and 252, but the 69K-key bunny 3.8 ms with 128, 4.5-6.1 with 192
+/// and 252: one full tile and one nearly empty leave a worker thread idle).
 pub const SORT_ITEMS_CPU: u32 = 128;
 /// The scatter counts a thread's digits in registers, 16 bins of 8 bits (radix.glsl);
 /// the kernels read keys in quads, so every tile size is a multiple of 4.

@@ -23,12 +23,10 @@ void main() {
     // This invocation's keys counted in registers (radix.glsl: count_digits), then
     // added to the tile's histogram once per digit.
     uvec4 h = count_digits(keys, base);
-    if (any(notEqual(h, uvec4(0u)))) {
-        for (uint d = 0u; d < SORT_BINS; ++d) {
-            uint c = digit_count(h, d);
-            if (c != 0u) {
-                atomicAdd(s_hist[d], c);
-            }
+    for (uint d = 0u; d < SORT_BINS; ++d) {
+        uint c = digit_count(h, d);
+        if (c != 0u) {
+            atomicAdd(s_hist[d], c);
         }
     }
     barrier();

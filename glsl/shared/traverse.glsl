@@ -131,7 +131,7 @@ uint trace_stack[TRACE_STACK];
 void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool any_hit, inout Hit best,
               inout bool overflow) {
     uint sp = 0u;
-    uint top = BVH_INVALID; // the stack's top entry when set (entries: sp, the array sp - 1)
+    uint top = BVH_INVALID; // when set, the top of the sp entries; the array holds the rest
     uint node = 0u; // the root, an internal node (or two links to the single leaf)
     while (true) {
         TraversalNode nd = fetch_node(bvh, node);

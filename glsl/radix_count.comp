@@ -5,7 +5,7 @@
 // CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
 #include "radix.glsl"
 
-layout(local_size_x = SORT_WG) in;
+layout(local_size_x_id = 1) in;
 
 layout(binding = 0) uniform utextureBuffer keys;
 layout(binding = 1, std430) writeonly buffer Counts { uint counts[]; };

@@ -1,8 +1,8 @@
 #version 460
 // lbvh.sort, step 2 of 3 per pass: exclusive prefix sum of the digit-major tile
 // histograms, in place, by a single workgroup (the array holds SORT_BINS entries per
-// tile: for 1M keys, 4096 entries in a GPU's tiles of 4K keys, 512 in a CPU device's
-// tiles of 32K). Each invocation sums a contiguous segment, the workgroup scans the
+// tile: for 1M keys, 4096 entries in a GPU's tiles of 4K keys, 2048 in a CPU device's
+// tiles of 8K). Each invocation sums a contiguous segment, the workgroup scans the
 // segment sums, each segment is rewritten with its offset. No workgroup waits on
 // another.
 // CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
@@ -10,7 +10,7 @@
 #define WG_SCAN_SIZE SORT_WG
 #include "wg_scan.glsl"
 
-layout(local_size_x = SORT_WG) in;
+layout(local_size_x_id = 1) in;
 
 layout(binding = 0, std430) buffer Counts { uint counts[]; };
 

@@ -14,7 +14,7 @@
 #define WG_SCAN_SIZE SORT_WG
 #include "wg_scan.glsl"
 
-layout(local_size_x = SORT_WG) in;
+layout(local_size_x_id = 1) in;
 
 layout(binding = 0) uniform utextureBuffer keys_in;
 layout(binding = 1) uniform utextureBuffer values_in;

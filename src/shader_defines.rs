@@ -41,8 +41,15 @@ pub const LBVH_BOUNDS_ITEMS: u32 = 64;
 pub const SORT_RADIX_BITS: u32 = 4;
 /// Bins per radix pass.
 pub const SORT_BINS: u32 = 1 << SORT_RADIX_BITS;
-/// Threads per radix-sort workgroup.
-pub const SORT_WG: u32 = 256;
+/// Threads per radix-sort workgroup (the kernels' specialization constant SORT_WG, their
+/// local size): on a GPU, a full workgroup ...
+pub const SORT_WG_GPU: u32 = 256;
+/// ... on a CPU device, a quarter of one: lavapipe runs a workgroup on one thread as
+/// SIMD batches of 8 invocations and switches through every batch at each barrier, so
+/// a sort pass of one tile (up to 8K keys: a few bodies, `room`) costs what its batches
+/// cost, not its keys (`bench lbvh`, 64 keys: 0.57 ms with 256, 0.28-0.35 with 64;
+/// 4,860: 0.79 ms, 0.55-0.57; the bunny's 69K: 3.98, 3.56).
+pub const SORT_WG_CPU: u32 = 64;
 /// Keys each sort thread owns, consecutively (the kernels' specialization constant
 /// SORT_ITEMS; a tile is SORT_WG x SORT_ITEMS keys): on a GPU, enough workgroups to
 /// fill it ...
@@ -51,7 +58,8 @@ pub const SORT_ITEMS_GPU: u32 = 16;
 /// barriers are the cost there (`bench lbvh`, 200K keys: 19.5 ms with 16, 14.6 with 64;
 /// with the count's register histograms, 1M keys: 46-49 ms with 64, 40.5-42 with 128,
 /// 39.5-40.5 with 160 and 252, but the 69K-key bunny 3.8 ms with 128, 4.5-6.1 with 192
-/// and 252: one full tile and one nearly empty leave a worker thread idle).
+/// and 252: one full tile and one nearly empty leave a worker thread idle; with 64-thread
+/// workgroups, 192 and 252 within noise of 128).
 pub const SORT_ITEMS_CPU: u32 = 128;
 /// The scatter counts a thread's digits in registers, 16 bins of 8 bits (radix.glsl);
 /// the kernels read keys in quads, so every tile size is a multiple of 4.
@@ -67,7 +75,7 @@ pub const COMPACT_WG: u32 = 256;
 /// Slots each compaction thread owns: a tile is COMPACT_WG x COMPACT_ITEMS slots.
 pub const COMPACT_ITEMS: u32 = 16;
 // wg_scan.glsl scans in groups of 16 invocations.
-const _: () = assert!(SORT_WG.is_multiple_of(16) && COMPACT_WG.is_multiple_of(16));
+const _: () = assert!(SORT_WG_GPU.is_multiple_of(16) && SORT_WG_CPU.is_multiple_of(16) && COMPACT_WG.is_multiple_of(16));
 
 /// Invocations per workgroup of `rt.reflect`, which runs over the compacted ray list
 /// (`ssr.compact` writes its indirect arguments in these units): 32 of lavapipe's
@@ -212,7 +220,6 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("LBVH_BOUNDS_ITEMS", LBVH_BOUNDS_ITEMS),
     ("SORT_RADIX_BITS", SORT_RADIX_BITS),
     ("SORT_BINS", SORT_BINS),
-    ("SORT_WG", SORT_WG),
     ("COMPACT_WG", COMPACT_WG),
     ("COMPACT_ITEMS", COMPACT_ITEMS),
     ("RT_LIST_WG", RT_LIST_WG),

@@ -8,10 +8,10 @@ use glam::Vec3;
 use rand::Rng;
 use speculum::cpu_ref::lbvh as cref;
 use speculum::gpu_types::{GpuVertex, PackedBvh};
-use speculum::passes::lbvh::sort::{RadixSort, SortBuffers};
+use speculum::passes::lbvh::sort::{RadixSort, SortBuffers, SortTile};
 use speculum::passes::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
 use speculum::scene::soup::{default_size, random_soup};
-use speculum::shader_defines::{SORT_ITEMS_CPU, SORT_ITEMS_GPU, SORT_ITEMS_MAX};
+use speculum::shader_defines::{SORT_ITEMS_MAX, SORT_WG_CPU, SORT_WG_GPU};
 use speculum::vk::{Context, GpuTimer};
 use std::sync::Arc;
 
@@ -129,8 +129,24 @@ fn bounds_morton_and_sort_match_cpu_exactly() {
 fn radix_sort_is_a_stable_sort() {
     let ctx = common::context();
     let mut rng = common::rng(7);
-    for items in [SORT_ITEMS_GPU, SORT_ITEMS_CPU, SORT_ITEMS_MAX] {
-        let sort = RadixSort::with_items(&ctx, items).unwrap();
+    let shapes = [
+        SortTile::GPU,
+        SortTile::CPU,
+        SortTile {
+            wg: SORT_WG_GPU,
+            items: SORT_ITEMS_MAX,
+        },
+        SortTile {
+            wg: SORT_WG_CPU,
+            items: SORT_ITEMS_MAX,
+        },
+        SortTile {
+            wg: SORT_WG_CPU,
+            items: 64,
+        },
+    ];
+    for tile in shapes {
+        let sort = RadixSort::with_tile(&ctx, tile).unwrap();
         for &n in &[1u32, 2, 3, 1000, 4096, 4097, 65537, 300000] {
             for kw in [1u32, 2] {
                 for distinct in [Some(5u64), None] {
@@ -162,11 +178,11 @@ fn radix_sort_is_a_stable_sort() {
                     );
                     let got_v: Vec<u32> = bytemuck::pod_collect_to_vec(&bufs.values[0].read().unwrap());
                     let (want_k, want_v) = cref::sort_pairs(&keys, &values);
-                    assert_eq!(got_k, want_k, "items={items} n={n} kw={kw} distinct={distinct:?}");
+                    assert_eq!(got_k, want_k, "{tile:?} n={n} kw={kw} distinct={distinct:?}");
                     assert_eq!(
                         &got_v[..n as usize],
                         &want_v[..],
-                        "items={items} n={n} kw={kw} distinct={distinct:?}: payload order"
+                        "{tile:?} n={n} kw={kw} distinct={distinct:?}: payload order"
                     );
                 }
             }

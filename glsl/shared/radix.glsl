@@ -15,6 +15,9 @@ layout(push_constant) uniform Push {
 // SORT_ITEMS_MAX = 252: the packed histograms below count to 255, and keys are read in
 // quads).
 layout(constant_id = 0) const uint SORT_ITEMS = 16u;
+// Threads per workgroup (sort.rs: SORT_WG_GPU or SORT_WG_CPU), each kernel's local size
+// (local_size_x_id = 1).
+layout(constant_id = 1) const uint SORT_WG = 256u;
 #define SORT_TILE (SORT_WG * SORT_ITEMS)
 
 // The keys and values are read as texel buffers of uvec4 (4 words a fetch: lavapipe

@@ -1,10 +1,13 @@
 //! `lbvh.sort`: stable LSD radix sort of (key, value) pairs, 4 bits per pass, each pass
-//! count → scan → scatter (reduce-then-scan: no workgroup waits on another). Tiles of
-//! SORT_WG x `items` keys, `items` chosen for the device (`RadixSort::items_for`).
+//! count → scan → scatter (reduce-then-scan: no workgroup waits on another). A tile is
+//! one workgroup's keys, `SortTile::wg` threads x `SortTile::items` keys, its shape
+//! chosen for the device (`SortTile::for_device`).
 //! CPU reference: `cpu_ref::lbvh::sort_pairs` (tests/lbvh.rs).
 
 use crate::error::{Error, Result};
-use crate::shader_defines::{SORT_BINS, SORT_ITEMS_CPU, SORT_ITEMS_GPU, SORT_ITEMS_MAX, SORT_RADIX_BITS, SORT_WG};
+use crate::shader_defines::{
+    SORT_BINS, SORT_ITEMS_CPU, SORT_ITEMS_GPU, SORT_ITEMS_MAX, SORT_RADIX_BITS, SORT_WG_CPU, SORT_WG_GPU,
+};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Pipeline, Resource, TexelView};
@@ -13,9 +16,9 @@ use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
-/// Keys per tile (one workgroup of the count and scatter kernels) at the smallest
-/// `items` a sort uses: the counts buffer is sized for that many tiles.
-const MIN_TILE: u32 = SORT_WG * SORT_ITEMS_GPU;
+/// The fewest keys per tile (one workgroup of the count and scatter kernels) a sort
+/// takes (`RadixSort::with_tile`): the counts buffer is sized for that many tiles.
+const MIN_TILE: u32 = SORT_WG_GPU * SORT_ITEMS_GPU;
 /// Most keys one sort handles: the 65535-workgroup limit at the smallest tile.
 pub const MAX_KEYS: u32 = 65535 * MIN_TILE;
 
@@ -78,50 +81,75 @@ impl SortBuffers {
     }
 }
 
+/// The shape of a sort's tiles: the kernels' specialization constants.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SortTile {
+    /// Threads per workgroup (SORT_WG, the local size).
+    pub wg: u32,
+    /// Keys per thread (SORT_ITEMS).
+    pub items: u32,
+}
+
+impl SortTile {
+    /// A GPU's: enough workgroups to fill it.
+    pub const GPU: Self = Self {
+        wg: SORT_WG_GPU,
+        items: SORT_ITEMS_GPU,
+    };
+    /// A CPU device's: fewer and longer tiles, each of fewer SIMD batches, whose cost is
+    /// per tile (ranking, barriers).
+    pub const CPU: Self = Self {
+        wg: SORT_WG_CPU,
+        items: SORT_ITEMS_CPU,
+    };
+
+    pub fn for_device(kind: vk::PhysicalDeviceType) -> Self {
+        if kind == vk::PhysicalDeviceType::CPU {
+            Self::CPU
+        } else {
+            Self::GPU
+        }
+    }
+
+    /// Keys per tile.
+    pub fn keys(self) -> u32 {
+        self.wg * self.items
+    }
+}
+
 pub struct RadixSort {
     ctx: Arc<Context>,
-    /// Keys per thread of the count and scatter kernels (their SORT_ITEMS).
-    items: u32,
+    tile: SortTile,
     count: Pipeline,
     scan: Pipeline,
     scatter: Pipeline,
 }
 
 impl RadixSort {
-    /// The kernels with the tile size for this device (`items_for`).
+    /// The kernels with the tile shape for this device (`SortTile::for_device`).
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
-        Self::with_items(ctx, Self::items_for(ctx.device_type))
+        Self::with_tile(ctx, SortTile::for_device(ctx.device_type))
     }
 
-    /// Keys per thread for a device type: longer tiles on a CPU device, whose cost is
-    /// per tile (ranking, barriers), while a GPU needs enough workgroups to fill it.
-    pub fn items_for(kind: vk::PhysicalDeviceType) -> u32 {
-        if kind == vk::PhysicalDeviceType::CPU {
-            SORT_ITEMS_CPU
-        } else {
-            SORT_ITEMS_GPU
-        }
-    }
-
-    /// The kernels with `items` keys per thread, whatever the device (tests run both
-    /// sizes on one device); `SORT_ITEMS_GPU..=SORT_ITEMS_MAX`, a multiple of 4.
-    pub fn with_items(ctx: &Arc<Context>, items: u32) -> Result<Self> {
+    /// The kernels with this tile shape, whatever the device (tests run every shape on
+    /// one device): SORT_WG_GPU or SORT_WG_CPU threads, `SORT_ITEMS_GPU..=SORT_ITEMS_MAX`
+    /// keys each (a multiple of 4), at least MIN_TILE keys a tile.
+    pub fn with_tile(ctx: &Arc<Context>, tile: SortTile) -> Result<Self> {
         assert!(
-            (SORT_ITEMS_GPU..=SORT_ITEMS_MAX).contains(&items) && items.is_multiple_of(4),
-            "{items} keys per sort thread"
+            (tile.wg == SORT_WG_GPU || tile.wg == SORT_WG_CPU)
+                && (SORT_ITEMS_GPU..=SORT_ITEMS_MAX).contains(&tile.items)
+                && tile.items.is_multiple_of(4)
+                && tile.keys() >= MIN_TILE,
+            "sort tile {tile:?}"
         );
-        let c = [items];
+        let c = [tile.items, tile.wg];
+        let kernel = |name, shader| Pipeline::compute_specialized::<SortPush>(ctx, name, shader, &c);
         Ok(Self {
             ctx: ctx.clone(),
-            items,
-            count: Pipeline::compute_specialized::<SortPush>(ctx, "lbvh.sort.count", shaders::RADIX_COUNT_COMP, &c)?,
-            scan: Pipeline::compute::<SortPush>(ctx, "lbvh.sort.scan", shaders::RADIX_SCAN_COMP)?,
-            scatter: Pipeline::compute_specialized::<SortPush>(
-                ctx,
-                "lbvh.sort.scatter",
-                shaders::RADIX_SCATTER_COMP,
-                &c,
-            )?,
+            tile,
+            count: kernel("lbvh.sort.count", shaders::RADIX_COUNT_COMP)?,
+            scan: kernel("lbvh.sort.scan", shaders::RADIX_SCAN_COMP)?,
+            scatter: kernel("lbvh.sort.scatter", shaders::RADIX_SCATTER_COMP)?,
         })
     }
 
@@ -134,7 +162,7 @@ impl RadixSort {
             return;
         }
         let d = &self.ctx.device;
-        let num_tiles = n.div_ceil(SORT_WG * self.items);
+        let num_tiles = n.div_ceil(self.tile.keys());
         let passes = 32 * b.key_words / SORT_RADIX_BITS;
         let rw = access::COMPUTE_READ_WRITE;
         let tiles = Groups::Exact([num_tiles, 1, 1]);

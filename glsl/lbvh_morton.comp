@@ -23,16 +23,6 @@ layout(push_constant) uniform Push {
     uint key_words; // 1: 30-bit codes, 2: 63-bit codes
 } pc;
 
-// Spreads the low 10 bits of x to every third bit:
-// ---- ---- ---- ---- ---- --98 7654 3210 -> ---- 9--8 --7- -6-- 5--4 --3- -2-- 1--0
-uint expand_bits10(uint x) {
-    x = (x | (x << 16)) & 0x030000ffu;
-    x = (x | (x << 8)) & 0x0300f00fu;
-    x = (x | (x << 4)) & 0x030c30c3u;
-    x = (x | (x << 2)) & 0x09249249u;
-    return x;
-}
-
 // The size class of a triangle whose box has squared diagonal d2, in a scene whose box
 // has squared diagonal s2: with 2 bits 0 (a diagonal of at least half the scene's), 1
 // (a quarter), 2 (an eighth) or 3; with 1 bit 0 (a quarter) or 1.
@@ -61,16 +51,13 @@ void main() {
     vec3 center = (a + b + c) * (1.0 / 3.0);
     vec3 lo = vec3(ordered_to_float(bounds[0]), ordered_to_float(bounds[1]), ordered_to_float(bounds[2]));
     vec3 hi = vec3(ordered_to_float(bounds[3]), ordered_to_float(bounds[4]), ordered_to_float(bounds[5]));
-    vec3 extent = hi - lo;
-    // A flat axis (all centroids equal along it) quantizes to 0.
-    vec3 unit = clamp((center - lo) / max(extent, vec3(1e-30)), 0.0, 1.0);
+    vec3 unit = unit_in(center, lo, hi);
     vec3 s_lo = vec3(ordered_to_float(bounds[6]), ordered_to_float(bounds[7]), ordered_to_float(bounds[8]));
     vec3 s_hi = vec3(ordered_to_float(bounds[9]), ordered_to_float(bounds[10]), ordered_to_float(bounds[11]));
     float d2 = squared_length(max(a, max(b, c)) - min(a, min(b, c)));
     float s2 = squared_length(s_hi - s_lo);
     if (pc.key_words == 1u) {
-        uvec3 q = uvec3(min(unit * 1024.0, vec3(1023.0)));
-        keys[t] = (size_class(d2, s2, 2u) << 30) | (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z);
+        keys[t] = (size_class(d2, s2, 2u) << 30) | morton30(unit);
     } else {
         uvec3 q = uvec3(min(unit * 2097152.0, vec3(2097151.0)));
         // Bit 3b+2 of the code is bit b of x, 3b+1 of y, 3b of z (x most significant).

@@ -1,8 +1,9 @@
-//! Axis-aligned boxes, shared by the GPU LBVH (reading back its bounds), the CPU
+//! Axis-aligned boxes and Morton codes of points in them, shared by the GPU LBVH
+//! (reading back its bounds; the rigid bodies' order, `passes::lbvh::rigid`), the CPU
 //! references and the scene code.
 
 use crate::gpu_types::TraversalNode;
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 
 /// An axis-aligned box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,4 +61,48 @@ impl Aabb {
 /// Inverse of the kernels' order-preserving float → uint mapping (`bvh.glsl`).
 pub fn ordered_to_float(u: u32) -> f32 {
     f32::from_bits(if u & 0x8000_0000 != 0 { u & 0x7fff_ffff } else { !u })
+}
+
+/// Spreads the low 10 bits of x to every third bit (`expand_bits10` in `bvh.glsl`).
+pub fn expand_bits10(mut x: u32) -> u32 {
+    x = (x | (x << 16)) & 0x0300_00ff;
+    x = (x | (x << 8)) & 0x0300_f00f;
+    x = (x | (x << 4)) & 0x030c_30c3;
+    x = (x | (x << 2)) & 0x0924_9249;
+    x
+}
+
+/// 30-bit Morton code of 10-bit cells, x most significant.
+pub fn morton30(q: UVec3) -> u32 {
+    (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z)
+}
+
+/// `unit_in` of `bvh.glsl`: point p's place in the box [lo, hi] as fractions in [0, 1]
+/// per axis (a flat axis gives 0); `morton30` of its 10-bit cells is the GLSL
+/// `morton30(unit)`.
+pub fn unit_in(p: Vec3, lo: Vec3, hi: Vec3) -> Vec3 {
+    ((p - lo) / (hi - lo).max(Vec3::splat(1e-30))).clamp(Vec3::ZERO, Vec3::ONE)
+}
+
+/// The 10-bit cells of a point at `unit` (`unit_in`).
+pub fn cells10(unit: Vec3) -> UVec3 {
+    (unit * 1024.0).min(Vec3::splat(1023.0)).as_uvec3()
+}
+
+/// `size_class` of `lbvh_morton.comp`: a triangle whose box has squared diagonal `d2`
+/// in a scene whose box has `s2`, in `bits` bits (2: 0 for a diagonal of at least half
+/// the scene's, 1 a quarter, 2 an eighth, else 3; 1: 0 for a quarter, else 1).
+pub fn size_class(d2: f32, s2: f32, bits: u32) -> u32 {
+    if bits == 1 {
+        return if d2 >= s2 * 0.0625 { 0 } else { 1 };
+    }
+    if d2 >= s2 * 0.25 {
+        0
+    } else if d2 >= s2 * 0.0625 {
+        1
+    } else if d2 >= s2 * 0.015625 {
+        2
+    } else {
+        3
+    }
 }

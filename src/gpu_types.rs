@@ -102,6 +102,15 @@ pub struct TraversalNode {
     pub unused: u32,
 }
 
+/// A rigid body of a rigid-body rebuild (`passes::lbvh::rigid`; std430, 16 bytes): the
+/// center of its object-space box and how many triangles it has.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RigidBody {
+    pub center: [f32; 3],
+    pub tri_count: u32,
+}
+
 /// A triangle of the BVH (std430, 48 bytes), in leaf order: corner `a`, the edges
 /// `b - a` and `c - a` the ray test uses, the scene's triangle id, and the link to its
 /// box's half of the parent node (as `TraversalNode::parent`).

@@ -24,6 +24,10 @@ pub const MAX_PCF_RADIUS: u32 = 4;
 /// `rt.trace` over a ray buffer:
 /// 256 = 32 subgroups on lavapipe, 8 on NVIDIA; enough to hide latency on GPUs.
 pub const LBVH_WG: u32 = 256;
+/// Threads of the one workgroup that finds the rigid bodies' centers, their bounds and
+/// codes (`lbvh_body_keys.comp`): bodies are few, and a CPU device switches through
+/// every SIMD batch of a workgroup at each barrier.
+pub const RIGID_WG: u32 = 64;
 
 /// Workgroup of the scheduled refit's last pass (`lbvh_refit_top.comp`): one workgroup
 /// refits every level of at most this many nodes, the tree's top, in one dispatch.
@@ -216,6 +220,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TEXTURE_NONE", TEXTURE_NONE),
     ("MAX_PCF_RADIUS", MAX_PCF_RADIUS),
     ("LBVH_WG", LBVH_WG),
+    ("RIGID_WG", RIGID_WG),
     ("REFIT_TOP_WG", REFIT_TOP_WG),
     ("LBVH_BOUNDS_ITEMS", LBVH_BOUNDS_ITEMS),
     ("SORT_RADIX_BITS", SORT_RADIX_BITS),

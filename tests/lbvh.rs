@@ -506,3 +506,126 @@ fn ploc_matches_cpu_exactly() {
     }
     assert_eq!(ctx.validation_messages(), 0);
 }
+
+/// A rigid rebuild (`passes::lbvh::rigid`): random bodies (one without triangles, two
+/// alike in one pose, so their codes tie) under random poses, 1, 2, 9 and 300 of them.
+/// The layout orders each body's triangles by their object-space keys; the kernels'
+/// keys and values equal `cpu_ref::lbvh::rigid_keys` exactly (outputs poisoned), come
+/// out sorted with every triangle once; and the fit over them builds the CPU's tree
+/// from the same pairs, which passes the invariants.
+#[test]
+fn rigid_keys_match_cpu_and_build_the_cpu_tree() {
+    use glam::{Mat4, Quat};
+    use speculum::passes::lbvh::rigid::{RigidKeys, RigidLayout};
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let mut rng = common::rng(23);
+    for bodies in [1u32, 2, 9, 300] {
+        // Object-space bodies: a soup each, around its own origin.
+        let (mut objects, mut i) = (Vec::new(), Vec::new());
+        for body in 0..bodies {
+            let n = if bodies > 2 && body == 3 {
+                0
+            } else {
+                rng.random_range(1..40usize)
+            };
+            if n == 0 {
+                continue;
+            }
+            // Bodies 1 and 2 alike (and posed alike below): their codes tie.
+            let twin = bodies > 2 && (body == 1 || body == 2);
+            let (n, seed) = if twin { (17, 1) } else { (n, rng.random()) };
+            let (sv, si) = random_soup(n, 1.0, default_size(n), seed);
+            let base = objects.len() as u32;
+            objects.extend(sv.iter().map(|v| GpuVertex {
+                position: (Vec3::from(v.position) - Vec3::splat(0.5)).to_array(),
+                object: body,
+                ..*v
+            }));
+            i.extend(si.iter().map(|k| base + k));
+        }
+        let mut poses: Vec<Mat4> = (0..bodies)
+            .map(|_| {
+                let axis = Vec3::new(rng.random(), rng.random(), rng.random::<f32>() + 0.1).normalize();
+                let t = Vec3::new(rng.random(), rng.random(), rng.random()) * 8.0 - 4.0;
+                Mat4::from_rotation_translation(Quat::from_axis_angle(axis, rng.random::<f32>() * 6.0), t)
+            })
+            .collect();
+        if bodies > 2 {
+            poses[2] = poses[1]; // two bodies on one spot: equal codes, told apart by index
+        }
+        let world: Vec<GpuVertex> = objects
+            .iter()
+            .map(|o| speculum::cpu_ref::sim::transform(o, &poses))
+            .collect();
+        let layout = RigidLayout::new(&objects, &i, bodies).unwrap();
+        let n = i.len() / 3;
+        for body in 0..bodies as usize {
+            let mut places: Vec<(u32, u32)> = layout
+                .tri_info
+                .iter()
+                .filter(|t| t[0] as usize == body)
+                .map(|t| (t[1], t[2]))
+                .collect();
+            places.sort();
+            assert_eq!(
+                places.len() as u32,
+                layout.bodies[body].tri_count,
+                "{bodies} bodies: body {body}'s count"
+            );
+            assert!(
+                places.iter().enumerate().all(|(k, p)| p.0 == k as u32) && places.windows(2).all(|w| w[0].1 <= w[1].1),
+                "{bodies} bodies: body {body}'s order is not by its keys"
+            );
+        }
+        let g = upload(&ctx, &world, &i);
+        let bvh = Bvh::new(&ctx, n as u32, MortonBits::Bits30).unwrap();
+        poison_packed(&bvh);
+        bvh.sort.keys[0]
+            .write(&vec![0x5au8; bvh.sort.keys[0].size as usize])
+            .unwrap();
+        bvh.sort.values[0]
+            .write(&vec![0xa5u8; bvh.sort.values[0].size as usize])
+            .unwrap();
+        let rigid = RigidKeys::new(&ctx, &layout).unwrap();
+        let pose_buf = speculum::vk::Buffer::with_data(
+            &ctx,
+            "test.poses",
+            ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+            bytemuck::cast_slice(&poses),
+        )
+        .unwrap();
+        let mut timer = GpuTimer::new(&ctx, 8).unwrap();
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            b.record_build_rigid(cmd, &mut timer, g.geometry(), &bvh, &rigid, &pose_buf);
+        })
+        .unwrap();
+        let keys: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.sort.keys[0].read().unwrap());
+        let values: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.sort.values[0].read().unwrap());
+        let (want_k, want_v) = cref::rigid_keys(
+            &layout.bodies,
+            &poses,
+            &layout.tri_info,
+            layout.rank_bits(),
+            layout.cell_bits(),
+        );
+        assert_eq!(&keys[..n], &want_k[..], "{bodies} bodies: keys");
+        assert_eq!(&values[..n], &want_v[..], "{bodies} bodies: values");
+        assert!(
+            want_k.windows(2).all(|w| w[0] <= w[1]),
+            "{bodies} bodies: keys not sorted"
+        );
+        let mut seen = want_v.clone();
+        seen.sort();
+        assert_eq!(
+            seen,
+            (0..n as u32).collect::<Vec<_>>(),
+            "{bodies} bodies: every triangle once"
+        );
+        let keys64: Vec<u64> = want_k.iter().map(|&k| k as u64).collect();
+        let want = cref::build(&keys64, &want_v, &world, &i);
+        let got = assert_packed(&bvh, &want, &format!("{bodies} bodies"));
+        cref::check_bvh(&got, &world, &i).unwrap_or_else(|e| panic!("{bodies} bodies: {e}"));
+    }
+}

@@ -134,6 +134,29 @@ TraversalNode node_from_texels(utextureBuffer nodes, uint i) {
                          w2.w, uintBitsToFloat(w3.xyz), w3.w);
 }
 
+// Spreads the low 10 bits of x to every third bit:
+// ---- ---- ---- ---- ---- --98 7654 3210 -> ---- 9--8 --7- -6-- 5--4 --3- -2-- 1--0
+uint expand_bits10(uint x) {
+    x = (x | (x << 16)) & 0x030000ffu;
+    x = (x | (x << 8)) & 0x0300f00fu;
+    x = (x | (x << 4)) & 0x030c30c3u;
+    x = (x | (x << 2)) & 0x09249249u;
+    return x;
+}
+
+// Point p's place in the box [lo, hi] as fractions in [0, 1] per axis; a flat axis
+// (lo = hi) gives 0. Mirrored by aabb::unit_in.
+vec3 unit_in(vec3 p, vec3 lo, vec3 hi) {
+    return clamp((p - lo) / max(hi - lo, vec3(1e-30)), 0.0, 1.0);
+}
+
+// The 30-bit Morton code (10 bits per axis, x most significant) of a point at `unit`
+// (unit_in). Mirrored by aabb::morton30.
+uint morton30(vec3 unit) {
+    uvec3 q = uvec3(min(unit * 1024.0, vec3(1023.0)));
+    return (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z);
+}
+
 // Float <-> uint mapping that preserves order, so atomicMin/atomicMax on uint act as
 // float min/max (negative floats: all bits flipped; positive: the sign bit set).
 uint float_to_ordered(float f) {

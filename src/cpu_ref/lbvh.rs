@@ -1,10 +1,10 @@
 //! References of the LBVH kernels (`glsl/lbvh_*.comp`, `glsl/radix_*.comp`) and the
 //! checks every built BVH must pass.
 
-pub use crate::aabb::{ordered_to_float, Aabb};
-use crate::gpu_types::{bvh_leaf, bvh_leaf_link, GpuVertex, PackedBvh, TraversalNode, TraversalTri};
+pub use crate::aabb::{cells10, expand_bits10, morton30, ordered_to_float, size_class, unit_in, Aabb};
+use crate::gpu_types::{bvh_leaf, bvh_leaf_link, GpuVertex, PackedBvh, RigidBody, TraversalNode, TraversalTri};
 use crate::shader_defines::{BVH_INVALID, BVH_LEAF_MAX};
-use glam::{UVec3, Vec3};
+use glam::{Mat4, UVec3, Vec3};
 
 /// Corners of triangle `t`.
 pub fn triangle(vertices: &[GpuVertex], indices: &[u32], t: usize) -> [Vec3; 3] {
@@ -24,20 +24,6 @@ pub fn bounds(vertices: &[GpuVertex], indices: &[u32]) -> (Aabb, Aabb) {
     })
 }
 
-/// Spreads the low 10 bits of x to every third bit (see `expand_bits10` in GLSL).
-pub fn expand_bits10(mut x: u32) -> u32 {
-    x = (x | (x << 16)) & 0x0300_00ff;
-    x = (x | (x << 8)) & 0x0300_f00f;
-    x = (x | (x << 4)) & 0x030c_30c3;
-    x = (x | (x << 2)) & 0x0924_9249;
-    x
-}
-
-/// 30-bit Morton code, x most significant.
-pub fn morton30(q: UVec3) -> u32 {
-    (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z)
-}
-
 /// 63-bit Morton code, x most significant (bit 3b+2 is bit b of x).
 pub fn morton63(q: UVec3) -> u64 {
     (0..21).fold(0u64, |code, b| {
@@ -45,24 +31,6 @@ pub fn morton63(q: UVec3) -> u64 {
             | (((q.y as u64 >> b) & 1) << (3 * b + 1))
             | (((q.z as u64 >> b) & 1) << (3 * b))
     })
-}
-
-/// `size_class` of `lbvh_morton.comp`: a triangle whose box has squared diagonal `d2`
-/// in a scene whose box has `s2`, in `bits` bits (2: 0 for a diagonal of at least half
-/// the scene's, 1 a quarter, 2 an eighth, else 3; 1: 0 for a quarter, else 1).
-pub fn size_class(d2: f32, s2: f32, bits: u32) -> u32 {
-    if bits == 1 {
-        return if d2 >= s2 * 0.0625 { 0 } else { 1 };
-    }
-    if d2 >= s2 * 0.25 {
-        0
-    } else if d2 >= s2 * 0.0625 {
-        1
-    } else if d2 >= s2 * 0.015625 {
-        2
-    } else {
-        3
-    }
 }
 
 /// `squared_length` of `lbvh_morton.comp`: x², y², z² summed in that order, unfused.
@@ -75,7 +43,6 @@ fn squared_length(v: Vec3) -> f32 {
 /// above a 63-bit one).
 pub fn morton_keys(vertices: &[GpuVertex], indices: &[u32], key_words: u32) -> Vec<u64> {
     let (cb, sb) = bounds(vertices, indices);
-    let extent = cb.hi - cb.lo;
     let s2 = squared_length(sb.hi - sb.lo);
     (0..indices.len() / 3)
         .map(|t| {
@@ -83,15 +50,72 @@ pub fn morton_keys(vertices: &[GpuVertex], indices: &[u32], key_words: u32) -> V
             let c = centroid(&tri);
             let b = Aabb::of_triangle(&tri);
             let d2 = squared_length(b.hi - b.lo);
-            let unit = ((c - cb.lo) / extent.max(Vec3::splat(1e-30))).clamp(Vec3::ZERO, Vec3::ONE);
+            let unit = unit_in(c, cb.lo, cb.hi);
             if key_words == 1 {
-                ((size_class(d2, s2, 2) << 30) | morton30((unit * 1024.0).min(Vec3::splat(1023.0)).as_uvec3())) as u64
+                ((size_class(d2, s2, 2) << 30) | morton30(cells10(unit))) as u64
             } else {
                 ((size_class(d2, s2, 1) as u64) << 63)
                     | morton63((unit * 2_097_152.0).min(Vec3::splat(2_097_151.0)).as_uvec3())
             }
         })
         .collect()
+}
+
+/// `lbvh_body_keys.comp`: a body's center in the world, its pose applied to its
+/// object-space center in the kernel's order, unfused.
+pub fn body_center(pose: &Mat4, center: [f32; 3]) -> Vec3 {
+    let p = Vec3::from(center);
+    ((pose.x_axis.truncate() * p.x + pose.y_axis.truncate() * p.y) + pose.z_axis.truncate() * p.z)
+        + pose.w_axis.truncate()
+}
+
+/// A rigid rebuild's keys (`passes::lbvh::rigid`: `lbvh_body_keys`, `lbvh_body_ranks`,
+/// `lbvh_rigid_keys`): the sorted (key, triangle) pairs of bodies `bodies` posed by
+/// `poses`, their triangles described by `tri_info` ([body, place in the body's order,
+/// object-space key, 0] per triangle): from the top, `cell_bits` of the body's code,
+/// `rank_bits` of its rank, the object-space key's first bits.
+pub fn rigid_keys(
+    bodies: &[RigidBody],
+    poses: &[Mat4],
+    tri_info: &[[u32; 4]],
+    rank_bits: u32,
+    cell_bits: u32,
+) -> (Vec<u32>, Vec<u32>) {
+    let centers: Vec<Vec3> = bodies
+        .iter()
+        .zip(poses)
+        .map(|(b, p)| body_center(p, b.center))
+        .collect();
+    let (lo, hi) = centers.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), &c| (lo.min(c), hi.max(c)),
+    );
+    let codes: Vec<u32> = centers.iter().map(|&c| morton30(cells10(unit_in(c, lo, hi)))).collect();
+    let mut order: Vec<usize> = (0..bodies.len()).collect();
+    order.sort_by_key(|&b| (codes[b], b));
+    let mut place = vec![(0u32, 0u32); bodies.len()];
+    let mut first = 0;
+    for (rank, &b) in order.iter().enumerate() {
+        place[b] = (rank as u32, first);
+        first += bodies[b].tri_count;
+    }
+    let top = rank_bits + cell_bits;
+    assert!(top < 32 && cell_bits <= 30);
+    let mut keys = vec![0u32; tri_info.len()];
+    let mut values = vec![0u32; tri_info.len()];
+    for (t, info) in tri_info.iter().enumerate() {
+        let (rank, first) = place[info[0] as usize];
+        let slot = (first + info[1]) as usize;
+        let cell = if cell_bits == 0 {
+            0
+        } else {
+            (codes[info[0] as usize] >> (30 - cell_bits)) << (32 - cell_bits)
+        };
+        let rank = if rank_bits == 0 { 0 } else { rank << (32 - top) };
+        keys[slot] = cell | rank | (info[2] >> top);
+        values[slot] = t as u32;
+    }
+    (keys, values)
 }
 
 /// `lbvh.sort`: a stable sort of (key, value) pairs by key.

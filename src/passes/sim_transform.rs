@@ -66,6 +66,12 @@ impl RigidBodies {
         Ok(())
     }
 
+    /// The poses `record_posed` last copied (one `Mat4` per body), which a rigid
+    /// rebuild of the BVH reads.
+    pub fn poses(&self) -> &Buffer {
+        &self.poses
+    }
+
     pub fn slots(&self) -> usize {
         self.staging.len()
     }

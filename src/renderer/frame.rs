@@ -252,7 +252,8 @@ impl Renderer {
                 });
             }
             f.staged_row(Row::DynamicBvh, |timer| {
-                dy.bvh.record(cmd, timer, builder, dy.mesh.triangles())
+                dy.bvh
+                    .record(cmd, timer, builder, dy.mesh.triangles(), dy.rigid.poses())
             });
         }
         let dynamic = dynamic.as_ref();

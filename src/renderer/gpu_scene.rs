@@ -6,6 +6,7 @@
 use crate::error::Result;
 use crate::gpu_types::{GpuMaterial, GpuVertex};
 use crate::passes::lbvh::dynamic::DynamicBvh;
+use crate::passes::lbvh::rigid::{self, RigidKeys, RigidLayout};
 use crate::passes::lbvh::{self, Geometry, TriangleTexels};
 use crate::passes::sim_cloth::ClothState;
 use crate::passes::sim_transform::{self, RigidBodies};
@@ -177,12 +178,19 @@ impl DynamicGeometry {
         }
         // Refit (cloth only, unless `cloth_rebuild`): rigid bodies move too far apart.
         let refit = scene.bodies.is_empty() && !settings.cloth_rebuild;
+        let mut bvh = DynamicBvh::new(ctx, tris, refit, settings.refit_rebuild_every)?;
+        // Rigid bodies alone: rebuilt from the bodies' order and each body's own.
+        let bodies = scene.bodies.len() as u32;
+        if settings.rigid_order && scene.cloths.is_empty() && (1..=rigid::MAX_BODIES).contains(&bodies) {
+            let layout = RigidLayout::new(&meshes.vertices, &meshes.indices, bodies)?;
+            bvh = bvh.with_rigid(RigidKeys::new(ctx, &layout)?);
+        }
         let mut dynamic = Self {
             world: RigidWorld::relative_to(scene, settings.sim_dt, origin)?,
             rigid: RigidBodies::new(ctx, &meshes.vertices, vertex_count, scene.bodies.len())?,
             mesh: MeshBuffers::new(ctx, "dynamic", world_vertices, &meshes.uvs, &meshes.indices)?,
             cloths,
-            bvh: DynamicBvh::new(ctx, tris, refit, settings.refit_rebuild_every)?,
+            bvh,
         };
         dynamic.rigid.write(0, &dynamic.world.poses());
         Ok(dynamic)

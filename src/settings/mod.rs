@@ -288,6 +288,12 @@ settings_table! {
     /// frame instead of refitting it (refit is cheaper; its tree loosens as the cloth
     /// deforms).
     cloth_rebuild: bool = false, Range::Any, Hud::Checkbox, NewRenderer;
+    /// Rebuild the dynamic BVH of a scene whose only dynamic geometry is rigid bodies
+    /// from the bodies' order and each body's own order of its triangles (by their
+    /// Morton codes in the body, fixed since the body is rigid): no sort of the
+    /// triangles, the bodies' tree above each body's subtree. Off: every triangle
+    /// sorted by its Morton code in the scene, as any other rebuild.
+    rigid_order: bool = true, Range::Any, Hud::Checkbox, NewRenderer;
     /// When refitting, still rebuild every this many frames (1: always rebuild).
     refit_rebuild_every: u32 = 60, u32s(1, u32::MAX), log_slider(1.0, 600.0), NewRenderer;
 }

@@ -2,8 +2,11 @@
 //! or refit (new boxes, same tree) while the topology holds — deforming cloth — and
 //! rebuilt all the same every `rebuild_every` frames, since a refit tree's boxes grow
 //! looser as the geometry drifts from where the tree was built.
-//! No kernel of its own: a policy over `LbvhBuilder`'s build and refit.
+//! Over rigid bodies alone, a rebuild orders the bodies and keeps each body's own order
+//! of its triangles (`rigid`) instead of sorting every triangle.
+//! No kernel of its own: a policy over `LbvhBuilder`'s builds and refit.
 
+use super::rigid::RigidKeys;
 use super::{Bvh, Geometry, LbvhBuilder, MortonBits, RefitSchedule};
 use super::{BvhKind, REFIT};
 use crate::error::Result;
@@ -22,6 +25,8 @@ pub struct DynamicBvh {
     since_build: u32,
     /// The refit order of the tree as last built (`after_frame` makes it).
     schedule: Option<RefitSchedule>,
+    /// Rebuild from the bodies' order (`with_rigid`), whose poses `record` gets.
+    rigid: Option<RigidKeys>,
 }
 
 impl DynamicBvh {
@@ -42,7 +47,20 @@ impl DynamicBvh {
             rebuild_every,
             since_build: 0,
             schedule: None,
+            rigid: None,
         })
+    }
+
+    /// Rebuilds from the bodies' order and their own (`rigid::RigidKeys`, over these
+    /// triangles): `record` then needs the bodies' poses.
+    pub fn with_rigid(mut self, rigid: RigidKeys) -> Self {
+        self.rigid = Some(rigid);
+        self
+    }
+
+    /// Whether a rebuild orders the bodies (`with_rigid`) rather than the triangles.
+    pub fn rigid(&self) -> bool {
+        self.rigid.is_some()
     }
 
     /// The next frame builds the tree afresh.
@@ -55,7 +73,16 @@ impl DynamicBvh {
     /// a refit by the schedule when the policy allows one, else a full build (whose
     /// schedule `after_frame` then makes). Each stage under its `lbvh.*` scope; the
     /// nodes end visible to all later reads.
-    pub fn record(&mut self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, builder: &LbvhBuilder, geom: Geometry<'_>) {
+    /// A rigid rebuild (`with_rigid`) reads `poses` (one `Mat4` per body, visible to
+    /// compute reads); other trees ignore it.
+    pub fn record(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        timer: &mut GpuTimer,
+        builder: &LbvhBuilder,
+        geom: Geometry<'_>,
+        poses: &crate::vk::Buffer,
+    ) {
         // WAR: the previous frame's traversal of the dynamic BVH is done before it changes.
         barrier::global(&self.ctx.device, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
         match &self.schedule {
@@ -64,7 +91,10 @@ impl DynamicBvh {
                 self.since_build += 1;
             }
             _ => {
-                builder.record_build(cmd, timer, geom, &self.bvh);
+                match &self.rigid {
+                    Some(rigid) => builder.record_build_rigid(cmd, timer, geom, &self.bvh, rigid, poses),
+                    None => builder.record_build(cmd, timer, geom, &self.bvh),
+                }
                 self.since_build = 1;
                 self.schedule = None;
             }

@@ -10,6 +10,7 @@
 
 pub mod dynamic;
 pub mod ploc;
+pub mod rigid;
 pub mod sort;
 
 use crate::aabb::{ordered_to_float, Aabb};
@@ -457,6 +458,25 @@ impl LbvhBuilder {
     /// reads. Earlier GPU use of the BVH's buffers must be complete (caller's barrier).
     pub fn record_build(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, geom: Geometry<'_>, bvh: &Bvh) {
         self.record_keys(cmd, timer, geom, bvh);
+        timer.begin(cmd, FIT);
+        self.record_fit(cmd, geom, bvh);
+        timer.end(cmd, FIT);
+    }
+
+    /// Records a rebuild of `bvh` over rigid bodies (`rigid`, posed by `poses`: one
+    /// `Mat4` per body, visible to compute reads): their keys without a sort
+    /// (`rigid::RigidKeys`), then `lbvh.fit`, each stage under its timer scope.
+    pub fn record_build_rigid(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: &mut GpuTimer,
+        geom: Geometry<'_>,
+        bvh: &Bvh,
+        rigid: &rigid::RigidKeys,
+        poses: &Buffer,
+    ) {
+        assert_eq!(geom.tri_count, bvh.tri_count, "BVH sized for another triangle count");
+        rigid.record(cmd, timer, poses, bvh);
         timer.begin(cmd, FIT);
         self.record_fit(cmd, geom, bvh);
         timer.end(cmd, FIT);

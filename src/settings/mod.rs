@@ -507,7 +507,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 28);
+        assert_eq!(Settings::field_names().len(), 29);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).

@@ -149,6 +149,10 @@ pub struct RigidKeys {
     _tri_info: Buffer,
     tri_info_texels: TexelView,
     body_keys: Buffer,
+    key_texels: TexelView,
+    /// Every body's triangle count, as texels of 4 (the memory behind `count_texels`).
+    _counts: Buffer,
+    count_texels: TexelView,
     places: Buffer,
     place_texels: TexelView,
     body_keys_kernel: Pipeline,
@@ -166,6 +170,18 @@ impl RigidKeys {
         let texels = storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
         let body_count = layout.bodies.len() as u32;
         let tri_info = Buffer::with_data(ctx, "rigid.tri_info", texels, bytemuck::cast_slice(&layout.tri_info))?;
+        // Codes and counts in whole texels of 4 (lbvh_body_ranks.comp reads 4 at a time).
+        let padded = body_count.next_multiple_of(4) as usize;
+        let mut counts: Vec<u32> = layout.bodies.iter().map(|b| b.tri_count).collect();
+        counts.resize(padded, 0);
+        let counts = Buffer::with_data(ctx, "rigid.counts", texels, bytemuck::cast_slice(&counts))?;
+        let body_keys = Buffer::new(
+            ctx,
+            "rigid.body_keys",
+            padded as u64 * 4,
+            texels,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
         let places = Buffer::new(
             ctx,
             "rigid.places",
@@ -178,13 +194,10 @@ impl RigidKeys {
             bodies: Buffer::with_data(ctx, "rigid.bodies", storage, bytemuck::cast_slice(&layout.bodies))?,
             tri_info_texels: TexelView::new(ctx, &tri_info)?,
             _tri_info: tri_info,
-            body_keys: Buffer::new(
-                ctx,
-                "rigid.body_keys",
-                body_count as u64 * 4,
-                storage,
-                gpu_allocator::MemoryLocation::GpuOnly,
-            )?,
+            key_texels: TexelView::new(ctx, &body_keys)?,
+            body_keys,
+            count_texels: TexelView::new(ctx, &counts)?,
+            _counts: counts,
             place_texels: TexelView::new(ctx, &places)?,
             places,
             body_keys_kernel: Pipeline::compute::<BodyPush>(ctx, "lbvh.body_keys", shaders::LBVH_BODY_KEYS_COMP)?,
@@ -228,8 +241,8 @@ impl RigidKeys {
         self.ranks_kernel.dispatch(
             cmd,
             &[
-                Resource::Buffer(&self.bodies),
-                Resource::Buffer(&self.body_keys),
+                Resource::Texels(&self.count_texels),
+                Resource::Texels(&self.key_texels),
                 Resource::Buffer(&self.places),
             ],
             &bodies,

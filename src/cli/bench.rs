@@ -377,8 +377,19 @@ fn dynamic(args: DynamicArgs) -> Result<()> {
         valid: points.iter().all(|p| p.valid),
         points,
     };
+    // Which rebuild the bodies get (the renderer's rule: passes::lbvh::rigid for rigid
+    // bodies alone, when `rigid_order` is on).
+    let rigid = settings.rigid_order
+        && scenes.iter().all(|s| {
+            s.cloths.is_empty() && (1..=speculum::passes::lbvh::rigid::MAX_BODIES).contains(&(s.bodies.len() as u32))
+        });
+    let rebuild = match (by_cloth, rigid) {
+        (true, _) => "",
+        (false, true) => "; bodies rebuilt in their own order, rigid_order",
+        (false, false) => "; every triangle sorted at each rebuild",
+    };
     text.line(format_args!(
-        "{} on {}: {}x{}, median of {} frames per body count (ms; sim.rigid is CPU)",
+        "{} on {}: {}x{}, median of {} frames per body count (ms; sim.rigid is CPU{rebuild})",
         report.scene, ctx.device_name, settings.width, settings.height, args.frames
     ));
     text.line(format_args!(

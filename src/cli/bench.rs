@@ -377,12 +377,10 @@ fn dynamic(args: DynamicArgs) -> Result<()> {
         valid: points.iter().all(|p| p.valid),
         points,
     };
-    // Which rebuild the bodies get (the renderer's rule: passes::lbvh::rigid for rigid
-    // bodies alone, when `rigid_order` is on).
-    let rigid = settings.rigid_order
-        && scenes.iter().all(|s| {
-            s.cloths.is_empty() && (1..=speculum::passes::lbvh::rigid::MAX_BODIES).contains(&(s.bodies.len() as u32))
-        });
+    // Which rebuild the bodies get (the renderer's rule).
+    let rigid = scenes
+        .iter()
+        .all(|s| speculum::passes::lbvh::rigid::applies(s, settings.rigid_order));
     let rebuild = match (by_cloth, rigid) {
         (true, _) => "",
         (false, true) => "; bodies rebuilt in their own order, rigid_order",

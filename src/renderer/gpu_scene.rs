@@ -180,9 +180,8 @@ impl DynamicGeometry {
         let refit = scene.bodies.is_empty() && !settings.cloth_rebuild;
         let mut bvh = DynamicBvh::new(ctx, tris, refit, settings.refit_rebuild_every)?;
         // Rigid bodies alone: rebuilt from the bodies' order and each body's own.
-        let bodies = scene.bodies.len() as u32;
-        if settings.rigid_order && scene.cloths.is_empty() && (1..=rigid::MAX_BODIES).contains(&bodies) {
-            let layout = RigidLayout::new(&meshes.vertices, &meshes.indices, bodies)?;
+        if rigid::applies(scene, settings.rigid_order) {
+            let layout = RigidLayout::new(&meshes.vertices, &meshes.indices, scene.bodies.len() as u32)?;
             bvh = bvh.with_rigid(RigidKeys::new(ctx, &layout)?);
         }
         let mut dynamic = Self {

@@ -58,11 +58,6 @@ impl DynamicBvh {
         self
     }
 
-    /// Whether a rebuild orders the bodies (`with_rigid`) rather than the triangles.
-    pub fn rigid(&self) -> bool {
-        self.rigid.is_some()
-    }
-
     /// The next frame builds the tree afresh.
     pub fn reset(&mut self) {
         self.since_build = 0;

@@ -17,6 +17,7 @@ use super::{Bvh, BOUNDS, MORTON, SORT};
 use crate::aabb::{cells10, morton30, size_class, unit_in, Aabb};
 use crate::error::{Error, Result};
 use crate::gpu_types::{GpuVertex, RigidBody};
+use crate::scene::Scene;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource, TexelView};
@@ -28,6 +29,12 @@ use std::sync::Arc;
 /// Most bodies a rigid rebuild orders: their ranks and cells take at most 24 bits of
 /// a key (`cell_bits`), leaving 8 for a triangle's object-space key.
 pub const MAX_BODIES: u32 = 1 << 12;
+
+/// Whether the dynamic BVH of `scene` gets the rigid rebuild (with `rigid_order` on):
+/// its dynamic geometry is rigid bodies alone, 1 to `MAX_BODIES` of them.
+pub fn applies(scene: &Scene, rigid_order: bool) -> bool {
+    rigid_order && scene.cloths.is_empty() && (1..=MAX_BODIES).contains(&(scene.bodies.len() as u32))
+}
 
 /// The bodies' object-space data a rigid rebuild needs, computed once.
 #[derive(Clone, Debug, PartialEq)]

@@ -88,7 +88,8 @@ const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 432);
 /// `parent`:
 /// `slot << 1 | side` of the parent's half holding this node's box (`BVH_INVALID` at
 /// the root, slot 0). `unused` is never written. The fit writes N-1 of them (one for a
-/// single triangle, whose two children are that leaf).
+/// single triangle, whose two children are that leaf). The static BVH's walk reads the
+/// 32-byte compact nodes made from these (`lbvh.compact`) instead.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TraversalNode {
@@ -173,6 +174,21 @@ pub struct Hit {
     /// Barycentric weights of the triangle's second and third corners.
     pub u: f32,
     pub v: f32,
+}
+
+impl Hit {
+    /// The hit with the dynamic BVH's bit cleared from its triangle id (a miss stays
+    /// `BVH_INVALID`).
+    pub fn without_bvh_bit(self) -> Self {
+        Self {
+            prim: if self.prim == crate::shader_defines::BVH_INVALID {
+                self.prim
+            } else {
+                self.prim & 0x7fff_ffff
+            },
+            ..self
+        }
+    }
 }
 
 const _: () = assert!(std::mem::size_of::<TraversalNode>() == 64);

@@ -507,6 +507,122 @@ fn ploc_matches_cpu_exactly() {
     assert_eq!(ctx.validation_messages(), 0);
 }
 
+/// `lbvh.compact` writes the CPU's compact nodes exactly (output poisoned), for LBVH and
+/// PLOC trees of random soups, of degenerate inputs (flat, a point, huge and tiny
+/// coordinates, a small scene far from the origin), of a single triangle, and after a
+/// refit moved the root's box; and every rounded half holds its exact box, within two
+/// grid steps of it, with the same child.
+#[test]
+fn compact_nodes_match_cpu_and_hold_the_boxes() {
+    use speculum::passes::lbvh::ploc::{PlocScratch, ROUNDS};
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let mut rng = common::rng(31);
+    let mut r = |s: f32| {
+        Vec3::new(
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+        )
+    };
+    let n = 3000;
+    let mut cases: Vec<(String, Vec<GpuVertex>, Vec<u32>)> = [1usize, 2, 1000, 40000]
+        .iter()
+        .map(|&k| {
+            let (v, i) = random_soup(k, 2.0, default_size(k) * 2.0, k as u64);
+            (format!("soup {k}"), v, i)
+        })
+        .collect();
+    let shaped: Vec<(&str, Vec<[Vec3; 3]>)> = vec![
+        (
+            "flat",
+            (0..n)
+                .map(|_| [r(1.0), r(1.0), r(1.0)].map(|p| Vec3::new(p.x, -0.25, p.z)))
+                .collect(),
+        ),
+        ("a point", (0..n).map(|_| [Vec3::splat(-3.0); 3]).collect()),
+        ("huge", (0..n).map(|_| [r(1e6), r(1e6), r(1e6)]).collect()),
+        ("tiny", (0..n).map(|_| [r(1e-6), r(1e-6), r(1e-6)]).collect()),
+        (
+            "far from the origin",
+            (0..n)
+                .map(|_| {
+                    let c = Vec3::new(3.0e5, -7.0e4, 1.0e5) + r(0.5);
+                    [c, c + r(0.01), c + r(0.01)]
+                })
+                .collect(),
+        ),
+    ];
+    for (name, tris) in shaped {
+        let (v, i) = soup_from(&tris);
+        cases.push((name.into(), v, i));
+    }
+    let check = |bvh: &Bvh, what: &str| {
+        bvh.compact.write(&vec![0xc3u8; bvh.compact.size as usize]).unwrap();
+        let mut timer = GpuTimer::new(&ctx, 2).unwrap();
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            b.record_compact(cmd, &mut timer, bvh);
+        })
+        .unwrap();
+        assert!(bvh.compact_current(), "{what}: compact nodes current");
+        let got: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&bvh.compact.read().unwrap());
+        let nodes = bvh.read_packed().unwrap().nodes;
+        let want = cref::compact_nodes(&nodes);
+        assert_eq!(got, want, "{what}: compact nodes");
+        let (g, st) = (Vec3::from_array(f32_3(got[0])), Vec3::from_array(f32_3(got[1])));
+        for (k, nd) in nodes.iter().enumerate() {
+            for side in 0..2 {
+                let half = got[2 + 2 * k + side];
+                let exact = speculum::aabb::Aabb::of_half(nd, side as u32);
+                let rounded = cref::compact_box(half, g, st);
+                let within = (exact.lo - rounded.lo).cmpge(Vec3::ZERO).all()
+                    && (rounded.hi - exact.hi).cmpge(Vec3::ZERO).all()
+                    && (exact.lo - rounded.lo).cmple(2.0 * st).all()
+                    && (rounded.hi - exact.hi).cmple(2.0 * st).all();
+                assert!(within, "{what}: node {k} side {side}: {exact:?} rounded to {rounded:?}");
+                assert_eq!(
+                    half[3],
+                    [nd.child0, nd.child1][side],
+                    "{what}: node {k} side {side}: child"
+                );
+            }
+        }
+    };
+    for (name, v, i) in &cases {
+        let g = upload(&ctx, v, i);
+        let n = (i.len() / 3) as u32;
+        let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
+        assert!(!bvh.compact_current(), "{name}: stale after the build");
+        check(&bvh, &format!("{name}, LBVH"));
+        let ploc = Bvh::new(&ctx, n, MortonBits::Bits30).unwrap();
+        let scratch = PlocScratch::new(&ctx, n).unwrap();
+        let mut timer = GpuTimer::new(&ctx, 8).unwrap();
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            b.record_build_ploc(cmd, &mut timer, g.geometry(), &ploc, &scratch);
+        })
+        .unwrap();
+        b.ploc.finish(n, &ploc, &scratch, ROUNDS).unwrap();
+        check(&ploc, &format!("{name}, PLOC"));
+        if name == "soup 40000" {
+            g.vertices.write(bytemuck::cast_slice(&wave(v))).unwrap();
+            ctx.one_shot(|cmd| {
+                timer.reset(cmd);
+                b.record_refit(cmd, &mut timer, g.geometry(), &bvh);
+            })
+            .unwrap();
+            assert!(!bvh.compact_current(), "{name}: stale after the refit");
+            check(&bvh, &format!("{name}, refit"));
+        }
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}
+
+fn f32_3(t: [u32; 4]) -> [f32; 3] {
+    [f32::from_bits(t[0]), f32::from_bits(t[1]), f32::from_bits(t[2])]
+}
+
 /// A rigid rebuild (`passes::lbvh::rigid`): random bodies (one without triangles, two
 /// alike in one pose, so their codes tie) under random poses, 1, 2, 9 and 300 of them.
 /// The layout orders each body's triangles by their object-space keys; the kernels'

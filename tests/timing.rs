@@ -141,6 +141,9 @@ fn one_shot_scopes_pass_their_self_check() {
     assert_eq!(build.len(), 5, "the build and its four stages: {:?}", build.scopes);
     let (lo, hi) = (glam::Vec3::splat(-5.0), glam::Vec3::splat(5.0));
     let rays = speculum::bench::lbvh::incoherent_rays(lo, hi, 50_000, 3);
+    timer
+        .one_shot(|cmd, timer| builder.record_compact(cmd, timer, &bvh))
+        .unwrap();
     let tracer = speculum::passes::rt_trace::TracePass::new(&ctx).unwrap();
     let scene = speculum::passes::TraceScene {
         static_bvh: Some(speculum::passes::Traceable { bvh: &bvh, geometry }),

@@ -44,6 +44,7 @@ impl Built {
         ctx.one_shot(|cmd| {
             timer.reset(cmd);
             b.record_build(cmd, &mut timer, self.geometry(), &self.bvh);
+            b.record_compact(cmd, &mut timer, &self.bvh);
         })
         .unwrap();
     }
@@ -140,7 +141,74 @@ fn closest_hits_equal_brute_force() {
         let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
         let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
         assert!(ties <= rays.len() / 1000, "{ties} ties");
+        // The same BVH walked as the dynamic one (its exact 64-byte nodes, not the
+        // static walk's compact ones, whose boxes are rounded outward): the same hits.
+        let as_dynamic = TraceScene {
+            static_bvh: None,
+            dynamic_bvh: Some(built.traceable()),
+        };
+        let (exact, _) = tracer.trace(&rays, as_dynamic, false).unwrap();
+        let exact: Vec<Hit> = exact.into_iter().map(Hit::without_bvh_bit).collect();
+        assert_eq!(gpu, exact, "{bits:?}: compact and exact nodes give the same hits");
     }
+}
+
+/// Rays aimed at points a hair inside each triangle's corners (where the triangle meets
+/// its leaf's box, within a grid step of it: the compact nodes round boxes outward by
+/// less than two) hit as brute force says, through the static walk's compact nodes and
+/// the dynamic walk's exact ones: a box rounded or decoded a step short loses them.
+#[test]
+fn rays_at_triangle_corners_hit_through_rounded_boxes() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let tracer = TracePass::new(&ctx).unwrap();
+    let n = 2000;
+    let (v, i) = random_soup(n, 1.0, default_size(n), 61);
+    let mut rng = common::rng(62);
+    let rays: Vec<Ray> = (0..n)
+        .flat_map(|t| {
+            let tri = triangle(&v, &i, t);
+            let center = (tri[0] + tri[1] + tri[2]) / 3.0;
+            tri.map(|corner| corner + (center - corner) * 1e-4)
+        })
+        .map(|target| {
+            let o = Vec3::new(
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+            );
+            Ray {
+                origin: o.to_array(),
+                tmin: 0.0,
+                dir: (target - o).to_array(),
+                tmax: f32::MAX,
+            }
+        })
+        .collect();
+    let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
+    let built = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
+    for (walk, scene) in [
+        (
+            "static (compact nodes)",
+            TraceScene {
+                static_bvh: Some(built.traceable()),
+                dynamic_bvh: None,
+            },
+        ),
+        (
+            "dynamic (exact nodes)",
+            TraceScene {
+                static_bvh: None,
+                dynamic_bvh: Some(built.traceable()),
+            },
+        ),
+    ] {
+        let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
+        let gpu: Vec<Hit> = gpu.into_iter().map(Hit::without_bvh_bit).collect();
+        let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
+        assert!(ties <= 10, "{walk}: {ties} ties");
+    }
+    assert_eq!(ctx.validation_messages(), 0);
 }
 
 /// Static and dynamic BVHs traced together equal brute force over both triangle sets
@@ -248,6 +316,7 @@ fn refit_traces_like_a_fresh_build() {
     ctx.one_shot(|cmd| {
         timer.reset(cmd);
         b.record_refit(cmd, &mut timer, refit.geometry(), &refit.bvh);
+        b.record_compact(cmd, &mut timer, &refit.bvh);
     })
     .unwrap();
     let fresh = Built::new(&ctx, &b, &moved, &i, MortonBits::Bits30);

@@ -1,5 +1,6 @@
-// BVH layout (src/gpu_types.rs: TraversalNode, TraversalTri), written by lbvh.fit and
-// the refit, read by the traversal. A BVH over N triangles is the binary radix tree of
+// BVH layout (src/gpu_types.rs: TraversalNode, TraversalTri), written by lbvh.fit,
+// PLOC and the refit, read by the walk of the dynamic BVH (the static BVH's walk reads
+// the compact nodes below, made from these). A BVH over N triangles is the binary radix tree of
 // its sorted Morton keys (Karras 2012): N leaves in key order and N-1 internal nodes,
 // each internal node stored with both children's boxes, so one 64-byte fetch tests both.
 //
@@ -132,6 +133,85 @@ TraversalNode node_from_texels(utextureBuffer nodes, uint i) {
     uvec4 w3 = texelFetch(nodes, int(4u * i + 3u));
     return TraversalNode(uintBitsToFloat(w0.xyz), w0.w, uintBitsToFloat(w1.xyz), w1.w, uintBitsToFloat(w2.xyz),
                          w2.w, uintBitsToFloat(w3.xyz), w3.w);
+}
+
+// The compact nodes (lbvh.compact, what the walk of the static BVH reads): each
+// internal node's two halves as one 16-byte texel each, the child's box rounded
+// outward to a grid of at most 65,535 steps an axis over the root's box, after a
+// 2-texel header:
+//
+//   texel 0: grid origin g (f32 x3), 0     texel 1: grid step s (f32 x3), 0
+//   texel 2 + 2i + side: | lo.x | lo.y | lo.z | hi.x | hi.y | hi.z | child |
+//                         16-bit steps, two to a word; child as in the node
+//
+// A coordinate q steps up the grid is g + q * s: s is a power of two and q < 2^16, so
+// q * s is exact and the one rounding is the addition's (a fused multiply-add gives
+// the same). The step is at least 2 units in the last place of the grid's largest
+// coordinate, so rounding never moves a coordinate by a whole step. Mirrored by
+// cpu_ref::lbvh::{compact_grid, compact_half}.
+
+// The smallest power of two at least x (x >= 0, finite), at least the smallest normal.
+float pow2_at_least(float x) {
+    uint b = floatBitsToUint(x);
+    uint e = b & 0x7f800000u;
+    if (e == 0u) {
+        return uintBitsToFloat(0x00800000u);
+    }
+    return uintBitsToFloat((b & 0x007fffffu) != 0u ? e + 0x00800000u : e);
+}
+
+// Two units in the last place of floats with x's exponent, at least the smallest
+// normal.
+float two_ulps(float x) {
+    uint e = floatBitsToUint(x) & 0x7f800000u;
+    return uintBitsToFloat(e >= (23u << 23) ? e - (22u << 23) : 0x00800000u);
+}
+
+// The grid over the box [lo, hi] (finite): origin lo, per axis the smallest power of
+// two step whose 65,534 steps span the box and that is at least two_ulps of its
+// largest coordinate (so step 65,535 lies beyond hi, rounded).
+void compact_grid(vec3 lo, vec3 hi, out vec3 g, out vec3 st) {
+    g = lo;
+    for (int a = 0; a < 3; ++a) {
+        precise float ext = hi[a] - lo[a];
+        float s = pow2_at_least(ext * (1.0 / 65536.0));
+        s = s * 65534.0 < ext ? 2.0 * s : s;
+        st[a] = max(s, two_ulps(max(abs(lo[a]), abs(hi[a]))));
+    }
+}
+
+// Grid coordinate q along an axis with origin g and step s.
+float grid_at(uint q, float g, float s) {
+    precise float p = g + float(q) * s;
+    return p;
+}
+
+// The grid steps of x (g <= x, inside the grid's box) rounded down (the largest q
+// with grid_at(q) <= x) or up (the smallest with grid_at(q) >= x).
+uint grid_down(float x, float g, float s) {
+    float inv = uintBitsToFloat(0x7f000000u - floatBitsToUint(s)); // 1 / s, exact
+    precise float d = (x - g) * inv;
+    uint q = uint(clamp(floor(d), 0.0, 65535.0));
+    for (int k = 0; k < 2 && q > 0u && grid_at(q, g, s) > x; ++k) {
+        --q;
+    }
+    return grid_at(q, g, s) > x ? 0u : q;
+}
+uint grid_up(float x, float g, float s) {
+    float inv = uintBitsToFloat(0x7f000000u - floatBitsToUint(s));
+    precise float d = (x - g) * inv;
+    uint q = uint(clamp(ceil(d), 0.0, 65535.0));
+    for (int k = 0; k < 2 && q < 65535u && grid_at(q, g, s) < x; ++k) {
+        ++q;
+    }
+    return grid_at(q, g, s) < x ? 65535u : q;
+}
+
+// One half of a compact node: the box [lo, hi] rounded outward and the child.
+uvec4 compact_half(vec3 lo, vec3 hi, uint child, vec3 g, vec3 st) {
+    uvec3 l = uvec3(grid_down(lo.x, g.x, st.x), grid_down(lo.y, g.y, st.y), grid_down(lo.z, g.z, st.z));
+    uvec3 h = uvec3(grid_up(hi.x, g.x, st.x), grid_up(hi.y, g.y, st.y), grid_up(hi.z, g.z, st.z));
+    return uvec4(l.x | (l.y << 16u), l.z | (h.x << 16u), h.y | (h.z << 16u), child);
 }
 
 // Spreads the low 10 bits of x to every third bit:

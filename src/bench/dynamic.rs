@@ -20,7 +20,6 @@ use crate::renderer::{FRAME, SIM_RIGID};
 use crate::report::{Header, Stat};
 use crate::scene::Scene;
 use crate::settings::Settings;
-use crate::shader_defines::BVH_INVALID;
 use crate::vk::{Context, GpuTimer, TimingCheck};
 use crate::Renderer;
 use serde::Serialize;
@@ -106,18 +105,7 @@ fn trace_median(
         times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
     }
     let ms = stat(&times).median;
-    let plain = hits
-        .into_iter()
-        .map(|h| Hit {
-            prim: if h.prim == BVH_INVALID {
-                h.prim
-            } else {
-                h.prim & 0x7fff_ffff
-            },
-            ..h
-        })
-        .collect();
-    Ok((plain, ms))
+    Ok((hits.into_iter().map(Hit::without_bvh_bit).collect(), ms))
 }
 
 /// Per measured frame, the figures `measure_frames` lists.

@@ -80,9 +80,13 @@ pub struct CaseReport {
     /// GPU milliseconds of the frame's refit (`record_refit_scheduled`) of the tree
     /// just built.
     pub refit_ms: Stat,
+    /// GPU milliseconds of `lbvh.compact` after that refit: the compact nodes the
+    /// walk of the static BVH reads (which the rays below walk), made once for a
+    /// static BVH and not part of the build.
+    pub compact_ms: Stat,
     /// Internal nodes per triangle.
     pub nodes_per_triangle: f64,
-    /// BVH bytes (nodes and triangles) per triangle.
+    /// BVH bytes (nodes, compact nodes and triangles) per triangle.
     pub bytes_per_triangle: f64,
     /// Rebuild scratch (sort buffers, counters) per triangle.
     pub scratch_bytes_per_triangle: f64,
@@ -297,6 +301,7 @@ pub fn run_case(
     let mut timer = GpuTimer::new(ctx, 8)?;
     let mut stages = Timings::default();
     let mut refits = Vec::new();
+    let mut compacts = Vec::new();
     let mut timing = TimingCheck::default();
     let mut untimed_rounds = 0;
     for rep in 0..=opts.repeats {
@@ -316,9 +321,12 @@ pub fn run_case(
         let schedule = RefitSchedule::of(ctx, &bvh)?;
         let refit =
             timer.one_shot(|cmd, timer| builder.record_refit_scheduled(cmd, timer, geometry, &bvh, &schedule))?;
+        let compact = timer.one_shot(|cmd, timer| builder.record_compact(cmd, timer, &bvh))?;
         if rep > 0 {
             refits.push(refit.first().map_or(f64::NAN, |r| r.1));
             timing.add(refit.problem.as_deref());
+            compacts.push(compact.first().map_or(f64::NAN, |r| r.1));
+            timing.add(compact.problem.as_deref());
         }
         tick();
     }
@@ -419,6 +427,7 @@ pub fn run_case(
         untimed_rounds,
         mtris_per_s: n as f64 / (build_ms.median * 1e3),
         refit_ms: Stat::of(&refits).expect("repeats > 0"),
+        compact_ms: Stat::of(&compacts).expect("repeats > 0"),
         nodes_per_triangle: (n - 1).max(1) as f64 / n as f64,
         bytes_per_triangle: bvh.bytes() as f64 / n as f64,
         scratch_bytes_per_triangle: (bvh.sort.keys[0].size * 2 + bvh.sort.values[0].size * 2) as f64 / n as f64,

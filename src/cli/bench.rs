@@ -594,13 +594,14 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
         r => format!(" (+{r} rounds untimed)"),
     };
     text.line(format_args!(
-        "{:<14} {:>9} tris  build {}{untimed} ({:7.2} Mtris/s) [{}]  refit {}",
+        "{:<14} {:>9} tris  build {}{untimed} ({:7.2} Mtris/s) [{}]  refit {}  compact {}",
         format!("{} {}", case.name, case.builder.name()),
         case.triangles,
         cell(Some(case.build_ms)),
         case.mtris_per_s,
         stages.join(", "),
-        cell(Some(case.refit_ms))
+        cell(Some(case.refit_ms)),
+        cell(Some(case.compact_ms))
     ));
     let checks = if case.valid {
         format!("valid; {}", super::timing_note(&case.timing))

@@ -5,7 +5,8 @@
 //! stayed the same. One layout, the one the traversal reads (`glsl/shared/bvh.glsl`):
 //! N-1 internal nodes of 64 bytes holding both children's boxes (`TraversalNode`, root
 //! in slot 0) and the triangles in leaf order (`TraversalTri`), each with a link to its
-//! box's half of the parent, which the refit climbs.
+//! box's half of the parent, which the refit climbs. `lbvh.compact` then writes the
+//! 32-byte nodes the walk of the static BVH reads (boxes rounded outward to 16 bits).
 //! CPU reference: `cpu_ref::lbvh` (every stage exactly; tests/lbvh.rs).
 
 pub mod dynamic;
@@ -25,6 +26,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use sort::{RadixSort, SortBuffers};
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
 pub const BOUNDS: &str = "lbvh.bounds";
@@ -32,6 +34,7 @@ pub const MORTON: &str = "lbvh.morton";
 pub const SORT: &str = "lbvh.sort";
 pub const FIT: &str = "lbvh.fit";
 pub const REFIT: &str = "lbvh.refit";
+pub const COMPACT: &str = "lbvh.compact";
 
 /// Most triangles in one BVH: 1D dispatches of LBVH_WG invocations, at most 65535
 /// workgroups.
@@ -217,6 +220,13 @@ pub struct Bvh {
     /// `tnodes` and `ttris` as the traversal reads them (texel buffers).
     pub node_texels: TexelView,
     pub tri_texels: TexelView,
+    /// The compact nodes (`lbvh.compact`; `glsl/shared/bvh.glsl`): 2 + 2 max(N-1, 1)
+    /// texels, what the walk of the static BVH reads, as texels.
+    pub compact: Buffer,
+    pub compact_texels: TexelView,
+    /// Builds and refits recorded, and the count when `compact` was last recorded.
+    shaped: AtomicU32,
+    compacted: AtomicU32,
     /// The fit's swap word per internal node (the first child's outer end).
     ends: Buffer,
     /// The fit's SAH cost of the subtree in each half of each node.
@@ -260,9 +270,14 @@ impl Bvh {
             "lbvh.ttris",
             tri_count as u64 * std::mem::size_of::<TraversalTri>() as u64,
         )?;
+        let compact = texels("lbvh.compact", (2 + 2 * (tri_count as u64 - 1).max(1)) * 16)?;
         Ok(Self {
             node_texels: TexelView::new(ctx, &tnodes)?,
             tri_texels: TexelView::new(ctx, &ttris)?,
+            compact_texels: TexelView::new(ctx, &compact)?,
+            compact,
+            shaped: AtomicU32::new(1),
+            compacted: AtomicU32::new(0),
             tnodes,
             ttris,
             ends: buf("lbvh.ends", (tri_count as u64 - 1).max(1) * 4)?,
@@ -274,9 +289,21 @@ impl Bvh {
         })
     }
 
-    /// Bytes of the BVH itself (nodes and triangles), without the rebuild scratch.
+    /// Bytes of the BVH itself (nodes, compact nodes and triangles), without the
+    /// rebuild scratch.
     pub fn bytes(&self) -> u64 {
-        self.tnodes.size + self.ttris.size
+        self.tnodes.size + self.compact.size + self.ttris.size
+    }
+
+    /// Whether `compact` was recorded after the last build or refit recorded (what the
+    /// walk of the static BVH needs).
+    pub fn compact_current(&self) -> bool {
+        self.compacted.load(Ordering::Relaxed) == self.shaped.load(Ordering::Relaxed)
+    }
+
+    /// A build or refit of the nodes was recorded: the compact nodes are stale.
+    fn reshaped(&self) {
+        self.shaped.fetch_add(1, Ordering::Relaxed);
     }
 
     /// (centroid bounds, scene bounds) from the last `lbvh.bounds`, read back.
@@ -420,6 +447,7 @@ pub struct LbvhBuilder {
     refit_leaves: Pipeline,
     refit_level: Pipeline,
     refit_top: Pipeline,
+    compact: Pipeline,
     pub ploc: ploc::PlocBuilder,
 }
 
@@ -449,6 +477,7 @@ impl LbvhBuilder {
             refit_leaves: Pipeline::compute::<u32>(ctx, REFIT, shaders::LBVH_REFIT_LEAVES_COMP)?,
             refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
             refit_top: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_TOP_COMP)?,
+            compact: Pipeline::compute::<u32>(ctx, COMPACT, shaders::LBVH_COMPACT_COMP)?,
             ploc: ploc::PlocBuilder::new(ctx)?,
         })
     }
@@ -502,7 +531,8 @@ impl LbvhBuilder {
     /// Builds `bvh` over `geom` now (submits and waits), for geometry built once, with
     /// `kind`. A PLOC tree deeper than the traversal's stack can walk (none seen: PLOC
     /// trees are shallower than the LBVH's) is replaced by the LBVH, whose depth the
-    /// key width bounds. Returns each stage's GPU milliseconds and the kind built.
+    /// key width bounds. Then the compact nodes (`record_compact`). Returns each
+    /// stage's GPU milliseconds and the kind built.
     pub fn build_now(
         &self,
         geom: Geometry<'_>,
@@ -510,17 +540,26 @@ impl LbvhBuilder {
         kind: BvhKind,
     ) -> Result<(Vec<(&'static str, f64)>, BvhKind)> {
         let mut timer = GpuTimer::new(&self.ctx, 8)?;
+        let mut built = None;
         if kind == BvhKind::Ploc {
             let scratch = ploc::PlocScratch::new(&self.ctx, geom.tri_count)?;
             let first = timer.one_shot(|cmd, timer| self.record_build_ploc(cmd, timer, geom, bvh, &scratch))?;
             self.ploc.finish(geom.tri_count, bvh, &scratch, ploc::ROUNDS)?;
             let nodes: Vec<TraversalNode> = bytemuck::pod_collect_to_vec(&bvh.tnodes.read()?);
             if stack_need(&nodes) <= crate::shader_defines::TRACE_STACK {
-                return Ok((first.scopes, BvhKind::Ploc));
+                built = Some((first.scopes, BvhKind::Ploc));
             }
         }
-        let readout = timer.one_shot(|cmd, timer| self.record_build(cmd, timer, geom, bvh))?;
-        Ok((readout.scopes, BvhKind::Lbvh))
+        let (mut scopes, kind) = match built {
+            Some(built) => built,
+            None => {
+                let readout = timer.one_shot(|cmd, timer| self.record_build(cmd, timer, geom, bvh))?;
+                (readout.scopes, BvhKind::Lbvh)
+            }
+        };
+        let compact = timer.one_shot(|cmd, timer| self.record_compact(cmd, timer, bvh))?;
+        scopes.extend(compact.scopes);
+        Ok((scopes, kind))
     }
 
     /// Records what both builders start with, each under its timer scope: bounds,
@@ -611,6 +650,7 @@ impl LbvhBuilder {
     ) {
         use crate::shader_defines::REFIT_TOP_WG;
         assert_eq!(geom.tri_count, bvh.tri_count, "BVH sized for another triangle count");
+        bvh.reshaped();
         let d = &self.ctx.device;
         timer.begin(cmd, REFIT);
         // WAR: earlier reads of the nodes (traversal) finish before the boxes change.
@@ -673,6 +713,7 @@ impl LbvhBuilder {
     /// `lbvh.fit`: the tree over the sorted keys in `bvh.sort` and its boxes, in one
     /// bottom-up pass.
     pub fn record_fit(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh) {
+        bvh.reshaped();
         let d = &self.ctx.device;
         unsafe { d.cmd_fill_buffer(cmd, bvh.ends.raw, 0, vk::WHOLE_SIZE, BVH_INVALID) };
         // RAW: the fit's swap words start empty; WAR: earlier reads of the nodes
@@ -706,6 +747,29 @@ impl LbvhBuilder {
         );
         // RAW: traversal (or a readback) reads the finished boxes.
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::ALL_READ_WRITE);
+    }
+
+    /// Records `lbvh.compact` under its timer scope: the compact nodes the walk of the
+    /// static BVH reads, from the nodes as the last build or refit left them (which
+    /// must be visible to compute reads, as those leave them). The compact nodes end
+    /// visible to all later reads.
+    pub fn record_compact(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, bvh: &Bvh) {
+        let d = &self.ctx.device;
+        // WAR: earlier walks of the compact nodes finish before they are rewritten.
+        barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
+        let nodes = (bvh.tri_count - 1).max(1);
+        timer.begin(cmd, COMPACT);
+        self.compact.dispatch(
+            cmd,
+            &[Resource::Texels(&bvh.node_texels), Resource::Buffer(&bvh.compact)],
+            &nodes,
+            Groups::Cover([nodes, 1, 1]),
+        );
+        timer.end(cmd, COMPACT);
+        // RAW: the walk (or a readback) reads them.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::ALL_READ_WRITE);
+        bvh.compacted
+            .store(bvh.shaped.load(Ordering::Relaxed), Ordering::Relaxed);
     }
 }
 

@@ -114,6 +114,7 @@ impl PlocBuilder {
             "PLOC scratch for {} triangles",
             s.capacity
         );
+        bvh.reshaped();
         let d = &self.ctx.device;
         let n = geom.tri_count;
         // WAR: earlier reads of the BVH and the scratch (traversal, a previous build's
@@ -207,6 +208,7 @@ impl PlocBuilder {
     /// until one cluster is left. Returns the rounds recorded in all.
     pub fn finish(&self, n: u32, bvh: &Bvh, s: &PlocScratch, mut rounds: u32) -> Result<u32> {
         while s.clusters_left(rounds)? > 1 {
+            bvh.reshaped();
             self.ctx
                 .one_shot(|cmd| self.record_rounds(cmd, n, bvh, s, rounds, ROUNDS))?;
             rounds += ROUNDS;

@@ -119,7 +119,8 @@ fn one_shot_scopes_pass_their_self_check() {
     let triangles = speculum::passes::lbvh::UploadedTriangles::new(&ctx, "t", &v, &i).unwrap();
     let geometry = triangles.geometry();
     let builder = speculum::passes::lbvh::LbvhBuilder::new(&ctx).unwrap();
-    let bvh = speculum::passes::lbvh::Bvh::new(&ctx, 20_000, speculum::passes::lbvh::MortonBits::Bits30).unwrap();
+    let bvh =
+        speculum::passes::lbvh::Bvh::new_static(&ctx, 20_000, speculum::passes::lbvh::MortonBits::Bits30).unwrap();
     let mut timer = GpuTimer::new(&ctx, 8).unwrap();
     // As for frames (`checked_frame`): a build refused by its self-check may be a
     // lavapipe thread preempted between two stamps; one that never passes is a bug.

@@ -25,7 +25,7 @@ struct Built {
 impl Built {
     fn new(ctx: &Arc<Context>, b: &LbvhBuilder, v: &[GpuVertex], i: &[u32], bits: MortonBits) -> Self {
         let triangles = UploadedTriangles::new(ctx, "t", v, i).unwrap();
-        let bvh = Bvh::new(ctx, (i.len() / 3) as u32, bits).unwrap();
+        let bvh = Bvh::new_static(ctx, (i.len() / 3) as u32, bits).unwrap();
         let built = Self { triangles, bvh };
         built.rebuild(ctx, b);
         built

@@ -291,7 +291,7 @@ pub fn run_case(
     let triangles = UploadedTriangles::new(ctx, "bench", v, i)?;
     let geometry = triangles.geometry();
     let builder = LbvhBuilder::new(ctx)?;
-    let bvh = Bvh::new(ctx, n, opts.bits)?;
+    let bvh = Bvh::new_static(ctx, n, opts.bits)?;
     let scratch = match kind {
         BvhKind::Ploc => Some(PlocScratch::new(ctx, n)?),
         BvhKind::Lbvh => None,

@@ -135,19 +135,21 @@ impl<'a> TraceScene<'a> {
     /// nodes, vertices, indices, then dynamic nodes, vertices, indices, then the static
     /// and dynamic triangles in leaf order) and the two triangle counts. A missing BVH
     /// is bound to the other's buffers with a triangle count of 0. Panics when the
-    /// static BVH's compact nodes are older than its last build or refit.
+    /// static BVH has no compact nodes, or older ones than its last build or refit.
     pub fn bindings(&self) -> ([Resource<'a>; 8], u32, u32) {
         let any = self.static_bvh.or(self.dynamic_bvh).expect("tracing needs a BVH");
         if let Some(s) = self.static_bvh {
             assert!(
                 s.bvh.compact_current(),
-                "the static BVH's compact nodes are stale (record_compact after its last build or refit)"
+                "the static BVH needs compact nodes (Bvh::new_static) recorded after its last build or refit"
             );
         }
         let s = self.static_bvh.unwrap_or(any);
         let d = self.dynamic_bvh.unwrap_or(any);
+        // Without a static BVH its slot is never read: any texel view fills it.
+        let s_nodes = s.bvh.compact.as_ref().map_or(&s.bvh.node_texels, |c| &c.texels);
         let resources = [
-            Resource::Texels(&s.bvh.compact_texels),
+            Resource::Texels(s_nodes),
             Resource::Buffer(s.geometry.vertices),
             Resource::Buffer(s.geometry.indices),
             Resource::Texels(&d.bvh.node_texels),

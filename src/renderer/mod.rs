@@ -140,7 +140,7 @@ impl Renderer {
             gpu_allocator::MemoryLocation::GpuOnly,
         )?;
         // The static BVH, once: the scene has no dynamic geometry yet.
-        let static_bvh = Bvh::new(ctx, scene_buffers.mesh.index_count / 3, MortonBits::Bits30)?;
+        let static_bvh = Bvh::new_static(ctx, scene_buffers.mesh.index_count / 3, MortonBits::Bits30)?;
         let builder = LbvhBuilder::new(ctx)?;
         let (static_bvh_build, _) =
             builder.build_now(scene_buffers.mesh.triangles(), &static_bvh, static_kind(settings))?;

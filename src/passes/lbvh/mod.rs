@@ -211,6 +211,13 @@ pub fn index_buffer(ctx: &Arc<Context>, name: &str, usage: vk::BufferUsageFlags,
     Buffer::with_data(ctx, name, usage | VERTEX_USAGE, bytemuck::cast_slice(&padded))
 }
 
+/// The compact nodes (`lbvh.compact`; `glsl/shared/bvh.glsl`): 2 + 2 max(N-1, 1)
+/// texels of 16 bytes, and the same as the walk reads them.
+pub struct CompactNodes {
+    pub buffer: Buffer,
+    pub texels: TexelView,
+}
+
 /// A BVH on the GPU and the scratch memory to rebuild it.
 pub struct Bvh {
     /// max(N-1, 1) `TraversalNode`s (written by the fit and the refit).
@@ -220,10 +227,9 @@ pub struct Bvh {
     /// `tnodes` and `ttris` as the traversal reads them (texel buffers).
     pub node_texels: TexelView,
     pub tri_texels: TexelView,
-    /// The compact nodes (`lbvh.compact`; `glsl/shared/bvh.glsl`): 2 + 2 max(N-1, 1)
-    /// texels, what the walk of the static BVH reads, as texels.
-    pub compact: Buffer,
-    pub compact_texels: TexelView,
+    /// The compact nodes the walk of the static BVH reads (`Bvh::new_static`; none for
+    /// a BVH only ever walked as the dynamic one).
+    pub compact: Option<CompactNodes>,
     /// Builds and refits recorded, and the count when `compact` was last recorded.
     shaped: AtomicU32,
     compacted: AtomicU32,
@@ -270,12 +276,10 @@ impl Bvh {
             "lbvh.ttris",
             tri_count as u64 * std::mem::size_of::<TraversalTri>() as u64,
         )?;
-        let compact = texels("lbvh.compact", (2 + 2 * (tri_count as u64 - 1).max(1)) * 16)?;
         Ok(Self {
             node_texels: TexelView::new(ctx, &tnodes)?,
             tri_texels: TexelView::new(ctx, &ttris)?,
-            compact_texels: TexelView::new(ctx, &compact)?,
-            compact,
+            compact: None,
             shaped: AtomicU32::new(1),
             compacted: AtomicU32::new(0),
             tnodes,
@@ -289,16 +293,36 @@ impl Bvh {
         })
     }
 
-    /// Bytes of the BVH itself (nodes, compact nodes and triangles), without the
-    /// rebuild scratch.
-    pub fn bytes(&self) -> u64 {
-        self.tnodes.size + self.compact.size + self.ttris.size
+    /// Memory for a BVH walked as the static one: `new` and its compact nodes.
+    pub fn new_static(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits) -> Result<Self> {
+        let mut bvh = Self::new(ctx, tri_count, bits)?;
+        let buffer = Buffer::new(
+            ctx,
+            "lbvh.compact",
+            (2 + 2 * (tri_count as u64 - 1).max(1)) * 16,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
+        bvh.compact = Some(CompactNodes {
+            texels: TexelView::new(ctx, &buffer)?,
+            buffer,
+        });
+        Ok(bvh)
     }
 
-    /// Whether `compact` was recorded after the last build or refit recorded (what the
-    /// walk of the static BVH needs).
+    /// Bytes of the BVH itself (nodes, compact nodes if any, and triangles), without
+    /// the rebuild scratch.
+    pub fn bytes(&self) -> u64 {
+        self.tnodes.size + self.compact.as_ref().map_or(0, |c| c.buffer.size) + self.ttris.size
+    }
+
+    /// Whether the BVH has compact nodes, recorded after the last build or refit
+    /// recorded (what the walk of the static BVH needs).
     pub fn compact_current(&self) -> bool {
-        self.compacted.load(Ordering::Relaxed) == self.shaped.load(Ordering::Relaxed)
+        self.compact.is_some() && self.compacted.load(Ordering::Relaxed) == self.shaped.load(Ordering::Relaxed)
     }
 
     /// A build or refit of the nodes was recorded: the compact nodes are stale.
@@ -753,7 +777,12 @@ impl LbvhBuilder {
     /// static BVH reads, from the nodes as the last build or refit left them (which
     /// must be visible to compute reads, as those leave them). The compact nodes end
     /// visible to all later reads.
+    /// Panics for a BVH made without them (`Bvh::new`).
     pub fn record_compact(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, bvh: &Bvh) {
+        let compact = bvh
+            .compact
+            .as_ref()
+            .expect("compact nodes of a BVH made by Bvh::new_static");
         let d = &self.ctx.device;
         // WAR: earlier walks of the compact nodes finish before they are rewritten.
         barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
@@ -761,7 +790,7 @@ impl LbvhBuilder {
         timer.begin(cmd, COMPACT);
         self.compact.dispatch(
             cmd,
-            &[Resource::Texels(&bvh.node_texels), Resource::Buffer(&bvh.compact)],
+            &[Resource::Texels(&bvh.node_texels), Resource::Buffer(&compact.buffer)],
             &nodes,
             Groups::Cover([nodes, 1, 1]),
         );

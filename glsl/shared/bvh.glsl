@@ -148,7 +148,7 @@ TraversalNode node_from_texels(utextureBuffer nodes, uint i) {
 // q * s is exact and the one rounding is the addition's (a fused multiply-add gives
 // the same). The step is at least 2 units in the last place of the grid's largest
 // coordinate, so rounding never moves a coordinate by a whole step. Mirrored by
-// cpu_ref::lbvh::{compact_grid, compact_half}.
+// cpu_ref::lbvh::{compact_grid, compact_half, compact_box}.
 
 // The smallest power of two at least x (x >= 0, finite), at least the smallest normal.
 float pow2_at_least(float x) {
@@ -186,21 +186,24 @@ float grid_at(uint q, float g, float s) {
     return p;
 }
 
+// (x - g) / s, in steps of the grid (s a power of two: 1 / s is exact).
+float grid_units(float x, float g, float s) {
+    float inv = uintBitsToFloat(0x7f000000u - floatBitsToUint(s));
+    precise float d = (x - g) * inv;
+    return d;
+}
+
 // The grid steps of x (g <= x, inside the grid's box) rounded down (the largest q
 // with grid_at(q) <= x) or up (the smallest with grid_at(q) >= x).
 uint grid_down(float x, float g, float s) {
-    float inv = uintBitsToFloat(0x7f000000u - floatBitsToUint(s)); // 1 / s, exact
-    precise float d = (x - g) * inv;
-    uint q = uint(clamp(floor(d), 0.0, 65535.0));
+    uint q = uint(clamp(floor(grid_units(x, g, s)), 0.0, 65535.0));
     for (int k = 0; k < 2 && q > 0u && grid_at(q, g, s) > x; ++k) {
         --q;
     }
     return grid_at(q, g, s) > x ? 0u : q;
 }
 uint grid_up(float x, float g, float s) {
-    float inv = uintBitsToFloat(0x7f000000u - floatBitsToUint(s));
-    precise float d = (x - g) * inv;
-    uint q = uint(clamp(ceil(d), 0.0, 65535.0));
+    uint q = uint(clamp(ceil(grid_units(x, g, s)), 0.0, 65535.0));
     for (int k = 0; k < 2 && q < 65535u && grid_at(q, g, s) < x; ++k) {
         ++q;
     }
@@ -212,6 +215,13 @@ uvec4 compact_half(vec3 lo, vec3 hi, uint child, vec3 g, vec3 st) {
     uvec3 l = uvec3(grid_down(lo.x, g.x, st.x), grid_down(lo.y, g.y, st.y), grid_down(lo.z, g.z, st.z));
     uvec3 h = uvec3(grid_up(hi.x, g.x, st.x), grid_up(hi.y, g.y, st.y), grid_up(hi.z, g.z, st.z));
     return uvec4(l.x | (l.y << 16u), l.z | (h.x << 16u), h.y | (h.z << 16u), child);
+}
+
+// The box of a compact half h on the grid (g, st), as the walk tests it (grid_at per
+// coordinate). Mirrored by cpu_ref::lbvh::compact_box.
+void compact_box(uvec4 h, vec3 g, vec3 st, out vec3 lo, out vec3 hi) {
+    lo = g + vec3(uvec3(h.x & 0xffffu, h.x >> 16u, h.y & 0xffffu)) * st;
+    hi = g + vec3(uvec3(h.y >> 16u, h.z & 0xffffu, h.z >> 16u)) * st;
 }
 
 // Spreads the low 10 bits of x to every third bit:

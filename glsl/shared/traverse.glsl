@@ -39,12 +39,6 @@ layout(binding = TRAVERSE_BINDING + 5, std430) readonly buffer DynamicIndices { 
 layout(binding = TRAVERSE_BINDING + 6) uniform utextureBuffer s_tris;
 layout(binding = TRAVERSE_BINDING + 7) uniform utextureBuffer d_tris;
 
-// The box of one compact half (bvh.glsl) on the grid (g, st).
-void compact_box(uvec4 h, vec3 g, vec3 st, out vec3 lo, out vec3 hi) {
-    lo = g + vec3(uvec3(h.x & 0xffffu, h.x >> 16u, h.y & 0xffffu)) * st;
-    hi = g + vec3(uvec3(h.y >> 16u, h.z & 0xffffu, h.z >> 16u)) * st;
-}
-
 // Node i of `bvh`: the static BVH's from its compact nodes on the grid (g, st), its
 // boxes rounded outward; the dynamic BVH's as built or refit (parent and unused are
 // not read).

@@ -511,15 +511,18 @@ pub fn compact_grid(lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
 
 /// `grid_at`: grid coordinate `q` along an axis (origin `g`, step `s`); `q * s` is
 /// exact, so this is one rounding, as a fused multiply-add would give.
-pub fn grid_at(q: u32, g: f32, s: f32) -> f32 {
+fn grid_at(q: u32, g: f32, s: f32) -> f32 {
     g + q as f32 * s
+}
+
+/// `grid_units`: (x - g) / s in steps of the grid (s a power of two: 1 / s is exact).
+fn grid_units(x: f32, g: f32, s: f32) -> f32 {
+    (x - g) * f32::from_bits(0x7f00_0000 - s.to_bits())
 }
 
 /// `grid_down`: the largest q with `grid_at(q) <= x` (x in the grid's box).
 fn grid_down(x: f32, g: f32, s: f32) -> u32 {
-    let inv = f32::from_bits(0x7f00_0000 - s.to_bits());
-    let d = (x - g) * inv;
-    let mut q = d.floor().clamp(0.0, 65535.0) as u32;
+    let mut q = grid_units(x, g, s).floor().clamp(0.0, 65535.0) as u32;
     for _ in 0..2 {
         if q > 0 && grid_at(q, g, s) > x {
             q -= 1;
@@ -534,9 +537,7 @@ fn grid_down(x: f32, g: f32, s: f32) -> u32 {
 
 /// `grid_up`: the smallest q with `grid_at(q) >= x` (x in the grid's box).
 fn grid_up(x: f32, g: f32, s: f32) -> u32 {
-    let inv = f32::from_bits(0x7f00_0000 - s.to_bits());
-    let d = (x - g) * inv;
-    let mut q = d.ceil().clamp(0.0, 65535.0) as u32;
+    let mut q = grid_units(x, g, s).ceil().clamp(0.0, 65535.0) as u32;
     for _ in 0..2 {
         if q < 65535 && grid_at(q, g, s) < x {
             q += 1;

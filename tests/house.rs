@@ -269,3 +269,87 @@ fn the_scanner_reads_paths_and_groups() {
     let got: Vec<String> = first_segments(code, "crate").into_iter().collect();
     assert_eq!(got, ["a", "c", "d", "g", "i"]);
 }
+
+/// Roots of absolute paths where data lives only on the machine that wrote it: a test
+/// or the program reading a model, image or scene there passes only on that machine.
+/// (Named without the leading slash, so this file does not plant them.)
+const MACHINE_DATA_ROOTS: &[&str] = &["tmp", "root", "home", "mnt", "media", "srv", "opt", "data", "Users"];
+
+/// Absolute paths under those roots that are the system's, not data: the X server's
+/// sockets and lock files (the window tests look for a display).
+const SYSTEM_PATHS: &[&str] = &["tmp/.X11-unix/", "tmp/.X"];
+
+/// The string literals of `text` that name a path under `MACHINE_DATA_ROOTS`
+/// (`"/tmp/models/bunny.obj"`, `"/home"`), with their line numbers; comments left out.
+fn machine_data_paths(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let code = match line.find("//") {
+            Some(i) if line[..i].matches('"').count() % 2 == 0 => &line[..i],
+            _ => line,
+        };
+        // Every other quote opens a literal (escaped quotes are rare in paths).
+        for lit in code.split('"').skip(1).step_by(2) {
+            let Some(path) = lit.strip_prefix('/') else { continue };
+            let under_root = MACHINE_DATA_ROOTS.iter().any(|root| {
+                path.strip_prefix(root)
+                    .is_some_and(|rest| rest.is_empty() || rest.starts_with('/'))
+            });
+            if under_root && !SYSTEM_PATHS.iter().any(|s| path.starts_with(s)) {
+                out.push((n + 1, lit.to_string()));
+            }
+        }
+    }
+    out
+}
+
+/// A fresh clone's `tools/test` must pass on a machine that never saw the repository:
+/// no file of `src/`, `tests/`, `examples/` or `build.rs` names data by an absolute
+/// path outside the repository. Tests read `tests/data`, `assets`, what they generate,
+/// or a temporary directory they made; outside models are benchmark arguments.
+#[test]
+fn nothing_reads_data_from_outside_the_repository() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("build.rs")];
+    for dir in ["src", "tests", "examples"] {
+        rust_files(&root.join(dir), &mut files);
+    }
+    assert!(files.len() > 100, "the scan found only {} files", files.len());
+    let wrong: Vec<String> = files
+        .iter()
+        .flat_map(|f| {
+            let rel = f.strip_prefix(root).unwrap().display().to_string();
+            machine_data_paths(&std::fs::read_to_string(f).unwrap())
+                .into_iter()
+                .map(move |(line, lit)| format!("{rel}:{line}: \"{lit}\""))
+        })
+        .collect();
+    assert!(
+        wrong.is_empty(),
+        "absolute paths to data outside the repository (use tests/data, assets, a tempdir, or a benchmark argument):\n{}",
+        wrong.join("\n")
+    );
+}
+
+/// The path scan itself: it flags the probe that broke a fresh clone's tests (its load
+/// line, planted here), and passes repository paths, the X server's files and comments.
+#[test]
+fn the_path_scan_flags_machine_data_and_passes_system_paths() {
+    // Built with format! so this file does not plant the paths it tests.
+    let tmp = format!("/{}", "tmp");
+    let probe = format!("    for name in [\"spheres\", \"gallery\", \"{tmp}/models/bunny.obj\"] {{");
+    assert_eq!(machine_data_paths(&probe), [(1, format!("{tmp}/models/bunny.obj"))]);
+    let home = format!(
+        "let m = load(\"/{}/me/sponza.obj\")?;\nlet r = Path::new(\"/{}\");",
+        "home", "root"
+    );
+    assert_eq!(
+        machine_data_paths(&home),
+        [(1, format!("/{}/me/sponza.obj", "home")), (2, format!("/{}", "root"))]
+    );
+    let fine = format!(
+        "let s = \"assets/room.toml\"; Path::new(\"{tmp}/.X11-unix/X{{n}}\"); \"{tmp}/.X{{n}}-lock\";\n\
+         // a comment naming {tmp}/models is no read\nlet d = \"/dev/null\"; let t = \"{tmp}x\";"
+    );
+    assert_eq!(machine_data_paths(&fine), []);
+}

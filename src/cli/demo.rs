@@ -15,7 +15,7 @@ pub enum Present {
     Immediate,
 }
 
-/// The key list, for `--help` (the README holds the same table).
+/// The key list, for `--help` (`docs/demo.md` holds the same table).
 pub fn keys_help() -> String {
     let mut s = String::from("Keys:\n");
     for (key, what) in script::KEYS {
@@ -41,7 +41,7 @@ pub struct DemoArgs {
     /// With --frames: save the last frame (without the HUD) here, and its JSON beside it.
     #[arg(long, requires = "frames")]
     pub screenshot: Option<PathBuf>,
-    /// Drive the demo from a script (see the README's "Demo scripts"); the demo quits
+    /// Drive the demo from a script (see "Demo scripts" in docs/demo.md); the demo quits
     /// at its end.
     #[arg(long, conflicts_with = "frames")]
     pub script: Option<PathBuf>,

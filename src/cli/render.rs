@@ -41,11 +41,11 @@ pub struct RenderArgs {
     /// Also write the timings report as JSON to this file (`-`: stdout).
     #[arg(long)]
     pub timings: Option<PathBuf>,
-    /// Also write the SSR fail mask as a PNG, coloured by reason (see README).
+    /// Also write the SSR fail mask as a PNG, coloured by reason (see docs/frame.md).
     #[arg(long)]
     pub fail_mask: Option<PathBuf>,
     /// Also write where each pixel's shadow came from as a PNG: grey from the shadow
-    /// map, pink from a shadow ray, each lighter where the sun reaches (see README).
+    /// map, pink from a shadow ray, each lighter where the sun reaches (see docs/shadows.md).
     #[arg(long)]
     pub shadow_sources: Option<PathBuf>,
     /// Also write every measured frame to this folder (created if needed) as

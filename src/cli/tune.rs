@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(Args, Clone, Debug)]
 pub struct TuneArgs {
-    /// Sweep file (TOML; see the README's "Tuning"); optional with --axis.
+    /// Sweep file (TOML; see docs/tuning.md); optional with --axis.
     pub sweep: Option<PathBuf>,
     /// An axis from the command line, `field=v1,v2,...` (replaces the file's axis of
     /// that name); repeatable.

@@ -48,7 +48,7 @@ pub enum Action {
     Quit,
 }
 
-/// The keys of `Action`s and what they do, for `--help` and the README.
+/// The keys of `Action`s and what they do, for `--help` and `docs/demo.md`.
 pub const KEYS: &[(&str, &str)] = &[
     ("1-5", "mode: raster, ssr, hybrid, rt, provenance"),
     ("F", "fail-mask view (colours by fail reason; legend in the HUD)"),

@@ -1,7 +1,7 @@
 //! Scene files (TOML): a camera, a sun, a sky, named materials and a list of instances —
 //! primitives (plane, box, sphere) or model files — each with a transform. The built-in
 //! scenes are such files (`assets/scenes/*.toml`, compiled into the binary). The format
-//! is documented in the README; every field here says what it is.
+//! is documented in `docs/scenes.md`; every field here says what it is.
 //!
 //! A transform is `translate * rotate * scale`, `rotate` in degrees about x, then y, then
 //! z (the matrix `Rz * Ry * Rx`), `scale` uniform or per axis.
@@ -686,11 +686,11 @@ mod tests {
         assert!(e.contains("collider 'blob'"), "{e}");
     }
 
-    /// The README's complete example is a valid scene file (with a model in place).
+    /// The complete example of `docs/scenes.md` is a valid scene file (with a model in place).
     #[test]
-    fn readme_example_builds() {
-        let readme = include_str!("../../README.md");
-        let start = readme.find("### Scene files").expect("the section");
+    fn documented_example_builds() {
+        let readme = include_str!("../../docs/scenes.md");
+        let start = readme.find("## Scene files").expect("the section");
         let block = &readme[start..];
         let toml_start = block.find("```toml\n").expect("an example") + 8;
         let text = &block[toml_start..toml_start + block[toml_start..].find("```").unwrap()];

@@ -1,5 +1,5 @@
 //! Scenes: triangles in world space with texture coordinates, materials (the model is
-//! in the README's "Materials"), base-colour textures, a camera and a light.
+//! in `docs/scenes.md`, "Materials"), base-colour textures, a camera and a light.
 //!
 //! A scene comes from a scene file (`file`: TOML, primitives and models with
 //! transforms; the built-in scenes are such files, `builtin`) or a model file (`obj`,

@@ -187,11 +187,12 @@ pub fn render_frames(
     }
     let (mut timings, mut ref_timings) = (Timings::default(), Timings::default());
     for index in 0..plan.frames {
-        let times = renderer.render_frame()?;
+        let (times, discarded) = renderer.render_frame_measured()?;
         tick();
-        timings.add(&times);
+        timings.add_measured(&times, discarded);
         if let Some(r) = &mut reference {
-            ref_timings.add(&r.render_frame()?);
+            let (times, discarded) = r.render_frame_measured()?;
+            ref_timings.add_measured(&times, discarded);
             tick();
         }
         if let Some(r) = &mut rays_reference {

@@ -9,7 +9,7 @@
 //! Only `rtcCommitScene` is timed. Traversal: `rtcIntersect1` per ray, the rays split
 //! into one contiguous chunk per thread.
 
-use super::lbvh::{AnchorRays, AnchorReport};
+use super::anchor::{agreement, AnchorRays, AnchorReport, AnchorSet};
 use crate::error::{Error, Result};
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::report::Stat;
@@ -211,10 +211,6 @@ impl Drop for Scene<'_> {
     }
 }
 
-/// One ray set for the anchor: the rays, Speculum's hits, Speculum's Mrays/s, and
-/// whether the rays are coherent (Embree's context hint).
-pub type AnchorSet<'a> = (&'a [Ray], &'a [Hit], f64, bool);
-
 /// Embree LOW and MEDIUM on a case: each built `repeats` times after a warm-up, each
 /// of `sets` (coherent, incoherent, the file's; `None` where absent) traced `repeats`
 /// times after a warm-up and compared with Speculum's hits.
@@ -273,22 +269,4 @@ fn repeated<T>(repeats: u32, mut run: impl FnMut() -> Result<(T, f64)>) -> Resul
         out = o;
     }
     Ok((out, Stat::of(&times).expect("repeats > 0")))
-}
-
-/// (agree, ties, disagree) of two tracers' hits of the same rays (see `AnchorRays`).
-pub fn agreement(a: &[Hit], b: &[Hit]) -> (u32, u32, u32) {
-    let (mut agree, mut ties, mut disagree) = (0, 0, 0);
-    for (x, y) in a.iter().zip(b) {
-        if x.prim == y.prim {
-            agree += 1;
-        } else if x.prim != BVH_INVALID
-            && y.prim != BVH_INVALID
-            && (x.t - y.t).abs() <= 1e-4 * x.t.abs().max(y.t.abs()).max(1.0)
-        {
-            ties += 1;
-        } else {
-            disagree += 1;
-        }
-    }
-    (agree, ties, disagree)
 }

@@ -7,6 +7,7 @@
 //! incoherent (random) rays. Checked in the same run: the BVH invariants after the
 //! timed builds, and a sample of each ray set against the CPU SAH BVH's hits.
 
+use super::anchor::{AnchorReport, AnchorSet};
 use crate::cpu_ref::lbvh::{check_bvh, sah_cost, triangle};
 use crate::cpu_ref::trace::{intersect, CpuBvh};
 use crate::error::Result;
@@ -17,7 +18,7 @@ use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
 use crate::shader_defines::BVH_INVALID;
-use crate::vk::{Context, GpuTimer, TimerReadout, TimingCheck, Timings};
+use crate::vk::{remeasure, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
@@ -114,40 +115,6 @@ pub struct CaseReport {
     /// The self-check of every timed build, refit and ray batch (`vk::timing`).
     pub timing: TimingCheck,
     pub valid: bool,
-}
-
-/// One Embree build quality on a case (cargo feature `embree`): its build, and the
-/// same ray sets traced with `rtcIntersect1` on the same CPU threads.
-#[derive(Clone, Debug, Serialize)]
-pub struct AnchorReport {
-    /// `low` (Embree's Morton builder) or `medium` (its binned SAH).
-    pub quality: &'static str,
-    pub threads: u32,
-    /// Wall-clock milliseconds of `rtcCommitScene`.
-    pub build_ms: Stat,
-    /// Speculum's build time over Embree's (> 1: Embree builds faster).
-    pub build_ratio: f64,
-    pub coherent: AnchorRays,
-    pub incoherent: AnchorRays,
-    pub file: Option<AnchorRays>,
-}
-
-/// Embree on one ray set, against Speculum's hits of the same rays.
-#[derive(Clone, Debug, Serialize)]
-pub struct AnchorRays {
-    /// Wall-clock milliseconds of tracing the set.
-    pub trace_ms: Stat,
-    pub mrays_per_s: f64,
-    /// Speculum's rays/s over Embree's (< 1: Embree is faster).
-    pub speed_ratio: f64,
-    /// Rays whose hits agree: the same triangle, or both miss.
-    pub agree: u32,
-    /// Rays where both hit different triangles at the same distance (within 1e-4,
-    /// relative): an edge or a coplanar pair, each tracer picking one.
-    pub ties: u32,
-    /// The rest: one tracer hit and the other missed (a ray through an edge that one
-    /// of the two non-watertight tests lets through), or different distances.
-    pub disagree: u32,
 }
 
 /// The `bench lbvh` report.
@@ -277,6 +244,129 @@ pub fn timed_ploc_build(
     Ok((readout, rounds - ROUNDS))
 }
 
+/// What the timed builds of one case measured: per-stage samples, and the refit and
+/// compact nodes made after each build.
+struct BuildTimes {
+    stages: Timings,
+    refit_ms: Stat,
+    compact_ms: Stat,
+    /// PLOC rounds beyond the first submission's, the most any build needed.
+    untimed_rounds: u32,
+    timing: TimingCheck,
+}
+
+/// One warm-up build (pipeline JIT), then `repeats` timed builds of `geometry` into
+/// `bvh` (PLOC with `scratch`, else the LBVH), each followed by the frame's refit and
+/// the compact nodes. Every readout that fails its self-check is measured again
+/// (`remeasure`: a build, a refit and a compaction do the same work each run).
+fn time_builds(
+    ctx: &Arc<Context>,
+    (builder, geometry, bvh): (&LbvhBuilder, Geometry<'_>, &Bvh),
+    scratch: Option<&PlocScratch>,
+    repeats: u32,
+    tick: super::Tick<'_>,
+) -> Result<BuildTimes> {
+    let mut timer = GpuTimer::new(ctx, 8)?;
+    let mut stages = Timings::default();
+    let (mut refits, mut compacts) = (Vec::new(), Vec::new());
+    let mut timing = TimingCheck::default();
+    let mut untimed_rounds = 0;
+    for rep in 0..=repeats {
+        let (extra, times, discarded) = remeasure(|| match scratch {
+            Some(scratch) => timed_ploc_build(&mut timer, builder, geometry, bvh, scratch).map(|(t, e)| (e, t)),
+            None => Ok((0, timed_build(&mut timer, builder, geometry, bvh)?)),
+        })?;
+        untimed_rounds = untimed_rounds.max(extra);
+        // The frame's refit: scheduled by height from the tree just built (the
+        // schedule is made once per build, as the frame does, and is not timed).
+        let schedule = RefitSchedule::of(ctx, bvh)?;
+        let (_, refit, refit_discarded) = remeasure(|| {
+            let r = timer.one_shot(|cmd, timer| builder.record_refit_scheduled(cmd, timer, geometry, bvh, &schedule));
+            Ok(((), r?))
+        })?;
+        let (_, compact, compact_discarded) = remeasure(|| {
+            Ok((
+                (),
+                timer.one_shot(|cmd, timer| builder.record_compact(cmd, timer, bvh))?,
+            ))
+        })?;
+        if rep > 0 {
+            stages.add_measured(&times, discarded);
+            refits.push(refit.first().map_or(f64::NAN, |r| r.1));
+            timing.add_measured(refit.problem.as_deref(), refit_discarded);
+            compacts.push(compact.first().map_or(f64::NAN, |r| r.1));
+            timing.add_measured(compact.problem.as_deref(), compact_discarded);
+        }
+        tick();
+    }
+    timing.merge(stages.check());
+    Ok(BuildTimes {
+        stages,
+        refit_ms: Stat::of(&refits).expect("repeats > 0"),
+        compact_ms: Stat::of(&compacts).expect("repeats > 0"),
+        untimed_rounds,
+        timing,
+    })
+}
+
+/// The CPU's answer to a case's rays: its binned-SAH BVH over the same triangles.
+struct CpuCheck<'a> {
+    bvh: CpuBvh,
+    vertices: &'a [GpuVertex],
+    indices: &'a [u32],
+    rays: u32,
+}
+
+/// Traces `rays` through `scene` once untimed and `repeats` times timed (each readout
+/// re-measured while it fails its self-check), and checks a sample of the hits
+/// against the CPU.
+fn time_rays(
+    tracer: &TracePass,
+    scene: TraceScene<'_>,
+    rays: &[Ray],
+    repeats: u32,
+    cpu: &CpuCheck<'_>,
+    timing: &mut TimingCheck,
+) -> Result<(RaySetReport, Vec<Hit>)> {
+    let mut times = Vec::new();
+    let mut hits = Vec::new();
+    for rep in 0..=repeats {
+        let (h, readout, discarded) = remeasure(|| tracer.trace(rays, scene, false))?;
+        if rep > 0 {
+            times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
+            timing.add_measured(readout.problem.as_deref(), discarded);
+        }
+        hits = h;
+    }
+    let trace_ms = Stat::of(&times).expect("repeats > 0");
+    let (mismatches, ties) = check_hits(rays, &hits, &cpu.bvh, cpu.vertices, cpu.indices, cpu.rays);
+    let report = RaySetReport {
+        rays: rays.len() as u32,
+        trace_ms,
+        mrays_per_s: rays.len() as f64 / (trace_ms.median * 1e3),
+        hit_fraction: hits.iter().filter(|h| h.prim != BVH_INVALID).count() as f64 / rays.len() as f64,
+        checked: cpu.rays.min(rays.len() as u32),
+        mismatches,
+        ties,
+    };
+    Ok((report, hits))
+}
+
+/// The Embree anchor of a case's ray sets: (rays, Speculum's hits, its Mrays/s,
+/// coherent) per set (cargo feature `embree`; `None` without it).
+#[cfg_attr(not(feature = "embree"), allow(unused_variables))]
+fn anchor(
+    (v, i): (&[GpuVertex], &[u32]),
+    sets: &[Option<AnchorSet<'_>>; 3],
+    repeats: u32,
+    build_ms: f64,
+) -> Result<Option<Vec<AnchorReport>>> {
+    #[cfg(feature = "embree")]
+    return Ok(Some(super::embree::anchor_reports(v, i, sets, repeats, build_ms)?));
+    #[cfg(not(feature = "embree"))]
+    Ok(None)
+}
+
 /// Benchmarks one triangle set with one builder.
 pub fn run_case(
     ctx: &Arc<Context>,
@@ -296,52 +386,24 @@ pub fn run_case(
         BvhKind::Ploc => Some(PlocScratch::new(ctx, n)?),
         BvhKind::Lbvh => None,
     };
-
-    // Builds: one warm-up (pipeline JIT), then `repeats` timed.
-    let mut timer = GpuTimer::new(ctx, 8)?;
-    let mut stages = Timings::default();
-    let mut refits = Vec::new();
-    let mut compacts = Vec::new();
-    let mut timing = TimingCheck::default();
-    let mut untimed_rounds = 0;
-    for rep in 0..=opts.repeats {
-        let times = match &scratch {
-            Some(scratch) => {
-                let (times, extra) = timed_ploc_build(&mut timer, &builder, geometry, &bvh, scratch)?;
-                untimed_rounds = untimed_rounds.max(extra);
-                times
-            }
-            None => timed_build(&mut timer, &builder, geometry, &bvh)?,
-        };
-        if rep > 0 {
-            stages.add(&times);
-        }
-        // The frame's refit: scheduled by height from the tree just built (the
-        // schedule is made once per build, as the frame does, and is not timed).
-        let schedule = RefitSchedule::of(ctx, &bvh)?;
-        let refit =
-            timer.one_shot(|cmd, timer| builder.record_refit_scheduled(cmd, timer, geometry, &bvh, &schedule))?;
-        let compact = timer.one_shot(|cmd, timer| builder.record_compact(cmd, timer, &bvh))?;
-        if rep > 0 {
-            refits.push(refit.first().map_or(f64::NAN, |r| r.1));
-            timing.add(refit.problem.as_deref());
-            compacts.push(compact.first().map_or(f64::NAN, |r| r.1));
-            timing.add(compact.problem.as_deref());
-        }
-        tick();
-    }
-    timing.merge(stages.check());
-    let stages_ms = PassTimes::of_scopes(&stages, &kind.stages());
-    let build_ms = stages.samples(BUILD).and_then(Stat::of).expect("repeats > 0");
+    let built = time_builds(ctx, (&builder, geometry, &bvh), scratch.as_ref(), opts.repeats, tick)?;
+    let mut timing = built.timing;
+    let stages_ms = PassTimes::of_scopes(&built.stages, &kind.stages());
+    let build_ms = built.stages.samples(BUILD).and_then(Stat::of).expect("repeats > 0");
 
     // Checks of the BVH as the timed builds (and refits) left it.
     let packed = bvh.read_packed()?;
     let invariants = check_bvh(&packed, v, i);
     let sah = sah_cost(&packed.nodes, i.len() / 3);
     let t0 = std::time::Instant::now();
-    let cpu = CpuBvh::build(v, i);
+    let cpu = CpuCheck {
+        bvh: CpuBvh::build(v, i),
+        vertices: v,
+        indices: i,
+        rays: opts.check_rays,
+    };
     let cpu_sah_build_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let sah_cpu = cpu.sah_cost();
+    let sah_cpu = cpu.bvh.sah_cost();
 
     let tracer = TracePass::new(ctx)?;
     let scene = TraceScene {
@@ -352,30 +414,7 @@ pub fn run_case(
         let r = crate::cpu_ref::lbvh::bounds(v, i).1;
         (r.lo, r.hi)
     };
-    let mut ray_set = |rays: &[Ray]| -> Result<(RaySetReport, Vec<Hit>)> {
-        let mut times = Vec::new();
-        let mut hits = Vec::new();
-        for rep in 0..=opts.repeats {
-            let (h, readout) = tracer.trace(rays, scene, false)?;
-            if rep > 0 {
-                times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
-                timing.add(readout.problem.as_deref());
-            }
-            hits = h;
-        }
-        let trace_ms = Stat::of(&times).expect("repeats > 0");
-        let (mismatches, ties) = check_hits(rays, &hits, &cpu, v, i, opts.check_rays);
-        let report = RaySetReport {
-            rays: rays.len() as u32,
-            trace_ms,
-            mrays_per_s: rays.len() as f64 / (trace_ms.median * 1e3),
-            hit_fraction: hits.iter().filter(|h| h.prim != BVH_INVALID).count() as f64 / rays.len() as f64,
-            checked: opts.check_rays.min(rays.len() as u32),
-            mismatches,
-            ties,
-        };
-        Ok((report, hits))
-    };
+    let mut ray_set = |rays: &[Ray]| time_rays(&tracer, scene, rays, opts.repeats, &cpu, &mut timing);
     let coherent_set = coherent_rays(lo, hi, opts.rays);
     let (coherent, coherent_hits) = ray_set(&coherent_set)?;
     let incoherent_set = incoherent_rays(lo, hi, opts.rays, 7);
@@ -384,28 +423,14 @@ pub fn run_case(
         Some(rays) => Some((ray_set(rays)?, rays)),
         None => None,
     };
-    #[cfg(feature = "embree")]
-    let embree = {
-        let sets = [
-            Some((&coherent_set[..], &coherent_hits[..], coherent.mrays_per_s, true)),
-            Some((&incoherent_set[..], &incoherent_hits[..], incoherent.mrays_per_s, false)),
-            file_set
-                .as_ref()
-                .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
-        ];
-        Some(super::embree::anchor_reports(
-            v,
-            i,
-            &sets,
-            opts.repeats,
-            build_ms.median,
-        )?)
-    };
-    #[cfg(not(feature = "embree"))]
-    let embree = {
-        let _ = &coherent_hits; // only the anchor compares them
-        None
-    };
+    let sets = [
+        Some((&coherent_set[..], &coherent_hits[..], coherent.mrays_per_s, true)),
+        Some((&incoherent_set[..], &incoherent_hits[..], incoherent.mrays_per_s, false)),
+        file_set
+            .as_ref()
+            .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
+    ];
+    let embree = anchor((v, i), &sets, opts.repeats, build_ms.median)?;
     let (file, kept) = match file_set {
         Some(((report, hits), rays)) => (Some(report), opts.keep_hits.then(|| (rays.clone(), hits))),
         None => (None, opts.keep_hits.then_some((incoherent_set, incoherent_hits))),
@@ -424,10 +449,10 @@ pub fn run_case(
         morton_bits: opts.bits.bits(),
         stages_ms,
         build_ms,
-        untimed_rounds,
+        untimed_rounds: built.untimed_rounds,
         mtris_per_s: n as f64 / (build_ms.median * 1e3),
-        refit_ms: Stat::of(&refits).expect("repeats > 0"),
-        compact_ms: Stat::of(&compacts).expect("repeats > 0"),
+        refit_ms: built.refit_ms,
+        compact_ms: built.compact_ms,
         nodes_per_triangle: (n - 1).max(1) as f64 / n as f64,
         bytes_per_triangle: bvh.bytes() as f64 / n as f64,
         scratch_bytes_per_triangle: (bvh.sort.keys[0].size * 2 + bvh.sort.values[0].size * 2) as f64 / n as f64,

@@ -1,6 +1,7 @@
 //! Benchmarks: every figure they time, they also check (tinybvh's rule), and their
 //! JSON says whether all checks passed.
 
+pub mod anchor;
 pub mod dynamic;
 #[cfg(feature = "embree")]
 pub mod embree;
@@ -66,11 +67,11 @@ pub fn interleave(renderers: &mut [Renderer], warmup: u32, rounds: u32, tick: Ti
     let mut frames: Vec<Vec<f64>> = vec![Vec::new(); renderers.len()];
     for round in 0..warmup + rounds {
         for (i, r) in renderers.iter_mut().enumerate() {
-            let t = r.render_frame()?;
+            let (t, discarded) = r.render_frame_measured()?;
             tick();
             if round >= warmup {
                 frames[i].push(t.get(FRAME).unwrap_or(f64::NAN));
-                timings[i].add(&t);
+                timings[i].add_measured(&t, discarded);
             }
         }
     }

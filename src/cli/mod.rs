@@ -263,7 +263,10 @@ pub fn check_count(flag: &str, value: u32, min: u32) -> Result<()> {
 /// What a set of timings' self-check found, for text output.
 pub fn timing_note(check: &speculum::vk::TimingCheck) -> String {
     match check.warning() {
-        None => format!("timings self-checked ({} readouts agree)", check.checked),
+        None => format!(
+            "timings self-checked ({} readouts agree, {} re-measured)",
+            check.checked, check.discarded
+        ),
         Some(w) => format!("TIMINGS INVALID: {w}"),
     }
 }

@@ -370,6 +370,18 @@ impl Renderer {
         self.read_frame(0, Some(wall))
     }
 
+    /// `render_frame` for a measurement: a static scene's frame (the same work every
+    /// time) is rendered again while its readout fails the self-check (`remeasure`); a
+    /// dynamic scene's frame advances the world, so it is measured once. Returns the
+    /// readout and how many failed readouts were discarded before it.
+    pub fn render_frame_measured(&mut self) -> Result<(TimerReadout, u32)> {
+        if self.is_dynamic() {
+            return Ok((self.render_frame()?, 0));
+        }
+        let (_, readout, discarded) = crate::vk::remeasure(|| Ok(((), self.render_frame()?)))?;
+        Ok((readout, discarded))
+    }
+
     /// Holds a dynamic scene still from the next frame on (its geometry and BVH stay
     /// as the last frame left them), or lets it move again.
     pub fn set_paused(&mut self, paused: bool) {

@@ -167,14 +167,14 @@ pub fn measure_scene(
         let (mut ssim, mut rmse, mut flip, mut traced) = (0.0, 0.0, 0.0, 0.0);
         let mut measured = 0u32;
         let mut measure = |r: &mut Renderer, reference: &mut Renderer, compare: bool| -> Result<()> {
-            let a = r.render_frame()?;
-            let b = reference.render_frame()?;
+            let (a, a_discarded) = r.render_frame_measured()?;
+            let (b, b_discarded) = reference.render_frame_measured()?;
             let ms = |t: &crate::vk::TimerReadout| t.get(crate::renderer::FRAME).unwrap_or(0.0);
             frame.push(ms(&a));
             rt.push(ms(&b));
             ratio.push(ms(&a) / ms(&b).max(1e-9));
-            timings.add(&a);
-            reference_check.add(b.problem.as_deref());
+            timings.add_measured(&a, a_discarded);
+            reference_check.add_measured(b.problem.as_deref(), b_discarded);
             if compare {
                 let (img, reference_img) = (r.read_output()?, reference.read_output()?);
                 let c = compare_rgba8(&img, &reference_img, w, h)?;

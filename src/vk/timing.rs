@@ -23,7 +23,11 @@
 //! submit to fence, the outermost scope is no longer than it (on every device) and no
 //! shorter by more than `WALL_MARGIN_MS` + `WALL_MARGIN_REL` (on a CPU device, where
 //! nothing but the commands runs between the two). A readout that fails says why in
-//! `TimerReadout::problem`; reports count such frames and mark themselves invalid.
+//! `TimerReadout::problem`. A run that can be repeated exactly (a build, a batch of
+//! rays, a frame of a static scene) is measured again when its readout fails
+//! (`remeasure`, at most `MEASURE_TRIES` runs): a readout spoiled by the machine (a
+//! process taking the core between two stamps) is discarded and counted, and a report
+//! is invalid only when every try of some run failed, the machine staying busy.
 
 use super::barrier;
 use super::context::Context;
@@ -41,6 +45,10 @@ pub const GAP_MARGIN_REL: f64 = 0.05;
 /// on any device (clock rounding): this many ms plus `WALL_MARGIN_REL` of the wall time.
 pub const WALL_MARGIN_MS: f64 = 2.0;
 pub const WALL_MARGIN_REL: f64 = 0.10;
+/// Runs of one measurement at most, the first included, before its failed self-check
+/// stands (`remeasure`): a busy spell of a second or two spoils a readout or two; a
+/// machine busy through four runs in a row makes the report invalid.
+pub const MEASURE_TRIES: u32 = 4;
 /// Slack for rounding when comparing two timestamps (ms).
 const EPS_MS: f64 = 0.01;
 
@@ -325,6 +333,20 @@ impl Drop for GpuTimer {
     }
 }
 
+/// Runs `run`, a measurement that does the same work each time, until its readout
+/// passes the self-check or `MEASURE_TRIES` runs were made; returns the last run's
+/// value and readout, and how many failed readouts were discarded before it.
+pub fn remeasure<T>(mut run: impl FnMut() -> Result<(T, TimerReadout)>) -> Result<(T, TimerReadout, u32)> {
+    let mut discarded = 0;
+    loop {
+        let (value, readout) = run()?;
+        if readout.problem.is_none() || discarded + 1 >= MEASURE_TRIES {
+            return Ok((value, readout, discarded));
+        }
+        discarded += 1;
+    }
+}
+
 /// Per-scope samples over many frames; reports medians.
 #[derive(Default, Debug, Clone)]
 pub struct Timings {
@@ -337,9 +359,12 @@ pub struct Timings {
 pub struct TimingCheck {
     /// No readout failed (`check_spans`): the timings may be published.
     pub valid: bool,
-    /// Readouts checked, and how many of them failed.
+    /// Readouts checked, and how many of them failed (after their re-measurements).
     pub checked: u32,
     pub failed: u32,
+    /// Readouts that failed the self-check and were measured again (`remeasure`),
+    /// not counted in `checked`: how busy the machine was.
+    pub discarded: u32,
     /// The first failure's reason; `null` when valid.
     pub reason: Option<String>,
 }
@@ -350,6 +375,7 @@ impl Default for TimingCheck {
             valid: true,
             checked: 0,
             failed: 0,
+            discarded: 0,
             reason: None,
         }
     }
@@ -366,10 +392,18 @@ impl TimingCheck {
         }
     }
 
+    /// Counts one readout measured with `remeasure`: its check, and the failed
+    /// readouts discarded before it.
+    pub fn add_measured(&mut self, problem: Option<&str>, discarded: u32) {
+        self.add(problem);
+        self.discarded += discarded;
+    }
+
     /// Both checks together.
     pub fn merge(&mut self, other: &TimingCheck) {
         self.checked += other.checked;
         self.failed += other.failed;
+        self.discarded += other.discarded;
         self.valid &= other.valid;
         if self.reason.is_none() {
             self.reason = other.reason.clone();
@@ -380,9 +414,10 @@ impl TimingCheck {
     pub fn warning(&self) -> Option<String> {
         (!self.valid).then(|| {
             format!(
-                "timings invalid on {} of {} frames: {}",
+                "timings invalid on {} of {} frames ({} re-measured first): {}",
                 self.failed,
                 self.checked,
+                self.discarded,
                 self.reason.as_deref().unwrap_or("?")
             )
         })
@@ -402,8 +437,13 @@ impl<'a> FromIterator<&'a TimingCheck> for TimingCheck {
 impl Timings {
     /// Adds one checked readout: its scopes (as `add_frame`) and its self-check.
     pub fn add(&mut self, readout: &TimerReadout) {
+        self.add_measured(readout, 0);
+    }
+
+    /// `add` for a readout of `remeasure`, with the failed readouts discarded before it.
+    pub fn add_measured(&mut self, readout: &TimerReadout, discarded: u32) {
         self.add_frame(&readout.scopes);
-        self.check.add(readout.problem.as_deref());
+        self.check.add_measured(readout.problem.as_deref(), discarded);
     }
 
     /// The self-check of every readout added with `add`.
@@ -436,6 +476,38 @@ impl Timings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn remeasure_discards_failed_readouts_up_to_its_tries() {
+        let readout = |ok: bool| TimerReadout {
+            scopes: vec![("a", 1.0)],
+            problem: (!ok).then(|| "gap".to_string()),
+        };
+        // Fails twice, then passes: the third run's value, two discarded.
+        let mut runs = 0;
+        let (v, r, discarded) = remeasure(|| {
+            runs += 1;
+            Ok((runs, readout(runs > 2)))
+        })
+        .unwrap();
+        assert_eq!((v, r.problem, discarded), (3, None, 2));
+        // Never passes: MEASURE_TRIES runs, the failure stands.
+        let mut runs = 0;
+        let (v, r, discarded) = remeasure(|| {
+            runs += 1;
+            Ok((runs, readout(false)))
+        })
+        .unwrap();
+        assert_eq!((v, discarded), (MEASURE_TRIES, MEASURE_TRIES - 1));
+        assert!(r.problem.is_some());
+        let mut check = TimingCheck::default();
+        check.add_measured(r.problem.as_deref(), discarded);
+        check.add_measured(None, 1);
+        assert_eq!(
+            (check.valid, check.checked, check.failed, check.discarded),
+            (false, 2, 1, MEASURE_TRIES)
+        );
+    }
 
     #[test]
     fn timings_sum_repeated_scopes_within_a_frame() {

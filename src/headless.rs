@@ -146,28 +146,7 @@ pub fn render_frames(
     mut on_frame: Option<OnFrame<'_>>,
 ) -> Result<Rendered> {
     plan.validate(settings)?;
-    let mut renderer = Renderer::new(ctx, scene, settings)?;
-    let mut reference = if plan.reference {
-        Some(Renderer::new(
-            ctx,
-            scene,
-            &Settings {
-                mode: Mode::Rt,
-                ..settings.clone()
-            },
-        )?)
-    } else {
-        None
-    };
-    let mut rays_reference = if plan.reference && settings.shadows != Shadows::Rays {
-        let rays = Settings {
-            shadows: Shadows::Rays,
-            ..settings.clone()
-        };
-        Some(Renderer::new(ctx, scene, &rays)?)
-    } else {
-        None
-    };
+    let (mut renderer, mut reference, mut rays_reference) = renderers(ctx, scene, settings, plan)?;
     for _ in 0..plan.warmup {
         for r in std::iter::once(&mut renderer)
             .chain(reference.as_mut())
@@ -221,12 +200,72 @@ pub fn render_frames(
             })?;
         }
     }
+    let runs = Runs {
+        renderer: &renderer,
+        reference: reference.as_ref(),
+        rays_reference: rays_reference.as_ref(),
+    };
+    finish(ctx, scene, settings, plan, runs, [timings, ref_timings])
+}
+
+/// The renderer of `settings`, and with a reference the `rt` renderer and (unless the
+/// shadows are rays already) the renderer with `rays` shadows, run in lockstep.
+fn renderers(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    settings: &Settings,
+    plan: FramePlan,
+) -> Result<(Renderer, Option<Renderer>, Option<Renderer>)> {
+    let renderer = Renderer::new(ctx, scene, settings)?;
+    let reference = if plan.reference {
+        let rt = Settings {
+            mode: Mode::Rt,
+            ..settings.clone()
+        };
+        Some(Renderer::new(ctx, scene, &rt)?)
+    } else {
+        None
+    };
+    let rays_reference = if plan.reference && settings.shadows != Shadows::Rays {
+        let rays = Settings {
+            shadows: Shadows::Rays,
+            ..settings.clone()
+        };
+        Some(Renderer::new(ctx, scene, &rays)?)
+    } else {
+        None
+    };
+    Ok((renderer, reference, rays_reference))
+}
+
+/// The renderers of a run after its last measured frame.
+struct Runs<'a> {
+    renderer: &'a Renderer,
+    reference: Option<&'a Renderer>,
+    rays_reference: Option<&'a Renderer>,
+}
+
+/// The report and images of a run after its last measured frame: the frame and its
+/// maps, and the comparisons with the references.
+fn finish(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    settings: &Settings,
+    plan: FramePlan,
+    runs: Runs<'_>,
+    [timings, ref_timings]: [Timings; 2],
+) -> Result<Rendered> {
+    let Runs {
+        renderer,
+        reference,
+        rays_reference,
+    } = runs;
     let rgba = renderer.read_output()?;
     let maps = renderer.reflection_maps()?;
     let stats = maps.stats();
     let shadow_maps = renderer.shadow_maps()?;
     let shadow_stats = shadow_maps.stats();
-    let vs_rays = match &rays_reference {
+    let vs_rays = match rays_reference {
         Some(r) => Some(ShadowsVsRays::of(
             (&rgba, &shadow_maps),
             (&r.read_output()?, &r.shadow_maps()?),
@@ -236,7 +275,7 @@ pub fn render_frames(
     };
     let frame_stat = |t: &Timings| t.samples(FRAME).and_then(Stat::of).expect("every frame is timed");
     let (mut ssim, mut rmse, mut rt_frame_ms, mut reference_rgba) = (None, None, None, None);
-    if let Some(r) = &reference {
+    if let Some(r) = reference {
         let reference = r.read_output()?;
         let c = compare_rgba8(&rgba, &reference, settings.width, settings.height)?;
         ssim = Some(c.ssim);

@@ -202,15 +202,9 @@ fn sibling_imports(dir: &str, top: &str) -> BTreeMap<String, BTreeSet<String>> {
     out
 }
 
-#[test]
-fn vk_has_no_import_cycle() {
-    let graph = sibling_imports("vk", "vk");
-    assert!(graph.len() >= 8, "vk/ has {} files", graph.len());
-    assert!(
-        graph.values().any(|n| !n.is_empty()),
-        "the scan found no imports in vk/"
-    );
-    // Depth-first search for a back edge.
+/// A cycle among the siblings of `graph` (file stem → siblings it imports), as the
+/// path that closes it, by depth-first search for a back edge.
+fn import_cycle(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
     fn visit(
         n: &str,
         g: &BTreeMap<String, BTreeSet<String>>,
@@ -239,11 +233,57 @@ fn vk_has_no_import_cycle() {
         None
     }
     let mut state = BTreeMap::new();
-    for n in graph.keys() {
-        if let Some(cycle) = visit(n, &graph, &mut state, &mut Vec::new()) {
-            panic!("vk/ import cycle: {}", cycle.join(" -> "));
+    graph.keys().find_map(|n| visit(n, graph, &mut state, &mut Vec::new()))
+}
+
+#[test]
+fn vk_has_no_import_cycle() {
+    let graph = sibling_imports("vk", "vk");
+    assert!(graph.len() >= 8, "vk/ has {} files", graph.len());
+    assert!(
+        graph.values().any(|n| !n.is_empty()),
+        "the scan found no imports in vk/"
+    );
+    if let Some(cycle) = import_cycle(&graph) {
+        panic!("vk/ import cycle: {}", cycle.join(" -> "));
+    }
+}
+
+/// No folder of `src/` has an import circle among its files (`bench/embree.rs` and
+/// `bench/lbvh.rs` had one: both now import `bench/anchor.rs`).
+#[test]
+fn no_folder_has_an_import_cycle() {
+    let folders = [
+        "bench",
+        "cpu_ref",
+        "demo",
+        "passes/lbvh",
+        "renderer",
+        "scene",
+        "settings",
+        "sim",
+        "tune",
+        "vk",
+    ];
+    let mut scanned = 0;
+    for dir in folders {
+        let top = dir.replace('/', "::");
+        let graph = sibling_imports(dir, &top);
+        scanned += graph.values().filter(|n| !n.is_empty()).count();
+        if let Some(cycle) = import_cycle(&graph) {
+            panic!("{dir}/ import cycle: {}", cycle.join(" -> "));
         }
     }
+    assert!(scanned >= 10, "the scan found imports in only {scanned} files");
+    // The search itself finds a planted circle.
+    let planted: BTreeMap<String, BTreeSet<String>> = [("a", "b"), ("b", "c"), ("c", "a")]
+        .into_iter()
+        .map(|(f, t)| (f.to_string(), BTreeSet::from([t.to_string()])))
+        .collect();
+    assert_eq!(
+        import_cycle(&planted),
+        Some(vec!["a".into(), "b".into(), "c".into(), "a".into()])
+    );
 }
 
 #[test]
@@ -352,4 +392,155 @@ fn the_path_scan_flags_machine_data_and_passes_system_paths() {
          // a comment naming {tmp}/models is no read\nlet d = \"/dev/null\"; let t = \"{tmp}x\";"
     );
     assert_eq!(machine_data_paths(&fine), []);
+}
+
+/// Lines a function of `src/` may have, its signature and closing brace included,
+/// unless a `// Long:` comment right above it (among its docs and attributes) says why.
+const FN_LINES_MAX: usize = 100;
+
+/// Functions over `FN_LINES_MAX` lines without a reason, not yet split: this list only
+/// shrinks (a function on it that fits, or that is gone, fails the test too).
+const LONG_FUNCTIONS_TO_SPLIT: &[&str] = &[
+    "cpu_ref/lbvh.rs::check_bvh",
+    "passes/reflect_merge.rs::record",
+    "vk/swapchain.rs::new",
+    "vk/pipeline.rs::graphics",
+    "cpu_ref/trace.rs::build",
+    "passes/gbuffer.rs::record",
+    "demo/script.rs::parse",
+];
+
+/// Every function of a Rust source text at the top level or in an `impl`/`mod` (as
+/// rustfmt writes them: the closing brace at the `fn`'s indentation): (name, first
+/// line, lines, whether a `// Long:` comment stands in the lines just above it).
+fn functions(text: &str) -> Vec<(String, usize, usize, bool)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let trimmed = line.trim_start();
+        let indent = &line[..line.len() - trimmed.len()];
+        let rest = ["pub(crate) ", "pub(super) ", "pub ", "const ", "async ", "unsafe "]
+            .iter()
+            .fold(trimmed, |t, p| t.strip_prefix(p).unwrap_or(t));
+        let Some(sig) = rest.strip_prefix("fn ") else { continue };
+        let name = ident(sig).to_string();
+        // The body opens where the signature ends with `{` (a `;` is a declaration).
+        let Some(open) = lines[i..].iter().position(|l| l.ends_with('{') || l.ends_with(';')) else {
+            continue;
+        };
+        if lines[i + open].ends_with(';') || lines[i + open].trim_end().ends_with('}') {
+            continue;
+        }
+        let close = format!("{indent}}}");
+        let Some(end) = lines[i + open..].iter().position(|l| *l == close) else {
+            continue;
+        };
+        let mut above = i;
+        let mut reason = false;
+        while above > 0 {
+            let l = lines[above - 1].trim_start();
+            if !(l.starts_with("//") || l.starts_with("#[")) {
+                break;
+            }
+            reason |= l.starts_with("// Long:");
+            above -= 1;
+        }
+        out.push((name, i + 1, open + end + 1, reason));
+    }
+    out
+}
+
+/// No function of `src/` runs past `FN_LINES_MAX` lines without its reason in the code
+/// (the frame function is DESIGN.md's frame table; a CPU reference may mirror its
+/// kernel's one function), except those listed to split.
+#[test]
+fn functions_stay_short_or_say_why() {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let mut long = Vec::new();
+    let mut count = 0;
+    for f in &files {
+        let rel = f.strip_prefix(src()).unwrap().display().to_string();
+        let text = std::fs::read_to_string(f).unwrap();
+        let text = text.split("#[cfg(test)]").next().unwrap();
+        for (name, line, len, reason) in functions(text) {
+            count += 1;
+            if len > FN_LINES_MAX && !reason {
+                long.push((format!("{rel}::{name}"), line, len));
+            }
+        }
+    }
+    assert!(count > 500, "the scan found only {count} functions");
+    let unlisted: Vec<String> = long
+        .iter()
+        .filter(|(n, _, _)| !LONG_FUNCTIONS_TO_SPLIT.contains(&n.as_str()))
+        .map(|(n, line, len)| format!("src/{n} (line {line}): {len} lines"))
+        .collect();
+    assert!(
+        unlisted.is_empty(),
+        "functions over {FN_LINES_MAX} lines: split them, or say why in a `// Long:` comment above:\n{}",
+        unlisted.join("\n")
+    );
+    let done: Vec<&&str> = LONG_FUNCTIONS_TO_SPLIT
+        .iter()
+        .filter(|n| !long.iter().any(|(l, _, _)| l == *n))
+        .collect();
+    assert!(
+        done.is_empty(),
+        "split or gone, take them off LONG_FUNCTIONS_TO_SPLIT: {done:?}"
+    );
+}
+
+/// The function scan itself: a long function, a declaration, a one-liner, a reason.
+#[test]
+fn the_function_scan_measures_bodies_and_reads_reasons() {
+    let body = "    let x = 1;\n".repeat(3);
+    let text = format!(
+        "fn a() {{\n{body}}}\n\nimpl T {{\n    /// Docs.\n    // Long: a reason.\n    #[inline]\n    pub fn b(\n        x: u32,\n    ) -> u32 {{\n{body}    }}\n    fn c();\n    fn d() {{}}\n}}\n"
+    );
+    let got: Vec<(String, usize, usize, bool)> = functions(&text);
+    assert_eq!(got, [("a".into(), 1, 5, false), ("b".into(), 11, 7, true)]);
+}
+
+/// Lines a file of `src/` may have before its tests module.
+const FILE_LINES_MAX: usize = 600;
+
+/// Files over `FILE_LINES_MAX` lines not yet split: this list only shrinks.
+const LONG_FILES_TO_SPLIT: &[&str] = &[
+    "cpu_ref/ssr.rs",
+    "cpu_ref/lbvh.rs",
+    "vk/context.rs",
+    "passes/lbvh/mod.rs",
+];
+
+/// No file of `src/` grows past `FILE_LINES_MAX` lines of code (its `#[cfg(test)]`
+/// module aside), except those listed to split.
+#[test]
+fn files_stay_readable() {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let mut long = Vec::new();
+    for f in &files {
+        let rel = f.strip_prefix(src()).unwrap().display().to_string();
+        let text = std::fs::read_to_string(f).unwrap();
+        let lines = text.split("#[cfg(test)]").next().unwrap().lines().count();
+        if lines > FILE_LINES_MAX {
+            long.push((rel, lines));
+        }
+    }
+    let unlisted: Vec<String> = long
+        .iter()
+        .filter(|(n, _)| !LONG_FILES_TO_SPLIT.contains(&n.as_str()))
+        .map(|(n, lines)| format!("src/{n}: {lines} lines"))
+        .collect();
+    assert!(
+        unlisted.is_empty(),
+        "files over {FILE_LINES_MAX} lines:\n{}",
+        unlisted.join("\n")
+    );
+    let done: Vec<&&str> = LONG_FILES_TO_SPLIT
+        .iter()
+        .filter(|n| !long.iter().any(|(l, _)| l == *n))
+        .collect();
+    assert!(done.is_empty(), "split, take them off LONG_FILES_TO_SPLIT: {done:?}");
 }

@@ -382,10 +382,7 @@ pub fn run_case(
     let geometry = triangles.geometry();
     let builder = LbvhBuilder::new(ctx)?;
     let bvh = Bvh::new_static(ctx, n, opts.bits)?;
-    let scratch = match kind {
-        BvhKind::Ploc => Some(PlocScratch::new(ctx, n)?),
-        BvhKind::Lbvh => None,
-    };
+    let scratch = (kind == BvhKind::Ploc).then(|| PlocScratch::new(ctx, n)).transpose()?;
     let built = time_builds(ctx, (&builder, geometry, &bvh), scratch.as_ref(), opts.repeats, tick)?;
     let mut timing = built.timing;
     let stages_ms = PassTimes::of_scopes(&built.stages, &kind.stages());
@@ -410,14 +407,11 @@ pub fn run_case(
         static_bvh: Some(Traceable { bvh: &bvh, geometry }),
         dynamic_bvh: None,
     };
-    let (lo, hi) = {
-        let r = crate::cpu_ref::lbvh::bounds(v, i).1;
-        (r.lo, r.hi)
-    };
+    let scene_box = crate::cpu_ref::lbvh::bounds(v, i).1;
     let mut ray_set = |rays: &[Ray]| time_rays(&tracer, scene, rays, opts.repeats, &cpu, &mut timing);
-    let coherent_set = coherent_rays(lo, hi, opts.rays);
+    let coherent_set = coherent_rays(scene_box.lo, scene_box.hi, opts.rays);
     let (coherent, coherent_hits) = ray_set(&coherent_set)?;
-    let incoherent_set = incoherent_rays(lo, hi, opts.rays, 7);
+    let incoherent_set = incoherent_rays(scene_box.lo, scene_box.hi, opts.rays, 7);
     let (incoherent, incoherent_hits) = ray_set(&incoherent_set)?;
     let file_set = match &opts.file_rays {
         Some(rays) => Some((ray_set(rays)?, rays)),

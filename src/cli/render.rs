@@ -101,8 +101,9 @@ fn reference_path(out: &std::path::Path) -> PathBuf {
     out.with_file_name(format!("{stem}_rt.png"))
 }
 
-pub fn run(args: RenderArgs) -> Result<()> {
-    // Everything that can be known before the GPU is touched is checked here.
+/// Everything that can be known before the GPU is touched: the settings, the frame
+/// plan, the outputs (and `--reference`'s implicit `<out>_rt.png`) against the inputs.
+fn check_before_gpu(args: &RenderArgs) -> Result<(Settings, headless::FramePlan, Option<PathBuf>)> {
     let mut settings: Settings = args.frame.resolve()?;
     if let Some(mode) = args.mode {
         settings.mode = mode;
@@ -137,6 +138,20 @@ pub fn run(args: RenderArgs) -> Result<()> {
             ("--settings", args.frame.settings.as_deref()),
         ],
     )?;
+    Ok((settings, plan, reference_out))
+}
+
+/// What the measured frames leave for the outputs: each frame's PNG and JSON line (a
+/// `--sequence`), and the frames of the contact sheet.
+#[derive(Default)]
+struct Captured {
+    frames_png: Vec<Vec<u8>>,
+    lines: String,
+    sheet: Vec<Vec<u8>>,
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    let (settings, plan, reference_out) = check_before_gpu(&args)?;
     let scene = args.view.load(&args.scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
@@ -146,20 +161,19 @@ pub fn run(args: RenderArgs) -> Result<()> {
 
     let bar = progress(plan.total_frames(&settings), "render", args.quiet);
     let (w, h) = (settings.width, settings.height);
-    // Per measured frame: its PNG and line (a sequence), or the frames of the sheet.
-    let (mut frames_png, mut lines, mut sheet) = (Vec::new(), String::new(), Vec::new());
+    let mut captured = Captured::default();
     let sheet_at: Vec<u32> = (0..SHEET_FRAMES)
         .map(|i| i * (plan.frames - 1) / (SHEET_FRAMES - 1))
         .collect();
     let wants_frames = args.sequence.is_some() || args.contact_sheet.is_some();
     let mut hook = |f: speculum::report::FrameRecord<'_>| -> speculum::error::Result<()> {
         if args.sequence.is_some() {
-            frames_png.push(speculum::output::png_bytes(f.rgba, w, h)?);
-            lines += &serde_json::to_string(&speculum::report::FrameLine::of(&f)).expect("lines serialize");
-            lines.push('\n');
+            captured.frames_png.push(speculum::output::png_bytes(f.rgba, w, h)?);
+            captured.lines += &serde_json::to_string(&speculum::report::FrameLine::of(&f)).expect("lines serialize");
+            captured.lines.push('\n');
         }
         if args.contact_sheet.is_some() && sheet_at.contains(&f.index) {
-            sheet.push(f.rgba.to_vec());
+            captured.sheet.push(f.rgba.to_vec());
         }
         Ok(())
     };
@@ -168,26 +182,66 @@ pub fn run(args: RenderArgs) -> Result<()> {
     bar.finish_and_clear();
     let mut r = rendered.report;
     r.header.refresh_validation(&ctx);
-    // Every output is written only after the whole render succeeded, all or none.
+    let images = Images {
+        rgba: &rendered.rgba,
+        reference_rgba: rendered.reference_rgba.as_deref(),
+        fail_mask_rgba: &rendered.fail_mask_rgba,
+        shadow_sources_rgba: &rendered.shadow_sources_rgba,
+        size: (w, h),
+    };
+    write_outputs(&args, reference_out.as_deref(), &images, &r, captured)?;
+    print_report(&text, &r, &ctx.device_name);
+    let written = [
+        Some(&args.out),
+        reference_out.as_ref(),
+        args.fail_mask.as_ref(),
+        args.shadow_sources.as_ref(),
+        args.timings.as_ref(),
+    ];
+    for path in written.into_iter().flatten().filter(|p| p.as_os_str() != "-") {
+        text.line(format_args!("wrote {}", path.display()));
+    }
+    super::check_validation(&ctx)
+}
+
+/// The images a render leaves, RGBA8 of `size`.
+struct Images<'a> {
+    rgba: &'a [u8],
+    reference_rgba: Option<&'a [u8]>,
+    fail_mask_rgba: &'a [u8],
+    shadow_sources_rgba: &'a [u8],
+    size: (u32, u32),
+}
+
+/// Writes every output the arguments ask for, only after the whole render succeeded:
+/// all of them or none.
+fn write_outputs(
+    args: &RenderArgs,
+    reference_out: Option<&std::path::Path>,
+    images: &Images<'_>,
+    r: &speculum::headless::TimingsReport,
+    captured: Captured,
+) -> Result<()> {
+    let (w, h) = images.size;
     let mut outputs = Batch::default();
-    outputs.add(&args.out, speculum::output::png_bytes(&rendered.rgba, w, h)?);
-    if let (Some(path), Some(reference)) = (&reference_out, &rendered.reference_rgba) {
+    outputs.add(&args.out, speculum::output::png_bytes(images.rgba, w, h)?);
+    if let (Some(path), Some(reference)) = (reference_out, images.reference_rgba) {
         outputs.add(path, speculum::output::png_bytes(reference, w, h)?);
     }
     if let Some(path) = &args.fail_mask {
-        outputs.add(path, speculum::output::png_bytes(&rendered.fail_mask_rgba, w, h)?);
+        outputs.add(path, speculum::output::png_bytes(images.fail_mask_rgba, w, h)?);
     }
     if let Some(path) = &args.shadow_sources {
-        outputs.add(path, speculum::output::png_bytes(&rendered.shadow_sources_rgba, w, h)?);
+        outputs.add(path, speculum::output::png_bytes(images.shadow_sources_rgba, w, h)?);
     }
     if let Some(path) = &args.timings {
-        outputs.add(path, speculum::report::to_json(&r).into_bytes());
+        outputs.add(path, speculum::report::to_json(r).into_bytes());
     }
     if let Some(dir) = &args.sequence {
-        for (k, png) in frames_png.into_iter().enumerate() {
+        for (k, png) in captured.frames_png.into_iter().enumerate() {
             outputs.add(&dir.join(format!("frame_{k:04}.png")), png);
         }
-        outputs.add(&dir.join("frames.jsonl"), lines.into_bytes());
+        outputs.add(&dir.join("frames.jsonl"), captured.lines.into_bytes());
         std::fs::create_dir_all(dir).map_err(|e| speculum::error::Error::Output {
             path: dir.clone(),
             detail: e.to_string(),
@@ -196,14 +250,18 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(path) = &args.contact_sheet {
         outputs.add(
             path,
-            speculum::output::png_bytes(&side_by_side(&sheet, w, h), w * SHEET_FRAMES, h)?,
+            speculum::output::png_bytes(&side_by_side(&captured.sheet, w, h), w * SHEET_FRAMES, h)?,
         );
     }
     outputs.commit()?;
+    Ok(())
+}
 
+/// The render's text report: per-pass medians, the pixel counts, the comparisons.
+fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str) {
     text.line(format_args!(
         "{} on {}: {}x{}, {} mode, median (p10–p90) of {} frames, GPU ms",
-        r.scene, ctx.device_name, r.resolution[0], r.resolution[1], r.mode, r.frames
+        r.scene, device, r.resolution[0], r.resolution[1], r.mode, r.frames
     ));
     for (name, stat) in &r.passes_ms.0 {
         if stat.is_some() {
@@ -245,15 +303,4 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(n) = r.header.validation_messages {
         text.line(format_args!("  validation messages: {n}"));
     }
-    let written = [
-        Some(&args.out),
-        reference_out.as_ref(),
-        args.fail_mask.as_ref(),
-        args.shadow_sources.as_ref(),
-        args.timings.as_ref(),
-    ];
-    for path in written.into_iter().flatten().filter(|p| p.as_os_str() != "-") {
-        text.line(format_args!("wrote {}", path.display()));
-    }
-    super::check_validation(&ctx)
 }

@@ -96,8 +96,9 @@ fn write_outputs(
     Ok(best)
 }
 
-pub fn run(args: TuneArgs) -> Result<()> {
-    // Everything that can be known before the GPU is touched is checked here.
+/// The sweep (its file, `--axis`), with the command line's scenes and size in place of
+/// the file's, as in every command; every value checked before any GPU work.
+fn checked_sweep(args: &TuneArgs) -> Result<Sweep> {
     let (text, what) = match &args.sweep {
         Some(p) => (
             speculum::error::read_text(p, "sweep file", speculum::error::bounds::TEXT)?,
@@ -134,13 +135,16 @@ pub fn run(args: TuneArgs) -> Result<()> {
     speculum::metrics::check_size(sweep.base.width, sweep.base.height)?;
     tune::plot::check_font()?;
     speculum::output::check_dir(&args.out)?;
-    let points = sweep.points()?;
-    let axes: Vec<String> = sweep.axes.iter().map(|(n, _)| n.clone()).collect();
-    let csv_path = args.out.join("points.csv");
+    Ok(sweep)
+}
+
+/// The points already measured in `csv_path` with `--resume` (none without it), whose
+/// axes must be this sweep's.
+fn resumed(args: &TuneArgs, csv_path: &std::path::Path, axes: &[String]) -> Result<Vec<PointResult>> {
     let mut results: Vec<PointResult> = Vec::new();
     if args.resume && csv_path.exists() {
         let (old_axes, old) = tune::from_csv(&speculum::error::read_text(
-            &csv_path,
+            csv_path,
             "points CSV",
             speculum::error::bounds::TABLE,
         )?)?;
@@ -152,6 +156,55 @@ pub fn run(args: TuneArgs) -> Result<()> {
         }
         results = old;
     }
+    Ok(results)
+}
+
+/// The best point's line, and with `--confirm` its frame time against the default's
+/// in alternating rounds on every scene.
+fn report_best(
+    out: &Text,
+    ctx: &std::sync::Arc<speculum::vk::Context>,
+    (args, sweep): (&TuneArgs, &Sweep),
+    scenes: &[(String, speculum::scene::Scene)],
+    results: &[PointResult],
+    best: Option<&str>,
+) -> Result<()> {
+    let ratio = |key: &str| {
+        let rs: Vec<&PointResult> = results.iter().filter(|r| r.key == key).collect();
+        rs.iter().map(|r| r.frame_over_rt.median).sum::<f64>() / rs.len().max(1) as f64
+    };
+    match best {
+        Some(key) => {
+            out.line(format_args!(
+                "best with SSIM >= {}: {key} (frame/rt {:.3}; default {:.3}) -> {}",
+                args.min_ssim,
+                ratio(key),
+                ratio(DEFAULT_KEY),
+                args.out.join("best.json").display()
+            ));
+            if args.confirm > 0 && key != DEFAULT_KEY {
+                let candidate = settings_of(sweep, results, key)?;
+                for (name, scene) in scenes {
+                    let s = tune::confirm(ctx, scene, sweep, &candidate, args.confirm)?;
+                    out.line(format_args!(
+                        "  confirmed on {name} ({} alternating rounds): default / best frame time {:.3} (p10 {:.3}, p90 {:.3})",
+                        s.samples, s.median, s.p10, s.p90
+                    ));
+                }
+            }
+        }
+        None => out.line(format_args!("no point reaches SSIM {} (no best.json)", args.min_ssim)),
+    }
+    Ok(())
+}
+
+pub fn run(args: TuneArgs) -> Result<()> {
+    // Everything that can be known before the GPU is touched is checked here.
+    let sweep = checked_sweep(&args)?;
+    let points = sweep.points()?;
+    let axes: Vec<String> = sweep.axes.iter().map(|(n, _)| n.clone()).collect();
+    let csv_path = args.out.join("points.csv");
+    let mut results = resumed(&args, &csv_path, &axes)?;
     let scenes: Vec<_> = sweep
         .scenes
         .iter()
@@ -202,32 +255,7 @@ pub fn run(args: TuneArgs) -> Result<()> {
         results.len(),
         ctx.device_name
     ));
-    let ratio = |key: &str| {
-        let rs: Vec<&PointResult> = results.iter().filter(|r| r.key == key).collect();
-        rs.iter().map(|r| r.frame_over_rt.median).sum::<f64>() / rs.len().max(1) as f64
-    };
-    match &best {
-        Some(key) => {
-            out.line(format_args!(
-                "best with SSIM >= {}: {key} (frame/rt {:.3}; default {:.3}) -> {}",
-                args.min_ssim,
-                ratio(key),
-                ratio(DEFAULT_KEY),
-                args.out.join("best.json").display()
-            ));
-            if args.confirm > 0 && key != DEFAULT_KEY {
-                let candidate = settings_of(&sweep, &results, key)?;
-                for (name, scene) in &scenes {
-                    let s = tune::confirm(&ctx, scene, &sweep, &candidate, args.confirm)?;
-                    out.line(format_args!(
-                        "  confirmed on {name} ({} alternating rounds): default / best frame time {:.3} (p10 {:.3}, p90 {:.3})",
-                        s.samples, s.median, s.p10, s.p90
-                    ));
-                }
-            }
-        }
-        None => out.line(format_args!("no point reaches SSIM {} (no best.json)", args.min_ssim)),
-    }
+    report_best(&out, &ctx, (&args, &sweep), &scenes, &results, best.as_deref())?;
     out.line(format_args!("wrote {}", args.out.display()));
     super::check_validation(&ctx)
 }

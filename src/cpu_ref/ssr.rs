@@ -317,7 +317,7 @@ fn to_pixel(frame: &FrameUniforms, h: Vec4) -> Vec2 {
 
 /// `march_linear`: the perspective-correct DDA (McGuire & Mara 2014), the hit refined
 /// by binary search and a secant.
-// Long by design: it mirrors `march_linear` in `ssr_trace.comp` line by line.
+// Long: it mirrors `march_linear` in `ssr_trace.comp` line by line.
 fn march_linear(
     frame: &FrameUniforms,
     (h0, h1): (Vec4, Vec4),
@@ -452,7 +452,7 @@ const NO_PLANE: f32 = 3.0e38;
 
 /// `march_hiz`: the hierarchical march through the min-depth pyramid
 /// (`inputs.pyramid`, `hiz`'s levels), step for step.
-// Long by design: it mirrors `march_hiz` in `ssr_trace.comp` line by line.
+// Long: it mirrors `march_hiz` in `ssr_trace.comp` line by line.
 fn march_hiz(
     frame: &FrameUniforms,
     h0: Vec4,

@@ -5,7 +5,7 @@ use super::*;
 use crate::error::Error;
 
 impl Demo {
-    // Long by design: the window, context, renderer, swapchain and HUD in order, then the Demo literal.
+    // Long: the window, context, renderer, swapchain and HUD in order, then the Demo literal.
     pub(super) fn new(el: &ActiveEventLoop, config: DemoConfig) -> Result<Self> {
         let s = &config.settings;
         let attrs = Window::default_attributes()

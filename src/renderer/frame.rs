@@ -206,7 +206,7 @@ impl Renderer {
     /// time step unless it is paused. The caller submits it, and must have seen the
     /// slot's previous frame finish (a fence) before; several slots' frames may be in
     /// flight on the queue at once.
-    // Long by design: it is DESIGN.md's frame table, every row in order; split, rows would hide.
+    // Long: it is DESIGN.md's frame table, every row in order; split, rows would hide.
     pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
         let advance = !self.paused || std::mem::take(&mut self.step_once);
         let Self {

@@ -476,7 +476,7 @@ impl Context {
         }
     }
 
-    // Long by design: the creation steps in order, each guarded, then the context's 23 fields.
+    // Long: the creation steps in order, each guarded, then the context's 23 fields.
     fn with_instance(
         entry: ash::Entry,
         instance: ash::Instance,

@@ -82,97 +82,124 @@ fn string(words: &[u32]) -> String {
     String::from_utf8_lossy(&bytes).into_owned()
 }
 
-/// Reflects a module.
-pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
-    let mut names: HashMap<u32, String> = HashMap::new();
-    let mut member_names: HashMap<(u32, u32), String> = HashMap::new();
-    let mut decorations: HashMap<(u32, u32), u32> = HashMap::new(); // (id, decoration) → first literal
-    let mut member_offsets: HashMap<(u32, u32), u32> = HashMap::new();
-    let mut types: HashMap<u32, (u32, Vec<u32>)> = HashMap::new(); // id → (opcode, operands after result)
-    let mut variables: Vec<(u32, u32, u32)> = Vec::new(); // (id, pointer type, storage class)
-    let mut out = Reflection::default();
+/// The instructions of a module that reflection reads, by id.
+#[derive(Default)]
+struct Module {
+    names: HashMap<u32, String>,
+    member_names: HashMap<(u32, u32), String>,
+    /// (id, decoration) → its first literal.
+    decorations: HashMap<(u32, u32), u32>,
+    member_offsets: HashMap<(u32, u32), u32>,
+    /// id → (opcode, operands after the result).
+    types: HashMap<u32, (u32, Vec<u32>)>,
+    /// (id, pointer type, storage class).
+    variables: Vec<(u32, u32, u32)>,
+    local_size: Option<[u32; 3]>,
+}
 
-    let mut i = 5;
-    while i < words.len() {
-        let count = (words[i] >> 16) as usize;
-        let op = words[i] & 0xffff;
-        if count == 0 || i + count > words.len() {
-            return Err(Error::Spirv(name, format!("truncated instruction at word {i}")));
+impl Module {
+    /// Reads the words of module `name` into the tables (a truncated instruction is an
+    /// error).
+    fn parse(name: &'static str, words: &[u32]) -> Result<Module> {
+        let mut m = Module::default();
+        let Module {
+            names,
+            member_names,
+            decorations,
+            member_offsets,
+            types,
+            variables,
+            local_size,
+        } = &mut m;
+        let mut i = 5;
+        while i < words.len() {
+            let count = (words[i] >> 16) as usize;
+            let op = words[i] & 0xffff;
+            if count == 0 || i + count > words.len() {
+                return Err(Error::Spirv(name, format!("truncated instruction at word {i}")));
+            }
+            let args = &words[i + 1..i + count];
+            match op {
+                OP_NAME if !args.is_empty() => {
+                    names.insert(args[0], string(&args[1..]));
+                }
+                OP_MEMBER_NAME if args.len() >= 2 => {
+                    member_names.insert((args[0], args[1]), string(&args[2..]));
+                }
+                OP_EXECUTION_MODE if args.len() >= 5 && args[1] == MODE_LOCAL_SIZE => {
+                    *local_size = Some([args[2], args[3], args[4]]);
+                }
+                OP_DECORATE if args.len() >= 2 => {
+                    decorations.insert((args[0], args[1]), args.get(2).copied().unwrap_or(0));
+                }
+                OP_MEMBER_DECORATE if args.len() >= 4 && args[2] == DEC_OFFSET => {
+                    member_offsets.insert((args[0], args[1]), args[3]);
+                }
+                OP_TYPE_BOOL
+                | OP_TYPE_INT
+                | OP_TYPE_FLOAT
+                | OP_TYPE_VECTOR
+                | OP_TYPE_MATRIX
+                | OP_TYPE_IMAGE
+                | OP_TYPE_SAMPLER
+                | OP_TYPE_SAMPLED_IMAGE
+                | OP_TYPE_ARRAY
+                | OP_TYPE_RUNTIME_ARRAY
+                | OP_TYPE_STRUCT
+                | OP_TYPE_POINTER
+                    if !args.is_empty() =>
+                {
+                    types.insert(args[0], (op, args[1..].to_vec()));
+                }
+                OP_VARIABLE if args.len() >= 3 => variables.push((args[1], args[0], args[2])),
+                _ => {}
+            }
+            i += count;
         }
-        let args = &words[i + 1..i + count];
-        match op {
-            OP_NAME if !args.is_empty() => {
-                names.insert(args[0], string(&args[1..]));
-            }
-            OP_MEMBER_NAME if args.len() >= 2 => {
-                member_names.insert((args[0], args[1]), string(&args[2..]));
-            }
-            OP_EXECUTION_MODE if args.len() >= 5 && args[1] == MODE_LOCAL_SIZE => {
-                out.local_size = Some([args[2], args[3], args[4]]);
-            }
-            OP_DECORATE if args.len() >= 2 => {
-                decorations.insert((args[0], args[1]), args.get(2).copied().unwrap_or(0));
-            }
-            OP_MEMBER_DECORATE if args.len() >= 4 && args[2] == DEC_OFFSET => {
-                member_offsets.insert((args[0], args[1]), args[3]);
-            }
-            OP_TYPE_BOOL
-            | OP_TYPE_INT
-            | OP_TYPE_FLOAT
-            | OP_TYPE_VECTOR
-            | OP_TYPE_MATRIX
-            | OP_TYPE_IMAGE
-            | OP_TYPE_SAMPLER
-            | OP_TYPE_SAMPLED_IMAGE
-            | OP_TYPE_ARRAY
-            | OP_TYPE_RUNTIME_ARRAY
-            | OP_TYPE_STRUCT
-            | OP_TYPE_POINTER
-                if !args.is_empty() =>
-            {
-                types.insert(args[0], (op, args[1..].to_vec()));
-            }
-            OP_VARIABLE if args.len() >= 3 => variables.push((args[1], args[0], args[2])),
-            _ => {}
-        }
-        i += count;
+        Ok(m)
     }
 
-    // Strip arrays to the element type.
-    let element = |mut t: u32| {
-        while let Some((OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY, ops)) = types.get(&t) {
+    /// `t` with its arrays stripped to the element type.
+    fn element(&self, mut t: u32) -> u32 {
+        while let Some((OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY, ops)) = self.types.get(&t) {
             t = ops[0];
         }
         t
-    };
-    for (id, ptr, class) in variables {
-        if class == SC_PUSH_CONSTANT {
-            let block = match types.get(&ptr) {
-                Some((OP_TYPE_POINTER, ops)) if ops.len() >= 2 => ops[1],
-                _ => return Err(Error::Spirv(name, "push constants are not a pointer".into())),
-            };
-            let Some((OP_TYPE_STRUCT, members)) = types.get(&block) else {
-                return Err(Error::Spirv(name, "push constants are not a block".into()));
-            };
-            for (m, &ty) in members.iter().enumerate() {
-                let offset = member_offsets.get(&(block, m as u32)).copied().unwrap_or(0);
-                let size = scalar_size(&types, ty)
-                    .ok_or_else(|| Error::Spirv(name, format!("push constant member {m} has an unsupported type")))?;
-                out.push_size = out.push_size.max(offset + size);
-            }
-            continue;
-        }
-        let Some(&binding) = decorations.get(&(id, DEC_BINDING)) else {
-            continue;
+    }
+
+    /// Bytes of the push-constant block that `ptr` points to (its last member's end).
+    fn push_size(&self, name: &'static str, ptr: u32) -> Result<u32> {
+        let block = match self.types.get(&ptr) {
+            Some((OP_TYPE_POINTER, ops)) if ops.len() >= 2 => ops[1],
+            _ => return Err(Error::Spirv(name, "push constants are not a pointer".into())),
         };
-        if decorations.get(&(id, DEC_SET)).copied().unwrap_or(0) != 0 {
-            return Err(Error::Spirv(name, "only descriptor set 0 is supported".into()));
+        let Some((OP_TYPE_STRUCT, members)) = self.types.get(&block) else {
+            return Err(Error::Spirv(name, "push constants are not a block".into()));
+        };
+        let mut size = 0;
+        for (m, &ty) in members.iter().enumerate() {
+            let offset = self.member_offsets.get(&(block, m as u32)).copied().unwrap_or(0);
+            let member = scalar_size(&self.types, ty)
+                .ok_or_else(|| Error::Spirv(name, format!("push constant member {m} has an unsupported type")))?;
+            size = size.max(offset + member);
         }
-        let pointee = match types.get(&ptr) {
-            Some((OP_TYPE_POINTER, ops)) if ops.len() >= 2 => element(ops[1]),
+        Ok(size)
+    }
+
+    /// The descriptor type of variable `id` (a pointer `ptr` of storage class `class`)
+    /// at `binding`.
+    fn descriptor_type(
+        &self,
+        name: &'static str,
+        (id, ptr, class): (u32, u32, u32),
+        binding: u32,
+    ) -> Result<vk::DescriptorType> {
+        let decorations = &self.decorations;
+        let pointee = match self.types.get(&ptr) {
+            Some((OP_TYPE_POINTER, ops)) if ops.len() >= 2 => self.element(ops[1]),
             _ => return Err(Error::Spirv(name, format!("variable {id} is not a pointer"))),
         };
-        let ty = match (class, types.get(&pointee)) {
+        Ok(match (class, self.types.get(&pointee)) {
             (SC_STORAGE_BUFFER, _) => vk::DescriptorType::STORAGE_BUFFER,
             (SC_UNIFORM, _) if decorations.contains_key(&(pointee, DEC_BUFFER_BLOCK)) => {
                 vk::DescriptorType::STORAGE_BUFFER
@@ -199,12 +226,41 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
                     format!("binding {binding}: unsupported descriptor kind"),
                 ))
             }
+        })
+    }
+}
+
+/// Reflects a module.
+pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
+    let module = Module::parse(name, words)?;
+    let mut out = Reflection {
+        local_size: module.local_size,
+        ..Reflection::default()
+    };
+    for &(id, ptr, class) in &module.variables {
+        if class == SC_PUSH_CONSTANT {
+            out.push_size = out.push_size.max(module.push_size(name, ptr)?);
+            continue;
+        }
+        let Some(&binding) = module.decorations.get(&(id, DEC_BINDING)) else {
+            continue;
         };
-        out.bindings.push((binding, ty));
+        if module.decorations.get(&(id, DEC_SET)).copied().unwrap_or(0) != 0 {
+            return Err(Error::Spirv(name, "only descriptor set 0 is supported".into()));
+        }
+        out.bindings
+            .push((binding, module.descriptor_type(name, (id, ptr, class), binding)?));
     }
     out.bindings.sort_by_key(|b| b.0);
-
-    for (&id, (op, ops)) in &types {
+    let Module {
+        names,
+        member_names,
+        decorations,
+        member_offsets,
+        types,
+        ..
+    } = &module;
+    for (&id, (op, ops)) in types {
         if *op == OP_TYPE_STRUCT {
             if let Some(struct_name) = names.get(&id) {
                 let members = (0..ops.len() as u32)

@@ -1,0 +1,202 @@
+//! `speculum bench dynamic`: a dynamic scene's per-frame costs as its bodies grow.
+
+use super::{valid_or_fail, Common};
+use crate::cli::{check_count, check_outputs, progress, SettingsArgs, Text};
+use anyhow::Result;
+use clap::Args;
+use speculum::output::Kind;
+use speculum::report::Header;
+
+#[derive(Args, Clone, Debug)]
+pub struct DynamicArgs {
+    /// A scene with a [spawn] table (built-in, or a scene file).
+    #[arg(long, default_value = "stress")]
+    pub scene: String,
+    /// Body counts of a [spawn] scene, each measured in its own run (1..=4000;
+    /// default 10 100 1000).
+    #[arg(long, num_args = 1..)]
+    pub bodies: Vec<u32>,
+    /// Instead: particles per side of every cloth of a scene with cloths (2..=512),
+    /// each resolution in its own run.
+    #[arg(long, num_args = 1..)]
+    pub cloth_res: Vec<u32>,
+    /// Measured frames per body count.
+    #[arg(long, default_value_t = 30)]
+    pub frames: u32,
+    /// Uncounted warm-up frames (the scene is reset after them).
+    #[arg(long, default_value_t = 2)]
+    pub warmup: u32,
+    /// Rays traced through the rebuilt and the refit BVH at the last frame.
+    #[arg(long, default_value_t = 65536)]
+    pub rays: u32,
+    #[command(flatten)]
+    pub frame: SettingsArgs,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
+    use speculum::bench::dynamic::{run_point, DynamicReport};
+    let c = &args.common;
+    let settings = args.frame.resolve()?;
+    check_count("--frames", args.frames, 1)?;
+    check_count("--warmup", args.warmup, 0)?;
+    check_count("--rays", args.rays, 1)?;
+    check_outputs(
+        &[("--json", c.json.as_deref(), Kind::Json)],
+        &[("--settings", args.frame.settings.as_deref())],
+    )?;
+    // Every body count's scene first: a bad one fails before any GPU work.
+    let (scenes, by_cloth) = point_scenes(&args)?;
+    let text = Text::new(&[c.json.as_deref()], c.quiet);
+    let ctx = c.gpu.context()?;
+    let per = (args.frames + args.warmup) as u64;
+    let bar = progress(per * scenes.len() as u64, "bench dynamic", c.quiet);
+    let mut points = Vec::new();
+    for scene in &scenes {
+        points.push(run_point(
+            &ctx,
+            scene,
+            &settings,
+            args.warmup,
+            args.frames,
+            args.rays,
+            &mut || bar.inc(1),
+        )?);
+    }
+    bar.finish_and_clear();
+    let (first, last) = (&points[0], &points[points.len() - 1]);
+    let report = DynamicReport {
+        header: Header::new("bench.dynamic", Some(&ctx), Some(&settings)),
+        scene: args.scene.clone(),
+        resolution: [settings.width, settings.height],
+        frames: args.frames,
+        warmup_frames: args.warmup,
+        rebuild_growth: last.rebuild_ms.median / first.rebuild_ms.median,
+        triangle_growth: last.dynamic_triangles as f64 / first.dynamic_triangles as f64,
+        valid: points.iter().all(|p| p.valid),
+        points,
+    };
+    print_points(
+        &text,
+        &report,
+        &ctx.device_name,
+        (&scenes, &settings),
+        by_cloth,
+        args.frames,
+    );
+    let timing: speculum::vk::TimingCheck = report.points.iter().map(|p| &p.timing).collect();
+    text.line(format_args!("  {}", crate::cli::timing_note(&timing)));
+    if let Some(path) = &c.json {
+        crate::cli::write_report(path, &report, &text)?;
+    }
+    crate::cli::check_validation(&ctx)?;
+    valid_or_fail(report.valid)
+}
+
+/// The scene of every point (`--bodies` counts, or `--cloth-res` resolutions), each
+/// checked; and whether the points vary the cloth.
+fn point_scenes(args: &DynamicArgs) -> Result<(Vec<speculum::scene::Scene>, bool)> {
+    if !args.bodies.is_empty() && !args.cloth_res.is_empty() {
+        anyhow::bail!("give --bodies or --cloth-res, not both");
+    }
+    let by_cloth = !args.cloth_res.is_empty();
+    let scenes = if !by_cloth {
+        let counts = if args.bodies.is_empty() {
+            vec![10, 100, 1000]
+        } else {
+            args.bodies.clone()
+        };
+        counts
+            .iter()
+            .map(|&n| {
+                let mut s = speculum::scene::load(&args.scene)?;
+                s.set_spawn_count(n)?;
+                Ok(s)
+            })
+            .collect::<Result<Vec<_>>>()?
+    } else {
+        args.cloth_res
+            .iter()
+            .map(|&n| {
+                let mut s = speculum::scene::load(&args.scene)?;
+                if s.cloths.is_empty() {
+                    anyhow::bail!(
+                        "--cloth-res needs a scene with cloths (such as cloth); '{}' has none",
+                        s.name
+                    );
+                }
+                for c in &mut s.cloths {
+                    c.resolution = n;
+                }
+                s.validate()?;
+                Ok(s)
+            })
+            .collect::<Result<Vec<_>>>()?
+    };
+    Ok((scenes, by_cloth))
+}
+
+/// The table of points, with which rebuild the bodies got.
+fn print_points(
+    text: &Text,
+    report: &speculum::bench::dynamic::DynamicReport,
+    device: &str,
+    (scenes, settings): (&[speculum::scene::Scene], &speculum::Settings),
+    by_cloth: bool,
+    frames: u32,
+) {
+    // Which rebuild the bodies get (the renderer's rule).
+    let rigid = scenes
+        .iter()
+        .all(|s| speculum::passes::lbvh::rigid::applies(s, settings.rigid_order));
+    let rebuild = match (by_cloth, rigid) {
+        (true, _) => "",
+        (false, true) => "; bodies rebuilt in their own order, rigid_order",
+        (false, false) => "; every triangle sorted at each rebuild",
+    };
+    text.line(format_args!(
+        "{} on {}: {}x{}, median of {} frames per body count (ms; sim.rigid is CPU{rebuild})",
+        report.scene, device, settings.width, settings.height, frames
+    ));
+    text.line(format_args!(
+        "  {:>6} {:>9} {:>9} {:>13} {:>9} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9}",
+        if by_cloth { "cloth" } else { "bodies" },
+        "tris",
+        "sim.rigid",
+        if by_cloth { "sim.cloth" } else { "sim.transform" },
+        "rebuild",
+        "refit",
+        "ratio",
+        "rt.reflect",
+        "frame",
+        "trace new",
+        "trace old"
+    ));
+    for p in &report.points {
+        text.line(format_args!(
+            "  {:>6} {:>9} {:>9.2} {:>13.2} {:>9.2} {:>8.2} {:>7.3} {:>10.1} {:>9.1} {:>9.2} {:>9.2}",
+            if by_cloth { p.cloth_resolution } else { p.bodies },
+            p.dynamic_triangles,
+            p.sim_rigid_ms.median,
+            if by_cloth {
+                p.sim_cloth_ms.median
+            } else {
+                p.sim_transform_ms.median
+            },
+            p.rebuild_ms.median,
+            p.refit_ms.median,
+            p.refit_over_rebuild,
+            p.rt_reflect_ms.median,
+            p.frame_ms.median,
+            p.trace_rebuilt_ms,
+            p.trace_refit_ms
+        ));
+    }
+    text.line(format_args!(
+        "  rebuild grows {:.2}x for {:.2}x the triangles; checks {}",
+        report.rebuild_growth,
+        report.triangle_growth,
+        if report.valid { "valid" } else { "INVALID" }
+    ));
+}

@@ -1,0 +1,267 @@
+//! `speculum bench lbvh`: the BVH builds and traversal, checked against the CPU.
+
+use super::{valid_or_fail, Common};
+use crate::cli::{cell, check_count, check_outputs, progress, Text};
+use anyhow::Result;
+use clap::Args;
+use speculum::bench::lbvh::{run_case, Options, Report};
+use speculum::output::Kind;
+use speculum::passes::lbvh::{BvhKind, MortonBits};
+use speculum::report::Header;
+use std::path::PathBuf;
+
+#[derive(Args, Clone, Debug)]
+pub struct LbvhArgs {
+    /// Random triangle soups of these sizes (default 10000 100000 1000000 when no
+    /// --scene is given).
+    #[arg(long, num_args = 1..)]
+    pub tris: Vec<u32>,
+    /// Built-in scene names or .obj paths to benchmark as well.
+    #[arg(long, num_args = 1..)]
+    pub scene: Vec<String>,
+    /// Morton code width in bits.
+    #[arg(long, default_value = "30", value_parser = crate::cli::choice(&MortonBits::ALL, MortonBits::name, MortonBits::about))]
+    pub bits: MortonBits,
+    /// The trees to build of each case.
+    #[arg(long, num_args = 1.., default_values = ["lbvh", "ploc"], value_parser = crate::cli::choice(&BvhKind::ALL, BvhKind::name, BvhKind::about))]
+    pub builder: Vec<BvhKind>,
+    /// Timed repetitions of each build and trace (medians are reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: u32,
+    /// Rays per ray set (coherent and incoherent).
+    #[arg(long, default_value_t = 262144)]
+    pub rays: u32,
+    /// Rays of each set checked against the CPU reference.
+    #[arg(long, default_value_t = 2000)]
+    pub check_rays: u32,
+    /// Also trace (time and check) these rays: 32 bytes each, little-endian f32
+    /// ox,oy,oz,dx,dy,dz,tmin,tmax, no header.
+    #[arg(long)]
+    pub rays_file: Option<PathBuf>,
+    /// Write the traced rays in that format (the --rays-file rays, else the
+    /// incoherent set), to trace them with another tracer; needs a single case.
+    #[arg(long)]
+    pub dump_rays: Option<PathBuf>,
+    /// Write their hits: 8 bytes each, f32 t and u32 triangle (in file order after fan
+    /// triangulation), a miss as (+inf, 0xFFFFFFFF); needs a single case.
+    #[arg(long)]
+    pub dump_hits: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// A benchmark case's triangles: its name, vertices and indices.
+type Case = (String, Vec<speculum::gpu_types::GpuVertex>, Vec<u32>);
+
+pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
+    let c = &args.common;
+    check_count("--repeats", args.repeats, 1)?;
+    if args.rays == 0 {
+        anyhow::bail!(speculum::Error::Input(
+            "--rays 0: each ray set needs at least one ray".into()
+        ));
+    }
+    let file_rays = match &args.rays_file {
+        Some(p) => {
+            let bytes = speculum::error::read_file(p, "rays file", speculum::error::bounds::RAYS)?;
+            Some(speculum::bench::rays_file::read_rays(&bytes, &p.display().to_string())?)
+        }
+        None => None,
+    };
+    let dumping = args.dump_rays.is_some() || args.dump_hits.is_some();
+    for p in [&args.dump_rays, &args.dump_hits].into_iter().flatten() {
+        if p.as_os_str() == "-" {
+            anyhow::bail!(speculum::Error::Input(
+                "--dump-rays/--dump-hits write binary files: give a path, not -".into()
+            ));
+        }
+        speculum::output::check(p, Kind::Json)?;
+    }
+    let opts = Options {
+        repeats: args.repeats,
+        rays: args.rays,
+        check_rays: args.check_rays,
+        bits: args.bits,
+        builders: args.builder.clone(),
+        file_rays,
+        keep_hits: dumping,
+    };
+    let mut inputs = vec![("--rays-file", args.rays_file.as_deref())];
+    inputs.extend(args.scene.iter().map(|s| ("--scene", crate::cli::input_file(s))));
+    check_outputs(
+        &[
+            ("--json", c.json.as_deref(), Kind::Json),
+            ("--dump-rays", args.dump_rays.as_deref(), Kind::Json),
+            ("--dump-hits", args.dump_hits.as_deref(), Kind::Json),
+        ],
+        &inputs,
+    )?;
+    let cases = lbvh_cases(&args)?;
+    if dumping && cases.len() * args.builder.len() != 1 {
+        anyhow::bail!(speculum::Error::Input(format!(
+            "--dump-rays/--dump-hits need a single case (one --tris or one --scene, one --builder), not {}",
+            cases.len() * args.builder.len()
+        )));
+    }
+    let text = Text::new(&[c.json.as_deref()], c.quiet);
+    let ctx = c.gpu.context()?;
+    text.line(format_args!(
+        "LBVH on {} ({}-bit Morton, median (p10–p90) of {} runs, GPU ms)",
+        ctx.device_name,
+        args.bits.bits(),
+        opts.repeats
+    ));
+    let runs = (cases.len() * opts.builders.len()) as u64;
+    let bar = progress(runs * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
+    let mut results = Vec::new();
+    for (name, v, i) in &cases {
+        for &kind in &opts.builders {
+            let case = run_case(&ctx, name, v, i, &opts, kind, &mut || bar.inc(1))?;
+            bar.suspend(|| print_lbvh_case(&text, &case));
+            results.push(case);
+        }
+    }
+    bar.finish_and_clear();
+    if let Some(kept) = results.first().and_then(|c| c.kept.as_ref()) {
+        dump_rays(&args, kept)?;
+    }
+    let valid = results.iter().all(|c| c.valid);
+    let report = Report {
+        header: Header::new("bench.lbvh", Some(&ctx), None),
+        options: opts,
+        cases: results,
+        valid,
+    };
+    if let Some(path) = &c.json {
+        crate::cli::write_report(path, &report, &text)?;
+    }
+    crate::cli::check_validation(&ctx)?;
+    valid_or_fail(valid)
+}
+
+/// `--dump-rays` and `--dump-hits`: the single case's rays and hits, written together.
+fn dump_rays(
+    args: &LbvhArgs,
+    (rays, hits): &(Vec<speculum::gpu_types::Ray>, Vec<speculum::gpu_types::Hit>),
+) -> Result<()> {
+    let mut out = speculum::output::Batch::default();
+    if let Some(p) = &args.dump_rays {
+        out.add(p, speculum::bench::rays_file::write_rays(rays));
+    }
+    if let Some(p) = &args.dump_hits {
+        out.add(p, speculum::bench::rays_file::write_hits(hits));
+    }
+    Ok(out.commit()?)
+}
+
+/// Every case's triangles, loaded before any GPU work (a bad scene fails first): the
+/// soups of `--tris` (10K, 100K, 1M without `--tris` or `--scene`), then the scenes.
+fn lbvh_cases(args: &LbvhArgs) -> Result<Vec<Case>> {
+    let mut tris = args.tris.clone();
+    if tris.is_empty() && args.scene.is_empty() {
+        tris = vec![10_000, 100_000, 1_000_000];
+    }
+    let mut cases = Vec::new();
+    for &n in &tris {
+        if n == 0 {
+            anyhow::bail!("--tris 0: a BVH needs at least one triangle");
+        }
+        if n > speculum::passes::lbvh::MAX_TRIANGLES {
+            anyhow::bail!(
+                "--tris {n}: more than the LBVH's {} triangles",
+                speculum::passes::lbvh::MAX_TRIANGLES
+            );
+        }
+        let size = speculum::scene::soup::default_size(n as usize);
+        let (v, i) = speculum::scene::soup::random_soup(n as usize, 1.0, size, n as u64);
+        cases.push((format!("soup-{n}"), v, i));
+    }
+    for name in &args.scene {
+        // The model alone: a floor would be triangles the benchmark did not ask for.
+        let scene = speculum::scene::load_with(name, speculum::scene::Floor::None)?;
+        cases.push((scene.name.clone(), scene.vertices, scene.indices));
+    }
+    Ok(cases)
+}
+
+/// One case's lines: the build and its stages, tree quality and trace rates with the
+/// checks, and the rays file's trace when there is one.
+fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
+    let stages: Vec<String> = case
+        .builder
+        .stages()
+        .iter()
+        .map(|s| format!("{} {:.3}", s.trim_start_matches("lbvh."), case.stages_ms.median(s)))
+        .collect();
+    let untimed = match case.untimed_rounds {
+        0 => String::new(),
+        r => format!(" (+{r} rounds untimed)"),
+    };
+    text.line(format_args!(
+        "{:<14} {:>9} tris  build {}{untimed} ({:7.2} Mtris/s) [{}]  refit {}  compact {}",
+        format!("{} {}", case.name, case.builder.name()),
+        case.triangles,
+        cell(Some(case.build_ms)),
+        case.mtris_per_s,
+        stages.join(", "),
+        cell(Some(case.refit_ms)),
+        cell(Some(case.compact_ms))
+    ));
+    let checks = if case.valid {
+        format!("valid; {}", crate::cli::timing_note(&case.timing))
+    } else {
+        format!(
+            "INVALID: {:?} {} {} mismatches",
+            case.invariant_error, case.coherent.mismatches, case.incoherent.mismatches
+        )
+    };
+    text.line(format_args!(
+        "{:<14} SAH {:.2} vs CPU binned {:.2} (ratio {:.3}); {:.1} B/tri; coherent {:.2} Mrays/s, incoherent {:.2} Mrays/s; {checks}",
+        "",
+        case.sah,
+        case.sah_cpu_binned,
+        case.sah_ratio,
+        case.bytes_per_triangle,
+        case.coherent.mrays_per_s,
+        case.incoherent.mrays_per_s,
+    ));
+    if let Some(f) = &case.file {
+        text.line(format_args!(
+            "{:<14} rays file: {} rays, {} ({:.1} Mrays/s), {:.1}% hit, {} of {} checked differ",
+            "",
+            f.rays,
+            cell(Some(f.trace_ms)),
+            f.mrays_per_s,
+            100.0 * f.hit_fraction,
+            f.mismatches,
+            f.checked
+        ))
+    }
+    for a in case.embree.iter().flatten() {
+        let sets = [
+            ("coherent", Some(&a.coherent)),
+            ("incoherent", Some(&a.incoherent)),
+            ("file", a.file.as_ref()),
+        ];
+        let rays: Vec<String> = sets
+            .iter()
+            .filter_map(|(name, r)| {
+                r.map(|r| {
+                    format!(
+                        "{name} {:.2} Mrays/s (Speculum {:.2}x; hits {} agree, {} ties, {} differ)",
+                        r.mrays_per_s, r.speed_ratio, r.agree, r.ties, r.disagree
+                    )
+                })
+            })
+            .collect();
+        text.line(format_args!(
+            "{:<14} Embree {} ({} CPU threads, wall ms): build {} (Speculum {:.2}x its time); {}",
+            "",
+            a.quality.to_uppercase(),
+            a.threads,
+            cell(Some(a.build_ms)),
+            a.build_ratio,
+            rays.join(", ")
+        ));
+    }
+}

@@ -320,7 +320,8 @@ const MACHINE_DATA_ROOTS: &[&str] = &["tmp", "root", "home", "mnt", "media", "sr
 const SYSTEM_PATHS: &[&str] = &["tmp/.X11-unix/", "tmp/.X"];
 
 /// The string literals of `text` that name a path under `MACHINE_DATA_ROOTS`
-/// (`"/tmp/models/bunny.obj"`, `"/home"`), with their line numbers; comments left out.
+/// (a model under the machine's temporary folder, a home folder), with their line
+/// numbers; comments left out.
 fn machine_data_paths(text: &str) -> Vec<(usize, String)> {
     let mut out = Vec::new();
     for (n, line) in text.lines().enumerate() {

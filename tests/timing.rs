@@ -124,15 +124,11 @@ fn one_shot_scopes_pass_their_self_check() {
         speculum::passes::lbvh::Bvh::new_static(&ctx, 20_000, speculum::passes::lbvh::MortonBits::Bits30).unwrap();
     let mut timer = GpuTimer::new(&ctx, 8).unwrap();
     // As for frames (`checked_frame`): a build refused by its self-check may be a
-    // lavapipe thread preempted between two stamps (`remeasure` tries again); one that
+    // lavapipe thread preempted between two stamps (`remeasure_readout` tries again); one that
     // never passes is a bug.
-    let ((), build, discarded) = speculum::vk::remeasure(|| {
-        Ok((
-            (),
-            speculum::bench::lbvh::timed_build(&mut timer, &builder, geometry, &bvh)?,
-        ))
-    })
-    .unwrap();
+    let (build, discarded) =
+        speculum::vk::remeasure_readout(|| speculum::bench::lbvh::timed_build(&mut timer, &builder, geometry, &bvh))
+            .unwrap();
     assert_eq!(
         build.problem, None,
         "no build passed its self-check ({discarded} refused before): {:?}",

@@ -18,7 +18,7 @@ use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
 use crate::shader_defines::BVH_INVALID;
-use crate::vk::{remeasure, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
+use crate::vk::{remeasure, remeasure_readout, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
@@ -280,16 +280,11 @@ fn time_builds(
         // The frame's refit: scheduled by height from the tree just built (the
         // schedule is made once per build, as the frame does, and is not timed).
         let schedule = RefitSchedule::of(ctx, bvh)?;
-        let (_, refit, refit_discarded) = remeasure(|| {
-            let r = timer.one_shot(|cmd, timer| builder.record_refit_scheduled(cmd, timer, geometry, bvh, &schedule));
-            Ok(((), r?))
+        let (refit, refit_discarded) = remeasure_readout(|| {
+            timer.one_shot(|cmd, timer| builder.record_refit_scheduled(cmd, timer, geometry, bvh, &schedule))
         })?;
-        let (_, compact, compact_discarded) = remeasure(|| {
-            Ok((
-                (),
-                timer.one_shot(|cmd, timer| builder.record_compact(cmd, timer, bvh))?,
-            ))
-        })?;
+        let (compact, compact_discarded) =
+            remeasure_readout(|| timer.one_shot(|cmd, timer| builder.record_compact(cmd, timer, bvh)))?;
         if rep > 0 {
             stages.add_measured(&times, discarded);
             refits.push(refit.first().map_or(f64::NAN, |r| r.1));

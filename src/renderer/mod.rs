@@ -378,8 +378,7 @@ impl Renderer {
         if self.is_dynamic() {
             return Ok((self.render_frame()?, 0));
         }
-        let (_, readout, discarded) = crate::vk::remeasure(|| Ok(((), self.render_frame()?)))?;
-        Ok((readout, discarded))
+        crate::vk::remeasure_readout(|| self.render_frame())
     }
 
     /// Holds a dynamic scene still from the next frame on (its geometry and BVH stay

@@ -16,4 +16,4 @@ pub use frame_sync::{Acquired, FrameSync};
 pub use image::{Image, Sampler};
 pub use pipeline::{GraphicsDesc, Groups, Pipeline, Resource, Shader};
 pub use swapchain::Swapchain;
-pub use timing::{remeasure, GpuTimer, TimerReadout, TimingCheck, Timings, Wall};
+pub use timing::{remeasure, remeasure_readout, GpuTimer, TimerReadout, TimingCheck, Timings, Wall};

@@ -252,21 +252,14 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
             .push((binding, module.descriptor_type(name, (id, ptr, class), binding)?));
     }
     out.bindings.sort_by_key(|b| b.0);
-    let Module {
-        names,
-        member_names,
-        decorations,
-        member_offsets,
-        types,
-        ..
-    } = &module;
-    for (&id, (op, ops)) in types {
+    // The named structs' member offsets and the arrays' strides, for layout checks.
+    for (&id, (op, ops)) in &module.types {
         if *op == OP_TYPE_STRUCT {
-            if let Some(struct_name) = names.get(&id) {
+            if let Some(struct_name) = module.names.get(&id) {
                 let members = (0..ops.len() as u32)
                     .filter_map(|m| {
-                        let offset = member_offsets.get(&(id, m))?;
-                        Some((member_names.get(&(id, m)).cloned().unwrap_or_default(), *offset))
+                        let offset = module.member_offsets.get(&(id, m))?;
+                        Some((module.member_names.get(&(id, m)).cloned().unwrap_or_default(), *offset))
                     })
                     .collect::<Vec<_>>();
                 if members.len() == ops.len() {
@@ -275,7 +268,10 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
             }
         }
         if matches!(*op, OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY) {
-            if let (Some(elem_name), Some(&stride)) = (names.get(&ops[0]), decorations.get(&(id, DEC_ARRAY_STRIDE))) {
+            if let (Some(elem_name), Some(&stride)) = (
+                module.names.get(&ops[0]),
+                module.decorations.get(&(id, DEC_ARRAY_STRIDE)),
+            ) {
                 out.array_strides.insert(elem_name.clone(), stride);
             }
         }

@@ -347,6 +347,13 @@ pub fn remeasure<T>(mut run: impl FnMut() -> Result<(T, TimerReadout)>) -> Resul
     }
 }
 
+/// `remeasure` for a measurement that yields only its readout: the last readout, and
+/// how many failed readouts were discarded before it.
+pub fn remeasure_readout(mut run: impl FnMut() -> Result<TimerReadout>) -> Result<(TimerReadout, u32)> {
+    let ((), readout, discarded) = remeasure(|| Ok(((), run()?)))?;
+    Ok((readout, discarded))
+}
+
 /// Per-scope samples over many frames; reports medians.
 #[derive(Default, Debug, Clone)]
 pub struct Timings {

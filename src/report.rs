@@ -74,7 +74,7 @@ impl DeviceReport {
         let v = ctx.api_version;
         Self {
             name: ctx.device_name.clone(),
-            kind: crate::vk::context::kind_name(ctx.device_type),
+            kind: crate::vk::device::kind_name(ctx.device_type),
             driver_name: ctx.driver_name.clone(),
             driver_info: ctx.driver_info.clone(),
             driver_version: ctx.driver_version,

@@ -399,18 +399,6 @@ fn the_path_scan_flags_machine_data_and_passes_system_paths() {
 /// unless a `// Long:` comment right above it (among its docs and attributes) says why.
 const FN_LINES_MAX: usize = 100;
 
-/// Functions over `FN_LINES_MAX` lines without a reason, not yet split: this list only
-/// shrinks (a function on it that fits, or that is gone, fails the test too).
-const LONG_FUNCTIONS_TO_SPLIT: &[&str] = &[
-    "cpu_ref/lbvh.rs::check_bvh",
-    "passes/reflect_merge.rs::record",
-    "vk/swapchain.rs::new",
-    "vk/pipeline.rs::graphics",
-    "cpu_ref/trace.rs::build",
-    "passes/gbuffer.rs::record",
-    "demo/script.rs::parse",
-];
-
 /// Every function of a Rust source text at the top level or in an `impl`/`mod` (as
 /// rustfmt writes them: the closing brace at the `fn`'s indentation): (name, first
 /// line, lines, whether a `// Long:` comment stands in the lines just above it).
@@ -453,7 +441,7 @@ fn functions(text: &str) -> Vec<(String, usize, usize, bool)> {
 
 /// No function of `src/` runs past `FN_LINES_MAX` lines without its reason in the code
 /// (the frame function is DESIGN.md's frame table; a CPU reference may mirror its
-/// kernel's one function), except those listed to split.
+/// kernel's one function).
 #[test]
 fn functions_stay_short_or_say_why() {
     let mut files = Vec::new();
@@ -467,28 +455,15 @@ fn functions_stay_short_or_say_why() {
         for (name, line, len, reason) in functions(text) {
             count += 1;
             if len > FN_LINES_MAX && !reason {
-                long.push((format!("{rel}::{name}"), line, len));
+                long.push(format!("src/{rel}::{name} (line {line}): {len} lines"));
             }
         }
     }
     assert!(count > 500, "the scan found only {count} functions");
-    let unlisted: Vec<String> = long
-        .iter()
-        .filter(|(n, _, _)| !LONG_FUNCTIONS_TO_SPLIT.contains(&n.as_str()))
-        .map(|(n, line, len)| format!("src/{n} (line {line}): {len} lines"))
-        .collect();
     assert!(
-        unlisted.is_empty(),
+        long.is_empty(),
         "functions over {FN_LINES_MAX} lines: split them, or say why in a `// Long:` comment above:\n{}",
-        unlisted.join("\n")
-    );
-    let done: Vec<&&str> = LONG_FUNCTIONS_TO_SPLIT
-        .iter()
-        .filter(|n| !long.iter().any(|(l, _, _)| l == *n))
-        .collect();
-    assert!(
-        done.is_empty(),
-        "split or gone, take them off LONG_FUNCTIONS_TO_SPLIT: {done:?}"
+        long.join("\n")
     );
 }
 
@@ -506,16 +481,8 @@ fn the_function_scan_measures_bodies_and_reads_reasons() {
 /// Lines a file of `src/` may have before its tests module.
 const FILE_LINES_MAX: usize = 600;
 
-/// Files over `FILE_LINES_MAX` lines not yet split: this list only shrinks.
-const LONG_FILES_TO_SPLIT: &[&str] = &[
-    "cpu_ref/ssr.rs",
-    "cpu_ref/lbvh.rs",
-    "vk/context.rs",
-    "passes/lbvh/mod.rs",
-];
-
 /// No file of `src/` grows past `FILE_LINES_MAX` lines of code (its `#[cfg(test)]`
-/// module aside), except those listed to split.
+/// module aside).
 #[test]
 fn files_stay_readable() {
     let mut files = Vec::new();
@@ -526,22 +493,12 @@ fn files_stay_readable() {
         let text = std::fs::read_to_string(f).unwrap();
         let lines = text.split("#[cfg(test)]").next().unwrap().lines().count();
         if lines > FILE_LINES_MAX {
-            long.push((rel, lines));
+            long.push(format!("src/{rel}: {lines} lines"));
         }
     }
-    let unlisted: Vec<String> = long
-        .iter()
-        .filter(|(n, _)| !LONG_FILES_TO_SPLIT.contains(&n.as_str()))
-        .map(|(n, lines)| format!("src/{n}: {lines} lines"))
-        .collect();
     assert!(
-        unlisted.is_empty(),
+        long.is_empty(),
         "files over {FILE_LINES_MAX} lines:\n{}",
-        unlisted.join("\n")
+        long.join("\n")
     );
-    let done: Vec<&&str> = LONG_FILES_TO_SPLIT
-        .iter()
-        .filter(|n| !long.iter().any(|(l, _)| l == *n))
-        .collect();
-    assert!(done.is_empty(), "split, take them off LONG_FILES_TO_SPLIT: {done:?}");
 }

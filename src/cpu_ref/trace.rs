@@ -106,45 +106,7 @@ impl CpuBvh {
                 continue;
             }
             let cb = range.iter().fold(Aabb::EMPTY, |b, &p| b.grow(centers[p as usize]));
-            // Best (cost, axis, split bin) over all axes.
-            let mut best: Option<(f32, usize, usize)> = None;
-            #[allow(clippy::needless_range_loop)] // `axis` indexes Vec3s, not one slice
-            for axis in 0..3 {
-                let (lo, hi) = (cb.lo[axis], cb.hi[axis]);
-                if hi <= lo {
-                    continue;
-                }
-                let scale = BINS as f32 / (hi - lo);
-                let bin_of = |p: u32| (((centers[p as usize][axis] - lo) * scale) as usize).min(BINS - 1);
-                let mut bin_box = [Aabb::EMPTY; BINS];
-                let mut bin_n = [0usize; BINS];
-                for &p in range.iter() {
-                    let b = bin_of(p);
-                    bin_box[b] = bin_box[b].union(boxes[p as usize]);
-                    bin_n[b] += 1;
-                }
-                let mut right_area = [0f32; BINS];
-                let mut right_n = [0usize; BINS];
-                let (mut acc, mut acc_n) = (Aabb::EMPTY, 0);
-                for b in (1..BINS).rev() {
-                    acc = acc.union(bin_box[b]);
-                    acc_n += bin_n[b];
-                    right_area[b] = acc.area();
-                    right_n[b] = acc_n;
-                }
-                let (mut acc, mut acc_n) = (Aabb::EMPTY, 0);
-                for split in 1..BINS {
-                    acc = acc.union(bin_box[split - 1]);
-                    acc_n += bin_n[split - 1];
-                    if acc_n == 0 || right_n[split] == 0 {
-                        continue;
-                    }
-                    let cost = acc.area() * acc_n as f32 + right_area[split] * right_n[split] as f32;
-                    if best.is_none_or(|b| cost < b.0) {
-                        best = Some((cost, axis, split));
-                    }
-                }
-            }
+            let best = best_split(range, &boxes, &centers, cb);
             let leaf_cost = bounds.area() * count as f32;
             let split_cost = best.map(|b| bounds.area() + b.0);
             let mid = match best {
@@ -234,4 +196,48 @@ impl CpuBvh {
         }
         best
     }
+}
+
+/// The binned-SAH split of the triangles `range` whose centroids span `cb`: the best
+/// (cost, axis, split bin) over all axes, `None` where every axis is flat.
+fn best_split(range: &[u32], boxes: &[Aabb], centers: &[Vec3], cb: Aabb) -> Option<(f32, usize, usize)> {
+    let mut best: Option<(f32, usize, usize)> = None;
+    #[allow(clippy::needless_range_loop)] // `axis` indexes Vec3s, not one slice
+    for axis in 0..3 {
+        let (lo, hi) = (cb.lo[axis], cb.hi[axis]);
+        if hi <= lo {
+            continue;
+        }
+        let scale = BINS as f32 / (hi - lo);
+        let bin_of = |p: u32| (((centers[p as usize][axis] - lo) * scale) as usize).min(BINS - 1);
+        let mut bin_box = [Aabb::EMPTY; BINS];
+        let mut bin_n = [0usize; BINS];
+        for &p in range.iter() {
+            let b = bin_of(p);
+            bin_box[b] = bin_box[b].union(boxes[p as usize]);
+            bin_n[b] += 1;
+        }
+        let mut right_area = [0f32; BINS];
+        let mut right_n = [0usize; BINS];
+        let (mut acc, mut acc_n) = (Aabb::EMPTY, 0);
+        for b in (1..BINS).rev() {
+            acc = acc.union(bin_box[b]);
+            acc_n += bin_n[b];
+            right_area[b] = acc.area();
+            right_n[b] = acc_n;
+        }
+        let (mut acc, mut acc_n) = (Aabb::EMPTY, 0);
+        for split in 1..BINS {
+            acc = acc.union(bin_box[split - 1]);
+            acc_n += bin_n[split - 1];
+            if acc_n == 0 || right_n[split] == 0 {
+                continue;
+            }
+            let cost = acc.area() * acc_n as f32 + right_area[split] * right_n[split] as f32;
+            if best.is_none_or(|b| cost < b.0) {
+                best = Some((cost, axis, split));
+            }
+        }
+    }
+    best
 }

@@ -124,99 +124,104 @@ pub fn parse(text: &str) -> Result<Vec<Step>> {
         if line.is_empty() {
             continue;
         }
-        let words: Vec<&str> = line.split_whitespace().collect();
-        let bad = |why: &str| Error::Input(format!("script line {}: '{line}': {why}", i + 1));
-        let args = |n: usize| -> Result<()> {
-            if words.len() != n + 1 {
-                return Err(bad(&format!("'{}' takes {n} argument(s)", words[0])));
-            }
-            Ok(())
-        };
-        let step = match words[0] {
-            "wait" => {
-                args(1)?;
-                let n: u32 = words[1].parse().map_err(|_| bad("frames must be a whole number"))?;
-                if n > 1_000_000 {
-                    return Err(bad("at most 1000000 frames"));
-                }
-                Step::Wait(n)
-            }
-            "key" => {
-                args(1)?;
-                Step::Key(
-                    Action::from_key(words[1])
-                        .ok_or_else(|| bad("unknown key (keys: 1-5 f h p space . backspace r c m escape)"))?,
-                )
-            }
-            "set" => {
-                if words.len() < 3 {
-                    return Err(bad("'set' takes a setting and a value"));
-                }
-                Step::Set(words[1].into(), words[2..].join(" "))
-            }
-            "resize" => {
-                args(2)?;
-                let side = |s: &str| -> Result<u32> {
-                    match s.parse::<u32>() {
-                        Ok(v) if (1..=crate::settings::MAX_SIDE).contains(&v) => Ok(v),
-                        _ => Err(bad(&format!("sizes are 1..={}", crate::settings::MAX_SIDE))),
-                    }
-                };
-                Step::Resize(side(words[1])?, side(words[2])?)
-            }
-            "minimize" => {
-                args(0)?;
-                Step::Minimize
-            }
-            "restore" => {
-                args(0)?;
-                Step::Restore
-            }
-            "camera" => {
-                args(2)?;
-                let p = vec3(words[1]).ok_or_else(|| bad("position must be x,y,z"))?;
-                let t = vec3(words[2]).ok_or_else(|| bad("target must be x,y,z"))?;
-                if p == t {
-                    return Err(bad("the camera must not look at its own position"));
-                }
-                Step::Camera(p, t)
-            }
-            "screenshot" => {
-                args(1)?;
-                let path = PathBuf::from(words[1]);
-                crate::output::check(&path, crate::output::Kind::Png)?;
-                Step::Screenshot(path)
-            }
-            "window-shot" => {
-                args(1)?;
-                let path = PathBuf::from(words[1]);
-                crate::output::check(&path, crate::output::Kind::Png)?;
-                Step::WindowShot(path)
-            }
-            "compare" => {
-                args(0)?;
-                Step::Compare
-            }
-            "save-settings" => {
-                args(1)?;
-                let path = PathBuf::from(words[1]);
-                crate::output::check(&path, crate::output::Kind::Json)?;
-                Step::SaveSettings(path)
-            }
-            "quit" => {
-                args(0)?;
-                Step::Quit
-            }
-            other => {
-                return Err(bad(&format!(
-                    "unknown step '{other}' (steps: wait, key, set, resize, minimize, restore, camera, screenshot, \
-                     window-shot, compare, save-settings, quit)"
-                )))
-            }
-        };
-        steps.push(step);
+        steps.push(parse_step(line, i + 1)?);
     }
     Ok(steps)
+}
+
+/// One step of a script: `line` (comment and blanks stripped, not empty) at line
+/// `number`.
+fn parse_step(line: &str, number: usize) -> Result<Step> {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let bad = |why: &str| Error::Input(format!("script line {number}: '{line}': {why}"));
+    let args = |n: usize| -> Result<()> {
+        if words.len() != n + 1 {
+            return Err(bad(&format!("'{}' takes {n} argument(s)", words[0])));
+        }
+        Ok(())
+    };
+    Ok(match words[0] {
+        "wait" => {
+            args(1)?;
+            let n: u32 = words[1].parse().map_err(|_| bad("frames must be a whole number"))?;
+            if n > 1_000_000 {
+                return Err(bad("at most 1000000 frames"));
+            }
+            Step::Wait(n)
+        }
+        "key" => {
+            args(1)?;
+            Step::Key(
+                Action::from_key(words[1])
+                    .ok_or_else(|| bad("unknown key (keys: 1-5 f h p space . backspace r c m escape)"))?,
+            )
+        }
+        "set" => {
+            if words.len() < 3 {
+                return Err(bad("'set' takes a setting and a value"));
+            }
+            Step::Set(words[1].into(), words[2..].join(" "))
+        }
+        "resize" => {
+            args(2)?;
+            let side = |s: &str| -> Result<u32> {
+                match s.parse::<u32>() {
+                    Ok(v) if (1..=crate::settings::MAX_SIDE).contains(&v) => Ok(v),
+                    _ => Err(bad(&format!("sizes are 1..={}", crate::settings::MAX_SIDE))),
+                }
+            };
+            Step::Resize(side(words[1])?, side(words[2])?)
+        }
+        "minimize" => {
+            args(0)?;
+            Step::Minimize
+        }
+        "restore" => {
+            args(0)?;
+            Step::Restore
+        }
+        "camera" => {
+            args(2)?;
+            let p = vec3(words[1]).ok_or_else(|| bad("position must be x,y,z"))?;
+            let t = vec3(words[2]).ok_or_else(|| bad("target must be x,y,z"))?;
+            if p == t {
+                return Err(bad("the camera must not look at its own position"));
+            }
+            Step::Camera(p, t)
+        }
+        "screenshot" => {
+            args(1)?;
+            let path = PathBuf::from(words[1]);
+            crate::output::check(&path, crate::output::Kind::Png)?;
+            Step::Screenshot(path)
+        }
+        "window-shot" => {
+            args(1)?;
+            let path = PathBuf::from(words[1]);
+            crate::output::check(&path, crate::output::Kind::Png)?;
+            Step::WindowShot(path)
+        }
+        "compare" => {
+            args(0)?;
+            Step::Compare
+        }
+        "save-settings" => {
+            args(1)?;
+            let path = PathBuf::from(words[1]);
+            crate::output::check(&path, crate::output::Kind::Json)?;
+            Step::SaveSettings(path)
+        }
+        "quit" => {
+            args(0)?;
+            Step::Quit
+        }
+        other => {
+            return Err(bad(&format!(
+                "unknown step '{other}' (steps: wait, key, set, resize, minimize, restore, camera, screenshot, \
+                 window-shot, compare, save-settings, quit)"
+            )))
+        }
+    })
 }
 
 #[cfg(test)]

@@ -105,36 +105,7 @@ impl GBufferPass {
             (access::COMPUTE_READ, access::DEPTH_WRITE),
             (L::UNDEFINED, L::DEPTH_ATTACHMENT_OPTIMAL),
         );
-        let clear_float = vk::ClearValue {
-            color: vk::ClearColorValue { float32: [0.0; 4] },
-        };
-        let clear_none = vk::ClearValue {
-            color: vk::ClearColorValue {
-                uint32: [MATERIAL_NONE; 4],
-            },
-        };
-        let colors: Vec<_> = self
-            .out
-            .colors()
-            .iter()
-            .zip([clear_float, clear_float, clear_none])
-            .map(|(img, clear)| {
-                vk::RenderingAttachmentInfo::default()
-                    .image_view(img.view)
-                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(clear)
-            })
-            .collect();
-        let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(self.out.depth.view)
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
-            });
+        let (colors, depth) = self.attachments();
         let extent = self.out.depth.extent;
         let info = vk::RenderingInfo::default()
             .render_area(vk::Rect2D {
@@ -179,5 +150,46 @@ impl GBufferPass {
             (access::DEPTH_WRITE, access::COMPUTE_READ),
             (L::DEPTH_ATTACHMENT_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
         );
+    }
+
+    /// The G-buffer's colour attachments (cleared to zero, the material to
+    /// `MATERIAL_NONE`) and its depth attachment (cleared to 1), stored.
+    fn attachments(
+        &self,
+    ) -> (
+        Vec<vk::RenderingAttachmentInfo<'static>>,
+        vk::RenderingAttachmentInfo<'static>,
+    ) {
+        let clear_float = vk::ClearValue {
+            color: vk::ClearColorValue { float32: [0.0; 4] },
+        };
+        let clear_none = vk::ClearValue {
+            color: vk::ClearColorValue {
+                uint32: [MATERIAL_NONE; 4],
+            },
+        };
+        let colors: Vec<_> = self
+            .out
+            .colors()
+            .iter()
+            .zip([clear_float, clear_float, clear_none])
+            .map(|(img, clear)| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(img.view)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(clear)
+            })
+            .collect();
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(self.out.depth.view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
+            });
+        (colors, depth)
     }
 }

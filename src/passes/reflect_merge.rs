@@ -213,6 +213,14 @@ impl MergePass {
             barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
             return;
         }
+        self.record_blur(cmd, frame, blur);
+    }
+
+    /// The seam blur over the merged reflection: the tile pass lists the tiles near a
+    /// seam, then a horizontal and a vertical pass over those tiles only.
+    fn record_blur(&self, cmd: vk::CommandBuffer, frame: &Buffer, blur: BlurParams) {
+        let d = &self.ctx.device;
+        let t = &self.targets;
         // RAW: the tile pass reads the merge's tile bits, the blur its merged image;
         // WAW: the tile pass rewrites the previous run's activity and list. WAR/WAW: the
         // previous run's uses of the dispatch arguments finish before they are reset.

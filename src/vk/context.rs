@@ -6,6 +6,7 @@
 //! validation) is switched on by `ContextDesc::validation`; every warning or error the
 //! layer reports is printed and counted in `Context::validation_messages`.
 
+use super::device::{check_device, describe, select, DeviceInfo};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -43,49 +44,6 @@ pub struct Surface {
     pub loader: ash::khr::surface::Instance,
     pub raw: vk::SurfaceKHR,
     pub swapchain: ash::khr::swapchain::Device,
-}
-
-/// One physical device as `speculum devices` shows it.
-#[derive(Clone, Debug)]
-pub struct DeviceInfo {
-    pub index: usize,
-    pub name: String,
-    pub kind: vk::PhysicalDeviceType,
-    pub api_version: u32,
-    /// The driver's name and version text (`VkPhysicalDeviceDriverProperties`), e.g.
-    /// "llvmpipe, Mesa 25.0.7 (LLVM 15.0.6)".
-    pub driver: String,
-    /// `Err(reason)` when Speculum cannot run on it.
-    pub usable: std::result::Result<(), String>,
-}
-
-impl DeviceInfo {
-    /// "discrete GPU", "CPU", ... for listings.
-    pub fn kind_name(&self) -> &'static str {
-        kind_name(self.kind)
-    }
-
-    /// Preference order when no device is named: lower is better.
-    fn rank(&self) -> u32 {
-        match self.kind {
-            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
-            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
-            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
-            vk::PhysicalDeviceType::CPU => 3,
-            _ => 4,
-        }
-    }
-}
-
-/// "discrete GPU", "CPU", ... for a device type.
-pub fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
-    match kind {
-        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
-        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
-        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
-        vk::PhysicalDeviceType::CPU => "CPU",
-        _ => "other",
-    }
 }
 
 /// Counts validation messages; lives in a `Box` whose address the messenger holds.
@@ -214,86 +172,6 @@ fn create_instance(
     Ok((instance, has_debug_utils))
 }
 
-/// Why a physical device cannot run Speculum, if it cannot.
-fn check_device(instance: &ash::Instance, pd: vk::PhysicalDevice) -> std::result::Result<u32, String> {
-    let props = unsafe { instance.get_physical_device_properties(pd) };
-    if props.api_version < vk::API_VERSION_1_3 {
-        return Err(format!(
-            "Vulkan {}.{} < 1.3",
-            vk::api_version_major(props.api_version),
-            vk::api_version_minor(props.api_version)
-        ));
-    }
-    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.map_err(|e| e.to_string())?;
-    if !exts.iter().any(|e| {
-        e.extension_name_as_c_str()
-            .is_ok_and(|n| n == ash::khr::push_descriptor::NAME)
-    }) {
-        return Err("no VK_KHR_push_descriptor".into());
-    }
-    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
-    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
-    unsafe { instance.get_physical_device_features2(pd, &mut f2) };
-    if f13.synchronization2 == 0 || f13.dynamic_rendering == 0 {
-        return Err("no synchronization2 or dynamic rendering".into());
-    }
-    // The list kernels aggregate their atomics per subgroup (ballot, elect, broadcast,
-    // subgroupOr), whatever the subgroup's size.
-    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
-    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
-    unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
-    let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::BALLOT | vk::SubgroupFeatureFlags::ARITHMETIC;
-    if !subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
-        || !subgroup.supported_operations.contains(ops)
-    {
-        return Err("no basic, ballot and arithmetic subgroup operations in compute shaders".into());
-    }
-    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-    families
-        .iter()
-        .position(|f| {
-            f.queue_flags
-                .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
-                && f.timestamp_valid_bits > 0
-        })
-        .map(|i| i as u32)
-        .ok_or_else(|| "no graphics+compute queue with timestamps".to_string())
-}
-
-fn describe(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceInfo)>> {
-    let pds = unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
-    Ok(pds
-        .into_iter()
-        .enumerate()
-        .map(|(index, pd)| {
-            let props = unsafe { instance.get_physical_device_properties(pd) };
-            let name = props
-                .device_name_as_c_str()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let usable = check_device(instance, pd).map(|_| ());
-            let mut driver = vk::PhysicalDeviceDriverProperties::default();
-            let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
-            unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
-            let text =
-                |c: std::result::Result<&CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
-            let info = DeviceInfo {
-                index,
-                name,
-                kind: props.device_type,
-                api_version: props.api_version,
-                driver: format!(
-                    "{}, {}",
-                    text(driver.driver_name_as_c_str()),
-                    text(driver.driver_info_as_c_str())
-                ),
-                usable,
-            };
-            (pd, info)
-        })
-        .collect())
-}
-
 /// Lists the physical devices, usable or not, in the order `--device INDEX` counts them.
 pub fn list_devices() -> Result<Vec<DeviceInfo>> {
     let entry = load_entry()?;
@@ -301,53 +179,6 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>> {
     let list = describe(&instance);
     unsafe { instance.destroy_instance(None) };
     Ok(list?.into_iter().map(|(_, info)| info).collect())
-}
-
-/// Picks the device `wanted` names, or the best usable one.
-fn select(list: &[(vk::PhysicalDevice, DeviceInfo)], wanted: Option<&str>) -> Result<usize> {
-    let names = || {
-        list.iter()
-            .map(|(_, d)| format!("{}: {}", d.index, d.name))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let chosen = match wanted {
-        Some(w) => {
-            let found = match w.trim().parse::<usize>() {
-                Ok(i) => list.iter().position(|(_, d)| d.index == i),
-                Err(_) => {
-                    let w = w.to_lowercase();
-                    list.iter().position(|(_, d)| d.name.to_lowercase().contains(&w))
-                }
-            };
-            let i = found.ok_or_else(|| {
-                Error::NoDevice(format!(
-                    "no Vulkan device matches --device '{w}' (devices: {})",
-                    names()
-                ))
-            })?;
-            if let Err(why) = &list[i].1.usable {
-                return Err(Error::NoDevice(format!(
-                    "device '{}' cannot run Speculum: {why}",
-                    list[i].1.name
-                )));
-            }
-            i
-        }
-        None => list
-            .iter()
-            .enumerate()
-            .filter(|(_, (_, d))| d.usable.is_ok())
-            .min_by_key(|(_, (_, d))| d.rank())
-            .map(|(i, _)| i)
-            .ok_or_else(|| {
-                Error::NoDevice(format!(
-                    "no usable Vulkan 1.3 device found (devices: {}); install mesa-vulkan-drivers for lavapipe",
-                    if list.is_empty() { "none".into() } else { names() }
-                ))
-            })?,
-    };
-    Ok(chosen)
 }
 
 /// Something a half-made context created, undone (`undo`) when the guard drops, unless

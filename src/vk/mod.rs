@@ -3,6 +3,7 @@
 pub mod barrier;
 pub mod buffer;
 pub mod context;
+pub mod device;
 pub mod frame_sync;
 pub mod image;
 pub mod pipeline;
@@ -11,7 +12,8 @@ pub mod swapchain;
 pub mod timing;
 
 pub use buffer::{Buffer, TexelView};
-pub use context::{list_devices, Context, ContextDesc, DeviceInfo, Surface, WindowHandles};
+pub use context::{list_devices, Context, ContextDesc, Surface, WindowHandles};
+pub use device::DeviceInfo;
 pub use frame_sync::{Acquired, FrameSync};
 pub use image::{Image, Sampler};
 pub use pipeline::{GraphicsDesc, Groups, Pipeline, Resource, Shader};

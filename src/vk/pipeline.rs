@@ -264,58 +264,7 @@ impl Pipeline {
             let stage_reflections: Vec<&Reflection> = reflections.iter().map(|r| r.1).collect();
             let push_size = push_size::<P>(ctx, name, &stage_reflections)?;
             let (set_layout, layout) = Self::layouts(ctx, name, &bindings, push_stages, push_size)?;
-            let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
-            let assembly =
-                vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-            let viewport = vk::PipelineViewportStateCreateInfo::default()
-                .viewport_count(1)
-                .scissor_count(1);
-            let (bias_on, bias_c, bias_s) = desc.depth_bias.map_or((false, 0.0, 0.0), |(c, s)| (true, c, s));
-            let raster = vk::PipelineRasterizationStateCreateInfo::default()
-                .polygon_mode(vk::PolygonMode::FILL)
-                .cull_mode(vk::CullModeFlags::NONE)
-                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-                .depth_bias_enable(bias_on)
-                .depth_bias_constant_factor(bias_c)
-                .depth_bias_slope_factor(bias_s)
-                .line_width(1.0);
-            let multisample =
-                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-                .depth_test_enable(true)
-                .depth_write_enable(true)
-                .depth_compare_op(vk::CompareOp::LESS);
-            let attachments: Vec<_> = desc
-                .color_formats
-                .iter()
-                .map(|_| {
-                    vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)
-                })
-                .collect();
-            let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
-            let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-            let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-            let mut rendering = vk::PipelineRenderingCreateInfo::default()
-                .color_attachment_formats(desc.color_formats)
-                .depth_attachment_format(desc.depth_format);
-            let info = vk::GraphicsPipelineCreateInfo::default()
-                .stages(&stage_infos)
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&assembly)
-                .viewport_state(&viewport)
-                .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&depth)
-                .color_blend_state(&blend)
-                .dynamic_state(&dynamic)
-                .layout(layout)
-                .push_next(&mut rendering);
-            let raw = unsafe {
-                ctx.device
-                    .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
-            }
-            .map_err(|(_, r)| r)
-            .vk("vkCreateGraphicsPipelines")?[0];
+            let raw = graphics_pipeline(ctx, desc, &stage_infos, layout)?;
             ctx.set_name(raw, name);
             Ok(Self {
                 ctx: ctx.clone(),
@@ -451,4 +400,63 @@ impl Drop for Pipeline {
             self.ctx.device.destroy_descriptor_set_layout(self.set_layout, None);
         }
     }
+}
+
+/// The graphics pipeline of `desc` over `stages` with `layout` (the fixed-function
+/// state `Pipeline::graphics` documents; viewport and scissor dynamic).
+fn graphics_pipeline(
+    ctx: &Context,
+    desc: &GraphicsDesc<'_>,
+    stages: &[vk::PipelineShaderStageCreateInfo<'_>],
+    layout: vk::PipelineLayout,
+) -> Result<vk::Pipeline> {
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let viewport = vk::PipelineViewportStateCreateInfo::default()
+        .viewport_count(1)
+        .scissor_count(1);
+    let (bias_on, bias_c, bias_s) = desc.depth_bias.map_or((false, 0.0, 0.0), |(c, s)| (true, c, s));
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .depth_bias_enable(bias_on)
+        .depth_bias_constant_factor(bias_c)
+        .depth_bias_slope_factor(bias_s)
+        .line_width(1.0);
+    let multisample =
+        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::LESS);
+    let attachments: Vec<_> = desc
+        .color_formats
+        .iter()
+        .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+        .collect();
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+    let mut rendering = vk::PipelineRenderingCreateInfo::default()
+        .color_attachment_formats(desc.color_formats)
+        .depth_attachment_format(desc.depth_format);
+    let info = vk::GraphicsPipelineCreateInfo::default()
+        .stages(stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&assembly)
+        .viewport_state(&viewport)
+        .rasterization_state(&raster)
+        .multisample_state(&multisample)
+        .depth_stencil_state(&depth)
+        .color_blend_state(&blend)
+        .dynamic_state(&dynamic)
+        .layout(layout)
+        .push_next(&mut rendering);
+    Ok(unsafe {
+        ctx.device
+            .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+    }
+    .map_err(|(_, r)| r)
+    .vk("vkCreateGraphicsPipelines")?[0])
 }

@@ -115,22 +115,7 @@ impl Swapchain {
         if extent.width == 0 || extent.height == 0 {
             return Ok(None);
         }
-        let formats = unsafe { s.loader.get_physical_device_surface_formats(pd, s.raw) }
-            .vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
-        let format = FORMATS
-            .iter()
-            .find_map(|f| {
-                formats
-                    .iter()
-                    .find(|sf| sf.format == *f && sf.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR)
-            })
-            .copied()
-            .ok_or_else(|| {
-                Error::NoDevice(format!(
-                    "the window offers no B8G8R8A8_UNORM or R8G8B8A8_UNORM sRGB surface format (it offers {:?})",
-                    formats.iter().map(|f| f.format).collect::<Vec<_>>()
-                ))
-            })?;
+        let format = surface_format(s, pd)?;
         let mut usage = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::COLOR_ATTACHMENT;
         if !caps.supported_usage_flags.contains(usage) {
             return Err(Error::NoDevice(
@@ -152,15 +137,7 @@ impl Swapchain {
         if caps.max_image_count > 0 {
             count = count.min(caps.max_image_count);
         }
-        let alpha = [
-            vk::CompositeAlphaFlagsKHR::OPAQUE,
-            vk::CompositeAlphaFlagsKHR::INHERIT,
-            vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
-            vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
-        ]
-        .into_iter()
-        .find(|a| caps.supported_composite_alpha.contains(*a))
-        .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE);
+        let alpha = composite_alpha(caps.supported_composite_alpha);
         let info = vk::SwapchainCreateInfoKHR::default()
             .surface(s.raw)
             .min_image_count(count)
@@ -189,25 +166,35 @@ impl Swapchain {
         };
         // From here on, Drop cleans up whatever was made.
         chain.images = unsafe { s.swapchain.get_swapchain_images(raw) }.vk("vkGetSwapchainImagesKHR")?;
-        for (i, &image) in chain.images.clone().iter().enumerate() {
+        chain.make_views()?;
+        Ok(Some(chain))
+    }
+
+    /// A view and a "rendered" semaphore per swapchain image.
+    fn make_views(&mut self) -> Result<()> {
+        for (i, &image) in self.images.clone().iter().enumerate() {
             let view_info = vk::ImageViewCreateInfo::default()
                 .image(image)
                 .view_type(vk::ImageViewType::TYPE_2D)
-                .format(chain.format)
+                .format(self.format)
                 .subresource_range(
                     vk::ImageSubresourceRange::default()
                         .aspect_mask(vk::ImageAspectFlags::COLOR)
                         .level_count(1)
                         .layer_count(1),
                 );
-            let view = unsafe { ctx.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
-            chain.views.push(view);
-            let sem = unsafe { ctx.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
-                .vk("vkCreateSemaphore")?;
-            ctx.set_name(sem, &format!("swapchain.rendered[{i}]"));
-            chain.rendered.push(sem);
+            let view = unsafe { self.ctx.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
+            self.views.push(view);
+            let sem = unsafe {
+                self.ctx
+                    .device
+                    .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+            }
+            .vk("vkCreateSemaphore")?;
+            self.ctx.set_name(sem, &format!("swapself.rendered[{i}]"));
+            self.rendered.push(sem);
         }
-        Ok(Some(chain))
+        Ok(())
     }
 
     /// Records the blit of `frame` (a colour image left in `GENERAL` by compute writes)
@@ -384,4 +371,37 @@ impl Drop for Swapchain {
             }
         }
     }
+}
+
+/// The first of `FORMATS` the surface offers in sRGB colour space.
+fn surface_format(s: &super::context::Surface, pd: vk::PhysicalDevice) -> Result<vk::SurfaceFormatKHR> {
+    let formats = unsafe { s.loader.get_physical_device_surface_formats(pd, s.raw) }
+        .vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
+    FORMATS
+        .iter()
+        .find_map(|f| {
+            formats
+                .iter()
+                .find(|sf| sf.format == *f && sf.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR)
+        })
+        .copied()
+        .ok_or_else(|| {
+            Error::NoDevice(format!(
+                "the window offers no B8G8R8A8_UNORM or R8G8B8A8_UNORM sRGB surface format (it offers {:?})",
+                formats.iter().map(|f| f.format).collect::<Vec<_>>()
+            ))
+        })
+}
+
+/// The first composite alpha the surface supports, opaque preferred.
+fn composite_alpha(supported: vk::CompositeAlphaFlagsKHR) -> vk::CompositeAlphaFlagsKHR {
+    [
+        vk::CompositeAlphaFlagsKHR::OPAQUE,
+        vk::CompositeAlphaFlagsKHR::INHERIT,
+        vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
+        vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
+    ]
+    .into_iter()
+    .find(|a| supported.contains(*a))
+    .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE)
 }

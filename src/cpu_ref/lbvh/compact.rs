@@ -1,0 +1,122 @@
+//! Reference of `lbvh.compact`: the static walk's 32-byte nodes, each child's box
+//! rounded outward to 16-bit steps of a power-of-two grid over the root's box.
+
+use crate::aabb::Aabb;
+use crate::gpu_types::TraversalNode;
+use glam::Vec3;
+
+/// The smallest power of two at least `x` (>= 0, finite), at least the smallest
+/// normal float (`pow2_at_least` in `glsl/shared/bvh.glsl`).
+fn pow2_at_least(x: f32) -> f32 {
+    let b = x.to_bits();
+    let e = b & 0x7f80_0000;
+    if e == 0 {
+        return f32::from_bits(0x0080_0000);
+    }
+    f32::from_bits(if b & 0x007f_ffff != 0 { e + 0x0080_0000 } else { e })
+}
+
+/// Two units in the last place of floats with `x`'s exponent, at least the smallest
+/// normal (`two_ulps`).
+fn two_ulps(x: f32) -> f32 {
+    let e = x.to_bits() & 0x7f80_0000;
+    f32::from_bits(if e >= 23 << 23 { e - (22 << 23) } else { 0x0080_0000 })
+}
+
+/// `compact_grid`: the grid of the compact nodes over the box [lo, hi] (the root's):
+/// origin `lo`, per axis the smallest power-of-two step whose 65,534 steps span the
+/// box, at least `two_ulps` of its largest coordinate. Returns (origin, step).
+pub fn compact_grid(lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+    let mut st = Vec3::ZERO;
+    for a in 0..3 {
+        let ext = hi[a] - lo[a];
+        let s = pow2_at_least(ext * (1.0 / 65536.0));
+        let s = if s * 65534.0 < ext { 2.0 * s } else { s };
+        st[a] = s.max(two_ulps(lo[a].abs().max(hi[a].abs())));
+    }
+    (lo, st)
+}
+
+/// `grid_at`: grid coordinate `q` along an axis (origin `g`, step `s`); `q * s` is
+/// exact, so this is one rounding, as a fused multiply-add would give.
+fn grid_at(q: u32, g: f32, s: f32) -> f32 {
+    g + q as f32 * s
+}
+
+/// `grid_units`: (x - g) / s in steps of the grid (s a power of two: 1 / s is exact).
+fn grid_units(x: f32, g: f32, s: f32) -> f32 {
+    (x - g) * f32::from_bits(0x7f00_0000 - s.to_bits())
+}
+
+/// `grid_down`: the largest q with `grid_at(q) <= x` (x in the grid's box).
+fn grid_down(x: f32, g: f32, s: f32) -> u32 {
+    let mut q = grid_units(x, g, s).floor().clamp(0.0, 65535.0) as u32;
+    for _ in 0..2 {
+        if q > 0 && grid_at(q, g, s) > x {
+            q -= 1;
+        }
+    }
+    if grid_at(q, g, s) > x {
+        0
+    } else {
+        q
+    }
+}
+
+/// `grid_up`: the smallest q with `grid_at(q) >= x` (x in the grid's box).
+fn grid_up(x: f32, g: f32, s: f32) -> u32 {
+    let mut q = grid_units(x, g, s).ceil().clamp(0.0, 65535.0) as u32;
+    for _ in 0..2 {
+        if q < 65535 && grid_at(q, g, s) < x {
+            q += 1;
+        }
+    }
+    if grid_at(q, g, s) < x {
+        65535
+    } else {
+        q
+    }
+}
+
+/// `compact_half`: one half of a compact node, the box [lo, hi] rounded outward on
+/// the grid (g, st) and the child link.
+pub fn compact_half(lo: [f32; 3], hi: [f32; 3], child: u32, g: Vec3, st: Vec3) -> [u32; 4] {
+    let l: [u32; 3] = std::array::from_fn(|a| grid_down(lo[a], g[a], st[a]));
+    let h: [u32; 3] = std::array::from_fn(|a| grid_up(hi[a], g[a], st[a]));
+    [l[0] | l[1] << 16, l[2] | h[0] << 16, h[1] | h[2] << 16, child]
+}
+
+/// The box of a compact half on the grid (g, st), as the walk decodes it.
+pub fn compact_box(half: [u32; 4], g: Vec3, st: Vec3) -> Aabb {
+    let q = |w: u32, high: bool| if high { w >> 16 } else { w & 0xffff };
+    let at = |a: usize, q: u32| grid_at(q, g[a], st[a]);
+    Aabb {
+        lo: Vec3::new(
+            at(0, q(half[0], false)),
+            at(1, q(half[0], true)),
+            at(2, q(half[1], false)),
+        ),
+        hi: Vec3::new(
+            at(0, q(half[1], true)),
+            at(1, q(half[2], false)),
+            at(2, q(half[2], true)),
+        ),
+    }
+}
+
+/// `lbvh.compact`: the compact nodes of `nodes` (`glsl/shared/bvh.glsl`), as texels of
+/// 4 words: the grid's origin and step over the root's box, then each node's two
+/// halves.
+pub fn compact_nodes(nodes: &[TraversalNode]) -> Vec<[u32; 4]> {
+    let root = Aabb::of_node(&nodes[0]);
+    let (g, st) = compact_grid(root.lo, root.hi);
+    let mut out = vec![
+        [g.x.to_bits(), g.y.to_bits(), g.z.to_bits(), 0],
+        [st.x.to_bits(), st.y.to_bits(), st.z.to_bits(), 0],
+    ];
+    for n in nodes {
+        out.push(compact_half(n.lo0, n.hi0, n.child0, g, st));
+        out.push(compact_half(n.lo1, n.hi1, n.child1, g, st));
+    }
+    out
+}

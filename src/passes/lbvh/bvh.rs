@@ -1,0 +1,239 @@
+//! `Bvh`: a tree's buffers on the GPU (nodes, triangles in leaf order, the static
+//! walk's compact nodes, the sort's scratch), and the refit's schedule by height.
+
+use super::sort::SortBuffers;
+use super::{MortonBits, MAX_TRIANGLES};
+use crate::aabb::{ordered_to_float, Aabb};
+use crate::error::{Error, Result};
+use crate::gpu_types::{PackedBvh, TraversalNode, TraversalTri};
+use crate::vk::{Buffer, Context, TexelView};
+use ash::vk;
+use glam::Vec3;
+use gpu_allocator::MemoryLocation;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Arc;
+
+/// The compact nodes (`lbvh.compact`; `glsl/shared/bvh.glsl`): 2 + 2 max(N-1, 1)
+/// texels of 16 bytes, and the same as the walk reads them.
+pub struct CompactNodes {
+    pub buffer: Buffer,
+    pub texels: TexelView,
+}
+
+/// A BVH on the GPU and the scratch memory to rebuild it.
+pub struct Bvh {
+    /// max(N-1, 1) `TraversalNode`s (written by the fit and the refit).
+    pub tnodes: Buffer,
+    /// N `TraversalTri`s, in leaf order.
+    pub ttris: Buffer,
+    /// `tnodes` and `ttris` as the traversal reads them (texel buffers).
+    pub node_texels: TexelView,
+    pub tri_texels: TexelView,
+    /// The compact nodes the walk of the static BVH reads (`Bvh::new_static`; none for
+    /// a BVH only ever walked as the dynamic one).
+    pub compact: Option<CompactNodes>,
+    /// Builds and refits recorded, and the count when `compact` was last recorded.
+    pub(super) shaped: AtomicU32,
+    pub(super) compacted: AtomicU32,
+    /// The fit's swap word per internal node (the first child's outer end).
+    pub(super) ends: Buffer,
+    /// The fit's SAH cost of the subtree in each half of each node.
+    pub(super) costs: Buffer,
+    pub(super) bounds: Buffer,
+    pub sort: SortBuffers,
+    pub tri_count: u32,
+    pub bits: MortonBits,
+}
+
+impl Bvh {
+    /// Memory for a BVH over `tri_count` triangles.
+    pub fn new(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits) -> Result<Self> {
+        if tri_count == 0 {
+            return Err(Error::Bvh("a BVH needs at least one triangle".into()));
+        }
+        if tri_count > MAX_TRIANGLES {
+            return Err(Error::Bvh(format!(
+                "{tri_count} triangles exceed the LBVH limit of {MAX_TRIANGLES}"
+            )));
+        }
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let buf = |name: &str, bytes: u64| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        // What the traversal reads, also as texel buffers (TexelView).
+        let texels = |name: &str, bytes: u64| {
+            Buffer::new(
+                ctx,
+                name,
+                bytes,
+                usage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+                MemoryLocation::GpuOnly,
+            )
+        };
+        let tnodes = texels(
+            "lbvh.tnodes",
+            (tri_count as u64 - 1).max(1) * std::mem::size_of::<TraversalNode>() as u64,
+        )?;
+        let ttris = texels(
+            "lbvh.ttris",
+            tri_count as u64 * std::mem::size_of::<TraversalTri>() as u64,
+        )?;
+        Ok(Self {
+            node_texels: TexelView::new(ctx, &tnodes)?,
+            tri_texels: TexelView::new(ctx, &ttris)?,
+            compact: None,
+            shaped: AtomicU32::new(1),
+            compacted: AtomicU32::new(0),
+            tnodes,
+            ttris,
+            ends: buf("lbvh.ends", (tri_count as u64 - 1).max(1) * 4)?,
+            costs: buf("lbvh.costs", (tri_count as u64 - 1).max(1) * 2 * 4)?,
+            bounds: buf("lbvh.bounds", 12 * 4)?,
+            sort: SortBuffers::new(ctx, tri_count, bits.key_words())?,
+            tri_count,
+            bits,
+        })
+    }
+
+    /// Memory for a BVH walked as the static one: `new` and its compact nodes.
+    pub fn new_static(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits) -> Result<Self> {
+        let mut bvh = Self::new(ctx, tri_count, bits)?;
+        let buffer = Buffer::new(
+            ctx,
+            "lbvh.compact",
+            (2 + 2 * (tri_count as u64 - 1).max(1)) * 16,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
+        bvh.compact = Some(CompactNodes {
+            texels: TexelView::new(ctx, &buffer)?,
+            buffer,
+        });
+        Ok(bvh)
+    }
+
+    /// Bytes of the BVH itself (nodes, compact nodes if any, and triangles), without
+    /// the rebuild scratch.
+    pub fn bytes(&self) -> u64 {
+        self.tnodes.size + self.compact.as_ref().map_or(0, |c| c.buffer.size) + self.ttris.size
+    }
+
+    /// Whether the BVH has compact nodes, recorded after the last build or refit
+    /// recorded (what the walk of the static BVH needs).
+    pub fn compact_current(&self) -> bool {
+        self.compact.is_some() && self.compacted.load(Ordering::Relaxed) == self.shaped.load(Ordering::Relaxed)
+    }
+
+    /// A build or refit of the nodes was recorded: the compact nodes are stale.
+    pub(super) fn reshaped(&self) {
+        self.shaped.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// (centroid bounds, scene bounds) from the last `lbvh.bounds`, read back.
+    pub fn read_bounds(&self) -> Result<(Aabb, Aabb)> {
+        let w: Vec<u32> = bytemuck::pod_collect_to_vec(&self.bounds.read()?);
+        let v = |i: usize| {
+            Vec3::new(
+                ordered_to_float(w[i]),
+                ordered_to_float(w[i + 1]),
+                ordered_to_float(w[i + 2]),
+            )
+        };
+        Ok((Aabb { lo: v(0), hi: v(3) }, Aabb { lo: v(6), hi: v(9) }))
+    }
+
+    /// The nodes and triangles, read back (for tests and benchmarks).
+    pub fn read_packed(&self) -> Result<PackedBvh> {
+        Ok(PackedBvh {
+            nodes: bytemuck::pod_collect_to_vec(&self.tnodes.read()?),
+            tris: bytemuck::pod_collect_to_vec(&self.ttris.read()?),
+        })
+    }
+}
+
+/// The order in which a refit of a fixed topology can visit the internal nodes: by
+/// height (1: both children leaves), so a level's children are all done when it runs.
+/// Made on the CPU from the nodes of a built BVH (`of`), valid until it is rebuilt.
+pub struct RefitSchedule {
+    /// Internal nodes by height, lowest first.
+    pub(super) order: Buffer,
+    /// (first, count) into `order` of each height level.
+    pub(super) levels: Buffer,
+    pub(super) level_list: Vec<[u32; 2]>,
+}
+
+impl RefitSchedule {
+    /// The schedule of `bvh` as built now (reads its nodes back; waits for the GPU).
+    pub fn of(ctx: &Arc<Context>, bvh: &Bvh) -> Result<Self> {
+        let (order, level_list) = refit_order(&bvh.read_packed()?, bvh.tri_count);
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            order: Buffer::with_data(ctx, "lbvh.refit_order", usage, bytemuck::cast_slice(&order))?,
+            levels: Buffer::with_data(ctx, "lbvh.refit_levels", usage, bytemuck::cast_slice(&level_list))?,
+            level_list,
+        })
+    }
+}
+
+/// Internal node slots ordered by height (triangles are 0) in the binary tree of parent
+/// links (also the nodes inside leaves of several triangles, whose boxes the refit
+/// keeps), and each level's (first, count).
+pub fn refit_order(bvh: &PackedBvh, tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]>) {
+    let internal = tri_count.saturating_sub(1) as usize;
+    // Each node's height, from its children's as they become known: a node is done when
+    // both its halves have reported, then reports to its own parent.
+    let mut height = vec![0u32; internal];
+    let mut reported = vec![0u8; internal];
+    let mut ready: Vec<(u32, u32)> = if internal == 0 {
+        Vec::new()
+    } else {
+        bvh.tris.iter().map(|t| (t.parent, 0)).collect()
+    };
+    while let Some((link, h)) = ready.pop() {
+        let s = (link >> 1) as usize;
+        height[s] = height[s].max(h + 1);
+        reported[s] += 1;
+        if reported[s] == 2 && s != 0 {
+            ready.push((bvh.nodes[s].parent, height[s]));
+        }
+    }
+    let top = height.iter().copied().max().unwrap_or(0);
+    let mut levels = vec![[0u32; 2]; top as usize];
+    for h in &height {
+        levels[*h as usize - 1][1] += 1;
+    }
+    let mut first = 0;
+    for l in &mut levels {
+        l[0] = first;
+        first += l[1];
+    }
+    let mut fill: Vec<u32> = levels.iter().map(|l| l[0]).collect();
+    let mut order = vec![0u32; internal];
+    for (s, h) in height.iter().enumerate() {
+        let h = *h as usize - 1;
+        order[fill[h] as usize] = s as u32;
+        fill[h] += 1;
+    }
+    (order, levels)
+}
+
+/// Stack entries a walk of this tree can need at most: the internal nodes on its
+/// longest path from the root (a walk holds at most one pending child per node it
+/// descends through).
+pub fn stack_need(nodes: &[TraversalNode]) -> u32 {
+    let mut deepest = 0;
+    let mut stack = vec![(0u32, 1u32)];
+    while let Some((s, depth)) = stack.pop() {
+        deepest = deepest.max(depth);
+        let nd = &nodes[s as usize];
+        for c in [nd.child0, nd.child1] {
+            if crate::gpu_types::bvh_leaf(c).is_none() {
+                stack.push((c, depth + 1));
+            }
+        }
+    }
+    deepest
+}

@@ -1,6 +1,6 @@
 //! Structs shared by Rust and GLSL (`glsl/shared/types.glsl`). Each is `#[repr(C)]`
 //! and Pod; padding is named `_padN`; sizes are asserted here and member offsets are
-//! checked against the compiled SPIR-V by `tests/layout.rs`.
+//! checked against the compiled SPIR-V by `tests/suite/layout.rs`.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec4};

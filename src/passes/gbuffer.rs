@@ -1,7 +1,7 @@
 //! `gbuffer`: rasterizes the scene from the camera into depth, normal + reflectivity
 //! (the normal clamped so its mirror direction stays above the facet), base colour
 //! (textured, sRGB-encoded) + roughness and material id.
-//! No CPU reference of its own (a raster pass): `tests/gbuffer.rs` checks its targets
+//! No CPU reference of its own (a raster pass): `tests/suite/gbuffer.rs` checks its targets
 //! against analytic ray casts of a plane and a sphere, and texels against the CPU lookup.
 
 use super::{set_viewport, GBuffer, SceneGeometry, Surfaces};

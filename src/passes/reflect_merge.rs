@@ -5,7 +5,7 @@
 //! A full-screen dispatch costs lavapipe about as much for a pixel with nothing to do
 //! as for one with work (it runs both sides of every branch), so the blur must not be
 //! dispatched over tiles it leaves unchanged.
-//! CPU reference: `cpu_ref::merge` (`merge`, `active_tiles`, `seam_blur`; tests/merge.rs).
+//! CPU reference: `cpu_ref::merge` (`merge`, `active_tiles`, `seam_blur`; tests/suite/merge.rs).
 
 use super::GBuffer;
 use crate::error::Result;

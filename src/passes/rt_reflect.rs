@@ -1,7 +1,7 @@
 //! `rt.reflect`: the compacted pixels' reflection rays through the static
 //! and dynamic BVHs, shaded, with recursive bounces; an indirect dispatch sized by
 //! `ssr.compact`.
-//! CPU reference: `cpu_ref::reflect::reflected_radiance` (tests/rt_reflect.rs).
+//! CPU reference: `cpu_ref::reflect::reflected_radiance` (tests/suite/rt_reflect.rs).
 
 use super::GBuffer;
 use super::{CompactOutputs, Surfaces, TraceScene};

@@ -2,7 +2,7 @@
 //! list of rays. Usable on its own (`TracePass::trace`) for tests and benchmarks;
 //! `rt.reflect` walks the same BVHs with the same traversal (`glsl/shared/traverse.glsl`)
 //! from its own kernel, and binds them through `TraceScene::bindings`.
-//! CPU reference: `cpu_ref::trace` (`brute_force`, `CpuBvh`; tests/trace.rs).
+//! CPU reference: `cpu_ref::trace` (`brute_force`, `CpuBvh`; tests/suite/trace.rs).
 
 use super::TraceScene;
 use crate::error::{Error, Result};

@@ -4,7 +4,7 @@
 //! `map` runs none of this). The same classify → compact → indirect-trace shape as the
 //! reflections; between the two, `shadow.compact` is the reflections' compaction
 //! (`ssr_compact::CompactPass`) run over this pass's mask.
-//! CPU reference: `cpu_ref::shadows` (tests/shadows.rs).
+//! CPU reference: `cpu_ref::shadows` (tests/suite/shadows.rs).
 
 use super::{CompactOutputs, GBuffer, TraceScene};
 use crate::error::Result;

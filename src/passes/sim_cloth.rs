@@ -1,7 +1,7 @@
 //! `sim.cloth`: one time step of every cloth on the GPU (integrate, Jacobi iterations
 //! with the colliders, then the cloth's vertices and normals into the dynamic vertex
 //! buffer). Each cloth owns two particle buffers (ping-pong) and its colliders.
-//! CPU reference: `cpu_ref::cloth` (`integrate`, `relax`, `vertices`; tests/sim.rs).
+//! CPU reference: `cpu_ref::cloth` (`integrate`, `relax`, `vertices`; tests/suite/sim.rs).
 
 use crate::error::Result;
 use crate::scene::cloth::{Cloth, ClothPush, Particle};

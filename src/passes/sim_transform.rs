@@ -3,7 +3,7 @@
 //! poses come from the host: `RigidBodies` keeps one staging buffer per frame slot (a
 //! frame in flight still copies from its own while the next one's are written), and
 //! `record_posed` copies the slot's poses in before the transform.
-//! CPU reference: `cpu_ref::sim::transform` (tests/sim.rs).
+//! CPU reference: `cpu_ref::sim::transform` (tests/suite/sim.rs).
 
 use crate::error::Result;
 use crate::shader_defines::LBVH_WG;

@@ -4,7 +4,7 @@
 //! rounding up, down to 1x1. The levels lie one after another in one storage buffer
 //! (`HiZ::levels` gives each one's offset and size), which every device binds the same
 //! way (no per-mip storage views).
-//! CPU reference: `cpu_ref::ssr::hiz` (tests/ssr.rs), exactly.
+//! CPU reference: `cpu_ref::ssr::hiz` (tests/suite/ssr.rs), exactly.
 
 use super::{HiZ, Level};
 use crate::error::Result;

@@ -3,7 +3,7 @@
 //! or, with `ssr_hiz` off, by McGuire & Mara's 2014 linear DDA, kept for comparison. The classification lists the pixels worth a march and fails or
 //! clears the rest; the march runs over that list by an indirect dispatch (the shape
 //! of FidelityFX SSSR), so pixels with nothing to march cost it nothing.
-//! CPU reference: `cpu_ref::ssr` (`classify`, `march`; tests/ssr.rs).
+//! CPU reference: `cpu_ref::ssr` (`classify`, `march`; tests/suite/ssr.rs).
 
 use super::{GBuffer, HiZ};
 use crate::error::Result;

@@ -5,10 +5,44 @@
 pub mod showcase;
 
 use speculum::vk::{Context, ContextDesc};
-use std::sync::Arc;
+use std::cell::Cell;
+use std::sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard};
+
+/// The machine the tests share: every GPU context and every run of the binary holds it
+/// shared (`shared`); a test that times things holds it alone (`alone`), so no other
+/// test's threads preempt lavapipe's between two timestamps. (In one test binary the
+/// harness runs tests of every module side by side.)
+static MACHINE: RwLock<()> = RwLock::new(());
+
+thread_local! {
+    /// This thread holds `MACHINE` alone: what it starts needs no shared hold.
+    static ALONE: Cell<bool> = const { Cell::new(false) };
+}
+
+/// A shared hold on the machine, or none while this thread holds it alone.
+fn shared() -> Option<RwLockReadGuard<'static, ()>> {
+    (!ALONE.get()).then(|| MACHINE.read().unwrap_or_else(|e| e.into_inner()))
+}
+
+/// The machine to this test alone while the guard lives (no other test's GPU context
+/// or binary run side by side): for tests whose assertions read timings.
+pub struct Alone(#[allow(dead_code)] RwLockWriteGuard<'static, ()>);
+
+pub fn alone() -> Alone {
+    let guard = MACHINE.write().unwrap_or_else(|e| e.into_inner());
+    ALONE.set(true);
+    Alone(guard)
+}
+
+impl Drop for Alone {
+    fn drop(&mut self) {
+        ALONE.set(false);
+    }
+}
 
 /// A context with validation and synchronization validation on (always, in tests).
 pub fn context() -> GpuTest {
+    let share = shared();
     GpuTest(
         Context::new(&ContextDesc {
             validation: true,
@@ -16,6 +50,7 @@ pub fn context() -> GpuTest {
             ..Default::default()
         })
         .expect("a Vulkan device with validation layers (run tools/test, which installs them)"),
+        share,
     )
 }
 
@@ -23,7 +58,7 @@ pub fn context() -> GpuTest {
 /// layer reported anything in the test's life (wgpu's `#[gpu_test]` idea: no test can
 /// forget to check). Locals declared after it are dropped first, so messages from
 /// their destruction count too. Derefs to the context.
-pub struct GpuTest(Arc<Context>);
+pub struct GpuTest(Arc<Context>, Option<RwLockReadGuard<'static, ()>>);
 
 impl std::ops::Deref for GpuTest {
     type Target = Arc<Context>;
@@ -261,6 +296,7 @@ impl Speculum {
     pub fn run(mut self) -> Output {
         use std::io::Read;
         use std::process::Stdio;
+        let _share = shared();
         let mut child = self
             .cmd
             .stdin(Stdio::null())

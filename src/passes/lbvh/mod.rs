@@ -7,7 +7,7 @@
 //! in slot 0) and the triangles in leaf order (`TraversalTri`), each with a link to its
 //! box's half of the parent, which the refit climbs. `lbvh.compact` then writes the
 //! 32-byte nodes the walk of the static BVH reads (boxes rounded outward to 16 bits).
-//! CPU reference: `cpu_ref::lbvh` (every stage exactly; tests/lbvh.rs).
+//! CPU reference: `cpu_ref::lbvh` (every stage exactly; tests/suite/lbvh.rs).
 
 mod bvh;
 pub mod dynamic;

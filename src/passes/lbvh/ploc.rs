@@ -7,7 +7,7 @@
 //! submission did not end the build. A merged cluster of at most `BVH_LEAF_MAX`
 //! triangles that are one run in key order becomes a leaf where that costs no more SAH
 //! than its split; the refit follows the parent links as for the LBVH.
-//! CPU reference: `cpu_ref::lbvh::ploc` (tests/lbvh.rs).
+//! CPU reference: `cpu_ref::lbvh::ploc` (tests/suite/lbvh.rs).
 
 use super::{Bvh, Geometry};
 use crate::error::Result;

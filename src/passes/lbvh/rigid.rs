@@ -11,7 +11,7 @@
 //! sorted. Then `lbvh.fit` as for any build: the bodies' tree above, each body's
 //! subtree below, the boxes from this frame's world-space vertices. The same tree
 //! layout as a full build, refittable the same way.
-//! CPU reference: `cpu_ref::lbvh::rigid_keys` (tests/lbvh.rs).
+//! CPU reference: `cpu_ref::lbvh::rigid_keys` (tests/suite/lbvh.rs).
 
 use super::{Bvh, BOUNDS, MORTON, SORT};
 use crate::aabb::{cells10, morton30, size_class, unit_in, Aabb};

@@ -2,7 +2,7 @@
 //! count → scan → scatter (reduce-then-scan: no workgroup waits on another). A tile is
 //! one workgroup's keys, `SortTile::wg` threads x `SortTile::items` keys, its shape
 //! chosen for the device (`SortTile::for_device`).
-//! CPU reference: `cpu_ref::lbvh::sort_pairs` (tests/lbvh.rs).
+//! CPU reference: `cpu_ref::lbvh::sort_pairs` (tests/suite/lbvh.rs).
 
 use crate::error::{Error, Result};
 use crate::shader_defines::{

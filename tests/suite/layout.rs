@@ -99,7 +99,7 @@ fn tracer_layouts_match_glsl() {
         ),
     ];
     // The traversal reads these as texels (traverse.glsl's fetch_node, fetch_triangle:
-    // the same words in the same order); tests/trace.rs checks what it reads.
+    // the same words in the same order); tests/suite/trace.rs checks what it reads.
     for shader in [shaders::LBVH_FIT_COMP, shaders::LBVH_REFIT_LEAVES_COMP] {
         let r = reflected(shader);
         for (name, layout, stride) in &bvh {

@@ -1,7 +1,7 @@
 //! `ssr.compact` against the CPU on random masks: the list (in tile order) and its count
 //! exactly, and the indirect dispatch arguments.
 
-mod common;
+use crate::common;
 
 use ash::vk;
 use rand::Rng;

@@ -1,7 +1,7 @@
 //! Bad input gives a one-line error naming the problem and a non-zero exit: never a
 //! panic, a hang or a validation message. Runs the real `speculum` binary.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
@@ -564,7 +564,7 @@ fn bad_scene_files() {
         dir.path(),
         &["unsupported scene format '.xyz'", ".toml, .obj, .gltf, .glb, .ply"],
     );
-    let room = include_str!("../assets/scenes/room.toml");
+    let room = include_str!("../../assets/scenes/room.toml");
     let missing = write(
         dir.path(),
         "missing.toml",
@@ -583,7 +583,7 @@ fn bad_scene_files() {
 fn scene_file_with_a_model_renders() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "cube.obj", CUBE_FACES);
-    let room = include_str!("../assets/scenes/room.toml");
+    let room = include_str!("../../assets/scenes/room.toml");
     let scene = write(
         dir.path(),
         "mine.toml",

@@ -2,7 +2,7 @@
 //! world position from depth, normal, and material id at every pixel away from
 //! silhouettes.
 
-mod common;
+use crate::common;
 
 use glam::{Mat4, Vec3};
 use speculum::scene::{Camera, Material, SceneBuilder, TriMesh};

@@ -6,7 +6,7 @@
 //! tolerance of 2e-3 plus 2e-4 absolute (GPU `pow`/`normalize` are not correctly rounded;
 //! the sharp specular lobe amplifies their error).
 
-mod common;
+use crate::common;
 
 use ash::vk;
 use glam::{IVec2, Vec3, Vec4Swizzles};

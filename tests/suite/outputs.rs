@@ -8,9 +8,7 @@ use std::os::unix::fs::FileTypeExt;
 use std::path::Path;
 use std::process::Command;
 
-mod common;
-
-use common::speculum_in as speculum;
+use crate::common::speculum_in as speculum;
 
 /// Asserts a refusal before any GPU work: exit 1, one `error:` line holding `needles`.
 fn assert_refused(args: &[&str], dir: &Path, needles: &[&str]) {

@@ -1,7 +1,7 @@
 //! The LBVH benchmark checks what it times: a small run is valid, and its figures are
 //! consistent with each other.
 
-mod common;
+use crate::common;
 
 use speculum::bench::lbvh::{run_case, Options};
 use speculum::passes::lbvh::{BvhKind, MortonBits};

@@ -1,6 +1,6 @@
 //! Device creation, device listing, and the GPU timer.
 
-mod common;
+use crate::common;
 
 use speculum::vk::{list_devices, Context, ContextDesc, GpuTimer};
 

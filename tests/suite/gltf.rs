@@ -3,9 +3,9 @@
 //! sphere where the transforms say, seen in the G-buffer; the checker texture is
 //! sampled per texel (its squares alternate along a row of pixels).
 
-mod common;
+use crate::common;
 
-use common::{pixel_of, showcase};
+use crate::common::{pixel_of, showcase};
 use glam::{IVec2, Vec3};
 use speculum::scene::{load_with, Floor};
 use speculum::settings::Mode;

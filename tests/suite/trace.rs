@@ -2,7 +2,7 @@
 //! 1e-5 relative), over one BVH and over static + dynamic together; any-hit agrees on
 //! occlusion; a refit BVH traces like a fresh build.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use rand::Rng;

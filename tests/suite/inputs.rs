@@ -4,7 +4,7 @@
 //! at once with one line naming it, never read until memory runs out. Runs the real
 //! `speculum` binary, each run killed (and the test failed) after 30 s.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -3,7 +3,7 @@
 //! apply), a `Stat` (median, p10, p90, samples) beside every timing, and `passes_ms`
 //! listing every scope of the frame. Runs each report kind through the real binary.
 
-mod common;
+use crate::common;
 
 use serde_json::Value;
 use speculum::passes::lbvh::BvhKind;

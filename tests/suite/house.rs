@@ -2,7 +2,7 @@
 //! `src/` points down the layers, `vk/` has no import cycle, no pass imports another,
 //! and nothing on the frame path uses a CPU reference. Read from the source text:
 //! `crate::name` and `use crate::{...}` paths (`speculum::` in the binary), with
-//! comments and `#[cfg(test)]` modules left out. Run alone: `cargo test --test house`.
+//! comments and `#[cfg(test)]` modules left out. Run alone: `cargo test --test suite house::`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -142,7 +142,7 @@ fn layer(module: &str) -> usize {
     LAYERS
         .iter()
         .position(|l| l.contains(&module))
-        .unwrap_or_else(|| panic!("module {module} is in no layer of tests/house.rs (add it)"))
+        .unwrap_or_else(|| panic!("module {module} is in no layer of tests/suite/house.rs (add it)"))
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! SSR works at any scene scale: the same scene at 1/100 and 100 times its size (the
 //! camera scaled with it) gives the same fail mask, pixel for pixel up to rounding.
 
-mod common;
+use crate::common;
 
 use speculum::scene::Scene;
 use speculum::{Renderer, Settings};

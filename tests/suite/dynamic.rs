@@ -4,7 +4,7 @@
 //! one of them behind the camera, seen only in the reflections; the cloth in the floor
 //! and the chrome sphere).
 
-mod common;
+use crate::common;
 
 use speculum::headless::{self, FramePlan};
 use speculum::settings::Mode;

@@ -2,7 +2,7 @@
 //! the fit's tree (topology, slots, links) exactly, boxes exactly (min/max are exact in
 //! f32), the BVH invariants on random and degenerate inputs, and both refits.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use rand::Rng;

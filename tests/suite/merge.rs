@@ -3,7 +3,7 @@
 //! correctly rounded, so colours may differ by 1e-5 relative (+1e-6 absolute); the
 //! source labels in alpha must match exactly.
 
-mod common;
+use crate::common;
 
 use ash::vk;
 use rand::Rng;

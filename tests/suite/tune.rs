@@ -3,14 +3,9 @@
 //! brute-force check of its own numbers gives; `--resume` measures only new points;
 //! bad sweep files get one clear error.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
-
-/// The tests here run one at a time: the sweep's timings (and its confirmation, which
-/// fails when no round's timings pass their self-check) are only trustworthy when no
-/// other lavapipe process takes the cores between a scope's stamps.
-static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn speculum(args: &[&str]) -> common::Output {
     common::speculum(args).run()
@@ -34,7 +29,7 @@ fn rows(dir: &Path) -> Vec<Vec<String>> {
 
 #[test]
 fn a_small_sweep_writes_its_outputs_and_resumes() {
-    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let _alone = common::alone();
     let dir = tempfile::tempdir().unwrap();
     let sweep = dir.path().join("sweep.toml");
     std::fs::write(&sweep, SWEEP).unwrap();
@@ -135,7 +130,7 @@ fn a_small_sweep_writes_its_outputs_and_resumes() {
 
 #[test]
 fn bad_sweeps_and_csvs_are_refused_before_any_gpu_work() {
-    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let _alone = common::alone();
     let dir = tempfile::tempdir().unwrap();
     for (text, says) in [
         ("[axes]\nmax_bounce = [1, 2]\n", "unknown setting 'max_bounce'"),
@@ -174,7 +169,7 @@ fn bad_sweeps_and_csvs_are_refused_before_any_gpu_work() {
 /// the view flags as in every other command; bad ones refused before any GPU work.
 #[test]
 fn a_sweep_needs_no_file() {
-    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let _alone = common::alone();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     let o = out.to_str().unwrap();
@@ -215,7 +210,7 @@ fn a_sweep_needs_no_file() {
 /// unknown source is refused naming the field.
 #[test]
 fn shadows_are_a_tuner_axis() {
-    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let _alone = common::alone();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     let o = out.to_str().unwrap();

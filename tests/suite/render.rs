@@ -1,7 +1,7 @@
 //! Whole frames: shadows darken occluded points, and the default scene matches its
 //! stored golden image.
 
-mod common;
+use crate::common;
 
 use glam::{Mat4, Vec3};
 use speculum::scene::{Camera, Light, Material, SceneBuilder, TriMesh};

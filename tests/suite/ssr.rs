@@ -11,7 +11,7 @@
 //! or the secant's within 1e-4 relative, or a looked-up position within 2e-3 px of a
 //! pixel boundary (a ray grazing a depth edge) — and such pixels must be at most 1%.
 
-mod common;
+use crate::common;
 
 use ash::vk;
 use glam::IVec2;

@@ -10,7 +10,7 @@
 //! textured scene a channel may also differ by 8e-3 absolute, two steps of 1/256 of the
 //! texels' full contrast (lavapipe stays within 1e-3 on all but 3 of 11,540 pixels).
 
-mod common;
+use crate::common;
 
 use ash::vk;
 use glam::{IVec2, Vec3};
@@ -136,7 +136,7 @@ fn reflected_paths_match_cpu_reference() {
         };
         // The dynamic geometry of that frame, moved on the CPU by an independent world;
         // a cloth's vertices are the GPU's own (sim.cloth has its own CPU comparison in
-        // tests/sim.rs; 40 steps of two f32 simulations drift apart by more than the
+        // tests/suite/sim.rs; 40 steps of two f32 simulations drift apart by more than the
         // shading tolerance).
         let (dyn_vertices, dyn_bvh, meshes) = if !scene.cloths.is_empty() {
             let v = r.read_dynamic_vertices().unwrap().unwrap();

@@ -2,7 +2,7 @@
 //! work when the screen holds the answer, provenance tells the truth, no reflective
 //! pixel is left without a reflection, and every mode runs clean under validation.
 
-mod common;
+use crate::common;
 
 use ash::vk;
 use glam::{Mat4, Vec3};

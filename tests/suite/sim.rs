@@ -5,7 +5,7 @@
 //! product in f32, FMA-contracted or not), normals within 1e-5; material and object
 //! ids exactly.
 
-mod common;
+use crate::common;
 
 use glam::{Mat4, Quat, Vec3};
 use rand::Rng;

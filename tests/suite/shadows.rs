@@ -1,9 +1,9 @@
 //! The shadow compositor: `shadow.classify` against its CPU reference on random
 //! G-buffers; on real frames the hybrid answers like the all-rays frame, traces only
 //! where the shadow map is unsure, and traces exactly what `rays` would there. (The
-//! frame's visibility against the CPU's, rays included: tests/rt_reflect.rs.)
+//! frame's visibility against the CPU's, rays included: tests/suite/rt_reflect.rs.)
 
-mod common;
+use crate::common;
 
 use ash::vk;
 use glam::{IVec2, Vec3};
@@ -168,7 +168,7 @@ fn hybrid_shadows_match_rays_on_room() {
 /// visibility is wrong on many lit pixels; the hybrid sees the doubt (texels that
 /// disagree or sit on the compare, a grazing sun) and traces them, and its visibility
 /// is the rays' on all but a few. (The rays' visibility equals the CPU's:
-/// tests/rt_reflect.rs.)
+/// tests/suite/rt_reflect.rs.)
 #[test]
 fn hybrid_shadows_fix_what_the_map_gets_wrong() {
     let mut room = speculum::scene::load("room").unwrap();

@@ -4,12 +4,7 @@
 //! resolved `ssr.trace`'s first stamp after its own dispatch: the scope read ~0.1 ms and
 //! ~60 ms of work fell in the gap before it, which these tests catch.
 
-mod common;
-
-/// The tests here run one at a time: a second lavapipe instance in the same process
-/// would steal the cores between a scope's stamps, and the self-check would rightly
-/// call those timings untrustworthy.
-static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+use crate::common;
 
 use speculum::vk::GpuTimer;
 use speculum::{Renderer, Settings};
@@ -54,7 +49,7 @@ fn checked_frame(r: &mut Renderer, ctx: &speculum::vk::Context, what: &str) -> s
 /// screen, so it cannot read less than a tenth of `ssr.classify`.
 #[test]
 fn frame_scopes_nest_and_fill_the_frame() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let _one = common::alone();
     let ctx = common::context();
     for name in ["room", "drop"] {
         let scene = speculum::scene::load(name).unwrap();
@@ -95,7 +90,7 @@ fn frame_scopes_nest_and_fill_the_frame() {
 /// scope that read 0.1 ms on lavapipe) and an LBVH build with its stages pass too.
 #[test]
 fn one_shot_scopes_pass_their_self_check() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let _one = common::alone();
     let ctx = common::context();
     let scene = speculum::scene::load("room").unwrap();
     let mut r = Renderer::new(

@@ -145,11 +145,15 @@ Vertex hit_vertex(uint prim, uint k) {
 uint trace_stack[TRACE_STACK];
 
 // One ray's walk of BVH `bvh` (0: static, 1: dynamic). Called with a constant `bvh`,
-// so each call compiles to the fetches of its own BVH only. Sets `overflow` when a
-// push would pass TRACE_STACK (the push is dropped).
-void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool any_hit, inout Hit best,
-              inout bool overflow) {
+// so each call compiles to the fetches of its own BVH only. Sets `failed` when a push
+// would pass TRACE_STACK (the push is dropped), or when the walk would take more than
+// `max_steps` steps: a step visits one internal node, and a walk of a valid tree visits
+// each of its N-1 nodes at most once, so a walk past N steps is in a cycle (a
+// corrupted tree) and stops instead of hanging the device.
+void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool any_hit, uint max_steps,
+              inout Hit best, inout bool failed) {
     uint sp = 0u;
+    uint steps = 0u;
     uint top = BVH_INVALID; // when set, the top of the sp entries; the array holds the rest
     uint node = 0u; // the root, an internal node (or two links to the single leaf)
     vec3 grid_origin = vec3(0.0), grid_step = vec3(0.0);
@@ -158,6 +162,10 @@ void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool an
         grid_step = uintBitsToFloat(texelFetch(s_nodes, 1).xyz);
     }
     while (true) {
+        if (++steps > max_steps) {
+            failed = true;
+            break;
+        }
         TraversalNode nd = fetch_node(bvh, node, grid_origin, grid_step);
         float t0 = box_entry(nd.lo0, nd.hi0, origin, inv_dir, tmin, best.t);
         float t1 = box_entry(nd.lo1, nd.hi1, origin, inv_dir, tmin, best.t);
@@ -185,7 +193,7 @@ void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool an
                 top = far;
                 ++sp;
             } else {
-                overflow = true;
+                failed = true;
             }
             node = near;
             continue;
@@ -207,20 +215,21 @@ void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool an
 }
 
 // Traces one ray through both BVHs (a BVH with 0 triangles is skipped). Returns the
-// closest hit, or with any_hit the first found; t = -1 if the stack overflowed.
+// closest hit, or with any_hit the first found; t = -1 if a walk failed (its stack
+// overflowed, or it overran its step bound: the tree is not what the walk expects).
 Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, uint dynamic_tris, bool any_hit) {
     // A zero direction component becomes a huge finite inverse (not inf: 0 * inf = NaN).
     vec3 safe_dir = mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
     vec3 inv_dir = 1.0 / safe_dir;
     Hit best = Hit(tmax, BVH_INVALID, 0.0, 0.0);
-    bool overflow = false;
+    bool failed = false;
     if (static_tris != 0u) {
-        walk_bvh(0u, origin, dir, inv_dir, tmin, any_hit, best, overflow);
+        walk_bvh(0u, origin, dir, inv_dir, tmin, any_hit, static_tris, best, failed);
     }
     if (dynamic_tris != 0u && !(any_hit && best.prim != BVH_INVALID)) {
-        walk_bvh(1u, origin, dir, inv_dir, tmin, any_hit, best, overflow);
+        walk_bvh(1u, origin, dir, inv_dir, tmin, any_hit, dynamic_tris, best, failed);
     }
-    if (overflow) {
+    if (failed) {
         best = Hit(-1.0, BVH_INVALID, 0.0, 0.0); // reported as an error, never silently wrong
     }
     return best;

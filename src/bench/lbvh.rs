@@ -59,6 +59,9 @@ pub struct RaySetReport {
     /// Checked rays where two triangles tie at the same t and the sides picked
     /// different ones (both genuine hits at equal t).
     pub ties: u32,
+    /// Rays (of all, not only the checked) whose walk failed: its stack overflowed or
+    /// it overran its step bound (t = -1; must be 0).
+    pub failed_walks: u32,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -343,6 +346,7 @@ fn time_rays(
         checked: cpu.rays.min(rays.len() as u32),
         mismatches,
         ties,
+        failed_walks: hits.iter().filter(|h| h.t < 0.0).count() as u32,
     };
     Ok((report, hits))
 }
@@ -426,10 +430,11 @@ pub fn run_case(
     };
 
     let invariants_ok = invariants.is_ok();
+    let sound = |r: &RaySetReport| r.mismatches == 0 && r.failed_walks == 0;
     let valid = invariants_ok
-        && coherent.mismatches == 0
-        && incoherent.mismatches == 0
-        && file.as_ref().is_none_or(|f| f.mismatches == 0)
+        && sound(&coherent)
+        && sound(&incoherent)
+        && file.as_ref().is_none_or(sound)
         && build_ms.median.is_finite();
     Ok(CaseReport {
         name: name.into(),

@@ -473,3 +473,76 @@ fn a_tree_deeper_than_the_stack_is_reported() {
     }
     assert_eq!(ctx.validation_messages(), 0);
 }
+
+/// A walk that cannot end is stopped: with the root's first child planted as the root
+/// itself (its half box the scene's, so every ray entering the scene takes it; its
+/// second half a speck in a corner), a walk would circle the root forever without a
+/// push. Bounded by the triangle count, it stops and reports t = -1, in the static walk
+/// (compact nodes made from the planted tree) and the dynamic one alike; a ray that
+/// misses the scene's box still misses.
+#[test]
+fn a_planted_cycle_ends_in_a_reported_overrun() {
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let (v, i) = random_soup(300, 1.0, default_size(300), 11);
+    let built = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
+    let mut nodes: Vec<speculum::gpu_types::TraversalNode> =
+        bytemuck::pod_collect_to_vec(&built.bvh.tnodes.read().unwrap());
+    let root = nodes[0];
+    let (lo, hi) = (
+        Vec3::from(root.lo0).min(Vec3::from(root.lo1)),
+        Vec3::from(root.hi0).max(Vec3::from(root.hi1)),
+    );
+    let speck = lo + 1e-3 * (hi - lo);
+    nodes[0] = speculum::gpu_types::TraversalNode {
+        lo0: lo.to_array(),
+        child0: 0,
+        hi0: hi.to_array(),
+        lo1: lo.to_array(),
+        hi1: speck.to_array(),
+        ..root
+    };
+    built.bvh.tnodes.write(bytemuck::cast_slice(&nodes)).unwrap();
+    let mut timer = GpuTimer::new(&ctx, 8).unwrap();
+    ctx.one_shot(|cmd| {
+        timer.reset(cmd);
+        b.record_compact(cmd, &mut timer, &built.bvh);
+    })
+    .unwrap();
+    let center = 0.5 * (lo + hi);
+    let through = Ray {
+        origin: (center - 2.0 * (hi - lo)).to_array(),
+        tmin: 0.0,
+        dir: (hi - lo).normalize().to_array(),
+        tmax: f32::MAX,
+    };
+    let past = Ray {
+        origin: (hi + Vec3::ONE).to_array(),
+        dir: [1.0, 0.0, 0.0],
+        ..through
+    };
+    let tracer = TracePass::new(&ctx).unwrap();
+    for scene in [
+        TraceScene {
+            static_bvh: Some(built.traceable()),
+            dynamic_bvh: None,
+        },
+        TraceScene {
+            static_bvh: None,
+            dynamic_bvh: Some(built.traceable()),
+        },
+    ] {
+        let (hits, _) = tracer.trace(&[through, past], scene, false).unwrap();
+        assert_eq!(
+            (hits[0].t, hits[0].prim),
+            (-1.0, BVH_INVALID),
+            "the overrun is reported"
+        );
+        assert_eq!(
+            (hits[1].t, hits[1].prim),
+            (f32::MAX, BVH_INVALID),
+            "a miss stays a miss"
+        );
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}

@@ -211,8 +211,12 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
         format!("valid; {}", crate::cli::timing_note(&case.timing))
     } else {
         format!(
-            "INVALID: {:?} {} {} mismatches",
-            case.invariant_error, case.coherent.mismatches, case.incoherent.mismatches
+            "INVALID: {:?} {} {} mismatches, {} {} failed walks",
+            case.invariant_error,
+            case.coherent.mismatches,
+            case.incoherent.mismatches,
+            case.coherent.failed_walks,
+            case.incoherent.failed_walks
         )
     };
     text.line(format_args!(
@@ -227,14 +231,15 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     ));
     if let Some(f) = &case.file {
         text.line(format_args!(
-            "{:<14} rays file: {} rays, {} ({:.1} Mrays/s), {:.1}% hit, {} of {} checked differ",
+            "{:<14} rays file: {} rays, {} ({:.1} Mrays/s), {:.1}% hit, {} of {} checked differ, {} failed walks",
             "",
             f.rays,
             cell(Some(f.trace_ms)),
             f.mrays_per_s,
             100.0 * f.hit_fraction,
             f.mismatches,
-            f.checked
+            f.checked,
+            f.failed_walks
         ))
     }
     for a in case.embree.iter().flatten() {

@@ -12,7 +12,7 @@ layout(local_size_x = LBVH_WG) in;
 layout(binding = 0, std430) readonly buffer Vertices { Vertex vertices[]; };
 layout(binding = 1, std430) readonly buffer Indices { uint indices[]; };
 // [0..2] center min, [3..5] center max, [6..8] scene min, [9..11] scene max.
-layout(binding = 2, std430) buffer Bounds { uint bounds[12]; };
+layout(binding = 2, std430) buffer Bounds { uint bounds[15]; }; // 12-14: lbvh.morton's scale
 
 layout(push_constant) uniform Push { uint tri_count; } pc;
 

@@ -14,7 +14,10 @@ layout(local_size_x = LBVH_WG) in;
 // The triangles' vertices and indices as texels (bvh.glsl: TRIANGLE_CORNERS).
 layout(binding = 0) uniform utextureBuffer vertices;
 layout(binding = 1) uniform utextureBuffer indices;
-layout(binding = 2, std430) readonly buffer Bounds { uint bounds[12]; };
+// Centroid bounds (0-5) and scene bounds (6-11) as ordered uints; this kernel stores the
+// unit_scale of the centroid bounds it quantizes with (12-14, float bits), so the CPU
+// reference multiplies by the GPU's own quotient.
+layout(binding = 2, std430) buffer Bounds { uint bounds[15]; };
 layout(binding = 3, std430) writeonly buffer Keys { uint keys[]; };
 layout(binding = 4, std430) writeonly buffer Values { uint values[]; };
 
@@ -48,10 +51,16 @@ void main() {
         return;
     }
     TRIANGLE_CORNERS(vertices, indices, t, a, b, c)
-    vec3 center = (a + b + c) * (1.0 / 3.0);
+    precise vec3 center = (a + b + c) * (1.0 / 3.0);
     vec3 lo = vec3(ordered_to_float(bounds[0]), ordered_to_float(bounds[1]), ordered_to_float(bounds[2]));
     vec3 hi = vec3(ordered_to_float(bounds[3]), ordered_to_float(bounds[4]), ordered_to_float(bounds[5]));
-    vec3 unit = unit_in(center, lo, hi);
+    vec3 scale = unit_scale(lo, hi);
+    if (t == 0u) {
+        bounds[12] = floatBitsToUint(scale.x);
+        bounds[13] = floatBitsToUint(scale.y);
+        bounds[14] = floatBitsToUint(scale.z);
+    }
+    vec3 unit = unit_at(center, lo, scale);
     vec3 s_lo = vec3(ordered_to_float(bounds[6]), ordered_to_float(bounds[7]), ordered_to_float(bounds[8]));
     vec3 s_hi = vec3(ordered_to_float(bounds[9]), ordered_to_float(bounds[10]), ordered_to_float(bounds[11]));
     float d2 = squared_length(max(a, max(b, c)) - min(a, min(b, c)));

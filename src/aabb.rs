@@ -77,11 +77,24 @@ pub fn morton30(q: UVec3) -> u32 {
     (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z)
 }
 
-/// `unit_in` of `bvh.glsl`: point p's place in the box [lo, hi] as fractions in [0, 1]
-/// per axis (a flat axis gives 0); `morton30` of its 10-bit cells is the GLSL
-/// `morton30(unit)`.
+/// `unit_scale` of `bvh.glsl`: the per-axis scale that maps [lo, hi] onto [0, 1], the
+/// one division of the Morton codes (IEEE here; a GPU may round it otherwise, within
+/// 2.5 ULP, which is why `lbvh.morton` stores the one it used).
+pub fn unit_scale(lo: Vec3, hi: Vec3) -> Vec3 {
+    Vec3::ONE / (hi - lo).max(Vec3::splat(1e-30))
+}
+
+/// `unit_at` of `bvh.glsl`: point p's place in the box from `lo` with `scale` as
+/// fractions in [0, 1] per axis (a flat axis gives 0): one subtraction and one
+/// multiplication, each rounded exactly, as the GPU's (`precise`).
+pub fn unit_at(p: Vec3, lo: Vec3, scale: Vec3) -> Vec3 {
+    ((p - lo) * scale).clamp(Vec3::ZERO, Vec3::ONE)
+}
+
+/// `unit_in` of `bvh.glsl`: `unit_at` in the box [lo, hi]; `morton30` of its 10-bit
+/// cells is the GLSL `morton30(unit)`.
 pub fn unit_in(p: Vec3, lo: Vec3, hi: Vec3) -> Vec3 {
-    ((p - lo) / (hi - lo).max(Vec3::splat(1e-30))).clamp(Vec3::ZERO, Vec3::ONE)
+    unit_at(p, lo, unit_scale(lo, hi))
 }
 
 /// The 10-bit cells of a point at `unit` (`unit_in`).

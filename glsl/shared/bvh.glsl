@@ -234,10 +234,27 @@ uint expand_bits10(uint x) {
     return x;
 }
 
-// Point p's place in the box [lo, hi] as fractions in [0, 1] per axis; a flat axis
-// (lo = hi) gives 0. Mirrored by aabb::unit_in.
+// The per-axis scale that maps the box [lo, hi] onto [0, 1]: 1 / max(hi - lo, 1e-30).
+// The one division of the Morton codes: Vulkan allows it 2.5 ULP (NVIDIA divides
+// through a reciprocal), so a kernel whose codes are checked exactly stores the scale
+// it used and the CPU reference multiplies by that (lbvh.morton). Mirrored by
+// aabb::unit_scale.
+vec3 unit_scale(vec3 lo, vec3 hi) {
+    return 1.0 / max(hi - lo, vec3(1e-30));
+}
+
+// Point p's place in the box from `lo` with `scale` (unit_scale) as fractions in
+// [0, 1] per axis; a flat axis gives 0. A subtraction and a multiplication, each
+// rounded exactly and never fused. Mirrored by aabb::unit_at.
+vec3 unit_at(vec3 p, vec3 lo, vec3 scale) {
+    precise vec3 d = p - lo;
+    precise vec3 u = d * scale;
+    return clamp(u, 0.0, 1.0);
+}
+
+// unit_at in the box [lo, hi]. Mirrored by aabb::unit_in.
 vec3 unit_in(vec3 p, vec3 lo, vec3 hi) {
-    return clamp((p - lo) / max(hi - lo, vec3(1e-30)), 0.0, 1.0);
+    return unit_at(p, lo, unit_scale(lo, hi));
 }
 
 // The 30-bit Morton code (10 bits per axis, x most significant) of a point at `unit`

@@ -69,6 +69,23 @@ fn cpu_bvh(keys_from: &[GpuVertex], v: &[GpuVertex], i: &[u32], bits: MortonBits
     cref::build(&sk, &sv, v, i)
 }
 
+/// The GPU's own sorted (key, triangle) pairs, as its Morton and sort stages left them
+/// in `bvh`: the fit's input. Each stage's expected output is built from the GPU's
+/// previous stage, so a key that a device's rounding moved cannot pose as a broken fit
+/// (the keys have their own test, `bounds_morton_and_sort_match_cpu_exactly`).
+fn gpu_sorted(bvh: &Bvh) -> (Vec<u64>, Vec<u32>) {
+    let (n, kw) = (bvh.tri_count as usize, bvh.bits.key_words());
+    let keys: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.sort.keys[0].read().unwrap());
+    let values: Vec<u32> = bytemuck::pod_collect_to_vec(&bvh.sort.values[0].read().unwrap());
+    (keys_u64(&keys[..n * kw as usize], kw), values[..n].to_vec())
+}
+
+/// The CPU's tree over `v`, `i` from the GPU's sorted keys in `bvh` (`gpu_sorted`).
+fn tree_from_gpu_keys(bvh: &Bvh, v: &[GpuVertex], i: &[u32]) -> PackedBvh {
+    let (keys, values) = gpu_sorted(bvh);
+    cref::build(&keys, &values, v, i)
+}
+
 fn keys_u64(raw: &[u32], key_words: u32) -> Vec<u64> {
     if key_words == 1 {
         raw.iter().map(|&k| k as u64).collect()
@@ -103,8 +120,26 @@ fn bounds_morton_and_sort_match_cpu_exactly() {
                 &bytemuck::pod_collect_to_vec(&bvh.sort.keys[0].read().unwrap())[..n * kw as usize],
                 kw,
             );
-            let cpu_keys = cref::morton_keys(&v, &i, kw);
+            // The codes' one division is the GPU's: the reference multiplies by the
+            // quotient the kernel stored, which Vulkan lets differ from IEEE by 2.5 ULP.
+            let scale = bvh.read_unit_scale().unwrap();
+            let ieee = cref::unit_scale(cb.lo, cb.hi);
+            for a in 0..3 {
+                let ulps = (scale[a].to_bits() as i64 - ieee[a].to_bits() as i64).abs();
+                assert!(ulps <= 3, "n={n}: the scale's axis {a} is {ulps} ULP from IEEE");
+            }
+            let cpu_keys = cref::morton_keys_scaled(&v, &i, kw, scale);
             assert_eq!(gpu_keys, cpu_keys, "n={n} {bits:?}: Morton codes");
+            if n == 300000 {
+                // What that buys: a device whose quotient is 1 ULP off IEEE (as NVIDIA's
+                // reciprocal can be) codes some triangles into other cells, so a
+                // reference that divided for itself would fail on it.
+                let off = Vec3::from_array(scale.to_array().map(|x| f32::from_bits(x.to_bits() + 1)));
+                let moved = cref::morton_keys_scaled(&v, &i, kw, off);
+                let differ = moved.iter().zip(&cpu_keys).filter(|(a, b)| a != b).count();
+                assert!(differ > 0, "{bits:?}: a 1-ULP quotient moved no key");
+                eprintln!("{bits:?}: a 1-ULP larger quotient moves {differ} of {n} keys");
+            }
             ctx.one_shot(|cmd| b.sort.record(cmd, &bvh.sort, n as u32)).unwrap();
             let sorted_keys = keys_u64(
                 &bytemuck::pod_collect_to_vec(&bvh.sort.keys[0].read().unwrap())[..n * kw as usize],
@@ -208,7 +243,7 @@ fn fit_matches_cpu(ctx: &Arc<Context>, b: &LbvhBuilder) {
         let g = upload(ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
             let bvh = build(ctx, b, &g, bits);
-            let want = cpu_bvh(&v, &v, &i, bits);
+            let want = tree_from_gpu_keys(&bvh, &v, &i);
             let got = assert_packed(&bvh, &want, &format!("n={n} {bits:?}"));
             cref::check_bvh(&got, &v, &i).unwrap_or_else(|e| panic!("n={n} {bits:?}: {e}"));
         }
@@ -296,7 +331,7 @@ fn degenerate_inputs_give_valid_bvhs() {
         let g = upload(&ctx, &v, &i);
         for bits in [MortonBits::Bits30, MortonBits::Bits63] {
             let bvh = build(&ctx, &b, &g, bits);
-            let got = assert_packed(&bvh, &cpu_bvh(&v, &v, &i, bits), &format!("{name} {bits:?}"));
+            let got = assert_packed(&bvh, &tree_from_gpu_keys(&bvh, &v, &i), &format!("{name} {bits:?}"));
             cref::check_bvh(&got, &v, &i).unwrap_or_else(|e| panic!("{name} {bits:?}: {e}"));
         }
     }
@@ -358,7 +393,7 @@ fn refit_matches_cpu_after_moving_vertices() {
         b.record_refit(cmd, &mut timer, g.geometry(), &bvh);
     })
     .unwrap();
-    let after = assert_packed(&bvh, &cpu_bvh(&v, &moved, &i, MortonBits::Bits30), "refit");
+    let after = assert_packed(&bvh, &tree_from_gpu_keys(&bvh, &moved, &i), "refit");
     assert_ne!(after.nodes, before.nodes, "the boxes moved");
     cref::check_bvh(&after, &moved, &i).unwrap();
 }
@@ -413,7 +448,7 @@ fn scheduled_refit_matches_cpu() {
         // triangles; the refit keeps them), every box and triangle recomputed.
         let after = assert_packed(
             &bvh,
-            &cref::refit(&cpu_bvh(&v, &v, &i, MortonBits::Bits30), &moved, &i),
+            &cref::refit(&tree_from_gpu_keys(&bvh, &v, &i), &moved, &i),
             &format!("scheduled refit, {n} triangles"),
         );
         cref::check_bvh(&after, &moved, &i).unwrap();
@@ -478,9 +513,6 @@ fn ploc_matches_cpu_exactly() {
     for (name, v, i) in &cases {
         let n = (i.len() / 3) as u32;
         let g = upload(&ctx, v, i);
-        let keys = cref::morton_keys(v, i, 1);
-        let (_, sv) = cref::sort_pairs(&keys, &(0..n).collect::<Vec<_>>());
-        let want = cref::ploc(&sv, v, i, PLOC_RADIUS as usize);
         let scratch = PlocScratch::new(&ctx, n).unwrap();
         for first_rounds in [ROUNDS, 3] {
             let bvh = Bvh::new(&ctx, n, MortonBits::Bits30).unwrap();
@@ -489,9 +521,12 @@ fn ploc_matches_cpu_exactly() {
                 b.record_bounds(cmd, g.geometry(), &bvh);
                 b.record_morton(cmd, g.geometry(), &bvh);
                 b.sort.record(cmd, &bvh.sort, n);
-                p.record(cmd, g.geometry(), &bvh, &scratch, first_rounds);
             })
             .unwrap();
+            // PLOC's expected tree from the GPU's own sorted order (`gpu_sorted`).
+            let want = cref::ploc(&gpu_sorted(&bvh).1, v, i, PLOC_RADIUS as usize);
+            ctx.one_shot(|cmd| p.record(cmd, g.geometry(), &bvh, &scratch, first_rounds))
+                .unwrap();
             let rounds = p.finish(n, &bvh, &scratch, first_rounds).unwrap();
             let what = format!("{name}, {first_rounds} rounds first ({rounds} in all)");
             let got = assert_packed(&bvh, &want, &what);
@@ -740,8 +775,8 @@ fn rigid_keys_match_cpu_and_build_the_cpu_tree() {
             (0..n as u32).collect::<Vec<_>>(),
             "{bodies} bodies: every triangle once"
         );
-        let keys64: Vec<u64> = want_k.iter().map(|&k| k as u64).collect();
-        let want = cref::build(&keys64, &want_v, &world, &i);
+        // The tree from the GPU's own keys (`gpu_sorted`'s rule).
+        let want = tree_from_gpu_keys(&bvh, &world, &i);
         let got = assert_packed(&bvh, &want, &format!("{bodies} bodies"));
         cref::check_bvh(&got, &world, &i).unwrap_or_else(|e| panic!("{bodies} bodies: {e}"));
     }

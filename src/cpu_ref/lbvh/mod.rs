@@ -1,7 +1,9 @@
 //! References of the LBVH kernels (`glsl/lbvh_*.comp`, `glsl/radix_*.comp`) and the
 //! checks every built BVH must pass.
 
-pub use crate::aabb::{cells10, expand_bits10, morton30, ordered_to_float, size_class, unit_in, Aabb};
+pub use crate::aabb::{
+    cells10, expand_bits10, morton30, ordered_to_float, size_class, unit_at, unit_in, unit_scale, Aabb,
+};
 use crate::gpu_types::{bvh_leaf_link, GpuVertex, PackedBvh, RigidBody, TraversalNode, TraversalTri};
 use crate::shader_defines::{BVH_INVALID, BVH_LEAF_MAX};
 use glam::{Mat4, UVec3, Vec3};
@@ -50,6 +52,15 @@ fn squared_length(v: Vec3) -> f32 {
 /// 1), its size class in the spare top bits (bits 30-31 above a 30-bit code, bit 63
 /// above a 63-bit one).
 pub fn morton_keys(vertices: &[GpuVertex], indices: &[u32], key_words: u32) -> Vec<u64> {
+    let (cb, _) = bounds(vertices, indices);
+    morton_keys_scaled(vertices, indices, key_words, unit_scale(cb.lo, cb.hi))
+}
+
+/// `morton_keys` quantizing with `scale` (the centroid bounds' `unit_scale`), such as the
+/// one `lbvh.morton` used and stored (`Bvh::read_unit_scale`): given the GPU's quotient,
+/// the rest is subtractions and multiplications rounded exactly, so the codes match
+/// whatever division the device has.
+pub fn morton_keys_scaled(vertices: &[GpuVertex], indices: &[u32], key_words: u32, scale: Vec3) -> Vec<u64> {
     let (cb, sb) = bounds(vertices, indices);
     let s2 = squared_length(sb.hi - sb.lo);
     (0..indices.len() / 3)
@@ -58,7 +69,7 @@ pub fn morton_keys(vertices: &[GpuVertex], indices: &[u32], key_words: u32) -> V
             let c = centroid(&tri);
             let b = Aabb::of_triangle(&tri);
             let d2 = squared_length(b.hi - b.lo);
-            let unit = unit_in(c, cb.lo, cb.hi);
+            let unit = unit_at(c, cb.lo, scale);
             if key_words == 1 {
                 ((size_class(d2, s2, 2) << 30) | morton30(cells10(unit))) as u64
             } else {

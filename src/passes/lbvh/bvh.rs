@@ -88,7 +88,7 @@ impl Bvh {
             ttris,
             ends: buf("lbvh.ends", (tri_count as u64 - 1).max(1) * 4)?,
             costs: buf("lbvh.costs", (tri_count as u64 - 1).max(1) * 2 * 4)?,
-            bounds: buf("lbvh.bounds", 12 * 4)?,
+            bounds: buf("lbvh.bounds", 15 * 4)?,
             sort: SortBuffers::new(ctx, tri_count, bits.key_words())?,
             tri_count,
             bits,
@@ -143,6 +143,18 @@ impl Bvh {
             )
         };
         Ok((Aabb { lo: v(0), hi: v(3) }, Aabb { lo: v(6), hi: v(9) }))
+    }
+
+    /// The per-axis scale `lbvh.morton` quantized the centroids with (its one
+    /// division, `unit_scale` in `bvh.glsl`), read back: the CPU reference of the codes
+    /// multiplies by the GPU's own quotient (`cpu_ref::lbvh::morton_keys_scaled`).
+    pub fn read_unit_scale(&self) -> Result<Vec3> {
+        let w: Vec<u32> = bytemuck::pod_collect_to_vec(&self.bounds.read()?);
+        Ok(Vec3::new(
+            f32::from_bits(w[12]),
+            f32::from_bits(w[13]),
+            f32::from_bits(w[14]),
+        ))
     }
 
     /// The nodes and triangles, read back (for tests and benchmarks).

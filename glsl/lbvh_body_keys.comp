@@ -2,7 +2,8 @@
 // lbvh.bounds of a rigid-body rebuild (passes/lbvh/rigid.rs): each body's center in
 // the world (its pose applied to its object-space center, unfused, in the order the
 // CPU computes it), the bounds of those centers, and each body's 30-bit Morton code in
-// them. One workgroup: bodies are few, and the bounds are one reduction.
+// them. One workgroup: bodies are few, and the bounds are one reduction. The codes'
+// one division (the bounds' unit scale) is stored, so the reference uses the GPU's.
 // CPU reference: cpu_ref::lbvh::rigid_keys (tests/lbvh.rs).
 #include "bvh.glsl"
 
@@ -16,6 +17,9 @@ struct Body {
 layout(binding = 0, std430) readonly buffer Bodies { Body bodies[]; };
 layout(binding = 1, std430) readonly buffer Poses { mat4 poses[]; };
 layout(binding = 2, std430) writeonly buffer BodyKeys { uint body_keys[]; };
+// The unit_scale of the centers' bounds the codes were made with (the codes' one
+// division), for the CPU reference to multiply by (bvh.glsl: unit_scale).
+layout(binding = 3, std430) writeonly buffer Scale { float scale_out[3]; };
 
 layout(push_constant) uniform Push {
     uint body_count;
@@ -48,12 +52,15 @@ void main() {
             hi = max(hi, s_hi[k]);
         }
         s_lo[0] = lo;
-        s_hi[0] = hi;
+        s_hi[0] = unit_scale(lo, hi);
+        scale_out[0] = s_hi[0].x;
+        scale_out[1] = s_hi[0].y;
+        scale_out[2] = s_hi[0].z;
     }
     barrier();
     lo = s_lo[0];
-    hi = s_hi[0];
+    vec3 scale = s_hi[0];
     for (uint b = l; b < pc.body_count; b += RIGID_WG) {
-        body_keys[b] = morton30(unit_in(world_center(b), lo, hi));
+        body_keys[b] = morton30(unit_at(world_center(b), lo, scale));
     }
 }

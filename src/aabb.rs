@@ -91,8 +91,9 @@ pub fn unit_at(p: Vec3, lo: Vec3, scale: Vec3) -> Vec3 {
     ((p - lo) * scale).clamp(Vec3::ZERO, Vec3::ONE)
 }
 
-/// `unit_in` of `bvh.glsl`: `unit_at` in the box [lo, hi]; `morton30` of its 10-bit
-/// cells is the GLSL `morton30(unit)`.
+/// `unit_at` in the box [lo, hi] with the IEEE `unit_scale` (the CPU's own codes, such
+/// as a rigid body's object-space order); `morton30` of its 10-bit cells is the GLSL
+/// `morton30(unit)`.
 pub fn unit_in(p: Vec3, lo: Vec3, hi: Vec3) -> Vec3 {
     unit_at(p, lo, unit_scale(lo, hi))
 }

@@ -252,13 +252,8 @@ vec3 unit_at(vec3 p, vec3 lo, vec3 scale) {
     return clamp(u, 0.0, 1.0);
 }
 
-// unit_at in the box [lo, hi]. Mirrored by aabb::unit_in.
-vec3 unit_in(vec3 p, vec3 lo, vec3 hi) {
-    return unit_at(p, lo, unit_scale(lo, hi));
-}
-
 // The 30-bit Morton code (10 bits per axis, x most significant) of a point at `unit`
-// (unit_in). Mirrored by aabb::morton30.
+// (unit_at). Mirrored by aabb::morton30.
 uint morton30(vec3 unit) {
     uvec3 q = uvec3(min(unit * 1024.0, vec3(1023.0)));
     return (expand_bits10(q.x) << 2) | (expand_bits10(q.y) << 1) | expand_bits10(q.z);

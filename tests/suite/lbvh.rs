@@ -761,6 +761,7 @@ fn rigid_keys_match_cpu_and_build_the_cpu_tree() {
             &layout.tri_info,
             layout.rank_bits(),
             layout.cell_bits(),
+            Some(rigid.read_scale().unwrap()),
         );
         assert_eq!(&keys[..n], &want_k[..], "{bodies} bodies: keys");
         assert_eq!(&values[..n], &want_v[..], "{bodies} bodies: values");

@@ -92,13 +92,16 @@ pub fn body_center(pose: &Mat4, center: [f32; 3]) -> Vec3 {
 /// `lbvh_rigid_keys`): the sorted (key, triangle) pairs of bodies `bodies` posed by
 /// `poses`, their triangles described by `tri_info` ([body, place in the body's order,
 /// object-space key, 0] per triangle): from the top, `cell_bits` of the body's code,
-/// `rank_bits` of its rank, the object-space key's first bits.
+/// `rank_bits` of its rank, the object-space key's first bits. The bodies' codes are
+/// quantized with `scale` when given (the GPU's own quotient, `RigidKeys::read_scale`),
+/// else with the IEEE `unit_scale` of their centers' bounds.
 pub fn rigid_keys(
     bodies: &[RigidBody],
     poses: &[Mat4],
     tri_info: &[[u32; 4]],
     rank_bits: u32,
     cell_bits: u32,
+    scale: Option<Vec3>,
 ) -> (Vec<u32>, Vec<u32>) {
     let centers: Vec<Vec3> = bodies
         .iter()
@@ -109,7 +112,11 @@ pub fn rigid_keys(
         (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
         |(lo, hi), &c| (lo.min(c), hi.max(c)),
     );
-    let codes: Vec<u32> = centers.iter().map(|&c| morton30(cells10(unit_in(c, lo, hi)))).collect();
+    let scale = scale.unwrap_or_else(|| unit_scale(lo, hi));
+    let codes: Vec<u32> = centers
+        .iter()
+        .map(|&c| morton30(cells10(unit_at(c, lo, scale))))
+        .collect();
     let mut order: Vec<usize> = (0..bodies.len()).collect();
     order.sort_by_key(|&b| (codes[b], b));
     let mut place = vec![(0u32, 0u32); bodies.len()];

@@ -162,6 +162,8 @@ pub struct RigidKeys {
     count_texels: TexelView,
     places: Buffer,
     place_texels: TexelView,
+    /// The unit scale `lbvh.bounds` coded the bodies' centers with (3 floats).
+    scale: Buffer,
     body_keys_kernel: Pipeline,
     ranks_kernel: Pipeline,
     keys_kernel: Pipeline,
@@ -207,6 +209,13 @@ impl RigidKeys {
             _counts: counts,
             place_texels: TexelView::new(ctx, &places)?,
             places,
+            scale: Buffer::new(
+                ctx,
+                "rigid.scale",
+                12,
+                storage | vk::BufferUsageFlags::TRANSFER_SRC,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )?,
             body_keys_kernel: Pipeline::compute::<BodyPush>(ctx, "lbvh.body_keys", shaders::LBVH_BODY_KEYS_COMP)?,
             ranks_kernel: Pipeline::compute::<BodyPush>(ctx, "lbvh.body_ranks", shaders::LBVH_BODY_RANKS_COMP)?,
             keys_kernel: Pipeline::compute::<KeysPush>(ctx, "lbvh.rigid_keys", shaders::LBVH_RIGID_KEYS_COMP)?,
@@ -215,6 +224,14 @@ impl RigidKeys {
             rank_bits: layout.rank_bits(),
             cell_bits: layout.cell_bits(),
         })
+    }
+
+    /// The unit scale the last rebuild coded the bodies' centers with (the codes' one
+    /// division, the GPU's own quotient), read back for the CPU reference.
+    pub fn read_scale(&self) -> Result<Vec3> {
+        Ok(Vec3::from_array(bytemuck::pod_read_unaligned(
+            &self.scale.read()?[..12],
+        )))
     }
 
     /// Records the keys and values of a rebuild under `poses` (one `Mat4` per body,
@@ -237,6 +254,7 @@ impl RigidKeys {
                 Resource::Buffer(&self.bodies),
                 Resource::Buffer(poses),
                 Resource::Buffer(&self.body_keys),
+                Resource::Buffer(&self.scale),
             ],
             &bodies,
             Groups::Exact([1, 1, 1]),

@@ -31,7 +31,9 @@ pub const RIGID_WG: u32 = 64;
 
 /// Workgroup of the scheduled refit's last pass (`lbvh_refit_top.comp`): one workgroup
 /// refits every level of at most this many nodes, the tree's top, in one dispatch.
-/// 1024 invocations is the minimum `maxComputeWorkGroupInvocations` Vulkan allows.
+/// Vulkan's minimum `maxComputeWorkGroupInvocations` is 128; every desktop GPU and
+/// lavapipe allow 1024, and a device below it is refused with a line naming it
+/// (`vk::device::limits_shortfall`).
 pub const REFIT_TOP_WG: u32 = 1024;
 
 /// Triangles each `lbvh.bounds` invocation folds before the workgroup reduction: fewer

@@ -14,7 +14,7 @@ use ash::vk;
 use std::sync::Arc;
 
 pub const NAME: &str = "gbuffer";
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+pub const DEPTH_FORMAT: vk::Format = crate::vk::device::DEPTH_FORMAT;
 /// xyz: unit world normal facing the camera; w: reflectivity.
 pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// rgb: base colour (the albedo times its texture), sRGB-encoded by the shader so

@@ -12,7 +12,7 @@ use ash::vk;
 use std::sync::Arc;
 
 pub const NAME: &str = "shadow.map";
-pub const FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+pub const FORMAT: vk::Format = crate::vk::device::DEPTH_FORMAT;
 
 pub struct ShadowMapPass {
     ctx: Arc<Context>,

@@ -3,6 +3,7 @@
 //! operations), and which one a run picks (`select`).
 
 use crate::error::{Error, Result, VkContext};
+use crate::shader_defines::{REFIT_TOP_WG, SORT_BINS, SORT_WG_GPU};
 use ash::vk;
 use std::ffi::CStr;
 
@@ -82,6 +83,10 @@ pub(super) fn check_device(instance: &ash::Instance, pd: vk::PhysicalDevice) -> 
         || !subgroup.supported_operations.contains(ops)
     {
         return Err("no basic, ballot and arithmetic subgroup operations in compute shaders".into());
+    }
+    let depth = unsafe { instance.get_physical_device_format_properties(pd, DEPTH_FORMAT) };
+    if let Some(short) = limits_shortfall(&props.limits, depth.optimal_tiling_features) {
+        return Err(short);
     }
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     families
@@ -174,4 +179,76 @@ pub(super) fn select(list: &[(vk::PhysicalDevice, DeviceInfo)], wanted: Option<&
             })?,
     };
     Ok(chosen)
+}
+
+/// The depth format of the G-buffer and the shadow map: rendered to, then sampled.
+/// Vulkan guarantees depth attachments of D16 and of D24 or D32 only, so it is checked.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// Shared memory of the sort's scatter (`radix_scatter.comp`: `s_counts[SORT_BINS *
+/// SORT_WG]` and `s_base[SORT_BINS]`, 32-bit words, with the GPU's workgroup), the most
+/// any kernel declares: 16,448 bytes, above the 16,384 every Vulkan device has.
+pub const SHARED_BYTES_NEEDED: u32 = (SORT_BINS * SORT_WG_GPU + SORT_BINS) * 4;
+
+/// What a device's limits and depth format lack for Speculum's kernels, as one line
+/// naming it (`None` when nothing): workgroups of `REFIT_TOP_WG` invocations along x
+/// (the refit's top pass; Vulkan's minimum is 128), `SHARED_BYTES_NEEDED` of shared
+/// memory, and `DEPTH_FORMAT` as a depth attachment that is also sampled.
+pub fn limits_shortfall(limits: &vk::PhysicalDeviceLimits, depth: vk::FormatFeatureFlags) -> Option<String> {
+    if limits.max_compute_work_group_invocations < REFIT_TOP_WG || limits.max_compute_work_group_size[0] < REFIT_TOP_WG
+    {
+        return Some(format!(
+            "compute workgroups of {REFIT_TOP_WG} invocations (the refit's top pass); the device allows {} ({} along x)",
+            limits.max_compute_work_group_invocations, limits.max_compute_work_group_size[0]
+        ));
+    }
+    if limits.max_compute_shared_memory_size < SHARED_BYTES_NEEDED {
+        return Some(format!(
+            "{SHARED_BYTES_NEEDED} bytes of compute shared memory (the sort's scatter); the device has {}",
+            limits.max_compute_shared_memory_size
+        ));
+    }
+    let needed = vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT | vk::FormatFeatureFlags::SAMPLED_IMAGE;
+    if !depth.contains(needed) {
+        return Some(format!("{DEPTH_FORMAT:?} as a sampled depth attachment"));
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A device at Vulkan's minimum limits lacks the workgroups and the shared memory,
+    /// each named in its line; one with a GPU's limits and D32 lacks nothing.
+    #[test]
+    fn limits_below_the_kernels_needs_are_named() {
+        let depth = vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT | vk::FormatFeatureFlags::SAMPLED_IMAGE;
+        let gpu = vk::PhysicalDeviceLimits {
+            max_compute_work_group_invocations: 1024,
+            max_compute_work_group_size: [1024, 1024, 64],
+            max_compute_shared_memory_size: 49152,
+            ..Default::default()
+        };
+        assert_eq!(limits_shortfall(&gpu, depth), None);
+        let minimum = vk::PhysicalDeviceLimits {
+            max_compute_work_group_invocations: 128,
+            max_compute_work_group_size: [128, 128, 64],
+            max_compute_shared_memory_size: 16384,
+            ..Default::default()
+        };
+        let line = limits_shortfall(&minimum, depth).unwrap();
+        assert!(
+            line.contains("1024 invocations") && line.contains("allows 128"),
+            "{line}"
+        );
+        let few_bytes = vk::PhysicalDeviceLimits {
+            max_compute_shared_memory_size: 16384,
+            ..gpu
+        };
+        let line = limits_shortfall(&few_bytes, depth).unwrap();
+        assert!(line.contains("16448 bytes") && line.contains("has 16384"), "{line}");
+        let line = limits_shortfall(&gpu, vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT).unwrap();
+        assert!(line.contains("D32_SFLOAT"), "{line}");
+    }
 }

@@ -28,6 +28,7 @@ impl Demo {
             validation: config.validation,
             device: config.device.clone(),
             window: Some(handles),
+            ..Default::default()
         })?;
         // The window may not have the asked size (a tiling window manager, a small
         // screen): render at the size it has.

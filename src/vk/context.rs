@@ -30,6 +30,13 @@ pub struct ContextDesc {
     /// device gets `VK_KHR_swapchain`, and a device whose queue cannot present to it
     /// is refused. The window must outlive the context.
     pub window: Option<WindowHandles>,
+    /// Specialize the kernels as for a device of this type (`Context::kernels_for`)
+    /// instead of the device's own: the GPU's sort tiles run on lavapipe in the tests,
+    /// a path otherwise only a GPU takes. `None`: the device's type.
+    pub kernels_for: Option<vk::PhysicalDeviceType>,
+    /// Make the LBVH fit climb in lockstep (the variant lavapipe before Mesa 25 needs)
+    /// or freely, whatever the driver (`Context::lockstep_fit`). `None`: as the driver needs.
+    pub lockstep_fit: Option<bool>,
 }
 
 /// A window's raw display and window handles (`raw-window-handle`), for `ContextDesc`.
@@ -65,6 +72,11 @@ pub struct Context {
     pub device_name: String,
     /// The device's type (discrete GPU, CPU, ...).
     pub device_type: vk::PhysicalDeviceType,
+    /// The device type the kernels are specialized for (the sort's tile shape):
+    /// `device_type` unless `ContextDesc::kernels_for` chose another.
+    pub kernels_for: vk::PhysicalDeviceType,
+    /// `ContextDesc::lockstep_fit`: the fit's climb chosen by the caller, if it chose.
+    pub lockstep_fit: Option<bool>,
     /// Vulkan version the device supports (`vk::make_api_version` encoding).
     pub api_version: u32,
     /// The driver's raw version number (its encoding is the vendor's).
@@ -387,6 +399,8 @@ impl Context {
             queue_family,
             device_name: info.name,
             device_type: props.device_type,
+            kernels_for: desc.kernels_for.unwrap_or(props.device_type),
+            lockstep_fit: desc.lockstep_fit,
             api_version: props.api_version,
             driver_version: props.driver_version,
             driver_name,

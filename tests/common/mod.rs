@@ -42,12 +42,18 @@ impl Drop for Alone {
 
 /// A context with validation and synchronization validation on (always, in tests).
 pub fn context() -> GpuTest {
+    context_with(ContextDesc::default())
+}
+
+/// `context` with `desc`'s choices (kernel specializations), validation on and the
+/// test's device.
+pub fn context_with(desc: ContextDesc) -> GpuTest {
     let share = shared();
     GpuTest(
         Context::new(&ContextDesc {
             validation: true,
             device: std::env::var("SPECULUM_TEST_DEVICE").ok(),
-            ..Default::default()
+            ..desc
         })
         .expect("a Vulkan device with validation layers (run tools/test, which installs them)"),
         share,

@@ -229,3 +229,75 @@ fn live_settings_camera_and_fail_mask_view_match_a_fresh_renderer() {
     assert!(failed > 0 && failed < maps.reflective.iter().filter(|r| **r).count());
     assert!(r.read_output().unwrap() == maps.fail_mask_rgba(), "fail-mask view");
 }
+
+/// Every kernel specialization a device chooses (the sort's tile shape by device type,
+/// the fit's climb by driver) runs through whole builds and frames on this device, and
+/// each gives the image its device's own choice gives, byte for byte: the GPU's
+/// 256 x 16 sort tiles and free climb too, paths otherwise only a GPU would take. The
+/// frames: `room` with its static tree from the LBVH (sort and fit), and three frames of
+/// `drop` whose bodies are rebuilt every frame with every triangle sorted.
+#[test]
+fn every_kernel_specialization_renders_the_same_frames() {
+    use ash::vk::PhysicalDeviceType as Kind;
+    let render = |desc: speculum::vk::ContextDesc| -> Vec<Vec<u8>> {
+        let ctx = common::context_with(desc);
+        // The sort the renderer's builder makes takes the chosen tile, not the device's.
+        let tile = speculum::passes::lbvh::sort::RadixSort::new(&ctx).unwrap().tile();
+        assert_eq!(
+            tile,
+            speculum::passes::lbvh::sort::SortTile::for_device(ctx.kernels_for)
+        );
+        let plan = headless::FramePlan {
+            warmup: 0,
+            frames: 3,
+            reference: false,
+        };
+        let cases = [
+            (
+                "room",
+                Settings {
+                    static_ploc: false,
+                    ..Settings::default()
+                },
+            ),
+            (
+                "drop",
+                Settings {
+                    rigid_order: false,
+                    mode: speculum::settings::Mode::Rt,
+                    ..Settings::default()
+                },
+            ),
+        ];
+        cases
+            .into_iter()
+            .map(|(name, s)| {
+                let settings = Settings {
+                    width: 192,
+                    height: 108,
+                    ..s
+                };
+                let scene = speculum::scene::load(name).unwrap();
+                headless::render(&ctx, &scene, &settings, plan, &mut || {})
+                    .unwrap()
+                    .rgba
+            })
+            .collect()
+    };
+    let own = render(Default::default());
+    for kind in [Kind::CPU, Kind::DISCRETE_GPU] {
+        for lockstep in [false, true] {
+            let got = render(speculum::vk::ContextDesc {
+                kernels_for: Some(kind),
+                lockstep_fit: Some(lockstep),
+                ..Default::default()
+            });
+            for (k, (a, b)) in own.iter().zip(&got).enumerate() {
+                assert!(
+                    a == b,
+                    "case {k}: sort tiles for {kind:?}, lockstep fit {lockstep}: another image"
+                );
+            }
+        }
+    }
+}

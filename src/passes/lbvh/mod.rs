@@ -184,7 +184,10 @@ struct RangePush {
 impl LbvhBuilder {
     /// The kernels, the fit's climb chosen for the driver (`lockstep_fit`).
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
-        Self::with_fit(ctx, lockstep_fit(&ctx.driver_name, &ctx.driver_info))
+        let lockstep = ctx
+            .lockstep_fit
+            .unwrap_or_else(|| lockstep_fit(&ctx.driver_name, &ctx.driver_info));
+        Self::with_fit(ctx, lockstep)
     }
 
     /// The kernels with the fit climbing in lockstep or freely, whatever the driver

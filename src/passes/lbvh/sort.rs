@@ -126,9 +126,15 @@ pub struct RadixSort {
 }
 
 impl RadixSort {
-    /// The kernels with the tile shape for this device (`SortTile::for_device`).
+    /// The kernels with the tile shape for this device (`SortTile::for_device` of
+    /// `Context::kernels_for`).
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
-        Self::with_tile(ctx, SortTile::for_device(ctx.device_type))
+        Self::with_tile(ctx, SortTile::for_device(ctx.kernels_for))
+    }
+
+    /// The tile shape the kernels were made for.
+    pub fn tile(&self) -> SortTile {
+        self.tile
     }
 
     /// The kernels with this tile shape, whatever the device (tests run every shape on

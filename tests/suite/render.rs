@@ -79,16 +79,84 @@ fn occluded_point_is_darker_than_lit_point() {
 
 const GOLDEN: &str = "tests/golden/room_192x108.png";
 
-/// The default scene at 192x108 matches the stored golden image: mean absolute
-/// error under 1.5/255 per channel (lavapipe is deterministic; the margin absorbs
-/// LLVM version differences). `SPECULUM_BLESS=1` rewrites the golden image.
-#[test]
-fn room_matches_golden_image() {
+/// A per-channel difference (of 255) any conformant device may make on a smooth
+/// surface: the 8-bit output rounds (1), texture filtering weighs texels with as few as
+/// 4 subtexel bits (Vulkan's minimum `subTexelPrecisionBits`: 1/16 of a neighbouring
+/// texel difference, which on this scene's smooth textures is under 2), and `pow`,
+/// `exp`, division and the tone map carry a few ULP each (under 1 after tone mapping).
+/// Twice that sum, rounded up.
+const GOLDEN_TOL: u8 = 8;
+/// The share of pixels that may differ beyond rounding (`GoldenDiff::bad`) when they
+/// are scattered: a reflected or shadow ray that another rounding sends past an edge of
+/// what it sees changes one pixel of the image, not a region. Observed here: 0.53%
+/// (110 pixels) between today's frame and the golden image blessed before later
+/// changes to the SSR march; 0.84% for a camera turned by a quarter pixel.
+const GOLDEN_SCATTERED_SHARE: f64 = 0.02;
+
+/// How a frame differs from the golden image.
+#[derive(Debug)]
+struct GoldenDiff {
+    /// Pixels that differ by more than `GOLDEN_TOL` in a channel from every golden
+    /// pixel of their 3x3 neighbourhood (so an edge that another rasteriser or march
+    /// puts one pixel over, taking its neighbour's colour, is not counted).
+    bad: usize,
+    /// Bad pixels whose whole 3x3 neighbourhood is bad: a region, which rounding does
+    /// not make (a lost shadow, reflection or texture does).
+    regions: usize,
+    /// The mean absolute difference per channel (of 255).
+    mean: f64,
+}
+
+fn rgb(img: &[u8], w: usize, x: usize, y: usize) -> [u8; 3] {
+    let i = 4 * (y * w + x);
+    [img[i], img[i + 1], img[i + 2]]
+}
+
+/// Each pixel's 3x3 neighbourhood, clipped to the image.
+fn around(x: usize, y: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
+    (y.saturating_sub(1)..(y + 2).min(h)).flat_map(move |j| (x.saturating_sub(1)..(x + 2).min(w)).map(move |i| (i, j)))
+}
+
+impl GoldenDiff {
+    fn of(golden: &[u8], out: &[u8], w: usize, h: usize) -> GoldenDiff {
+        let bad: Vec<bool> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                let o = rgb(out, w, x, y);
+                around(x, y, w, h).all(|(a, b)| {
+                    let g = rgb(golden, w, a, b);
+                    o.iter().zip(&g).any(|(p, q)| p.abs_diff(*q) > GOLDEN_TOL)
+                })
+            })
+            .collect();
+        let regions = (0..w * h)
+            .filter(|&i| {
+                let (x, y) = (i % w, i / w);
+                x > 0 && y > 0 && x + 1 < w && y + 1 < h && around(x, y, w, h).all(|(a, b)| bad[b * w + a])
+            })
+            .count();
+        let sum: u64 = golden.iter().zip(out).map(|(a, b)| a.abs_diff(*b) as u64).sum();
+        GoldenDiff {
+            bad: bad.iter().filter(|&&b| b).count(),
+            regions,
+            mean: sum as f64 / golden.len() as f64,
+        }
+    }
+
+    /// Whether the difference is what another conformant device's rounding makes:
+    /// scattered pixels, no region.
+    fn within_rounding(&self, pixels: usize) -> bool {
+        self.regions == 0 && self.bad as f64 <= GOLDEN_SCATTERED_SHARE * pixels as f64
+    }
+}
+
+fn render_room(change: impl FnOnce(&mut speculum::scene::Scene), w: u32, h: u32) -> Vec<u8> {
     let ctx = common::context();
-    let scene = speculum::scene::builtin::room().unwrap();
+    let mut scene = speculum::scene::builtin::room().unwrap();
+    change(&mut scene);
     let settings = Settings {
-        width: 192,
-        height: 108,
+        width: w,
+        height: h,
         ..Default::default()
     };
     let plan = headless::FramePlan {
@@ -96,26 +164,99 @@ fn room_matches_golden_image() {
         frames: 1,
         reference: false,
     };
-    let out = headless::render(&ctx, &scene, &settings, plan, &mut || {}).unwrap();
+    headless::render(&ctx, &scene, &settings, plan, &mut || {})
+        .unwrap()
+        .rgba
+}
+
+/// The default scene at 192x108 matches the stored golden image as closely as any
+/// conformant device's rounding allows (`GoldenDiff::within_rounding`: within a few
+/// levels of a neighbour, edges free to move by a pixel, scattered outliers, no
+/// region). Lavapipe is deterministic:
+/// here the image must also be within a mean of 1.5/255 (the margin absorbs LLVM
+/// versions). `SPECULUM_BLESS=1` rewrites the golden image.
+#[test]
+fn room_matches_golden_image() {
+    let (w, h) = (192, 108);
+    let out = render_room(|_| {}, w, h);
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(GOLDEN);
     if std::env::var("SPECULUM_BLESS").is_ok_and(|v| v == "1") {
-        speculum::output::save_png(&path, &out.rgba, settings.width, settings.height).unwrap();
+        speculum::output::save_png(&path, &out, w, h).unwrap();
     }
     let golden = image::open(&path)
         .expect("golden image (SPECULUM_BLESS=1 writes it)")
         .to_rgba8();
-    assert_eq!(golden.dimensions(), (settings.width, settings.height));
-    let sum: u64 = golden
-        .as_raw()
-        .iter()
-        .zip(&out.rgba)
-        .map(|(a, b)| (*a as i64 - *b as i64).unsigned_abs())
-        .sum();
-    let mean = sum as f64 / out.rgba.len() as f64;
-    assert!(mean < 1.5, "mean absolute error {mean:.3}/255 against {GOLDEN}");
+    assert_eq!(golden.dimensions(), (w, h));
+    let d = GoldenDiff::of(golden.as_raw(), &out, w as usize, h as usize);
+    assert!(d.within_rounding((w * h) as usize), "against {GOLDEN}: {d:?}");
+    if common::context().driver_name == "llvmpipe" {
+        assert!(
+            d.mean < 1.5,
+            "lavapipe: mean absolute error {:.3}/255 against {GOLDEN}",
+            d.mean
+        );
+    }
     // The image is not trivially flat: the comparison means something.
-    let distinct: std::collections::HashSet<_> = out.rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect();
+    let distinct: std::collections::HashSet<_> = out.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect();
     assert!(distinct.len() > 500, "only {} distinct colours", distinct.len());
+}
+
+/// The golden comparison passes what rounding does and fails what a defect does: a
+/// camera turned by a hundredth of a pixel (every vertex rounds differently) and by a
+/// quarter of a pixel (every edge and reflection moves, more than rounding moves them)
+/// and the image shifted by a whole pixel pass; a 6x6 blot and the scene without its
+/// mirror reflections fail.
+#[test]
+fn golden_comparison_tells_rounding_from_defects() {
+    let (w, h) = (192usize, 108usize);
+    let golden = render_room(|_| {}, w as u32, h as u32);
+    let diff = |out: &[u8]| GoldenDiff::of(&golden, out, w, h);
+    let n = w * h;
+    let g = diff(&golden);
+    assert_eq!((g.bad, g.regions), (0, 0));
+    // The camera turned about the up axis by a share of a pixel: a hundredth (every
+    // vertex rounds differently) and a quarter (every edge and every reflection moves,
+    // far more than rounding moves them).
+    let turned = |share: f32| {
+        render_room(
+            |s| {
+                let c = &mut s.camera;
+                let turn = (c.fov_y_deg / h as f32 * share).to_radians();
+                let dir = c.target - c.position;
+                c.target = c.position + glam::Quat::from_axis_angle(c.up.normalize(), turn) * dir;
+            },
+            w as u32,
+            h as u32,
+        )
+    };
+    for share in [0.01, 0.25] {
+        let d = diff(&turned(share));
+        assert!(d.within_rounding(n) && d.mean > 0.0, "turned by {share} pixel: {d:?}");
+    }
+    // The whole image shifted by a pixel: every edge moves over.
+    let mut shifted = golden.clone();
+    for y in 0..h {
+        let row = 4 * y * w;
+        shifted.copy_within(row..row + 4 * (w - 1), row + 4);
+    }
+    let d = diff(&shifted);
+    assert!(d.within_rounding(n) && d.mean > 0.0, "shifted: {d:?}");
+    // A 6x6 blot in the middle of the image.
+    let (bx, by) = (w / 2, h / 2);
+    let mut blotted = golden.clone();
+    for k in 0..36 {
+        let p = 4 * ((by + k / 6) * w + bx + k % 6);
+        blotted[p] = blotted[p].wrapping_add(64);
+    }
+    let d = diff(&blotted);
+    assert!(!d.within_rounding(n), "blot at ({bx}, {by}): {d:?}");
+    let unreflective = render_room(
+        |s| s.materials.iter_mut().for_each(|m| m.reflectivity = 0.0),
+        w as u32,
+        h as u32,
+    );
+    let d = diff(&unreflective);
+    assert!(!d.within_rounding(n), "no reflections: {d:?}");
 }
 
 /// `Renderer::resize` recreates every screen-sized target: after rendering at one size

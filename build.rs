@@ -98,6 +98,9 @@ fn main() {
             Some("vert") => shaderc::ShaderKind::Vertex,
             Some("frag") => shaderc::ShaderKind::Fragment,
             Some("comp") => shaderc::ShaderKind::Compute,
+            Some("rgen") => shaderc::ShaderKind::RayGeneration,
+            Some("rmiss") => shaderc::ShaderKind::Miss,
+            Some("rchit") => shaderc::ShaderKind::ClosestHit,
             _ => continue,
         };
         let source = std::fs::read_to_string(&path).expect("readable shader");

@@ -9,8 +9,13 @@
 layout(local_size_x = COMPACT_WG) in;
 
 layout(binding = 0, std430) buffer TileCounts { uint tile_counts[]; };
-// x, y, z: VkDispatchIndirectCommand for RT_LIST_WG-wide workgroups; w: the count.
-layout(binding = 1, std430) writeonly buffer Indirect { uvec4 indirect; };
+// indirect: x, y, z a VkDispatchIndirectCommand for RT_LIST_WG-wide workgroups, w the
+// count; trace_rays: x, y, z a VkTraceRaysIndirectCommandKHR of one ray per entry (the
+// vendor tracer's launch), w unused.
+layout(binding = 1, std430) writeonly buffer Indirect {
+    uvec4 indirect;
+    uvec4 trace_rays;
+};
 
 void main() {
     uint l = gl_LocalInvocationID.x;
@@ -31,5 +36,6 @@ void main() {
     }
     if (l == 0u) {
         indirect = uvec4(list_groups((total + RT_LIST_WG - 1u) / RT_LIST_WG), 1u, total);
+        trace_rays = uvec4(total, 1u, 1u, 0u);
     }
 }

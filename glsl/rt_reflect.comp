@@ -12,108 +12,15 @@
 // error both grow with it), and the hit must be beyond tmin.
 // CPU reference: cpu_ref::reflect::reflected_radiance (tests/rt_reflect.rs).
 #include "shading.glsl"
-#include "surface.glsl"
 #define TRAVERSE_BINDING 8
 #include "traverse.glsl"
-#include "pixel_list.glsl"
+#include "reflect_path.glsl"
 
 layout(local_size_x = RT_LIST_WG) in;
 
-layout(binding = 1) uniform sampler2D gb_depth;
-layout(binding = 2) uniform sampler2D gb_normal;
-layout(binding = 3, std430) readonly buffer Materials { Material materials[]; };
-layout(binding = 4) uniform sampler2D shadow_map;
-layout(binding = 5, std430) readonly buffer Pixels { uint pixels[]; };
-layout(binding = 6, std430) readonly buffer Indirect { uvec4 indirect; }; // w: count
-layout(binding = 7, rgba32f) uniform writeonly image2D rt_out;
-// Bindings 8-15: traverse.glsl. Texture coordinates of the static and dynamic vertices.
-layout(binding = 16, std430) readonly buffer StaticUvs { vec2 s_uvs[]; };
-layout(binding = 17, std430) readonly buffer DynamicUvs { vec2 d_uvs[]; };
-layout(binding = 18) uniform sampler2DArray scene_textures;
-
-layout(push_constant) uniform Push {
-    uint max_bounces;  // rays per path (1: a single reflection)
-    uint static_tris;
-    uint dynamic_tris;
-    uint shadows;      // SHADOWS_*: how hits are shadowed
-} pc;
-
-vec2 hit_uv(uint prim, uint k) {
-    uint t = prim & 0x7fffffffu;
-    if ((prim & 0x80000000u) == 0u) {
-        return s_uvs[s_indices[3u * t + k]];
-    }
-    return d_uvs[d_indices[3u * t + k]];
-}
-
-// The angle one pixel subtends at the camera (vertical; square pixels).
-float pixel_spread() {
-    return 2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y));
-}
-
 void main() {
     uint i = list_entry(indirect.w, RT_LIST_WG);
-    if (i >= indirect.w) {
-        return;
+    if (i < indirect.w) {
+        reflect_entry(i);
     }
-    ivec2 p = unpack_pixel(pixels[i]);
-    float depth = texelFetch(gb_depth, p, 0).r;
-    vec3 pos = world_from_depth(p, depth);
-    vec3 n = normalize(texelFetch(gb_normal, p, 0).xyz);
-    vec3 dir = reflect(normalize(pos - frame.camera_pos.xyz), n);
-    vec3 origin = pos + n * offset_scale(pos);
-    float spread = pixel_spread();
-    // The ray cone's width at `origin`, grown along the path.
-    float cone = spread * length(pos - frame.camera_pos.xyz);
-
-    vec3 radiance = vec3(0.0);
-    vec3 throughput = vec3(1.0);
-    for (uint bounce = 0u; bounce < pc.max_bounces; ++bounce) {
-        Hit h = trace_ray(origin, dir, 0.0, 3.0e38, pc.static_tris, pc.dynamic_tris, false);
-        if (h.prim == BVH_INVALID) {
-            radiance += throughput * sky_radiance(dir);
-            break;
-        }
-        Vertex a = hit_vertex(h.prim, 0u);
-        Vertex b = hit_vertex(h.prim, 1u);
-        Vertex c = hit_vertex(h.prim, 2u);
-        Material m = materials[a.material];
-        // The facet's plane facing the ray.
-        vec3 g = normalize(cross(b.position - a.position, c.position - a.position));
-        g = dot(g, dir) > 0.0 ? -g : g;
-        vec3 albedo = m.albedo;
-        cone += spread * h.t;
-        if (m.texture_layer != TEXTURE_NONE) {
-            vec2 ta = hit_uv(h.prim, 0u), tb = hit_uv(h.prim, 1u), tc = hit_uv(h.prim, 2u);
-            vec2 uv = (1.0 - h.u - h.v) * ta + h.u * tb + h.v * tc;
-            float texels = float(textureSize(scene_textures, 0).x);
-            float lod = ray_cone_lod(cone, abs(dot(g, dir)), a.position, b.position, c.position, ta, tb, tc, texels);
-            albedo = base_color_lod(m, scene_textures, uv, lod);
-        }
-        vec3 hn = normalize((1.0 - h.u - h.v) * a.normal + h.u * b.normal + h.v * c.normal);
-        if (dot(hn, dir) > 0.0) {
-            hn = -hn; // double-sided: face the incoming ray
-        }
-        // The next mirror direction stays above the facet.
-        hn = clamp_bent_normal(hn, g, -dir);
-        vec3 hp = origin + dir * h.t;
-        // Shadows as on the visible surface: the map, or a ray where shadow_ray_reasons
-        // asks for one (always under `rays`; where the map is unsure under `hybrid`).
-        float vis;
-        if (pc.shadows == SHADOWS_MAP) {
-            vis = shadow_visibility(shadow_map, hp);
-        } else if (shadow_ray_reasons(shadow_map, hp, dot(hn, frame.light_dir.xyz), pc.shadows, vis) != 0u) {
-            vec3 so = hp + g * offset_scale(hp);
-            Hit sh = trace_ray(so, frame.light_dir.xyz, 0.0, 3.0e38, pc.static_tris, pc.dynamic_tris, true);
-            vis = sh.prim == BVH_INVALID ? 1.0 : 0.0;
-        }
-        radiance += throughput * shade_direct(albedo, m.roughness, m.reflectivity, m.metallic, hn, -dir, vis);
-        if (m.reflectivity <= 0.0) {
-            break;
-        }
-        throughput *= reflection_weight(albedo, m.metallic, m.reflectivity, hn, -dir);
-        dir = reflect(dir, hn);
-        origin = hp + g * offset_scale(hp); // off the facet itself, whatever the normal
-    }
-    imageStore(rt_out, p, vec4(radiance, 1.0));
 }

@@ -17,6 +17,8 @@ uvec2 list_groups(uint groups) {
     return uvec2(min(groups, LIST_GROUPS_X), max((groups + LIST_GROUPS_X - 1u) / LIST_GROUPS_X, 1u));
 }
 
+#ifndef PIXEL_LIST_NO_DISPATCH
+// (Ray-generation shaders define PIXEL_LIST_NO_DISPATCH: they have no workgroups.)
 // This workgroup's index in a dispatch sized by `list_groups` (row-major over x, y).
 uint list_workgroup() {
     return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
@@ -41,4 +43,5 @@ uint list_entry(uint length, uint wg_size) {
     uint chunk = w < per_stripe * LIST_STRIPES ? (w % LIST_STRIPES) * per_stripe + w / LIST_STRIPES : w;
     return chunk * wg_size + gl_LocalInvocationID.x;
 }
+#endif // PIXEL_LIST_NO_DISPATCH
 #endif

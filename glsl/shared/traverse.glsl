@@ -22,13 +22,7 @@
 #ifndef TRAVERSE_GLSL
 #define TRAVERSE_GLSL
 #include "bvh.glsl"
-
-struct Hit {
-    float t;    // distance along dir (in units of |dir|); tmax on a miss
-    uint prim;  // triangle id, bit 31 set for the dynamic BVH; BVH_INVALID on a miss
-    float u;    // barycentric weight of corner b
-    float v;    // barycentric weight of corner c
-};
+#include "hit.glsl"
 
 layout(binding = TRAVERSE_BINDING + 0) uniform utextureBuffer s_nodes;
 layout(binding = TRAVERSE_BINDING + 1, std430) readonly buffer StaticVertices { Vertex s_vertices[]; };

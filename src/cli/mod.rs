@@ -11,7 +11,7 @@ use anyhow::{Context as _, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use speculum::scene::Floor;
-use speculum::settings::Shadows;
+use speculum::settings::{Shadows, Tracer};
 use speculum::vk::{Context, ContextDesc};
 use speculum::Settings;
 use std::io::IsTerminal;
@@ -56,6 +56,9 @@ pub struct SettingsArgs {
     /// Where shadows come from [default: map, or the settings file's].
     #[arg(long, value_parser = choice(&Shadows::ALL, Shadows::name, Shadows::about))]
     pub shadows: Option<Shadows>,
+    /// The ray tracer [default: lbvh, or the settings file's].
+    #[arg(long, value_parser = choice(&Tracer::ALL, Tracer::name, Tracer::about))]
+    pub tracer: Option<Tracer>,
 }
 
 impl SettingsArgs {
@@ -67,6 +70,9 @@ impl SettingsArgs {
         }
         if let Some(h) = self.height {
             s.height = h;
+        }
+        if let Some(tracer) = self.tracer {
+            s.tracer = tracer;
         }
         if let Some(shadows) = self.shadows {
             s.shadows = shadows;

@@ -18,6 +18,7 @@
 
 pub mod compose;
 pub mod gbuffer;
+pub mod khr;
 pub mod lbvh;
 pub mod light_direct;
 pub mod reflect_merge;
@@ -30,10 +31,15 @@ pub mod sim_transform;
 pub mod ssr_compact;
 pub mod ssr_hiz;
 pub mod ssr_trace;
+pub mod tracer;
+
+pub use tracer::{with_trace, KhrTrace, TraceKernel, Tracing};
 
 use crate::vk::{Buffer, Image, Resource};
 use ash::vk;
-use lbvh::{Bvh, Geometry};
+use lbvh::Bvh;
+/// A mesh's triangles on the GPU (what the builders and both tracers read).
+pub use lbvh::Geometry;
 
 /// Sets a full-target viewport and scissor (both are dynamic state).
 pub(crate) fn set_viewport(device: &ash::Device, cmd: vk::CommandBuffer, extent: vk::Extent2D) {
@@ -110,11 +116,15 @@ pub struct CompactOutputs {
     /// One `u32` per listed pixel: `x | y << 16`.
     pub pixels: Buffer,
     /// `[groups_x, groups_y, 1, count]`: a `VkDispatchIndirectCommand` for `RT_LIST_WG`-wide
-    /// workgroups (`list_groups`), then the number of listed pixels.
+    /// workgroups (`list_groups`), then the number of listed pixels; at byte
+    /// `TRACE_RAYS_ARGS`, `[count, 1, 1, 0]`: a `VkTraceRaysIndirectCommandKHR`.
     pub indirect: Buffer,
     tile_counts: Buffer,
     extent: vk::Extent2D,
 }
+
+/// Byte offset of the trace-rays arguments in `CompactOutputs::indirect`.
+pub const TRACE_RAYS_ARGS: u64 = 16;
 
 /// One BVH and the triangles it was built over.
 #[derive(Clone, Copy)]

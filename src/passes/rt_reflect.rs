@@ -1,15 +1,17 @@
 //! `rt.reflect`: the compacted pixels' reflection rays through the static
 //! and dynamic BVHs, shaded, with recursive bounces; an indirect dispatch sized by
-//! `ssr.compact`.
+//! `ssr.compact`. With the vendor tracer the same path (`glsl/shared/reflect_path.glsl`)
+//! runs as a ray-generation shader through the scene's acceleration structures, one
+//! launch per entry, sized on the GPU (`TRACE_RAYS_ARGS`).
 //! CPU reference: `cpu_ref::reflect::reflected_radiance` (tests/suite/rt_reflect.rs).
 
 use super::GBuffer;
-use super::{CompactOutputs, Surfaces, TraceScene};
+use super::{with_trace, CompactOutputs, Surfaces, TraceKernel, Tracing};
 use crate::error::Result;
-use crate::settings::Shadows;
+use crate::settings::{Shadows, Tracer};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
+use crate::vk::{Buffer, Context, Image, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -28,7 +30,7 @@ struct ReflectPush {
 
 pub struct RtReflectPass {
     ctx: Arc<Context>,
-    pipeline: Pipeline,
+    kernel: TraceKernel,
     sampler: Sampler,
     /// Reflected radiance of the listed pixels (others are left as they were); always
     /// `GENERAL`.
@@ -42,14 +44,17 @@ pub struct ReflectInputs<'a> {
     pub surfaces: Surfaces<'a>,
     pub shadow_map: &'a Image,
     pub list: &'a CompactOutputs,
-    pub scene: TraceScene<'a>,
+    pub scene: Tracing<'a>,
 }
 
 impl RtReflectPass {
-    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+    /// The pass for `tracer` (`khr` needs a context with ray tracing).
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D, tracer: Tracer) -> Result<Self> {
+        let (comp, rgen) = (shaders::RT_REFLECT_COMP, shaders::RT_REFLECT_RGEN);
+        let kernel = TraceKernel::new::<ReflectPush>(ctx, NAME, tracer, comp, rgen)?;
         Ok(Self {
             ctx: ctx.clone(),
-            pipeline: Pipeline::compute::<ReflectPush>(ctx, NAME, shaders::RT_REFLECT_COMP)?,
+            kernel,
             sampler: Sampler::nearest_clamp(ctx, "rt.sampler")?,
             out: Image::storage(ctx, "rt.color", extent, FORMAT)?,
         })
@@ -64,7 +69,7 @@ impl RtReflectPass {
     /// indirect dispatch). `color` ends visible to its reader, `reflect.merge`.
     /// `shadows`: how the hits are shadowed (the `shadows` setting).
     pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ReflectInputs<'_>, max_bounces: u32, shadows: Shadows) {
-        let ([sn, sv, si, dn, dv, di, st, dt], static_tris, dynamic_tris) = inputs.scene.bindings();
+        let (trace, static_tris, dynamic_tris) = inputs.scene.bindings();
         let push = ReflectPush {
             max_bounces,
             static_tris,
@@ -73,35 +78,29 @@ impl RtReflectPass {
         };
         let s = &self.sampler;
         let d = &self.ctx.device;
-        // WAR/WAW: the previous frame's merge reads and tracer writes of the colour are done.
-        barrier::global(d, cmd, access::COMPUTE_ANY, access::COMPUTE_WRITE);
-        self.pipeline.dispatch(
-            cmd,
-            &[
-                Resource::Buffer(inputs.frame),
-                Resource::Sampled(&inputs.gbuffer.depth, s),
-                Resource::Sampled(&inputs.gbuffer.normal, s),
-                Resource::Buffer(inputs.surfaces.materials),
-                Resource::Sampled(inputs.shadow_map, s),
-                Resource::Buffer(&inputs.list.pixels),
-                Resource::Buffer(&inputs.list.indirect),
-                Resource::StorageImage(&self.out),
-                sn,
-                sv,
-                si,
-                dn,
-                dv,
-                di,
-                st,
-                dt,
-                Resource::Buffer(inputs.surfaces.uvs[0]),
-                Resource::Buffer(inputs.surfaces.uvs[1]),
-                Resource::Sampled(inputs.surfaces.textures, inputs.surfaces.sampler),
-            ],
-            &push,
-            Groups::Indirect(&inputs.list.indirect),
-        );
+        let before = [
+            Resource::Buffer(inputs.frame),
+            Resource::Sampled(&inputs.gbuffer.depth, s),
+            Resource::Sampled(&inputs.gbuffer.normal, s),
+            Resource::Buffer(inputs.surfaces.materials),
+            Resource::Sampled(inputs.shadow_map, s),
+            Resource::Buffer(&inputs.list.pixels),
+            Resource::Buffer(&inputs.list.indirect),
+            Resource::StorageImage(&self.out),
+        ];
+        let after = [
+            Resource::Buffer(inputs.surfaces.uvs[0]),
+            Resource::Buffer(inputs.surfaces.uvs[1]),
+            Resource::Sampled(inputs.surfaces.textures, inputs.surfaces.sampler),
+        ];
+        let resources = with_trace(&before, trace, &after);
+        // WAR/WAW: the previous frame's merge reads and tracer writes of the colour are
+        // done (and, for the vendor tracer, the compute passes' list, arguments and
+        // images before its ray-tracing shaders read them).
+        barrier::global(d, cmd, access::COMPUTE_ANY, self.kernel.runs());
+        let k = &self.kernel;
+        k.over_list(NAME, cmd, &resources, &push, inputs.list, &inputs.scene);
         // RAW: the merge reads the ray-traced colour.
-        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
+        barrier::global(d, cmd, k.writes(), access::COMPUTE_READ);
     }
 }

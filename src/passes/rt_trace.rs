@@ -2,14 +2,18 @@
 //! list of rays. Usable on its own (`TracePass::trace`) for tests and benchmarks;
 //! `rt.reflect` walks the same BVHs with the same traversal (`glsl/shared/traverse.glsl`)
 //! from its own kernel, and binds them through `TraceScene::bindings`.
-//! CPU reference: `cpu_ref::trace` (`brute_force`, `CpuBvh`; tests/suite/trace.rs).
+//! With the vendor tracer (`TracePass::new_khr`) the same rays go through
+//! `glsl/rt_trace.rgen` and the scene's acceleration structures instead.
+//! CPU reference: `cpu_ref::trace` (`brute_force`, `CpuBvh`; tests/suite/trace.rs,
+//! tests/suite/khr.rs).
 
-use super::TraceScene;
+use super::{with_trace, TraceKernel, Tracing};
 use crate::error::{Error, Result};
 use crate::gpu_types::{Hit, Ray};
+use crate::settings::Tracer;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource, TimerReadout};
+use crate::vk::{Buffer, Context, GpuTimer, Resource, TimerReadout};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -38,53 +42,60 @@ pub struct RayBatch<'a> {
 
 pub struct TracePass {
     ctx: Arc<Context>,
-    pipeline: Pipeline,
+    kernel: TraceKernel,
 }
 
 impl TracePass {
+    /// Through Speculum's own BVHs (`TraceScene`).
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        Self::for_tracer(ctx, Tracer::Lbvh)
+    }
+
+    /// Through the driver's acceleration structures (`KhrTrace`); the context must have
+    /// ray tracing.
+    pub fn new_khr(ctx: &Arc<Context>) -> Result<Self> {
+        Self::for_tracer(ctx, Tracer::Khr)
+    }
+
+    pub fn for_tracer(ctx: &Arc<Context>, tracer: Tracer) -> Result<Self> {
+        let (comp, rgen) = (shaders::RT_TRACE_COMP, shaders::RT_TRACE_RGEN);
         Ok(Self {
             ctx: ctx.clone(),
-            pipeline: Pipeline::compute::<TracePush>(ctx, NAME, shaders::RT_TRACE_COMP)?,
+            kernel: TraceKernel::new::<TracePush>(ctx, NAME, tracer, comp, rgen)?,
         })
     }
 
-    /// Records the traversal of a batch of rays. At least one BVH must be given; rays,
-    /// nodes and geometry must be visible to compute reads.
-    pub fn record(&self, cmd: vk::CommandBuffer, batch: RayBatch<'_>, scene: TraceScene<'_>) {
-        let ([sn, sv, si, dn, dv, di, st, dt], static_tris, dynamic_tris) = scene.bindings();
+    /// Records the traversal of a batch of rays through the tracer the pass was made
+    /// for. At least one BVH must be given; rays, nodes and geometry must be visible to
+    /// the kernel's reads (compute, or ray-tracing shaders).
+    pub fn record<'a>(&self, cmd: vk::CommandBuffer, batch: RayBatch<'_>, scene: impl Into<Tracing<'a>>) {
+        let scene = scene.into();
+        let (trace, static_tris, dynamic_tris) = scene.bindings();
         let push = TracePush {
             ray_count: batch.count,
             static_tris,
             dynamic_tris,
             any_hit: batch.any_hit as u32,
         };
-        self.pipeline.dispatch(
-            cmd,
-            &[
-                Resource::Buffer(batch.rays),
-                Resource::Buffer(batch.hits),
-                sn,
-                sv,
-                si,
-                dn,
-                dv,
-                di,
-                st,
-                dt,
-            ],
-            &push,
-            Groups::Cover([batch.count, 1, 1]),
-        );
+        let lists = [Resource::Buffer(batch.rays), Resource::Buffer(batch.hits)];
+        let resources = with_trace(&lists, trace, &[]);
+        self.kernel
+            .over_count(NAME, cmd, &resources, &push, batch.count, &scene);
     }
 
     /// Uploads `rays`, traces them, and returns the hits and the GPU time of the
     /// traversal (scope `NAME`, self-checked).
-    pub fn trace(&self, rays: &[Ray], scene: TraceScene<'_>, any_hit: bool) -> Result<(Vec<Hit>, TimerReadout)> {
+    pub fn trace<'a>(
+        &self,
+        rays: &[Ray],
+        scene: impl Into<Tracing<'a>>,
+        any_hit: bool,
+    ) -> Result<(Vec<Hit>, TimerReadout)> {
+        let scene = scene.into();
         if rays.is_empty() {
             return Ok((Vec::new(), TimerReadout::default()));
         }
-        if scene.static_bvh.is_none() && scene.dynamic_bvh.is_none() {
+        if scene.is_empty() {
             return Err(Error::Bvh("tracing needs at least one BVH".into()));
         }
         let ctx = &self.ctx;
@@ -114,7 +125,7 @@ impl TracePass {
             barrier::record(
                 &ctx.device,
                 cmd,
-                &[barrier::memory(access::TRANSFER_WRITE, access::COMPUTE_WRITE)],
+                &[barrier::memory(access::TRANSFER_WRITE, self.kernel.runs())],
                 &[],
             );
             timer.begin(cmd, NAME);

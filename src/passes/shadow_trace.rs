@@ -4,11 +4,12 @@
 //! `map` runs none of this). The same classify → compact → indirect-trace shape as the
 //! reflections; between the two, `shadow.compact` is the reflections' compaction
 //! (`ssr_compact::CompactPass`) run over this pass's mask.
+//! `shadow.trace` runs through either tracer (`TraceKernel`).
 //! CPU reference: `cpu_ref::shadows` (tests/suite/shadows.rs).
 
-use super::{CompactOutputs, GBuffer, TraceScene};
+use super::{with_trace, CompactOutputs, GBuffer, TraceKernel, Tracing};
 use crate::error::Result;
-use crate::settings::Shadows;
+use crate::settings::{Shadows, Tracer};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
@@ -52,7 +53,7 @@ pub struct ShadowOutputs {
 pub struct ShadowTracePass {
     ctx: Arc<Context>,
     classify: Pipeline,
-    trace: Pipeline,
+    trace: TraceKernel,
     sampler: Sampler,
     pub out: ShadowOutputs,
 }
@@ -67,11 +68,14 @@ impl ShadowOutputs {
 }
 
 impl ShadowTracePass {
-    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+    /// The pass, its shadow rays through `tracer` (`khr` needs a context with ray
+    /// tracing).
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D, tracer: Tracer) -> Result<Self> {
+        let (comp, rgen) = (shaders::SHADOW_TRACE_COMP, shaders::SHADOW_TRACE_RGEN);
         Ok(Self {
             ctx: ctx.clone(),
             classify: Pipeline::compute::<ClassifyPush>(ctx, CLASSIFY_NAME, shaders::SHADOW_CLASSIFY_COMP)?,
-            trace: Pipeline::compute::<TracePush>(ctx, NAME, shaders::SHADOW_TRACE_COMP)?,
+            trace: TraceKernel::new::<TracePush>(ctx, NAME, tracer, comp, rgen)?,
             sampler: Sampler::nearest_clamp(ctx, "shadow.sampler")?,
             out: ShadowOutputs::new(ctx, extent)?,
         })
@@ -126,36 +130,33 @@ impl ShadowTracePass {
         frame: &Buffer,
         gbuffer: &GBuffer,
         list: &CompactOutputs,
-        scene: &TraceScene<'_>,
+        scene: &Tracing<'_>,
     ) {
-        let ([sn, sv, si, dn, dv, di, st, dt], static_tris, dynamic_tris) = scene.bindings();
+        let (trace, static_tris, dynamic_tris) = scene.bindings();
         let d = &self.ctx.device;
         let s = &self.sampler;
-        self.trace.dispatch(
-            cmd,
-            &[
-                Resource::Buffer(frame),
-                Resource::Sampled(&gbuffer.depth, s),
-                Resource::Sampled(&gbuffer.normal, s),
-                Resource::Buffer(&list.pixels),
-                Resource::Buffer(&list.indirect),
-                Resource::StorageImage(&self.out.visibility),
-                sn,
-                sv,
-                si,
-                dn,
-                dv,
-                di,
-                st,
-                dt,
-            ],
-            &TracePush {
-                static_tris,
-                dynamic_tris,
-            },
-            Groups::Indirect(&list.indirect),
-        );
+        let before = [
+            Resource::Buffer(frame),
+            Resource::Sampled(&gbuffer.depth, s),
+            Resource::Sampled(&gbuffer.normal, s),
+            Resource::Buffer(&list.pixels),
+            Resource::Buffer(&list.indirect),
+            Resource::StorageImage(&self.out.visibility),
+        ];
+        let resources = with_trace(&before, trace, &[]);
+        let push = TracePush {
+            static_tris,
+            dynamic_tris,
+        };
+        let k = &self.trace;
+        if let TraceKernel::Khr(_) = k {
+            // RAW: the compaction's list and arguments and the G-buffer before the
+            // ray-tracing shaders read them (the compute kernel's are made visible to
+            // compute reads by the compaction).
+            barrier::global(d, cmd, access::ALL_READ_WRITE, k.runs());
+        }
+        k.over_list(NAME, cmd, &resources, &push, list, scene);
         // RAW: light.direct reads the visibility.
-        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
+        barrier::global(d, cmd, k.writes(), access::COMPUTE_READ);
     }
 }

@@ -43,7 +43,13 @@ impl CompactOutputs {
         let tiles = slots(extent).div_ceil(TILE).max(1) as u64;
         Ok(Self {
             pixels: Buffer::new(ctx, "compact.pixels", n * 4, usage, MemoryLocation::GpuOnly)?,
-            indirect: Buffer::device_list(ctx, "compact.indirect", 16)?,
+            indirect: Buffer::new(
+                ctx,
+                "compact.indirect",
+                32,
+                usage | vk::BufferUsageFlags::INDIRECT_BUFFER | crate::vk::accel::address_usage(ctx),
+                MemoryLocation::GpuOnly,
+            )?,
             tile_counts: Buffer::new(ctx, "compact.tiles", tiles * 4, usage, MemoryLocation::GpuOnly)?,
             extent,
         })

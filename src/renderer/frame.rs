@@ -16,7 +16,7 @@ use crate::passes::ssr_trace::{self, MarchInputs};
 use crate::passes::{
     gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_transform, ssr_compact, SceneGeometry,
 };
-use crate::passes::{TraceScene, Traceable};
+use crate::passes::{TraceScene, Traceable, Tracing};
 use crate::settings::Mode;
 use crate::settings::SsrParams;
 use crate::vk::barrier::{self, access};
@@ -227,6 +227,7 @@ impl Renderer {
             merge,
             compose,
             static_bvh,
+            khr,
             dynamic,
             transform,
             cloth,
@@ -266,12 +267,18 @@ impl Renderer {
         }
         let surfaces = scene.surfaces(dynamic);
         f.row(Row::GBuffer, || gbuffer.record(cmd, ubo, &surfaces, &geometries));
-        let trace_scene = TraceScene {
-            static_bvh: Some(Traceable {
-                bvh: static_bvh,
-                geometry: scene.mesh.triangles(),
-            }),
-            dynamic_bvh: dynamic.map(|dy| dy.traceable()),
+        let trace_scene: Tracing<'_> = match khr {
+            Some(k) => k
+                .trace(Some(scene.mesh.triangles()), dynamic.map(|dy| dy.mesh.triangles()))
+                .into(),
+            None => TraceScene {
+                static_bvh: Some(Traceable {
+                    bvh: static_bvh,
+                    geometry: scene.mesh.triangles(),
+                }),
+                dynamic_bvh: dynamic.map(|dy| dy.traceable()),
+            }
+            .into(),
         };
         if shadows.traces() {
             f.row(Row::ShadowClassify, || {

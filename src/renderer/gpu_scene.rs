@@ -102,7 +102,7 @@ impl SceneBuffers {
         let vertices = Buffer::with_data(
             ctx,
             "scene.vertices",
-            lbvh::VERTEX_USAGE,
+            lbvh::VERTEX_USAGE | crate::vk::accel::input_usage(ctx),
             bytemuck::cast_slice(vertices),
         )?;
         Ok(Self {
@@ -167,7 +167,7 @@ impl DynamicGeometry {
             ctx,
             "dynamic.vertices",
             std::mem::size_of_val(meshes.vertices.as_slice()) as u64,
-            lbvh::VERTEX_USAGE | vk::BufferUsageFlags::TRANSFER_SRC,
+            lbvh::VERTEX_USAGE | vk::BufferUsageFlags::TRANSFER_SRC | crate::vk::accel::input_usage(ctx),
             gpu_allocator::MemoryLocation::GpuOnly,
         )?;
         let mut cloths = Vec::new();

@@ -27,6 +27,7 @@ use crate::error::Result;
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposePass;
 use crate::passes::gbuffer::GBufferPass;
+use crate::passes::khr::KhrScene;
 use crate::passes::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
 use crate::passes::light_direct::{self, LightDirectPass};
 use crate::passes::reflect_merge::MergePass;
@@ -41,7 +42,7 @@ use crate::passes::ssr_trace::SsrPass;
 use crate::passes::Traceable;
 use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
 use crate::scene::{Camera, Scene};
-use crate::settings::{Applies, Mode, Settings};
+use crate::settings::{Applies, Mode, Settings, Tracer};
 use crate::shadow_maps::ShadowMaps;
 use crate::vk::{Buffer, Context, GpuTimer, Image, TimerReadout, Wall};
 use ash::vk;
@@ -98,6 +99,8 @@ pub struct Renderer {
     pub static_bvh: Bvh,
     /// GPU milliseconds per stage of the static BVH build.
     pub static_bvh_build: Vec<(&'static str, f64)>,
+    /// The vendor tracer's acceleration structures (`tracer = khr`).
+    khr: Option<KhrScene>,
     /// What moves, when the scene has bodies.
     dynamic: Option<DynamicGeometry>,
     transform: SimTransformPass,
@@ -112,6 +115,35 @@ pub struct Renderer {
     paused: bool,
     step_once: bool,
     cmd: vk::CommandBuffer,
+}
+
+/// Whether the renderer can trace `scene` with `settings.tracer`: the vendor tracer
+/// needs the device's ray-tracing extensions (the error names what it lacks) and, for
+/// now, a static scene. Checked before any GPU work.
+fn check_tracer(ctx: &Context, (name, dynamic): (&str, bool), settings: &Settings) -> Result<()> {
+    if settings.tracer != Tracer::Khr {
+        return Ok(());
+    }
+    if let Some(missing) = &ctx.ray_tracing_missing {
+        return Err(crate::Error::NoDevice(format!(
+            "tracer khr needs ray tracing, and device '{}' lacks {missing} (tracer lbvh runs anywhere)",
+            ctx.device_name
+        )));
+    }
+    if dynamic {
+        return Err(crate::Error::Settings(format!(
+            "tracer khr traces static scenes only so far, and '{name}' has moving bodies or cloth (tracer lbvh traces it)"
+        )));
+    }
+    Ok(())
+}
+
+/// The vendor tracer's structures over the static scene, when it is the tracer.
+fn khr_scene(ctx: &Arc<Context>, scene: &SceneBuffers, settings: &Settings) -> Result<Option<KhrScene>> {
+    match settings.tracer {
+        Tracer::Khr => Ok(Some(KhrScene::new_static(ctx, &scene.mesh.triangles())?)),
+        Tracer::Lbvh => Ok(None),
+    }
 }
 
 /// The builder of the static scene's BVH.
@@ -129,6 +161,7 @@ impl Renderer {
         settings.validate()?;
         scene.validate()?;
         crate::limits::check_frame(ctx, settings)?;
+        check_tracer(ctx, (&scene.name, scene.is_dynamic()), settings)?;
         // Every pass works relative to `origin` (see `render_origin`).
         let origin = render_origin(scene);
         let scene_buffers = SceneBuffers::upload(ctx, scene, origin)?;
@@ -149,6 +182,7 @@ impl Renderer {
         } else {
             None
         };
+        let khr = khr_scene(ctx, &scene_buffers, settings)?;
         let extent = extent(settings);
         let view = View::of(scene).relative_to(origin);
         Ok(Self {
@@ -165,13 +199,14 @@ impl Renderer {
             hiz: HiZPass::new(ctx, extent)?,
             ssr: SsrPass::new(ctx, extent)?,
             compact: CompactPass::new(ctx, ssr_compact::PIPELINES, extent)?,
-            shadow_trace: ShadowTracePass::new(ctx, extent)?,
+            shadow_trace: ShadowTracePass::new(ctx, extent, settings.tracer)?,
             shadow_compact: CompactPass::new(ctx, shadow_trace::COMPACT_PIPELINES, extent)?,
-            rt: RtReflectPass::new(ctx, extent)?,
+            rt: RtReflectPass::new(ctx, extent, settings.tracer)?,
             merge: MergePass::new(ctx, extent)?,
             compose: ComposePass::new(ctx, extent)?,
             static_bvh,
             static_bvh_build,
+            khr,
             dynamic,
             transform: SimTransformPass::new(ctx)?,
             cloth: ClothPass::new(ctx)?,
@@ -224,6 +259,7 @@ impl Renderer {
     pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         settings.validate()?;
         crate::limits::check_frame(&self.ctx, &settings)?;
+        check_tracer(&self.ctx, ("the scene", self.is_dynamic()), &settings)?;
         if self.needs_new_renderer(&settings) {
             let fields = self.settings.changed(&settings, Applies::NewRenderer).join(", ");
             return Err(crate::Error::Settings(format!(
@@ -252,12 +288,27 @@ impl Renderer {
                 self.builder
                     .build_now(self.scene.mesh.triangles(), &self.static_bvh, static_kind(&settings))?;
         }
+        if !old.changed(&settings, Applies::Tracer).is_empty() {
+            self.ctx.wait_idle()?;
+            self.set_tracer(&settings)?;
+        }
+        let old = &self.settings;
         if !old.changed(&settings, Applies::ShadowMap).is_empty() {
             self.ctx.wait_idle()?;
             self.shadow = ShadowMapPass::new(&self.ctx, settings.shadow_map_size, settings.shadow_slope_bias)?;
         }
         self.settings = settings;
         self.uniforms = self.view.uniforms(&self.settings);
+        Ok(())
+    }
+
+    /// Makes the tracing passes and structures for `settings.tracer` (the GPU idle).
+    fn set_tracer(&mut self, settings: &Settings) -> Result<()> {
+        let e = extent(settings);
+        let rt = RtReflectPass::new(&self.ctx, e, settings.tracer)?;
+        let shadow_trace = ShadowTracePass::new(&self.ctx, e, settings.tracer)?;
+        self.khr = khr_scene(&self.ctx, &self.scene, settings)?;
+        (self.rt, self.shadow_trace) = (rt, shadow_trace);
         Ok(())
     }
 

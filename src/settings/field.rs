@@ -2,7 +2,7 @@
 //! HUD shows it, how a change applies, and its value as one type for generic code
 //! (validation, the HUD, the README's list).
 
-use super::{Mode, Settings, Shadows};
+use super::{Mode, Settings, Shadows, Tracer};
 
 /// One setting: everything the struct, validation, the renderer, the HUD, the CLI and
 /// the README need to know of it.
@@ -61,6 +61,8 @@ pub enum Applies {
     /// A dynamic scene's simulation is made with it: a new renderer (the animation
     /// restarts); a static scene's applies it next frame.
     NewRenderer,
+    /// Remakes the tracing passes and the tracer's structures (waits for the GPU).
+    Tracer,
 }
 
 impl Field {
@@ -78,6 +80,7 @@ impl Applies {
             Applies::ShadowMap => "new shadow map",
             Applies::StaticBvh => "static BVH rebuilt",
             Applies::NewRenderer => "new renderer (dynamic scenes)",
+            Applies::Tracer => "new tracer",
         }
     }
 }
@@ -90,6 +93,7 @@ pub enum Value {
     Bool(bool),
     Mode(Mode),
     Shadows(Shadows),
+    Tracer(Tracer),
 }
 
 /// The field's type back from a `Value` (`Field::set`); a value of another type is a
@@ -122,6 +126,7 @@ value_of!(f32, F32);
 value_of!(bool, Bool);
 value_of!(Mode, Mode);
 value_of!(Shadows, Shadows);
+value_of!(Tracer, Tracer);
 
 impl std::fmt::Display for Value {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -131,6 +136,7 @@ impl std::fmt::Display for Value {
             Value::Bool(v) => write!(f, "{v}"),
             Value::Mode(m) => write!(f, "{}", m.name()),
             Value::Shadows(m) => write!(f, "{}", m.name()),
+            Value::Tracer(t) => write!(f, "{}", t.name()),
         }
     }
 }

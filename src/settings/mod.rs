@@ -85,6 +85,36 @@ impl std::str::FromStr for Mode {
     }
 }
 
+/// The ray tracer every traced ray goes through (reflections and their bounces,
+/// shadow rays, the `rt` reference): Speculum's own BVH or the driver's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tracer {
+    Lbvh,
+    Khr,
+}
+
+impl Tracer {
+    pub const ALL: [Tracer; 2] = [Tracer::Lbvh, Tracer::Khr];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Tracer::Lbvh => "lbvh",
+            Tracer::Khr => "khr",
+        }
+    }
+
+    /// What the tracer is, in a line (the CLI's help, the HUD).
+    pub fn about(self) -> &'static str {
+        match self {
+            Tracer::Lbvh => "Speculum's own GPU BVH (LBVH or PLOC), walked in compute shaders",
+            Tracer::Khr => {
+                "The driver's acceleration structures and a ray-tracing pipeline (VK_KHR_acceleration_structure, VK_KHR_ray_tracing_pipeline)"
+            }
+        }
+    }
+}
+
 /// Where the sun's shadows come from, on the visible surface and at every ray-traced
 /// reflection hit alike (`about` says what each is).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -275,6 +305,11 @@ settings_table! {
     /// detached contact shadows live there): wider traces more pixels, closer to
     /// `rays`.
     shadow_band: f32 = 0.0002, ANY_F32, log_slider(0.00001, 0.01), NextFrame;
+    /// The ray tracer for every traced ray (reflections with their bounces, shadow
+    /// rays, the `rt` reference): Speculum's own BVH, rebuilt or refit on the GPU as
+    /// the scene moves, or the driver's acceleration structures through a ray-tracing
+    /// pipeline (the ray-tracing hardware where the GPU has it).
+    tracer: Tracer = Tracer::Lbvh, Range::Any, Hud::Own, Tracer;
     /// Simulated seconds per rendered frame of a dynamic scene (a fixed step, so frame
     /// k is the same image in every run): smaller is smoother motion and more frames
     /// for the same animation.
@@ -399,6 +434,7 @@ pub fn markdown_table() -> String {
         let range = match (f.range, (f.get)(&defaults)) {
             (Range::Any, Value::Mode(_)) => Mode::ALL.map(Mode::name).join(", "),
             (Range::Any, Value::Shadows(_)) => Shadows::ALL.map(Shadows::name).join(", "),
+            (Range::Any, Value::Tracer(_)) => Tracer::ALL.map(Tracer::name).join(", "),
             (Range::Any, Value::Bool(_)) => "true, false".into(),
             (r, _) => r.describe(),
         };
@@ -507,7 +543,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 29);
+        assert_eq!(Settings::field_names().len(), 30);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).

@@ -134,6 +134,35 @@ pub mod access {
         S::COLOR_ATTACHMENT_OUTPUT,
         A::from_raw(A::COLOR_ATTACHMENT_WRITE.as_raw() | A::COLOR_ATTACHMENT_READ.as_raw()),
     );
+    /// An acceleration-structure build or copy: it writes its destination and reads
+    /// (and writes) its source and scratch.
+    pub const AS_BUILD: (S, A) = (
+        S::ACCELERATION_STRUCTURE_BUILD_KHR,
+        A::from_raw(A::ACCELERATION_STRUCTURE_READ_KHR.as_raw() | A::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()),
+    );
+    /// A build reading its input buffers (vertices, indices, instances).
+    pub const AS_BUILD_INPUT: (S, A) = (S::ACCELERATION_STRUCTURE_BUILD_KHR, A::SHADER_READ);
+    /// Ray-tracing shaders reading buffers, images and acceleration structures, and
+    /// `vkCmdTraceRaysIndirectKHR` reading its arguments.
+    pub const RT_READ_AND_INDIRECT: (S, A) = (
+        S::from_raw(S::RAY_TRACING_SHADER_KHR.as_raw() | S::DRAW_INDIRECT.as_raw()),
+        A::from_raw(
+            A::SHADER_READ.as_raw() | A::ACCELERATION_STRUCTURE_READ_KHR.as_raw() | A::INDIRECT_COMMAND_READ.as_raw(),
+        ),
+    );
+    /// Ray-tracing shaders writing their outputs.
+    pub const RT_WRITE: (S, A) = (S::RAY_TRACING_SHADER_KHR, A::SHADER_WRITE);
+    /// Every access of a ray-tracing pass: its shaders' reads (acceleration structures
+    /// included) and writes, and its indirect arguments.
+    pub const RT_ANY: (S, A) = (
+        S::from_raw(S::RAY_TRACING_SHADER_KHR.as_raw() | S::DRAW_INDIRECT.as_raw()),
+        A::from_raw(
+            A::SHADER_READ.as_raw()
+                | A::SHADER_WRITE.as_raw()
+                | A::ACCELERATION_STRUCTURE_READ_KHR.as_raw()
+                | A::INDIRECT_COMMAND_READ.as_raw(),
+        ),
+    );
     pub const DEPTH_WRITE: (S, A) = (
         S::from_raw(S::EARLY_FRAGMENT_TESTS.as_raw() | S::LATE_FRAGMENT_TESTS.as_raw()),
         A::from_raw(A::DEPTH_STENCIL_ATTACHMENT_WRITE.as_raw() | A::DEPTH_STENCIL_ATTACHMENT_READ.as_raw()),

@@ -50,6 +50,18 @@ impl Buffer {
                 limit,
             )?;
         }
+        Self::unbound(ctx, name, size, usage, location)
+    }
+
+    /// A buffer no descriptor binds (acceleration-structure storage, build scratch): no
+    /// descriptor range limit applies to it.
+    pub fn unbound(
+        ctx: &Arc<Context>,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Self> {
         let info = vk::BufferCreateInfo::default().size(size).usage(usage);
         let raw = unsafe { ctx.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
@@ -187,6 +199,13 @@ impl Buffer {
             );
         })?;
         Ok(staging.mapped().expect("GpuToCpu is mapped").to_vec())
+    }
+
+    /// The buffer's device address (it was made with `SHADER_DEVICE_ADDRESS` usage, on a
+    /// context with `bufferDeviceAddress`: `Context::ray_tracing`).
+    pub fn address(&self) -> vk::DeviceAddress {
+        let info = vk::BufferDeviceAddressInfo::default().buffer(self.raw);
+        unsafe { self.ctx.device.get_buffer_device_address(&info) }
     }
 
     /// The whole buffer as a descriptor range.

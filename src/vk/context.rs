@@ -37,6 +37,10 @@ pub struct ContextDesc {
     /// Make the LBVH fit climb in lockstep (the variant lavapipe before Mesa 25 needs)
     /// or freely, whatever the driver (`Context::lockstep_fit`). `None`: as the driver needs.
     pub lockstep_fit: Option<bool>,
+    /// Leave the vendor tracer's extensions off, as on a device without them
+    /// (`Context::ray_tracing` is `None`, `ray_tracing_missing` says so): how the tests
+    /// reach `tracer = khr`'s error on a device that has them.
+    pub no_ray_tracing: bool,
 }
 
 /// A window's raw display and window handles (`raw-window-handle`), for `ContextDesc`.
@@ -91,6 +95,12 @@ pub struct Context {
     /// Bits of a timestamp that are valid on our queue (results wrap at 2^bits).
     pub timestamp_valid_bits: u32,
     pub push_descriptor: ash::khr::push_descriptor::Device,
+    /// The vendor tracer's extensions and limits (`vk::rt`), when the device has them
+    /// and `ContextDesc::no_ray_tracing` did not hide them.
+    pub ray_tracing: Option<super::rt::RayTracing>,
+    /// What the device lacks for the vendor tracer, in one line, when `ray_tracing` is
+    /// `None`.
+    pub ray_tracing_missing: Option<String>,
     /// Present when the loader offers VK_EXT_debug_utils: object names and labels.
     pub debug_utils: Option<ash::ext::debug_utils::Device>,
     debug_instance: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
@@ -277,12 +287,14 @@ fn pick_device(
 }
 
 /// The logical device: one queue of `queue_family`, push descriptors, synchronization2
-/// and dynamic rendering (and the swapchain extension when presenting).
+/// and dynamic rendering (and the swapchain extension when presenting; the vendor
+/// tracer's extensions and features with `ray_tracing`).
 fn create_device(
     instance: &ash::Instance,
     physical_device: vk::PhysicalDevice,
     queue_family: u32,
     presents: bool,
+    ray_tracing: bool,
 ) -> Result<ash::Device> {
     let priorities = [1.0f32];
     let queue_infos = [vk::DeviceQueueCreateInfo::default()
@@ -295,7 +307,12 @@ fn create_device(
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
         .synchronization2(true)
         .dynamic_rendering(true);
+    let (mut accel, mut pipe, mut f12) = super::rt::enabled_features();
     let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+    if ray_tracing {
+        dev_exts.extend(super::rt::EXTENSIONS.iter().map(|n| n.as_ptr()));
+        f2 = f2.push_next(&mut accel).push_next(&mut pipe).push_next(&mut f12);
+    }
     let dinfo = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queue_infos)
         .enabled_extension_names(&dev_exts)
@@ -319,7 +336,7 @@ impl Context {
         }
     }
 
-    // Long: the creation steps in order, each guarded, then the context's 23 fields.
+    // Long: the creation steps in order, each guarded, then the context's 25 fields.
     fn with_instance(
         entry: ash::Entry,
         instance: ash::Instance,
@@ -353,8 +370,14 @@ impl Context {
             }
         });
         let (physical_device, info, queue_family) = pick_device(&instance, surface.get().as_ref(), desc)?;
+        let ray_tracing_missing = if desc.no_ray_tracing {
+            Some("its ray-tracing extensions, hidden by the caller (ContextDesc::no_ray_tracing)".to_string())
+        } else {
+            super::rt::missing(&instance, physical_device)
+        };
+        let rt = ray_tracing_missing.is_none();
         let device = Undo::new(
-            create_device(&instance, physical_device, queue_family, surface.get().is_some())?,
+            create_device(&instance, physical_device, queue_family, surface.get().is_some(), rt)?,
             |d| unsafe { d.destroy_device(None) },
         );
         let allocator = Allocator::new(&AllocatorCreateDesc {
@@ -362,7 +385,7 @@ impl Context {
             device: device.get().clone(),
             physical_device,
             debug_settings: Default::default(),
-            buffer_device_address: false,
+            buffer_device_address: rt,
             allocation_sizes: Default::default(),
         })
         .map_err(|source| Error::Allocation {
@@ -388,6 +411,8 @@ impl Context {
         Ok(Self {
             queue: unsafe { device.get_device_queue(queue_family, 0) },
             push_descriptor: ash::khr::push_descriptor::Device::new(&instance, &device),
+            ray_tracing: rt.then(|| super::rt::RayTracing::new(&instance, physical_device, &device)),
+            ray_tracing_missing,
             debug_utils: has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device)),
             surface: surface.map(|(loader, raw)| Surface {
                 loader,

@@ -1,5 +1,6 @@
 //! Vulkan plumbing only: no knowledge of passes or scenes.
 
+pub mod accel;
 pub mod barrier;
 pub mod buffer;
 pub mod context;
@@ -7,6 +8,8 @@ pub mod device;
 pub mod frame_sync;
 pub mod image;
 pub mod pipeline;
+pub mod rt;
+pub mod rt_pipeline;
 pub mod spirv;
 pub mod swapchain;
 pub mod timing;

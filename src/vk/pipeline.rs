@@ -28,6 +28,7 @@ pub enum Groups<'a> {
 }
 
 /// One resource to bind, in binding order.
+#[derive(Clone, Copy)]
 pub enum Resource<'a> {
     /// A storage or uniform buffer (the shader decides which).
     Buffer(&'a Buffer),
@@ -37,6 +38,8 @@ pub enum Resource<'a> {
     Sampled(&'a Image, &'a Sampler),
     /// A uniform texel buffer (`utextureBuffer`).
     Texels(&'a super::TexelView),
+    /// A top-level acceleration structure (`accelerationStructureEXT`).
+    Accel(&'a super::accel::Accel),
 }
 
 /// A shader given by name (for errors) and SPIR-V bytes.
@@ -70,12 +73,12 @@ pub struct Pipeline {
     pub local_size: [u32; 3],
 }
 
-struct Module {
-    raw: vk::ShaderModule,
-    reflection: Reflection,
+pub(super) struct Module {
+    pub(super) raw: vk::ShaderModule,
+    pub(super) reflection: Reflection,
 }
 
-fn module(ctx: &Context, (name, bytes): Shader) -> Result<Module> {
+pub(super) fn module(ctx: &Context, (name, bytes): Shader) -> Result<Module> {
     let words = spirv::words(name, bytes)?;
     let reflection = spirv::reflect(name, &words)?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
@@ -84,7 +87,7 @@ fn module(ctx: &Context, (name, bytes): Shader) -> Result<Module> {
 }
 
 /// Merges the bindings of several stages; the same binding must agree on its kind.
-fn merge(
+pub(super) fn merge(
     name: &str,
     stages: &[(vk::ShaderStageFlags, &Reflection)],
 ) -> Result<Vec<(u32, vk::DescriptorType, vk::ShaderStageFlags)>> {
@@ -109,7 +112,7 @@ fn merge(
 
 /// Checks that the push-constant struct `P` is what the shaders declare and that the
 /// device allows it; returns its size.
-fn push_size<P: Pod>(ctx: &Context, name: &str, reflections: &[&Reflection]) -> Result<u32> {
+pub(super) fn push_size<P: Pod>(ctx: &Context, name: &str, reflections: &[&Reflection]) -> Result<u32> {
     let declared = reflections.iter().map(|r| r.push_size).max().unwrap_or(0);
     let size = std::mem::size_of::<P>() as u32;
     if size != declared {
@@ -128,7 +131,37 @@ fn push_size<P: Pod>(ctx: &Context, name: &str, reflections: &[&Reflection]) -> 
 }
 
 impl Pipeline {
-    fn layouts(
+    /// A pipeline made elsewhere in `vk/` (the ray-tracing one) from its parts; it
+    /// owns them from here.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn from_parts<P: Pod>(
+        ctx: &Arc<Context>,
+        raw: vk::Pipeline,
+        (set_layout, layout): (vk::DescriptorSetLayout, vk::PipelineLayout),
+        bindings: &[(u32, vk::DescriptorType, vk::ShaderStageFlags)],
+        bind_point: vk::PipelineBindPoint,
+        stages: vk::ShaderStageFlags,
+        push_size: u32,
+    ) -> Self {
+        Self {
+            ctx: ctx.clone(),
+            raw,
+            layout,
+            set_layout,
+            bindings: bindings.iter().map(|b| (b.0, b.1)).collect(),
+            bind_point,
+            stages,
+            push_type: TypeId::of::<P>(),
+            push_size,
+            local_size: [1, 1, 1],
+        }
+    }
+
+    pub(super) fn ctx(&self) -> &Arc<Context> {
+        &self.ctx
+    }
+
+    pub(super) fn layouts(
         ctx: &Context,
         name: &str,
         bindings: &[(u32, vk::DescriptorType, vk::ShaderStageFlags)],
@@ -303,6 +336,7 @@ impl Pipeline {
             Buffer(vk::DescriptorBufferInfo),
             Image(vk::DescriptorImageInfo),
             Texels(vk::BufferView),
+            Accel(vk::AccelerationStructureKHR),
         }
         let infos: Vec<(u32, vk::DescriptorType, Info)> = self
             .bindings
@@ -328,11 +362,24 @@ impl Pipeline {
                             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
                     ),
                     (Resource::Texels(view), vk::DescriptorType::UNIFORM_TEXEL_BUFFER) => Info::Texels(view.raw),
+                    (Resource::Accel(a), vk::DescriptorType::ACCELERATION_STRUCTURE_KHR) => Info::Accel(a.raw),
                     _ => panic!("binding {b}: the shader wants {ty:?}, a different kind of resource was given"),
                 };
                 (b, ty, info)
             })
             .collect();
+        // An acceleration structure is written through a struct chained to its write.
+        let mut accels: Vec<vk::WriteDescriptorSetAccelerationStructureKHR<'_>> = infos
+            .iter()
+            .filter_map(|(_, _, info)| match info {
+                Info::Accel(a) => Some(
+                    vk::WriteDescriptorSetAccelerationStructureKHR::default()
+                        .acceleration_structures(std::slice::from_ref(a)),
+                ),
+                _ => None,
+            })
+            .collect();
+        let mut accels = accels.iter_mut();
         let writes: Vec<vk::WriteDescriptorSet<'_>> = infos
             .iter()
             .map(|(b, ty, info)| {
@@ -344,6 +391,7 @@ impl Pipeline {
                     Info::Buffer(i) => w.buffer_info(std::slice::from_ref(i)),
                     Info::Image(i) => w.image_info(std::slice::from_ref(i)),
                     Info::Texels(v) => w.texel_buffer_view(std::slice::from_ref(v)),
+                    Info::Accel(_) => w.push_next(accels.next().expect("one per acceleration structure")),
                 }
             })
             .collect();

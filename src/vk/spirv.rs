@@ -24,6 +24,7 @@ const OP_TYPE_ARRAY: u32 = 28;
 const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
 const OP_TYPE_STRUCT: u32 = 30;
 const OP_TYPE_POINTER: u32 = 32;
+const OP_TYPE_ACCELERATION_STRUCTURE: u32 = 5341;
 const OP_VARIABLE: u32 = 59;
 const OP_DECORATE: u32 = 71;
 const OP_MEMBER_DECORATE: u32 = 72;
@@ -147,6 +148,7 @@ impl Module {
                 | OP_TYPE_RUNTIME_ARRAY
                 | OP_TYPE_STRUCT
                 | OP_TYPE_POINTER
+                | OP_TYPE_ACCELERATION_STRUCTURE
                     if !args.is_empty() =>
                 {
                     types.insert(args[0], (op, args[1..].to_vec()));
@@ -207,6 +209,9 @@ impl Module {
             (SC_UNIFORM, _) if decorations.contains_key(&(pointee, DEC_BLOCK)) => vk::DescriptorType::UNIFORM_BUFFER,
             (SC_UNIFORM_CONSTANT, Some((OP_TYPE_SAMPLED_IMAGE, _))) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             (SC_UNIFORM_CONSTANT, Some((OP_TYPE_SAMPLER, _))) => vk::DescriptorType::SAMPLER,
+            (SC_UNIFORM_CONSTANT, Some((OP_TYPE_ACCELERATION_STRUCTURE, _))) => {
+                vk::DescriptorType::ACCELERATION_STRUCTURE_KHR
+            }
             // OpTypeImage operands after the result: sampled type, dim, depth, arrayed, ms, sampled.
             // A texel buffer is an image of dim Buffer (`utextureBuffer`, `imageBuffer`).
             (SC_UNIFORM_CONSTANT, Some((OP_TYPE_IMAGE, ops))) if ops.len() >= 6 && ops[1] == DIM_BUFFER => {

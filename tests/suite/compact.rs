@@ -46,7 +46,7 @@ fn compaction_matches_cpu_on_random_masks() {
                 .pixels
                 .write(&vec![0xcdu8; pass.out.pixels.size as usize])
                 .unwrap();
-            pass.out.indirect.write(&[0xcdu8; 16]).unwrap();
+            pass.out.indirect.write(&[0xcdu8; 32]).unwrap();
             ctx.one_shot(|cmd| pass.record(cmd, &img)).unwrap();
             let want = compact(&mask, w, h);
             let args: Vec<u32> = bytemuck::pod_collect_to_vec(&pass.out.indirect.read().unwrap());
@@ -54,7 +54,9 @@ fn compaction_matches_cpu_on_random_masks() {
                 args,
                 {
                     let [x, y] = speculum::passes::list_groups((want.len() as u32).div_ceil(RT_LIST_WG));
-                    [x, y, 1, want.len() as u32]
+                    let n = want.len() as u32;
+                    // The dispatch's arguments and count, then the trace-rays launch's.
+                    [x, y, 1, n, n, 1, 1, 0]
                 },
                 "{w}x{h} density {density}"
             );

@@ -16,6 +16,7 @@ mod gltf;
 mod house;
 mod inputs;
 mod kernels;
+mod khr;
 mod layout;
 mod lbvh;
 mod merge;

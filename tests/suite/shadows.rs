@@ -55,7 +55,7 @@ fn shadow_classify_matches_cpu_on_random_gbuffers() {
         size: size as u32,
         depth: &shadow,
     };
-    let pass = ShadowTracePass::new(&ctx, extent).unwrap();
+    let pass = ShadowTracePass::new(&ctx, extent, speculum::settings::Tracer::Lbvh).unwrap();
     let general = vk::ImageLayout::GENERAL;
     for mode in [Shadows::Hybrid, Shadows::Rays] {
         pass.out
@@ -251,7 +251,8 @@ fn shadow_trace_matches_cpu_on_a_random_gbuffer() {
     ctx.one_shot(|cmd| {
         r.shadow_trace.classify(cmd, &ubo, gb, &r.shadow.out, Shadows::Rays);
         r.shadow_compact.record(cmd, &r.shadow_trace.out.mask);
-        r.shadow_trace.trace(cmd, &ubo, gb, &r.shadow_compact.out, &scene);
+        r.shadow_trace
+            .trace(cmd, &ubo, gb, &r.shadow_compact.out, &scene.into());
         let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
         barrier::record(&ctx.device, cmd, &[b], &[]);
     })

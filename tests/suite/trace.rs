@@ -52,7 +52,7 @@ impl Built {
 
 /// Rays from random points around the soup: half aimed at random triangles (hits),
 /// half in random directions (many misses).
-fn random_rays(n: usize, v: &[GpuVertex], i: &[u32], scale: f32, seed: u64) -> Vec<Ray> {
+pub(crate) fn random_rays(n: usize, v: &[GpuVertex], i: &[u32], scale: f32, seed: u64) -> Vec<Ray> {
     let mut rng = common::rng(seed);
     let tris = i.len() / 3;
     (0..n)
@@ -88,15 +88,26 @@ fn random_rays(n: usize, v: &[GpuVertex], i: &[u32], scale: f32, seed: u64) -> V
 /// break differently only if their float results differ: such a pair passes when the
 /// GPU's triangle really is hit at the CPU's t; ties are counted and must be rare.
 fn compare(gpu: &[Hit], cpu: &[Hit], rays: &[Ray], tri_of: impl Fn(u32) -> [Vec3; 3]) -> usize {
+    compare_within(gpu, cpu, rays, tri_of, (1e-5, 1e-4))
+}
+
+/// `compare` with t within `t_rel` relative and barycentrics within `bary` absolute.
+pub(crate) fn compare_within(
+    gpu: &[Hit],
+    cpu: &[Hit],
+    rays: &[Ray],
+    tri_of: impl Fn(u32) -> [Vec3; 3],
+    (t_rel, bary): (f32, f32),
+) -> usize {
     let mut ties = 0;
     for (k, ((g, c), r)) in gpu.iter().zip(cpu).zip(rays).enumerate() {
         assert!(g.t >= 0.0, "ray {k}: traversal stack overflow");
-        let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
+        let close = |a: f32, b: f32| (a - b).abs() <= t_rel * a.abs().max(b.abs()).max(1.0);
         if g.prim == c.prim {
             assert!(close(g.t, c.t), "ray {k}: t {} vs {}", g.t, c.t);
             if g.prim != BVH_INVALID {
                 assert!(
-                    (g.u - c.u).abs() < 1e-4 && (g.v - c.v).abs() < 1e-4,
+                    (g.u - c.u).abs() < bary && (g.v - c.v).abs() < bary,
                     "ray {k}: barycentrics"
                 );
             }

@@ -56,7 +56,7 @@ impl UploadedTriangles {
         let v = Buffer::with_data(
             ctx,
             &format!("{name}.vertices"),
-            VERTEX_USAGE,
+            VERTEX_USAGE | crate::vk::accel::input_usage(ctx),
             bytemuck::cast_slice(vertices),
         )?;
         let i = index_buffer(ctx, &format!("{name}.indices"), vk::BufferUsageFlags::empty(), indices)?;
@@ -83,5 +83,6 @@ impl UploadedTriangles {
 pub fn index_buffer(ctx: &Arc<Context>, name: &str, usage: vk::BufferUsageFlags, indices: &[u32]) -> Result<Buffer> {
     let mut padded = indices.to_vec();
     padded.resize(indices.len().next_multiple_of(4).max(4), 0);
-    Buffer::with_data(ctx, name, usage | VERTEX_USAGE, bytemuck::cast_slice(&padded))
+    let usage = usage | VERTEX_USAGE | crate::vk::accel::input_usage(ctx);
+    Buffer::with_data(ctx, name, usage, bytemuck::cast_slice(&padded))
 }

@@ -1,0 +1,201 @@
+//! The vendor tracer (`tracer = khr`) against the CPU: the driver's acceleration
+//! structures and a ray-tracing pipeline find the hits brute force finds (the same
+//! triangle, t within 1e-4 relative; ties counted), closest and any hit, over scenes of
+//! 1, 2 and thousands of triangles; a device without the extensions is told so.
+
+use crate::common;
+use crate::trace::{compare_within, random_rays};
+
+use glam::Vec3;
+use speculum::cpu_ref::lbvh::triangle;
+use speculum::cpu_ref::trace::{brute_force, intersect};
+use speculum::gpu_types::{GpuVertex, Hit, Ray};
+use speculum::passes::khr::KhrScene;
+use speculum::passes::lbvh::UploadedTriangles;
+use speculum::passes::rt_trace::TracePass;
+use speculum::scene::soup::{default_size, random_soup};
+use speculum::shader_defines::BVH_INVALID;
+use speculum::vk::ContextDesc;
+
+/// Relative t tolerance between the driver's intersection test and the CPU's
+/// Moller-Trumbore (both single precision, computed differently).
+const T_REL: f32 = 1e-4;
+
+/// The vendor tracer's hits against brute force's: the same triangle with t within
+/// `T_REL` (barycentrics within 1e-3), or a counted tie.
+fn compare(gpu: &[Hit], cpu: &[Hit], rays: &[Ray], tri_of: impl Fn(u32) -> [Vec3; 3]) -> usize {
+    compare_within(gpu, cpu, rays, tri_of, (T_REL, 1e-3))
+}
+
+fn traced(v: &[GpuVertex], i: &[u32], rays: &[Ray], any_hit: bool) -> Vec<Hit> {
+    let ctx = common::context();
+    assert!(
+        ctx.ray_tracing.is_some() || ctx.driver_name != "llvmpipe",
+        "lavapipe 25 has the vendor tracer's extensions: {:?}",
+        ctx.ray_tracing_missing
+    );
+    if ctx.ray_tracing.is_none() {
+        eprintln!("skipped: {} lacks {:?}", ctx.device_name, ctx.ray_tracing_missing);
+        return rays.iter().map(|r| brute_force(r, v, i)).collect();
+    }
+    let tris = UploadedTriangles::new(&ctx, "khr", v, i).unwrap();
+    let scene = KhrScene::new_static(&ctx, &tris.geometry()).unwrap();
+    let pass = TracePass::new_khr(&ctx).unwrap();
+    let (hits, _) = pass
+        .trace(rays, scene.trace(Some(tris.geometry()), None), any_hit)
+        .unwrap();
+    assert_eq!(ctx.validation_messages(), 0);
+    hits
+}
+
+/// 4,000 random rays against a 3,000-triangle soup: every closest hit is brute force's
+/// (ties excepted, counted, rare); every any-hit agrees on whether something is hit,
+/// and what it reports is a real hit of that ray.
+#[test]
+fn khr_hits_equal_brute_force() {
+    let n = 3000;
+    let (v, i) = random_soup(n, 1.0, default_size(n), 31);
+    let rays = random_rays(4000, &v, &i, 1.0, 32);
+    let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
+    let hits = cpu.iter().filter(|h| h.prim != BVH_INVALID).count();
+    assert!(hits > 2000 && hits < 3900, "a mix of hits and misses: {hits}");
+    let gpu = traced(&v, &i, &rays, false);
+    let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
+    assert!(ties <= rays.len() / 1000, "{ties} ties");
+    let any = traced(&v, &i, &rays, true);
+    for (k, ((a, c), r)) in any.iter().zip(&cpu).zip(&rays).enumerate() {
+        assert_eq!(
+            a.prim == BVH_INVALID,
+            c.prim == BVH_INVALID,
+            "ray {k}: any {a:?} closest {c:?}"
+        );
+        if a.prim != BVH_INVALID {
+            let t = intersect(r, &triangle(&v, &i, a.prim as usize)).map(|h| h.0);
+            assert!(
+                t.is_some_and(|t| (t - a.t).abs() <= T_REL * t.max(1.0)),
+                "ray {k}: {a:?}"
+            );
+        }
+    }
+}
+
+/// Builds of one and of two triangles trace as brute force says (the smallest trees).
+#[test]
+fn khr_traces_one_and_two_triangles() {
+    for n in [1, 2] {
+        let (v, i) = random_soup(n, 1.0, default_size(n), 40 + n as u64);
+        let rays = random_rays(200, &v, &i, 1.0, 50 + n as u64);
+        let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
+        assert!(cpu.iter().any(|h| h.prim != BVH_INVALID), "{n}: some rays hit");
+        let gpu = traced(&v, &i, &rays, false);
+        let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
+        assert_eq!(ties, 0, "{n} triangles");
+    }
+}
+
+/// A device whose ray-tracing extensions are hidden has no vendor tracer, and says what
+/// it lacks in one line.
+#[test]
+fn hidden_ray_tracing_is_missing() {
+    let ctx = common::context_with(ContextDesc {
+        no_ray_tracing: true,
+        ..Default::default()
+    });
+    assert!(ctx.ray_tracing.is_none());
+    let why = ctx.ray_tracing_missing.clone().expect("a reason");
+    assert!(!why.contains('\n') && why.contains("ray-tracing"), "{why}");
+}
+
+/// Every static built-in scene renders the same image through either tracer, in
+/// `hybrid` and `rt`, with map and ray shadows: SSIM >= 0.999 (the driver's intersection
+/// test differs from the walk's in the last bits of t; here the images are in fact
+/// byte-identical). The vendor tracer's frame passes validation.
+#[test]
+fn khr_renders_what_lbvh_renders() {
+    use speculum::settings::{Mode, Shadows, Tracer};
+    use speculum::{headless, Settings};
+    let ctx = common::context();
+    if ctx.ray_tracing.is_none() {
+        assert_ne!(ctx.driver_name, "llvmpipe", "lavapipe 25 has the vendor tracer");
+        return;
+    }
+    let plan = headless::FramePlan {
+        warmup: 0,
+        frames: 1,
+        reference: false,
+    };
+    for name in ["room", "mirrors", "spheres", "offscreen", "gallery"] {
+        let scene = speculum::scene::builtin::by_name(name).unwrap().unwrap();
+        for (mode, shadows) in [
+            (Mode::Hybrid, Shadows::Map),
+            (Mode::Rt, Shadows::Rays),
+            (Mode::Hybrid, Shadows::Hybrid),
+        ] {
+            let image = |tracer| {
+                let settings = Settings {
+                    width: 160,
+                    height: 90,
+                    mode,
+                    shadows,
+                    tracer,
+                    ..Default::default()
+                };
+                headless::render(&ctx, &scene, &settings, plan, &mut || {})
+                    .unwrap()
+                    .rgba
+            };
+            let (lbvh, khr) = (image(Tracer::Lbvh), image(Tracer::Khr));
+            let c = speculum::metrics::compare_rgba8(&lbvh, &khr, 160, 90).unwrap();
+            assert!(c.ssim >= 0.999, "{name} {mode:?} {shadows:?}: {c:?}");
+        }
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}
+
+/// `tracer = khr` is refused in one line before any GPU work where it cannot run: on a
+/// device without the extensions (hidden here), naming what is missing; on a scene
+/// that moves (not yet traced by it). Switching a renderer's tracer in place renders
+/// what a fresh renderer of that tracer renders.
+#[test]
+fn khr_refusals_and_switching() {
+    use speculum::settings::Tracer;
+    use speculum::{Renderer, Settings};
+    let khr = Settings {
+        width: 64,
+        height: 40,
+        tracer: Tracer::Khr,
+        ..Default::default()
+    };
+    let room = speculum::scene::builtin::room().unwrap();
+    let hidden = common::context_with(ContextDesc {
+        no_ray_tracing: true,
+        ..Default::default()
+    });
+    let e = Renderer::new(&hidden, &room, &khr).err().expect("refused").to_string();
+    assert!(
+        e.contains("tracer khr needs ray tracing") && e.contains("lacks") && !e.contains('\n'),
+        "{e}"
+    );
+    let ctx = common::context();
+    if ctx.ray_tracing.is_none() {
+        return;
+    }
+    let drop = speculum::scene::builtin::by_name("drop").unwrap().unwrap();
+    let e = Renderer::new(&ctx, &drop, &khr).err().expect("refused").to_string();
+    assert!(e.contains("static scenes only") && !e.contains('\n'), "{e}");
+    let lbvh = Settings {
+        tracer: Tracer::Lbvh,
+        ..khr.clone()
+    };
+    let frame = |r: &mut Renderer| {
+        r.render_frame().unwrap();
+        r.read_output().unwrap()
+    };
+    let mut fresh = Renderer::new(&ctx, &room, &khr).unwrap();
+    let want = frame(&mut fresh);
+    let mut switched = Renderer::new(&ctx, &room, &lbvh).unwrap();
+    frame(&mut switched);
+    switched.set_settings(khr.clone()).unwrap();
+    assert_eq!(frame(&mut switched), want, "switched to khr in place");
+    assert_eq!(ctx.validation_messages(), 0);
+}

@@ -282,7 +282,8 @@ mod tests {
             json.starts_with(
                 "{\"uniforms\":null,\"sim.rigid\":null,\"sim.transform\":null,\"sim.cloth\":null,\
                  \"lbvh.bounds\":null,\"lbvh.morton\":null,\"lbvh.sort\":null,\
-                 \"lbvh.fit\":null,\"lbvh.refit\":null,\"shadow.map\":null,\"gbuffer\":{\"median\":2.0"
+                 \"lbvh.fit\":null,\"lbvh.refit\":null,\"as.cloth\":null,\"as.tlas\":null,\
+                 \"shadow.map\":null,\"gbuffer\":{\"median\":2.0"
             ),
             "{json}"
         );

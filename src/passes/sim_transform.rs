@@ -45,7 +45,12 @@ impl RigidBodies {
         let poses = storage | vk::BufferUsageFlags::TRANSFER_DST;
         Ok(Self {
             ctx: ctx.clone(),
-            objects: Buffer::with_data(ctx, "dynamic.objects", storage, bytemuck::cast_slice(vertices))?,
+            objects: Buffer::with_data(
+                ctx,
+                "dynamic.objects",
+                storage | crate::vk::accel::input_usage(ctx),
+                bytemuck::cast_slice(vertices),
+            )?,
             poses: Buffer::new(ctx, "dynamic.poses", bytes, poses, MemoryLocation::GpuOnly)?,
             staging: vec![Self::staging(ctx, bytes)?],
             vertex_count: count,
@@ -64,6 +69,11 @@ impl RigidBodies {
             self.staging.push(Self::staging(&self.ctx, self.poses.size)?);
         }
         Ok(())
+    }
+
+    /// The bodies' vertices in their own spaces.
+    pub fn objects(&self) -> &Buffer {
+        &self.objects
     }
 
     /// The poses `record_posed` last copied (one `Mat4` per body), which a rigid

@@ -7,6 +7,7 @@
 use super::{FrameSlot, Renderer};
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::{self, ComposeInputs, ComposeMode};
+use crate::passes::khr;
 use crate::passes::lbvh::dynamic::DynamicBvh;
 use crate::passes::light_direct::Sun;
 use crate::passes::reflect_merge::{self, BlurParams, MergeInputs, MergeParams};
@@ -39,6 +40,9 @@ pub enum Row {
     SimCloth,
     /// The dynamic BVH's rebuild or refit (`lbvh.*`; the static BVH is built once).
     DynamicBvh,
+    /// The vendor tracer's structures of a moving scene (`as.*`; the static ones are
+    /// built once).
+    DynamicAccel,
     ShadowMap,
     GBuffer,
     ShadowClassify,
@@ -56,12 +60,13 @@ pub enum Row {
 
 impl Row {
     /// Every row, in frame order.
-    pub const ALL: [Row; 18] = [
+    pub const ALL: [Row; 19] = [
         Row::Uniforms,
         Row::SimRigid,
         Row::SimTransform,
         Row::SimCloth,
         Row::DynamicBvh,
+        Row::DynamicAccel,
         Row::ShadowMap,
         Row::GBuffer,
         Row::ShadowClassify,
@@ -86,6 +91,7 @@ impl Row {
             Row::SimTransform => &[sim_transform::NAME],
             Row::SimCloth => &[sim_cloth::NAME],
             Row::DynamicBvh => &DynamicBvh::SCOPES,
+            Row::DynamicAccel => &khr::SCOPES,
             Row::ShadowMap => &[shadow_map::NAME],
             Row::GBuffer => &[gbuffer::NAME],
             Row::ShadowClassify => &[shadow_trace::CLASSIFY_NAME],
@@ -252,10 +258,18 @@ impl Renderer {
                     dy.cloths.iter().for_each(|c| cloth.record(cmd, c, &dy.mesh.vertices))
                 });
             }
-            f.staged_row(Row::DynamicBvh, |timer| {
-                dy.bvh
-                    .record(cmd, timer, builder, dy.mesh.triangles(), dy.rigid.poses())
-            });
+            match khr {
+                None => f.staged_row(Row::DynamicBvh, |timer| {
+                    dy.bvh
+                        .record(cmd, timer, builder, dy.mesh.triangles(), dy.rigid.poses())
+                }),
+                Some(k) => {
+                    let poses = dy.world.poses();
+                    f.staged_row(Row::DynamicAccel, |timer| {
+                        k.record_frame(cmd, timer, slot, &poses, &dy.mesh.triangles())
+                    })
+                }
+            }
         }
         let dynamic = dynamic.as_ref();
         let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.mesh.geometry())
@@ -269,7 +283,7 @@ impl Renderer {
         f.row(Row::GBuffer, || gbuffer.record(cmd, ubo, &surfaces, &geometries));
         let trace_scene: Tracing<'_> = match khr {
             Some(k) => k
-                .trace(Some(scene.mesh.triangles()), dynamic.map(|dy| dy.mesh.triangles()))
+                .trace(scene.mesh.triangles(), dynamic.map(|dy| dy.mesh.triangles()))
                 .into(),
             None => TraceScene {
                 static_bvh: Some(Traceable {

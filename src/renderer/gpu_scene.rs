@@ -5,6 +5,7 @@
 
 use crate::error::Result;
 use crate::gpu_types::{GpuMaterial, GpuVertex};
+use crate::passes::khr::{BodyRange, DynamicLayout};
 use crate::passes::lbvh::dynamic::DynamicBvh;
 use crate::passes::lbvh::rigid::{self, RigidKeys, RigidLayout};
 use crate::passes::lbvh::{self, Geometry, TriangleTexels};
@@ -137,6 +138,28 @@ fn upload_textures(ctx: &Arc<Context>, scene: &Scene) -> Result<Image> {
     Image::texture_array(ctx, "scene.textures", size, &chains)
 }
 
+/// The bodies' triangle ranges in the dynamic numbering with the first body of the same
+/// shape (`BodyShape`: the same object-space triangles), and the cloths' range: what the
+/// vendor tracer builds its bottom levels over.
+pub(super) fn khr_ranges(scene: &Scene) -> (Vec<BodyRange>, Option<(u32, u32)>) {
+    let mut first_of_shape = std::collections::HashMap::new();
+    let mut first_tri = 0u32;
+    let mut bodies = Vec::with_capacity(scene.bodies.len());
+    for (i, b) in scene.bodies.iter().enumerate() {
+        let tris = (scene.body_mesh(b).indices.len() / 3) as u32;
+        // Debug prints an f32 exactly (the shortest text that reads back as it).
+        let shape_of = *first_of_shape.entry(format!("{:?}", b.shape)).or_insert(i as u32);
+        bodies.push(BodyRange {
+            first_tri,
+            tris,
+            shape_of,
+        });
+        first_tri += tris;
+    }
+    let cloth_tris: u32 = scene.cloths.iter().map(|c| 2 * (c.resolution - 1).pow(2)).sum();
+    (bodies, (cloth_tris > 0).then_some((first_tri, cloth_tris)))
+}
+
 /// The moving geometry of a scene with bodies: its simulation (`sim.rigid` on the
 /// host), the rigid bodies' vertices and poses (`sim.transform`), the cloths
 /// (`sim.cloth`), the world-space vertices those two write, and the BVH over them.
@@ -147,6 +170,10 @@ pub(super) struct DynamicGeometry {
     pub mesh: MeshBuffers,
     pub cloths: Vec<ClothState>,
     pub bvh: DynamicBvh,
+    /// `khr_ranges` of the scene.
+    pub khr_ranges: (Vec<BodyRange>, Option<(u32, u32)>),
+    /// `refit_rebuild_every`, or 1 where the LBVH rebuilds every frame.
+    pub rebuild_every: u32,
 }
 
 impl DynamicGeometry {
@@ -190,6 +217,8 @@ impl DynamicGeometry {
             mesh: MeshBuffers::new(ctx, "dynamic", world_vertices, &meshes.uvs, &meshes.indices)?,
             cloths,
             bvh,
+            khr_ranges: khr_ranges(scene),
+            rebuild_every: if refit { settings.refit_rebuild_every } else { 1 },
         };
         dynamic.rigid.write(0, &dynamic.world.poses());
         Ok(dynamic)
@@ -207,6 +236,18 @@ impl DynamicGeometry {
         }
         self.bvh.reset();
         Ok(())
+    }
+
+    /// The moving geometry as the vendor tracer builds it.
+    pub fn khr_layout(&self) -> DynamicLayout<'_> {
+        DynamicLayout {
+            objects: self.rigid.objects(),
+            object_vertices: self.rigid.vertex_count,
+            world: self.mesh.triangles(),
+            bodies: self.khr_ranges.0.clone(),
+            cloth: self.khr_ranges.1,
+            rebuild_every: self.rebuild_every,
+        }
     }
 
     pub fn traceable(&self) -> Traceable<'_> {

@@ -117,10 +117,10 @@ pub struct Renderer {
     cmd: vk::CommandBuffer,
 }
 
-/// Whether the renderer can trace `scene` with `settings.tracer`: the vendor tracer
-/// needs the device's ray-tracing extensions (the error names what it lacks) and, for
-/// now, a static scene. Checked before any GPU work.
-fn check_tracer(ctx: &Context, (name, dynamic): (&str, bool), settings: &Settings) -> Result<()> {
+/// Whether the renderer can trace with `settings.tracer`: the vendor tracer needs the
+/// device's ray-tracing extensions (the error names what it lacks). Checked before any
+/// GPU work.
+fn check_tracer(ctx: &Context, settings: &Settings) -> Result<()> {
     if settings.tracer != Tracer::Khr {
         return Ok(());
     }
@@ -130,20 +130,28 @@ fn check_tracer(ctx: &Context, (name, dynamic): (&str, bool), settings: &Setting
             ctx.device_name
         )));
     }
-    if dynamic {
-        return Err(crate::Error::Settings(format!(
-            "tracer khr traces static scenes only so far, and '{name}' has moving bodies or cloth (tracer lbvh traces it)"
-        )));
-    }
     Ok(())
 }
 
-/// The vendor tracer's structures over the static scene, when it is the tracer.
-fn khr_scene(ctx: &Arc<Context>, scene: &SceneBuffers, settings: &Settings) -> Result<Option<KhrScene>> {
-    match settings.tracer {
-        Tracer::Khr => Ok(Some(KhrScene::new_static(ctx, &scene.mesh.triangles())?)),
-        Tracer::Lbvh => Ok(None),
+/// The vendor tracer's structures over the scene, when it is the tracer (the bodies
+/// where the simulation has them now).
+fn khr_scene(
+    ctx: &Arc<Context>,
+    scene: &SceneBuffers,
+    dynamic: Option<&DynamicGeometry>,
+    settings: &Settings,
+) -> Result<Option<KhrScene>> {
+    if settings.tracer != Tracer::Khr {
+        return Ok(None);
     }
+    let layout = dynamic.map(|d| d.khr_layout());
+    let poses = dynamic.map(|d| d.world.poses()).unwrap_or_default();
+    Ok(Some(KhrScene::new(
+        ctx,
+        &scene.mesh.triangles(),
+        layout.as_ref(),
+        &poses,
+    )?))
 }
 
 /// The builder of the static scene's BVH.
@@ -161,7 +169,7 @@ impl Renderer {
         settings.validate()?;
         scene.validate()?;
         crate::limits::check_frame(ctx, settings)?;
-        check_tracer(ctx, (&scene.name, scene.is_dynamic()), settings)?;
+        check_tracer(ctx, settings)?;
         // Every pass works relative to `origin` (see `render_origin`).
         let origin = render_origin(scene);
         let scene_buffers = SceneBuffers::upload(ctx, scene, origin)?;
@@ -182,7 +190,7 @@ impl Renderer {
         } else {
             None
         };
-        let khr = khr_scene(ctx, &scene_buffers, settings)?;
+        let khr = khr_scene(ctx, &scene_buffers, dynamic.as_ref(), settings)?;
         let extent = extent(settings);
         let view = View::of(scene).relative_to(origin);
         Ok(Self {
@@ -259,7 +267,7 @@ impl Renderer {
     pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         settings.validate()?;
         crate::limits::check_frame(&self.ctx, &settings)?;
-        check_tracer(&self.ctx, ("the scene", self.is_dynamic()), &settings)?;
+        check_tracer(&self.ctx, &settings)?;
         if self.needs_new_renderer(&settings) {
             let fields = self.settings.changed(&settings, Applies::NewRenderer).join(", ");
             return Err(crate::Error::Settings(format!(
@@ -307,7 +315,7 @@ impl Renderer {
         let e = extent(settings);
         let rt = RtReflectPass::new(&self.ctx, e, settings.tracer)?;
         let shadow_trace = ShadowTracePass::new(&self.ctx, e, settings.tracer)?;
-        self.khr = khr_scene(&self.ctx, &self.scene, settings)?;
+        self.khr = khr_scene(&self.ctx, &self.scene, self.dynamic.as_ref(), settings)?;
         (self.rt, self.shadow_trace) = (rt, shadow_trace);
         Ok(())
     }
@@ -353,6 +361,9 @@ impl Renderer {
         }
         if let Some(d) = &mut self.dynamic {
             d.rigid.set_slots(n)?;
+        }
+        if let Some(k) = &mut self.khr {
+            k.set_slots(n)?;
         }
         Ok(())
     }
@@ -401,6 +412,9 @@ impl Renderer {
         if let Some(d) = &mut self.dynamic {
             self.ctx.wait_idle()?;
             d.reset()?;
+        }
+        if let Some(k) = &mut self.khr {
+            k.reset();
         }
         Ok(())
     }
@@ -458,7 +472,9 @@ impl Renderer {
     }
 
     fn read_frame(&mut self, slot: usize, wall: Option<Wall>) -> Result<TimerReadout> {
-        if let Some(d) = &mut self.dynamic {
+        // The dynamic BVH's refit schedule reads its first build back (the LBVH's only:
+        // the vendor tracer's structures keep their own).
+        if let Some(d) = self.dynamic.as_mut().filter(|_| self.khr.is_none()) {
             d.bvh.after_frame()?;
         }
         let s = &mut self.slots[slot];

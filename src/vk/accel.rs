@@ -85,13 +85,15 @@ impl Scratch {
 }
 
 /// Triangles for a bottom level: each vertex's position is its first three floats of
-/// `stride` bytes; indices are `u32`, three per triangle, from the start of `indices`.
+/// `stride` bytes; indices are `u32`, three per triangle, from byte `index_offset` of
+/// `indices` (a multiple of 4).
 #[derive(Clone, Copy)]
 pub struct Triangles<'a> {
     pub vertices: &'a Buffer,
     pub stride: u64,
     pub vertex_count: u32,
     pub indices: &'a Buffer,
+    pub index_offset: u64,
     pub tri_count: u32,
 }
 
@@ -120,7 +122,7 @@ impl Build {
             .max_vertex(t.vertex_count.saturating_sub(1))
             .index_type(vk::IndexType::UINT32)
             .index_data(vk::DeviceOrHostAddressConstKHR {
-                device_address: t.indices.address(),
+                device_address: t.indices.address() + t.index_offset,
             });
         Ok(Self {
             level: vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,

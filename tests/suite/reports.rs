@@ -71,7 +71,7 @@ fn check_stat(v: &Value, what: &str) {
 }
 
 /// The scopes only a dynamic scene runs (these reports are of static scenes).
-const DYNAMIC_SCOPES: [&str; 8] = [
+const DYNAMIC_SCOPES: [&str; 10] = [
     "sim.rigid",
     "sim.transform",
     "sim.cloth",
@@ -80,6 +80,8 @@ const DYNAMIC_SCOPES: [&str; 8] = [
     "lbvh.sort",
     "lbvh.fit",
     "lbvh.refit",
+    "as.cloth",
+    "as.tlas",
 ];
 
 /// The scopes only shadows other than `map` run (these reports are of `map` shadows).

@@ -5,8 +5,10 @@
 // fill the payload.
 //
 // The includer defines TRAVERSE_BINDING (the first of traverse.glsl's eight bindings)
-// first; here +0 is the scene's top level, +1/+2 the static vertices and indices,
-// +4/+5 the dynamic ones (+3, +6, +7 unused). Instances carry mask 1 (static) or 2
+// first; here +0 is the scene's top level, +1/+2 the static vertices and indices, +3
+// the static permutation (the bottom level's primitive i is scene triangle s_perm[i]:
+// passes/khr.rs hands the driver the triangles in Morton order), +4/+5 the dynamic
+// vertices and indices (+6, +7 unused). Instances carry mask 1 (static) or 2
 // (dynamic), so a trace skips the geometry whose triangle count it is given as 0.
 // Epsilon policy: the driver's watertight test; a hit counts when tmin <= t <= tmax
 // (traverse.glsl: tmin < t < tmax); ties between triangles go to whichever the
@@ -20,6 +22,7 @@
 layout(binding = TRAVERSE_BINDING + 0) uniform accelerationStructureEXT scene_tlas;
 layout(binding = TRAVERSE_BINDING + 1, std430) readonly buffer StaticVertices { Vertex s_vertices[]; };
 layout(binding = TRAVERSE_BINDING + 2, std430) readonly buffer StaticIndices { uint s_indices[]; };
+layout(binding = TRAVERSE_BINDING + 3, std430) readonly buffer StaticPerm { uint s_perm[]; };
 layout(binding = TRAVERSE_BINDING + 4, std430) readonly buffer DynamicVertices { Vertex d_vertices[]; };
 layout(binding = TRAVERSE_BINDING + 5, std430) readonly buffer DynamicIndices { uint d_indices[]; };
 
@@ -43,6 +46,10 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
         uint flags = gl_RayFlagsOpaqueEXT | (any_hit ? gl_RayFlagsTerminateOnFirstHitEXT : 0u);
         traceRayEXT(scene_tlas, flags, mask, 0, 0, 0, origin, tmin, dir, tmax, 0);
     }
-    return khr_payload;
+    Hit h = khr_payload;
+    if (h.prim < 0x80000000u) { // a static hit (BVH_INVALID has bit 31 set)
+        h.prim = s_perm[h.prim];
+    }
+    return h;
 }
 #endif

@@ -8,8 +8,10 @@
 //! timed builds, and a sample of each ray set against the CPU SAH BVH's hits.
 
 use super::anchor::{AnchorReport, AnchorSet};
-use crate::cpu_ref::lbvh::{check_bvh, sah_cost, triangle};
-use crate::cpu_ref::trace::{intersect, CpuBvh};
+pub(crate) use super::rays::check_hits;
+use super::rays::time_rays;
+pub use super::rays::{CpuCheck, RaySetReport};
+use crate::cpu_ref::lbvh::{check_bvh, sah_cost};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::lbvh::ploc::{PlocScratch, ROUNDS};
@@ -17,7 +19,6 @@ use crate::passes::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, Refit
 use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
-use crate::shader_defines::BVH_INVALID;
 use crate::vk::{remeasure, remeasure_readout, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
@@ -43,25 +44,9 @@ pub struct Options {
     /// for `--dump-hits`.
     #[serde(skip)]
     pub keep_hits: bool,
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct RaySetReport {
-    pub rays: u32,
-    /// GPU milliseconds of `rt.trace` over the repeats.
-    pub trace_ms: Stat,
-    pub mrays_per_s: f64,
-    /// Fraction of rays that hit a triangle.
-    pub hit_fraction: f64,
-    pub checked: u32,
-    /// Checked rays whose GPU hit differs from the CPU's (must be 0).
-    pub mismatches: u32,
-    /// Checked rays where two triangles tie at the same t and the sides picked
-    /// different ones (both genuine hits at equal t).
-    pub ties: u32,
-    /// Rays (of all, not only the checked) whose walk failed: its stack overflowed or
-    /// it overran its step bound (t = -1; must be 0).
-    pub failed_walks: u32,
+    /// Rays of each set the vendor tracer traces (the first of them; 0: no vendor
+    /// tracer), on the first builder's case (`bench::khr`).
+    pub khr_rays: u32,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -109,6 +94,9 @@ pub struct CaseReport {
     /// Embree 3 on the same triangles and rays, LOW then MEDIUM (built with the cargo
     /// feature `embree`; `null` without it).
     pub embree: Option<Vec<AnchorReport>>,
+    /// The vendor tracer, file and Morton order (`bench::khr`): on the first builder's
+    /// case, on a device with ray tracing; `null` otherwise.
+    pub khr: Option<Vec<super::khr::KhrReport>>,
     /// The traced rays and their hits kept for `--dump-rays` / `--dump-hits`.
     #[serde(skip)]
     pub kept: Option<(Vec<Ray>, Vec<Hit>)>,
@@ -182,36 +170,6 @@ pub fn incoherent_rays(lo: Vec3, hi: Vec3, count: u32, seed: u64) -> Vec<Ray> {
             }
         })
         .collect()
-}
-
-/// Checks `sample` evenly spaced rays against the CPU BVH: (mismatches, ties).
-pub(crate) fn check_hits(
-    rays: &[Ray],
-    gpu: &[Hit],
-    cpu: &CpuBvh,
-    v: &[GpuVertex],
-    i: &[u32],
-    sample: u32,
-) -> (u32, u32) {
-    let step = (rays.len() / sample.max(1) as usize).max(1);
-    let (mut mismatches, mut ties) = (0, 0);
-    let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
-    for k in (0..rays.len()).step_by(step).take(sample as usize) {
-        let (g, c) = (gpu[k], cpu.trace(&rays[k], v, i));
-        if g.prim == c.prim && (g.prim == BVH_INVALID || close(g.t, c.t)) {
-            continue;
-        }
-        let genuine_tie = g.prim != BVH_INVALID
-            && c.prim != BVH_INVALID
-            && close(g.t, c.t)
-            && intersect(&rays[k], &triangle(v, i, g.prim as usize)).is_some_and(|h| close(h.0, c.t));
-        if genuine_tie {
-            ties += 1;
-        } else {
-            mismatches += 1;
-        }
-    }
-    (mismatches, ties)
 }
 
 /// One whole build of `geometry` into `bvh` (the `BUILD` scope around its stages),
@@ -307,50 +265,6 @@ fn time_builds(
     })
 }
 
-/// The CPU's answer to a case's rays: its binned-SAH BVH over the same triangles.
-struct CpuCheck<'a> {
-    bvh: CpuBvh,
-    vertices: &'a [GpuVertex],
-    indices: &'a [u32],
-    rays: u32,
-}
-
-/// Traces `rays` through `scene` once untimed and `repeats` times timed (each readout
-/// re-measured while it fails its self-check), and checks a sample of the hits
-/// against the CPU.
-fn time_rays(
-    tracer: &TracePass,
-    scene: TraceScene<'_>,
-    rays: &[Ray],
-    repeats: u32,
-    cpu: &CpuCheck<'_>,
-    timing: &mut TimingCheck,
-) -> Result<(RaySetReport, Vec<Hit>)> {
-    let mut times = Vec::new();
-    let mut hits = Vec::new();
-    for rep in 0..=repeats {
-        let (h, readout, discarded) = remeasure(|| tracer.trace(rays, scene, false))?;
-        if rep > 0 {
-            times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
-            timing.add_measured(readout.problem.as_deref(), discarded);
-        }
-        hits = h;
-    }
-    let trace_ms = Stat::of(&times).expect("repeats > 0");
-    let (mismatches, ties) = check_hits(rays, &hits, &cpu.bvh, cpu.vertices, cpu.indices, cpu.rays);
-    let report = RaySetReport {
-        rays: rays.len() as u32,
-        trace_ms,
-        mrays_per_s: rays.len() as f64 / (trace_ms.median * 1e3),
-        hit_fraction: hits.iter().filter(|h| h.prim != BVH_INVALID).count() as f64 / rays.len() as f64,
-        checked: cpu.rays.min(rays.len() as u32),
-        mismatches,
-        ties,
-        failed_walks: hits.iter().filter(|h| h.t < 0.0).count() as u32,
-    };
-    Ok((report, hits))
-}
-
 /// The Embree anchor of a case's ray sets: (rays, Speculum's hits, its Mrays/s,
 /// coherent) per set (cargo feature `embree`; `None` without it).
 #[cfg_attr(not(feature = "embree"), allow(unused_variables))]
@@ -364,6 +278,28 @@ fn anchor(
     return Ok(Some(super::embree::anchor_reports(v, i, sets, repeats, build_ms)?));
     #[cfg(not(feature = "embree"))]
     Ok(None)
+}
+
+/// The vendor tracer's figures (`bench::khr`), on the case of the first builder: the
+/// case's triangles and its coherent and incoherent rays (and the file's).
+fn vendor_tracer(
+    ctx: &Arc<Context>,
+    (opts, kind): (&Options, BvhKind),
+    (v, i, [coherent, incoherent]): (&[GpuVertex], &[u32], [&[Ray]; 2]),
+    cpu: &CpuCheck<'_>,
+    (tracer, scene): (&TracePass, TraceScene<'_>),
+) -> Result<Option<Vec<super::khr::KhrReport>>> {
+    if opts.builders.first() != Some(&kind) {
+        return Ok(None);
+    }
+    let sets = [Some(coherent), Some(incoherent), opts.file_rays.as_deref()];
+    super::khr::reports(
+        ctx,
+        (v, i),
+        sets,
+        (opts.repeats, opts.khr_rays, cpu),
+        (tracer, scene.into()),
+    )
 }
 
 /// Benchmarks one triangle set with one builder.
@@ -391,14 +327,7 @@ pub fn run_case(
     let packed = bvh.read_packed()?;
     let invariants = check_bvh(&packed, v, i);
     let sah = sah_cost(&packed.nodes, i.len() / 3);
-    let t0 = std::time::Instant::now();
-    let cpu = CpuCheck {
-        bvh: CpuBvh::build(v, i),
-        vertices: v,
-        indices: i,
-        rays: opts.check_rays,
-    };
-    let cpu_sah_build_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let (cpu, cpu_sah_build_ms) = CpuCheck::new(v, i, opts.check_rays);
     let sah_cpu = cpu.bvh.sah_cost();
 
     let tracer = TracePass::new(ctx)?;
@@ -407,7 +336,7 @@ pub fn run_case(
         dynamic_bvh: None,
     };
     let scene_box = crate::cpu_ref::lbvh::bounds(v, i).1;
-    let mut ray_set = |rays: &[Ray]| time_rays(&tracer, scene, rays, opts.repeats, &cpu, &mut timing);
+    let mut ray_set = |rays: &[Ray]| time_rays(&tracer, scene.into(), rays, opts.repeats, &cpu, &mut timing);
     let coherent_set = coherent_rays(scene_box.lo, scene_box.hi, opts.rays);
     let (coherent, coherent_hits) = ray_set(&coherent_set)?;
     let incoherent_set = incoherent_rays(scene_box.lo, scene_box.hi, opts.rays, 7);
@@ -424,6 +353,8 @@ pub fn run_case(
             .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
     ];
     let embree = anchor((v, i), &sets, opts.repeats, build_ms.median)?;
+    let khr_case = (v, i, [&coherent_set[..], &incoherent_set[..]]);
+    let khr = vendor_tracer(ctx, (opts, kind), khr_case, &cpu, (&tracer, scene))?;
     let (file, kept) = match file_set {
         Some(((report, hits), rays)) => (Some(report), opts.keep_hits.then(|| (rays.clone(), hits))),
         None => (None, opts.keep_hits.then_some((incoherent_set, incoherent_hits))),
@@ -435,6 +366,7 @@ pub fn run_case(
         && sound(&coherent)
         && sound(&incoherent)
         && file.as_ref().is_none_or(sound)
+        && khr.iter().flatten().all(super::khr::KhrReport::sound)
         && build_ms.median.is_finite();
     Ok(CaseReport {
         name: name.into(),
@@ -458,6 +390,7 @@ pub fn run_case(
         incoherent,
         file,
         embree,
+        khr,
         kept,
         invariants_ok,
         invariant_error: invariants.err(),

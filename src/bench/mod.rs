@@ -5,8 +5,10 @@ pub mod anchor;
 pub mod dynamic;
 #[cfg(feature = "embree")]
 pub mod embree;
+pub mod khr;
 pub mod lbvh;
 pub mod modes;
+pub mod rays;
 pub mod rays_file;
 pub mod reflect;
 pub mod shadows;

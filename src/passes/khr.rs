@@ -1,7 +1,9 @@
 //! `as.*`: the vendor tracer's acceleration structures for a scene (`tracer = khr`),
 //! the vendor's way (the method's OptiX counterpart):
-//! - static geometry: one bottom level built once for fast tracing and compacted, the
-//!   triangles in the scene's order (primitive i is the scene's triangle i);
+//! - static geometry: one bottom level built once for fast tracing and compacted, its
+//!   triangles handed to the driver in `StaticOrder` (Morton by default: a driver that
+//!   splits the primitive range at its middle, as lavapipe's does, builds a tree only
+//!   as good as that order) with a permutation back to the scene's triangle ids;
 //! - rigid bodies: one bottom level per body shape, built once in the shape's own
 //!   space and compacted; every body is an instance of its shape's, placed by its pose;
 //! - cloth: one bottom level over the cloths' world-space triangles, built with
@@ -45,6 +47,73 @@ pub const MASK_DYNAMIC: u8 = 2;
 const DYNAMIC_INSTANCE: u32 = 0x80_0000;
 const MAX_FIRST_TRIANGLE: u32 = 0x7f_ffff;
 
+/// The order the static triangles are handed to the driver in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StaticOrder {
+    /// The scene's own (its files').
+    File,
+    /// By the 63-bit Morton code of each triangle's centroid in the centroids' box:
+    /// spatially coherent whatever the file's order.
+    Morton,
+}
+
+impl StaticOrder {
+    pub fn name(self) -> &'static str {
+        match self {
+            StaticOrder::File => "file",
+            StaticOrder::Morton => "morton",
+        }
+    }
+
+    /// The bottom level's triangles as scene triangle ids, in this order.
+    pub fn permutation(self, vertices: &[GpuVertex], indices: &[u32]) -> Vec<u32> {
+        let n = (indices.len() / 3) as u32;
+        match self {
+            StaticOrder::File => (0..n).collect(),
+            StaticOrder::Morton => {
+                let centroid = |t: usize| {
+                    let p = |k: usize| glam::Vec3::from(vertices[indices[3 * t + k] as usize].position);
+                    (p(0) + p(1) + p(2)) / 3.0
+                };
+                let centroids: Vec<glam::Vec3> = (0..n as usize).map(centroid).collect();
+                let lo = centroids.iter().fold(glam::Vec3::INFINITY, |a, &c| a.min(c));
+                let hi = centroids.iter().fold(glam::Vec3::NEG_INFINITY, |a, &c| a.max(c));
+                let scale = ((1u32 << 21) - 1) as f32 / (hi - lo).max(glam::Vec3::splat(f32::MIN_POSITIVE));
+                let keys: Vec<u64> = centroids
+                    .iter()
+                    .map(|&c| {
+                        let q = ((c - lo) * scale).as_uvec3();
+                        spread21(q.x) << 2 | spread21(q.y) << 1 | spread21(q.z)
+                    })
+                    .collect();
+                let mut perm: Vec<u32> = (0..n).collect();
+                perm.sort_by_key(|&t| keys[t as usize]); // stable: equal keys keep file order
+                perm
+            }
+        }
+    }
+}
+
+/// The low 21 bits of `v`, each moved to every third bit (a Morton code's one axis).
+fn spread21(v: u32) -> u64 {
+    let mut x = (v & 0x1f_ffff) as u64;
+    x = (x | x << 32) & 0x001f_0000_0000_ffff;
+    x = (x | x << 16) & 0x001f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    x = (x | x << 2) & 0x1249_2492_4924_9249;
+    x
+}
+
+/// The static triangles as the vendor tracer builds them: the vertices, and the
+/// scene's triangles (on the host) with the order to hand them over in.
+pub struct StaticInput<'a> {
+    pub geometry: Geometry<'a>,
+    pub vertices: &'a [GpuVertex],
+    pub indices: &'a [u32],
+    pub order: StaticOrder,
+}
+
 /// One rigid body: its triangles in the dynamic numbering and the body whose shape
 /// (the same object-space triangles) it shares; a body is its own shape's first.
 #[derive(Clone, Copy, Debug)]
@@ -82,6 +151,10 @@ struct ClothAccel {
 pub struct KhrScene {
     ctx: Arc<Context>,
     static_blas: Option<Accel>,
+    /// The static triangles' indices in the bottom level's order, and each primitive's
+    /// scene triangle id (what `trace_khr.glsl` maps a static hit back through).
+    _static_indices: Buffer,
+    static_perm: Buffer,
     /// One per distinct body shape, and each body's (first triangle, shape's index).
     shapes: Vec<Accel>,
     bodies: Vec<(u32, usize)>,
@@ -129,15 +202,23 @@ impl KhrScene {
     /// top level built now with the bodies at `poses`.
     pub fn new(
         ctx: &Arc<Context>,
-        static_geometry: &Geometry<'_>,
+        input: &StaticInput<'_>,
         dynamic: Option<&DynamicLayout<'_>>,
         poses: &[Mat4],
     ) -> Result<Self> {
-        let static_tris = static_geometry.tri_count;
+        let g = &input.geometry;
+        let static_tris = g.tri_count;
+        let perm = input.order.permutation(input.vertices, input.indices);
+        let ordered: Vec<u32> = perm
+            .iter()
+            .flat_map(|&t| input.indices[3 * t as usize..3 * t as usize + 3].iter().copied())
+            .collect();
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | accel::input_usage(ctx);
+        let static_indices = Buffer::with_data(ctx, "as.static.indices", usage, bytemuck::cast_slice(&ordered))?;
+        let static_perm = Buffer::with_data(ctx, "as.static.perm", usage, bytemuck::cast_slice(&perm))?;
         let static_blas = (static_tris > 0)
             .then(|| {
-                let g = static_geometry;
-                let t = triangles(g.vertices, vertex_count(g), g.indices, (0, static_tris));
+                let t = triangles(g.vertices, vertex_count(g), &static_indices, (0, static_tris));
                 accel::static_blas(ctx, BLAS_STATIC, &t)
             })
             .transpose()?;
@@ -168,6 +249,8 @@ impl KhrScene {
         let mut scene = Self {
             ctx: ctx.clone(),
             static_blas,
+            _static_indices: static_indices,
+            static_perm,
             shapes,
             bodies,
             cloth,
@@ -189,8 +272,8 @@ impl KhrScene {
     }
 
     /// The structures of a static scene (no bodies, no cloth).
-    pub fn new_static(ctx: &Arc<Context>, geometry: &Geometry<'_>) -> Result<Self> {
-        Self::new(ctx, geometry, None, &[])
+    pub fn new_static(ctx: &Arc<Context>, input: &StaticInput<'_>) -> Result<Self> {
+        Self::new(ctx, input, None, &[])
     }
 
     fn instance_buffer(ctx: &Arc<Context>, count: u32) -> Result<Buffer> {
@@ -292,6 +375,7 @@ impl KhrScene {
         debug_assert_eq!(static_geometry.tri_count, self.static_tris);
         KhrTrace {
             tlas: &self.tlas,
+            static_perm: &self.static_perm,
             static_geometry: (self.static_tris > 0).then_some(static_geometry),
             dynamic_geometry,
         }
@@ -333,4 +417,32 @@ fn cloth_flags() -> vk::BuildAccelerationStructureFlagsKHR {
 /// A top level rebuilt every frame: built fast.
 fn tlas_flags() -> vk::BuildAccelerationStructureFlagsKHR {
     vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_BUILD
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Morton codes interleave x, y, z from the top; the order follows space.
+    #[test]
+    fn morton_order_interleaves_and_sorts_by_space() {
+        assert_eq!(spread21(0b111), 0b1001001);
+        assert_eq!(spread21(0x1f_ffff), 0x1249_2492_4924_9249);
+        // Four unit triangles along x, given in scrambled order.
+        let xs = [3.0f32, 0.0, 2.0, 1.0];
+        let vertices: Vec<GpuVertex> = xs
+            .iter()
+            .flat_map(|&x| {
+                [[x, 0.0, 0.0], [x + 0.1, 0.0, 0.0], [x, 0.1, 0.0]].map(|p| GpuVertex {
+                    position: p,
+                    material: 0,
+                    normal: [0.0, 0.0, 1.0],
+                    object: 0,
+                })
+            })
+            .collect();
+        let indices: Vec<u32> = (0..12).collect();
+        assert_eq!(StaticOrder::Morton.permutation(&vertices, &indices), [1, 3, 2, 0]);
+        assert_eq!(StaticOrder::File.permutation(&vertices, &indices), [0, 1, 2, 3]);
+    }
 }

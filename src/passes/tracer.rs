@@ -21,6 +21,8 @@ use std::sync::Arc;
 #[derive(Clone, Copy)]
 pub struct KhrTrace<'a> {
     pub tlas: &'a crate::vk::accel::Accel,
+    /// Each static primitive's scene triangle id (`khr::StaticOrder`).
+    pub static_perm: &'a crate::vk::Buffer,
     pub static_geometry: Option<Geometry<'a>>,
     pub dynamic_geometry: Option<Geometry<'a>>,
 }
@@ -48,8 +50,8 @@ impl<'a> From<KhrTrace<'a>> for Tracing<'a> {
 impl<'a> Tracing<'a> {
     /// The eight traversal bindings and the two triangle counts: `TraceScene::bindings`,
     /// or for the vendor tracer those of `glsl/shared/trace_khr.glsl` (the top level,
-    /// then the static and the dynamic vertices and indices; the slots it leaves unused
-    /// repeat a buffer, never bound).
+    /// the static vertices, indices and permutation, the dynamic vertices and indices;
+    /// the slots it leaves unused repeat a buffer, never bound).
     pub fn bindings(&self) -> ([Resource<'a>; 8], u32, u32) {
         match self {
             Tracing::Lbvh(s) => s.bindings(),
@@ -64,7 +66,7 @@ impl<'a> Tracing<'a> {
                     Resource::Accel(k.tlas),
                     Resource::Buffer(s.vertices),
                     Resource::Buffer(s.indices),
-                    Resource::Buffer(s.vertices),
+                    Resource::Buffer(k.static_perm),
                     Resource::Buffer(d.vertices),
                     Resource::Buffer(d.indices),
                     Resource::Buffer(s.vertices),

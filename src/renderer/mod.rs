@@ -27,7 +27,7 @@ use crate::error::Result;
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposePass;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::khr::KhrScene;
+use crate::passes::khr::{KhrScene, StaticInput, StaticOrder};
 use crate::passes::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
 use crate::passes::light_direct::{self, LightDirectPass};
 use crate::passes::reflect_merge::MergePass;
@@ -134,7 +134,7 @@ fn check_tracer(ctx: &Context, settings: &Settings) -> Result<()> {
 }
 
 /// The vendor tracer's structures over the scene, when it is the tracer (the bodies
-/// where the simulation has them now).
+/// where the simulation has them now; the static triangles, read back, in Morton order).
 fn khr_scene(
     ctx: &Arc<Context>,
     scene: &SceneBuffers,
@@ -144,14 +144,19 @@ fn khr_scene(
     if settings.tracer != Tracer::Khr {
         return Ok(None);
     }
+    let geometry = scene.mesh.triangles();
+    let vertices: Vec<crate::gpu_types::GpuVertex> = bytemuck::pod_collect_to_vec(&geometry.vertices.read()?);
+    let mut indices: Vec<u32> = bytemuck::pod_collect_to_vec(&geometry.indices.read()?);
+    indices.truncate(3 * geometry.tri_count as usize);
+    let input = StaticInput {
+        geometry,
+        vertices: &vertices,
+        indices: &indices,
+        order: StaticOrder::Morton,
+    };
     let layout = dynamic.map(|d| d.khr_layout());
     let poses = dynamic.map(|d| d.world.poses()).unwrap_or_default();
-    Ok(Some(KhrScene::new(
-        ctx,
-        &scene.mesh.triangles(),
-        layout.as_ref(),
-        &poses,
-    )?))
+    Ok(Some(KhrScene::new(ctx, &input, layout.as_ref(), &poses)?))
 }
 
 /// The builder of the static scene's BVH.

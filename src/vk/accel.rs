@@ -11,6 +11,7 @@ use super::barrier::{self, access};
 use super::buffer::Buffer;
 use super::context::Context;
 use super::rt::RayTracing;
+use super::timing::{GpuTimer, TimerReadout};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -218,18 +219,35 @@ impl Build {
     }
 }
 
+/// Timer scopes of `static_blas_timed`: the build, and the compacting copy.
+pub const BUILD_SCOPE: &str = "as.build";
+pub const COMPACT_SCOPE: &str = "as.compact";
+
 /// Builds a bottom level over `t` once, for fast tracing, and compacts it: the
 /// structure a static scene keeps.
 pub fn static_blas(ctx: &Arc<Context>, name: &str, t: &Triangles<'_>) -> Result<Accel> {
+    let mut timer = GpuTimer::new(ctx, 1)?;
+    Ok(static_blas_timed(ctx, name, t, &mut timer)?.0)
+}
+
+/// `static_blas`, its two submissions timed on `timer`: the build (`BUILD_SCOPE`) and
+/// the compacting copy (`COMPACT_SCOPE`); also returns the uncompacted size in bytes.
+pub fn static_blas_timed(
+    ctx: &Arc<Context>,
+    name: &str,
+    t: &Triangles<'_>,
+    timer: &mut GpuTimer,
+) -> Result<(Accel, [TimerReadout; 2], u64)> {
     let flags = vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
         | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION;
     let build = Build::triangles(ctx, t, flags)?;
     let sizes = build.sizes(ctx);
+    let full_size = sizes.acceleration_structure_size;
     let full = Accel::new(
         ctx,
         &format!("{name}.uncompacted"),
         vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
-        sizes.acceleration_structure_size,
+        full_size,
     )?;
     let scratch = Scratch::new(ctx, &format!("{name}.scratch"), sizes.build_scratch_size)?;
     let info = vk::QueryPoolCreateInfo::default()
@@ -237,9 +255,9 @@ pub fn static_blas(ctx: &Arc<Context>, name: &str, t: &Triangles<'_>) -> Result<
         .query_count(1);
     let pool = unsafe { ctx.device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
     let result = (|| {
-        ctx.one_shot(|cmd| {
+        let built = timer.one_shot(|cmd, timer| {
             unsafe { ctx.device.cmd_reset_query_pool(cmd, pool, 0, 1) };
-            build.record(ctx, cmd, &full, None, &scratch);
+            timer.scope(cmd, BUILD_SCOPE, || build.record(ctx, cmd, &full, None, &scratch));
             // RAW: the size query reads the built structure.
             barrier::global(&ctx.device, cmd, access::AS_BUILD, access::AS_BUILD);
             unsafe {
@@ -262,21 +280,23 @@ pub fn static_blas(ctx: &Arc<Context>, name: &str, t: &Triangles<'_>) -> Result<
             )
         }
         .vk("vkGetQueryPoolResults")?;
-        if size[0] == 0 || size[0] > sizes.acceleration_structure_size {
+        if size[0] == 0 || size[0] > full_size {
             return Err(Error::Pipeline(format!(
-                "{name}: the driver reported a compacted size of {} B for a {} B structure",
-                size[0], sizes.acceleration_structure_size
+                "{name}: the driver reported a compacted size of {} B for a {full_size} B structure",
+                size[0]
             )));
         }
         let compact = Accel::new(ctx, name, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, size[0])?;
-        ctx.one_shot(|cmd| {
+        let copied = timer.one_shot(|cmd, timer| {
             let copy = vk::CopyAccelerationStructureInfoKHR::default()
                 .src(full.raw)
                 .dst(compact.raw)
                 .mode(vk::CopyAccelerationStructureModeKHR::COMPACT);
-            unsafe { rt(ctx).accel.cmd_copy_acceleration_structure(cmd, &copy) };
+            timer.scope(cmd, COMPACT_SCOPE, || unsafe {
+                rt(ctx).accel.cmd_copy_acceleration_structure(cmd, &copy)
+            });
         })?;
-        Ok(compact)
+        Ok((compact, [built, copied], full_size))
     })();
     unsafe { ctx.device.destroy_query_pool(pool, None) };
     result
@@ -331,10 +351,11 @@ pub fn address_usage(ctx: &Context) -> vk::BufferUsageFlags {
 }
 
 /// The usage vertex and index buffers need to be a build's input, on a context with
-/// ray tracing (none otherwise).
+/// ray tracing (none otherwise); and to be read back (the vendor tracer orders the
+/// static triangles on the host).
 pub fn input_usage(ctx: &Context) -> vk::BufferUsageFlags {
     if ctx.ray_tracing.is_some() {
-        INSTANCE_USAGE
+        INSTANCE_USAGE | vk::BufferUsageFlags::TRANSFER_SRC
     } else {
         vk::BufferUsageFlags::empty()
     }

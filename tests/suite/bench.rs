@@ -29,10 +29,28 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         builders: BvhKind::ALL.to_vec(),
         file_rays: None,
         keep_hits: false,
+        khr_rays: 512,
     };
     for kind in BvhKind::ALL {
         let c = run_case(&ctx, "soup-5000", &v, &i, &opts, kind, &mut || {}).unwrap();
         assert!(c.valid, "{c:?}");
+        // The vendor tracer on the first builder's case: both orders, every checked hit
+        // agreeing with the CPU, its builds timed.
+        match (&c.khr, kind == opts.builders[0] && ctx.ray_tracing.is_some()) {
+            (Some(k), true) => {
+                assert_eq!(k.iter().map(|k| k.order).collect::<Vec<_>>(), ["file", "morton"]);
+                for k in k {
+                    assert!(k.build_ms.median > 0.0 && k.bytes_per_triangle > 0.0, "{k:?}");
+                    assert_eq!(
+                        (k.coherent.rays, k.coherent.mismatches, k.incoherent.mismatches),
+                        (512, 0, 0)
+                    );
+                    assert!(k.coherent.checked > 0 && k.incoherent.hit_fraction > 0.0, "{k:?}");
+                }
+            }
+            (None, false) => {}
+            (k, _) => panic!("{kind:?}: khr {k:?}"),
+        }
         assert_eq!((c.triangles, c.builder), (5000, kind));
         for s in kind.stages() {
             assert!(c.stages_ms.median(s) > 0.0, "{kind:?}: stage {s} timed");
@@ -77,6 +95,7 @@ fn lbvh_benchmark_anchors_against_embree() {
         builders: BvhKind::ALL.to_vec(),
         file_rays: None,
         keep_hits: false,
+        khr_rays: 0,
     };
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);
     let room = speculum::scene::builtin::room().unwrap();

@@ -10,7 +10,7 @@ use glam::Vec3;
 use speculum::cpu_ref::lbvh::triangle;
 use speculum::cpu_ref::trace::{brute_force, intersect};
 use speculum::gpu_types::{GpuVertex, Hit, Ray};
-use speculum::passes::khr::KhrScene;
+use speculum::passes::khr::{KhrScene, StaticInput, StaticOrder};
 use speculum::passes::lbvh::UploadedTriangles;
 use speculum::passes::rt_trace::TracePass;
 use speculum::scene::soup::{default_size, random_soup};
@@ -39,11 +39,29 @@ fn traced(v: &[GpuVertex], i: &[u32], rays: &[Ray], any_hit: bool) -> Vec<Hit> {
         return rays.iter().map(|r| brute_force(r, v, i)).collect();
     }
     let tris = UploadedTriangles::new(&ctx, "khr", v, i).unwrap();
-    let scene = KhrScene::new_static(&ctx, &tris.geometry()).unwrap();
     let pass = TracePass::new_khr(&ctx).unwrap();
-    let (hits, _) = pass.trace(rays, scene.trace(tris.geometry(), None), any_hit).unwrap();
+    let mut out = Vec::new();
+    // Either order of the triangles traces the same hits (ids mapped back).
+    for order in [StaticOrder::File, StaticOrder::Morton] {
+        let input = StaticInput {
+            geometry: tris.geometry(),
+            vertices: v,
+            indices: i,
+            order,
+        };
+        let scene = KhrScene::new_static(&ctx, &input).unwrap();
+        let (hits, _) = pass.trace(rays, scene.trace(tris.geometry(), None), any_hit).unwrap();
+        out.push(hits);
+    }
     assert_eq!(ctx.validation_messages(), 0);
-    hits
+    let morton = out.pop().unwrap();
+    let file = out.pop().unwrap();
+    let ids = |h: &[Hit]| h.iter().map(|h| h.prim).collect::<Vec<_>>();
+    if !any_hit {
+        // (An any-hit ray may stop at another triangle in another tree.)
+        assert_eq!(ids(&file), ids(&morton), "file and Morton order hit the same triangles");
+    }
+    morton
 }
 
 /// 4,000 random rays against a 3,000-triangle soup: every closest hit is brute force's

@@ -34,6 +34,12 @@ pub struct LbvhArgs {
     /// Rays of each set checked against the CPU reference.
     #[arg(long, default_value_t = 2000)]
     pub check_rays: u32,
+    /// Rays of each set the vendor tracer (KHR acceleration structures, file and Morton
+    /// order) traces, on the first builder's line; 0 leaves it out [lavapipe builds
+    /// the driver's tree by the primitive order, which in file order can trace
+    /// thousands of times slower than the LBVH: keep this small there]
+    #[arg(long, default_value_t = 16384)]
+    pub khr_rays: u32,
     /// Also trace (time and check) these rays: 32 bytes each, little-endian f32
     /// ox,oy,oz,dx,dy,dz,tmin,tmax, no header.
     #[arg(long)]
@@ -85,6 +91,7 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
         builders: args.builder.clone(),
         file_rays,
         keep_hits: dumping,
+        khr_rays: args.khr_rays,
     };
     let mut inputs = vec![("--rays-file", args.rays_file.as_deref())];
     inputs.extend(args.scene.iter().map(|s| ("--scene", crate::cli::input_file(s))));
@@ -242,6 +249,7 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
             f.failed_walks
         ))
     }
+    print_khr(text, case);
     for a in case.embree.iter().flatten() {
         let sets = [
             ("coherent", Some(&a.coherent)),
@@ -267,6 +275,39 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
             cell(Some(a.build_ms)),
             a.build_ratio,
             rays.join(", ")
+        ));
+    }
+}
+
+/// The vendor tracer's lines of a case (`bench::khr`).
+fn print_khr(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
+    for k in case.khr.iter().flatten() {
+        let file = k
+            .file
+            .as_ref()
+            .map_or(String::new(), |f| format!(", file {:.3} Mrays/s", f.mrays_per_s));
+        let differ: u32 = [Some(&k.coherent), Some(&k.incoherent), k.file.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(|r| r.mismatches)
+            .sum();
+        text.line(format_args!(
+            "{:<14} KHR {} order: build {} + compact {} ({:.1} B/tri, {:.1} uncompacted); {} rays: coherent {:.3} Mrays/s, incoherent {:.3} Mrays/s{file} (this tree on the same rays: {}); {differ} of the checked hits differ",
+            "",
+            k.order,
+            cell(Some(k.build_ms)),
+            cell(Some(k.compact_ms)),
+            k.bytes_per_triangle,
+            k.uncompacted_bytes_per_triangle,
+            k.coherent.rays,
+            k.coherent.mrays_per_s,
+            k.incoherent.mrays_per_s,
+            k.lbvh_same_rays_mrays_per_s
+                .iter()
+                .flatten()
+                .map(|m| format!("{m:.3}"))
+                .collect::<Vec<_>>()
+                .join(", "),
         ));
     }
 }

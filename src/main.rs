@@ -81,9 +81,10 @@ fn devices() -> Result<()> {
         println!("no Vulkan devices found");
     }
     for d in list {
-        let usable = match &d.usable {
-            Ok(()) => "usable".to_string(),
-            Err(why) => format!("unusable: {why}"),
+        let usable = match (&d.usable, &d.ray_tracing_missing) {
+            (Ok(()), None) => "usable; tracers lbvh and khr".to_string(),
+            (Ok(()), Some(lacks)) => format!("usable; tracer lbvh (khr lacks {lacks})"),
+            (Err(why), _) => format!("unusable: {why}"),
         };
         println!(
             "{}: {} ({}, Vulkan {}.{}.{}, driver {}) {usable}",

@@ -19,6 +19,9 @@ pub struct DeviceInfo {
     pub driver: String,
     /// `Err(reason)` when Speculum cannot run on it.
     pub usable: std::result::Result<(), String>,
+    /// What it lacks for the vendor tracer (`tracer = khr`; `vk::rt::missing`), if
+    /// anything.
+    pub ray_tracing_missing: Option<String>,
 }
 
 impl DeviceInfo {
@@ -128,6 +131,7 @@ pub(super) fn describe(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevi
                     text(driver.driver_info_as_c_str())
                 ),
                 usable,
+                ray_tracing_missing: super::rt::missing(instance, pd),
             };
             (pd, info)
         })

@@ -166,6 +166,39 @@ impl RtPipeline {
     }
 }
 
+/// Where a shader binding table's regions lie: each region starts on
+/// `shaderGroupBaseAlignment`, each record is `shaderGroupHandleSize` rounded up to
+/// `shaderGroupHandleAlignment`, and the ray generation's one record fills its region
+/// (Vulkan requires its size to equal its stride).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SbtLayout {
+    pub record: u64,
+    pub base: u64,
+    pub raygen_size: u64,
+    /// Byte offsets of the ray generation, miss and hit regions.
+    pub offsets: [u64; 3],
+    /// The table's bytes.
+    pub size: u64,
+}
+
+impl SbtLayout {
+    pub fn of(l: &super::rt::RtLimits, misses: u64) -> Self {
+        let record =
+            (l.shader_group_handle_size as u64).next_multiple_of(l.shader_group_handle_alignment.max(1) as u64);
+        let base = l.shader_group_base_alignment.max(1) as u64;
+        let raygen_size = record.next_multiple_of(base);
+        let miss_size = (misses * record).next_multiple_of(base);
+        let offsets = [0, raygen_size, raygen_size + miss_size];
+        Self {
+            record,
+            base,
+            raygen_size,
+            offsets,
+            size: offsets[2] + record,
+        }
+    }
+}
+
 /// The table: the ray generation's record, the misses', the hit group's, each region
 /// starting on `shaderGroupBaseAlignment` and each record `shaderGroupHandleSize`
 /// rounded up to `shaderGroupHandleAlignment`.
@@ -178,19 +211,15 @@ fn shader_binding_table(
 ) -> Result<(Buffer, [vk::StridedDeviceAddressRegionKHR; 3])> {
     let l = &rt.limits;
     let handle = l.shader_group_handle_size as u64;
-    let record = handle.next_multiple_of(l.shader_group_handle_alignment.max(1) as u64);
-    let base = l.shader_group_base_alignment.max(1) as u64;
+    let layout = SbtLayout::of(l, groups as u64 - 2);
+    let (record, base, offsets) = (layout.record, layout.base, layout.offsets);
     let handles = unsafe {
         rt.pipeline
             .get_ray_tracing_shader_group_handles(pipeline, 0, groups, (groups as u64 * handle) as usize)
     }
     .vk("vkGetRayTracingShaderGroupHandlesKHR")?;
     let misses = groups as u64 - 2;
-    // Region offsets: raygen at 0, misses, then the hit group.
-    let raygen_size = record.next_multiple_of(base);
-    let miss_size = (misses * record).next_multiple_of(base);
-    let offsets = [0, raygen_size, raygen_size + miss_size];
-    let mut table = vec![0u8; (offsets[2] + record) as usize];
+    let mut table = vec![0u8; layout.size as usize];
     let group_at = |g: u64| &handles[(g * handle) as usize..((g + 1) * handle) as usize];
     let mut put = |at: u64, g: u64| table[at as usize..(at + handle) as usize].copy_from_slice(group_at(g));
     put(0, 0);
@@ -219,9 +248,57 @@ fn shader_binding_table(
     Ok((
         sbt,
         [
-            region(0, raygen_size, raygen_size),
+            region(0, layout.raygen_size, layout.raygen_size),
             region(offsets[1], record, misses * record),
             region(offsets[2], record, record),
         ],
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vk::rt::RtLimits;
+
+    fn limits(handle: u32, handle_align: u32, base: u32) -> RtLimits {
+        RtLimits {
+            shader_group_handle_size: handle,
+            shader_group_handle_alignment: handle_align,
+            shader_group_base_alignment: base,
+            max_ray_recursion_depth: 1,
+            max_ray_dispatch_invocation_count: 1 << 30,
+            min_scratch_offset_alignment: 128,
+            max_geometry_count: 1 << 24,
+            max_instance_count: 1 << 24,
+            max_primitive_count: 1 << 29,
+        }
+    }
+
+    /// The table's regions for NVIDIA's sizes (32-byte handles, 32-byte handle and
+    /// 64-byte base alignment) and for others: every region base-aligned, every record
+    /// handle-aligned and no smaller than a handle, no region overlapping the next.
+    #[test]
+    fn sbt_regions_follow_the_device_alignments() {
+        let nvidia = SbtLayout::of(&limits(32, 32, 64), 1);
+        assert_eq!(
+            nvidia,
+            SbtLayout {
+                record: 32,
+                base: 64,
+                raygen_size: 64,
+                offsets: [0, 64, 128],
+                size: 160
+            }
+        );
+        for (h, ha, b) in [(32, 32, 64), (32, 16, 64), (16, 16, 32), (24, 8, 256), (32, 64, 64)] {
+            for misses in 1..4 {
+                let s = SbtLayout::of(&limits(h, ha, b), misses);
+                assert!(s.record >= h as u64 && s.record % ha as u64 == 0, "{s:?}");
+                assert!(s.offsets.iter().all(|o| o % b as u64 == 0), "{s:?}");
+                assert!(s.raygen_size >= s.record && s.offsets[1] >= s.raygen_size, "{s:?}");
+                assert!(s.offsets[2] >= s.offsets[1] + misses * s.record, "{s:?}");
+                assert_eq!(s.size, s.offsets[2] + s.record);
+            }
+        }
+    }
 }

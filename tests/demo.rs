@@ -20,6 +20,20 @@ struct Display {
 impl Drop for Display {
     fn drop(&mut self) {
         if let Some(x) = &mut self.xvfb {
+            // SIGTERM lets Xvfb remove its lock and socket (SIGKILL, `Child::kill`,
+            // left them behind, and 20 stale numbers later no display was free);
+            // SIGKILL only if it does not exit within 5 s.
+            let terminated = Command::new("kill")
+                .args(["-TERM", &x.id().to_string()])
+                .status()
+                .is_ok_and(|s| s.success());
+            let start = Instant::now();
+            while terminated && start.elapsed() < Duration::from_secs(5) {
+                if let Ok(Some(_)) = x.try_wait() {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
             let _ = x.kill();
             let _ = x.wait();
         }
@@ -32,6 +46,14 @@ fn display_works(name: &str) -> bool {
     Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
 }
 
+/// Whether the X lock file `lock` names a live process (its first line is the pid).
+fn lock_alive(lock: &str) -> bool {
+    std::fs::read_to_string(lock)
+        .ok()
+        .and_then(|s| s.trim().parse::<u32>().ok())
+        .is_some_and(|pid| Path::new(&format!("/proc/{pid}")).exists())
+}
+
 fn find_display() -> Result<Display, String> {
     if let Ok(name) = std::env::var("DISPLAY") {
         if display_works(&name) {
@@ -40,7 +62,16 @@ fn find_display() -> Result<Display, String> {
     }
     for n in 90..110 {
         let name = format!(":{n}");
-        if display_works(&name) || Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+        let (lock, socket) = (format!("/tmp/.X{n}-lock"), format!("/tmp/.X11-unix/X{n}"));
+        if lock_alive(&lock) {
+            continue;
+        }
+        if Path::new(&lock).exists() {
+            // A server killed without cleaning up left its lock and socket: both stale,
+            // the number is free (Xvfb would refuse a live lock, not a dead one).
+            let _ = std::fs::remove_file(&lock);
+            let _ = std::fs::remove_file(&socket);
+        } else if display_works(&name) {
             continue;
         }
         let child = Command::new("Xvfb")

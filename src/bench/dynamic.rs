@@ -7,19 +7,23 @@
 //! and the frame. At the last frame, rays are traced through the BVH rebuilt that
 //! frame and through one built at the first measured frame and refit since (refit
 //! trees trace slower as the bodies scatter). Checked: both BVHs' hits equal the CPU
-//! BVH's over the frame's vertices on a sample of the rays.
+//! BVH's over the frame's vertices on a sample of the rays. On a device with the
+//! vendor tracer, the same frames again through it (`tracer = khr`): its top level's
+//! rebuild and the cloth's bottom-level update against the LBVH's rebuild, and the
+//! frame (the `tracer` setting is ignored: both run).
 
 use super::lbvh::{check_hits, incoherent_rays};
 use crate::cpu_ref::trace::CpuBvh;
 use crate::error::Result;
 use crate::gpu_types::{Hit, Ray};
+use crate::passes::khr;
 use crate::passes::lbvh::{self, Bvh, LbvhBuilder, MortonBits, RefitSchedule};
 use crate::passes::rt_trace::TracePass;
 use crate::passes::{TraceScene, Traceable};
 use crate::renderer::{FRAME, SIM_RIGID};
 use crate::report::{Header, Stat};
 use crate::scene::Scene;
-use crate::settings::Settings;
+use crate::settings::{Settings, Tracer};
 use crate::vk::{remeasure, remeasure_readout, Context, GpuTimer, TimingCheck};
 use crate::Renderer;
 use serde::Serialize;
@@ -57,9 +61,25 @@ pub struct DynamicPoint {
     /// Sampled rays whose hits differ from the CPU BVH's (beyond genuine ties), both
     /// BVHs together; 0 when valid.
     pub mismatches: u32,
+    /// The same frames through the vendor tracer (`null` on a device without it).
+    pub khr: Option<KhrPoint>,
     /// The self-check of every timed frame, refit and traversal (`vk::timing`).
     pub timing: TimingCheck,
     pub valid: bool,
+}
+
+/// One point's frames through the vendor tracer (`tracer = khr`): its per-frame
+/// structures (the top level rebuilt; the cloth's bottom level updated, rebuilt every
+/// `refit_rebuild_every` frames) against the LBVH's rebuild, and the frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct KhrPoint {
+    pub as_tlas_ms: Stat,
+    /// `as.cloth` (0 without cloth).
+    pub as_cloth_ms: Stat,
+    pub rt_reflect_ms: Stat,
+    pub frame_ms: Stat,
+    /// Median frame over the LBVH's median frame (measured before it, not interleaved).
+    pub frame_over_lbvh: f64,
 }
 
 /// The `bench dynamic` report.
@@ -181,6 +201,7 @@ pub fn run_point(
     // Rebuilt every frame (a cloth would be refit): the refit is timed apart.
     let settings = Settings {
         cloth_rebuild: true,
+        tracer: Tracer::Lbvh,
         ..settings.clone()
     };
     let mut r = Renderer::new(ctx, scene, &settings)?;
@@ -223,6 +244,18 @@ pub fn run_point(
     let [sim, transform, cloth, rebuild, refit, rt_reflect, frame, ratio] = series;
     let mismatches = m1 + m2;
     let frame_ms = stat(&frame);
+    let khr = match ctx.ray_tracing {
+        Some(_) => Some(khr_point(
+            ctx,
+            scene,
+            &settings,
+            (warmup, frames),
+            frame_ms.median,
+            &mut timing,
+            tick,
+        )?),
+        None => None,
+    };
     Ok(DynamicPoint {
         bodies: scene.bodies.len() as u32,
         cloth_resolution: scene.cloths.first().map_or(0, |c| c.resolution),
@@ -239,7 +272,51 @@ pub fn run_point(
         trace_refit_ms,
         rays,
         mismatches,
+        khr,
         timing,
         valid: mismatches == 0 && frame_ms.median.is_finite() && trace_rebuilt_ms > 0.0,
+    })
+}
+
+/// The frames of `run_point` through the vendor tracer, the cloth updated as the
+/// LBVH's would be refit (`cloth_rebuild` off).
+fn khr_point(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    settings: &Settings,
+    (warmup, frames): (u32, u32),
+    lbvh_frame_ms: f64,
+    timing: &mut TimingCheck,
+    tick: super::Tick<'_>,
+) -> Result<KhrPoint> {
+    let settings = Settings {
+        tracer: Tracer::Khr,
+        cloth_rebuild: false,
+        ..settings.clone()
+    };
+    let mut r = Renderer::new(ctx, scene, &settings)?;
+    for _ in 0..warmup {
+        r.render_frame()?;
+    }
+    r.reset_simulation()?;
+    let mut series: [Vec<f64>; 4] = Default::default();
+    for _ in 0..frames {
+        let times = r.render_frame()?;
+        timing.add(times.problem.as_deref());
+        tick();
+        let get = |name: &str| times.get(name).unwrap_or(0.0);
+        let names = [khr::TLAS, khr::CLOTH, crate::passes::rt_reflect::NAME, FRAME];
+        for (s, name) in series.iter_mut().zip(names) {
+            s.push(get(name));
+        }
+    }
+    let [tlas, cloth, rt_reflect, frame] = series;
+    let frame_ms = stat(&frame);
+    Ok(KhrPoint {
+        as_tlas_ms: stat(&tlas),
+        as_cloth_ms: stat(&cloth),
+        rt_reflect_ms: stat(&rt_reflect),
+        frame_over_lbvh: frame_ms.median / lbvh_frame_ms,
+        frame_ms,
     })
 }

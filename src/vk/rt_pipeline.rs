@@ -293,8 +293,8 @@ mod tests {
         for (h, ha, b) in [(32, 32, 64), (32, 16, 64), (16, 16, 32), (24, 8, 256), (32, 64, 64)] {
             for misses in 1..4 {
                 let s = SbtLayout::of(&limits(h, ha, b), misses);
-                assert!(s.record >= h as u64 && s.record % ha as u64 == 0, "{s:?}");
-                assert!(s.offsets.iter().all(|o| o % b as u64 == 0), "{s:?}");
+                assert!(s.record >= h as u64 && s.record.is_multiple_of(ha as u64), "{s:?}");
+                assert!(s.offsets.iter().all(|o| o.is_multiple_of(b as u64)), "{s:?}");
                 assert!(s.raygen_size >= s.record && s.offsets[1] >= s.raygen_size, "{s:?}");
                 assert!(s.offsets[2] >= s.offsets[1] + misses * s.record, "{s:?}");
                 assert_eq!(s.size, s.offsets[2] + s.record);

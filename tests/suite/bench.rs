@@ -223,6 +223,20 @@ fn small_dynamic_benchmark_is_valid() {
             assert!(ms > 0.0 && ms.is_finite(), "{n} bodies: {what} {ms}");
         }
         assert!(p.frame_ms.median >= p.rebuild_ms.median);
+        // The vendor tracer's frames, where the device has it: its top level timed
+        // every frame, no cloth here.
+        match (&p.khr, ctx.ray_tracing.is_some()) {
+            (Some(k), true) => {
+                assert!(
+                    k.as_tlas_ms.median > 0.0 && k.frame_ms.median > k.as_tlas_ms.median,
+                    "{k:?}"
+                );
+                assert_eq!(k.as_cloth_ms.median, 0.0);
+                assert!(k.rt_reflect_ms.median > 0.0 && k.frame_over_lbvh > 0.0, "{k:?}");
+            }
+            (None, false) => {}
+            (k, _) => panic!("{n} bodies: khr {k:?}"),
+        }
         points.push(p);
     }
     assert!(points[1].dynamic_triangles > 2 * points[0].dynamic_triangles);

@@ -199,4 +199,37 @@ fn print_points(
         report.triangle_growth,
         if report.valid { "valid" } else { "INVALID" }
     ));
+    print_khr_points(text, report, by_cloth);
+}
+
+/// The same frames through the vendor tracer, where the device has it.
+fn print_khr_points(text: &Text, report: &speculum::bench::dynamic::DynamicReport, by_cloth: bool) {
+    if report.points.iter().all(|p| p.khr.is_none()) {
+        return;
+    }
+    text.line(format_args!(
+        "  through the vendor tracer (tracer = khr; not interleaved with the rows above):"
+    ));
+    text.line(format_args!(
+        "  {:>6} {:>9} {:>9} {:>10} {:>9} {:>15}",
+        if by_cloth { "cloth" } else { "bodies" },
+        "as.tlas",
+        "as.cloth",
+        "rt.reflect",
+        "frame",
+        "frame vs lbvh"
+    ));
+    for p in &report.points {
+        if let Some(k) = &p.khr {
+            text.line(format_args!(
+                "  {:>6} {:>9.2} {:>9.2} {:>10.1} {:>9.1} {:>14.2}x",
+                if by_cloth { p.cloth_resolution } else { p.bodies },
+                k.as_tlas_ms.median,
+                k.as_cloth_ms.median,
+                k.rt_reflect_ms.median,
+                k.frame_ms.median,
+                k.frame_over_lbvh
+            ));
+        }
+    }
 }

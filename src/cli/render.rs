@@ -259,8 +259,9 @@ fn write_outputs(
 
 /// The render's text report: per-pass medians, the pixel counts, the comparisons.
 fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str) {
+    let tracer = r.header.settings.as_ref().map_or("lbvh", |s| s.tracer.name());
     text.line(format_args!(
-        "{} on {}: {}x{}, {} mode, median (p10–p90) of {} frames, GPU ms",
+        "{} on {}: {}x{}, {} mode, tracer {tracer}, median (p10–p90) of {} frames, GPU ms",
         r.scene, device, r.resolution[0], r.resolution[1], r.mode, r.frames
     ));
     for (name, stat) in &r.passes_ms.0 {

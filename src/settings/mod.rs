@@ -525,6 +525,7 @@ mod tests {
         assert_eq!(d.with_field("ssr_stride", "2.5").unwrap().ssr_stride, 2.5);
         assert!(d.with_field("ssr_stride", "1e300").is_err(), "infinite as f32");
         assert_eq!(d.with_field("shadows", "rays").unwrap().shadows, Shadows::Rays);
+        assert_eq!(d.with_field("tracer", "khr").unwrap().tracer, Tracer::Khr);
         for err in [
             d.with_field("shadow_rays", "true").unwrap_err().to_string(),
             Settings::from_json(r#"{"shadow_rays": false}"#)

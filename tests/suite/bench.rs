@@ -46,6 +46,13 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
                         (512, 0, 0)
                     );
                     assert!(k.coherent.checked > 0 && k.incoherent.hit_fraction > 0.0, "{k:?}");
+                    // Ray by ray against the LBVH: every ray of both sets compared.
+                    for a in &k.lbvh_agreement[..2] {
+                        let (agree, ties, differ) = a.expect("both sets compared");
+                        assert_eq!(agree + ties + differ, 512, "{k:?}");
+                        assert!(differ * 1000 <= 512 && agree >= 500, "{k:?}");
+                    }
+                    assert!(k.sound(), "{k:?}");
                 }
             }
             (None, false) => {}

@@ -301,3 +301,68 @@ fn khr_resize_renders_what_a_fresh_renderer_renders() {
     assert_eq!(r.read_output().unwrap(), fresh.read_output().unwrap());
     assert_eq!(ctx.validation_messages(), 0);
 }
+
+/// A build of 100,000 triangles traces as brute force says (a few hundred rays: lavapipe
+/// traces a soup in file order slowly, see docs/tracers.md).
+#[test]
+fn khr_traces_100k_triangles() {
+    let n = 100_000;
+    let (v, i) = random_soup(n, 1.0, default_size(n), 61);
+    let rays = random_rays(300, &v, &i, 1.0, 62);
+    let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
+    let gpu = traced(&v, &i, &rays, false);
+    let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
+    assert!(ties <= 1, "{ties} ties");
+}
+
+/// Moving geometry with nothing in it (no bodies, no cloth) leaves the static
+/// instance alone in the top level, which traces as brute force says; a moving
+/// bottom level whose first triangle is beyond an instance's 23-bit custom index is
+/// refused in one line before anything is built.
+#[test]
+fn khr_empty_dynamic_set_and_the_index_limit() {
+    use speculum::passes::khr::{BodyRange, DynamicLayout};
+    let ctx = common::context();
+    if ctx.ray_tracing.is_none() {
+        return;
+    }
+    let (v, i) = random_soup(500, 1.0, default_size(500), 71);
+    let tris = UploadedTriangles::new(&ctx, "khr", &v, &i).unwrap();
+    let input = StaticInput {
+        geometry: tris.geometry(),
+        vertices: &v,
+        indices: &i,
+        order: StaticOrder::Morton,
+    };
+    let empty = DynamicLayout {
+        objects: tris.geometry().vertices,
+        object_vertices: v.len() as u32,
+        world: tris.geometry(),
+        bodies: Vec::new(),
+        cloth: None,
+        rebuild_every: 60,
+    };
+    let scene = KhrScene::new(&ctx, &input, Some(&empty), &[]).unwrap();
+    let rays = random_rays(400, &v, &i, 1.0, 72);
+    let pass = TracePass::new_khr(&ctx).unwrap();
+    let (hits, _) = pass.trace(&rays, scene.trace(tris.geometry(), None), false).unwrap();
+    let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
+    assert_eq!(compare(&hits, &cpu, &rays, |p| triangle(&v, &i, p as usize)), 0);
+    let beyond = DynamicLayout {
+        bodies: vec![BodyRange {
+            first_tri: 9_000_000,
+            tris: 1,
+            shape_of: 0,
+        }],
+        ..empty
+    };
+    let e = KhrScene::new(&ctx, &input, Some(&beyond), &[glam::Mat4::IDENTITY])
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("custom index") && e.contains("9000000") && !e.contains('\n'),
+        "{e}"
+    );
+    assert_eq!(ctx.validation_messages(), 0);
+}

@@ -292,7 +292,7 @@ fn print_khr(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
             .map(|r| r.mismatches)
             .sum();
         text.line(format_args!(
-            "{:<14} KHR {} order: build {} + compact {} ({:.1} B/tri, {:.1} uncompacted); {} rays: coherent {:.3} Mrays/s, incoherent {:.3} Mrays/s{file} (this tree on the same rays: {}); {differ} of the checked hits differ",
+            "{:<14} KHR {} order: build {} + compact {} ({:.1} B/tri, {:.1} uncompacted); {} rays: coherent {:.3} Mrays/s, incoherent {:.3} Mrays/s{file} (this tree on the same rays: {}; ray by ray against its hits: {}); {differ} of the checked hits differ from the CPU's",
             "",
             k.order,
             cell(Some(k.build_ms)),
@@ -308,6 +308,12 @@ fn print_khr(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
                 .map(|m| format!("{m:.3}"))
                 .collect::<Vec<_>>()
                 .join(", "),
+            k.lbvh_agreement
+                .iter()
+                .flatten()
+                .map(|(a, t, d)| format!("{a} agree, {t} ties, {d} differ"))
+                .collect::<Vec<_>>()
+                .join("; "),
         ));
     }
 }

@@ -320,8 +320,12 @@ impl Renderer {
         let e = extent(settings);
         let rt = RtReflectPass::new(&self.ctx, e, settings.tracer)?;
         let shadow_trace = ShadowTracePass::new(&self.ctx, e, settings.tracer)?;
-        self.khr = khr_scene(&self.ctx, &self.scene, self.dynamic.as_ref(), settings)?;
-        (self.rt, self.shadow_trace) = (rt, shadow_trace);
+        let mut khr = khr_scene(&self.ctx, &self.scene, self.dynamic.as_ref(), settings)?;
+        if let Some(k) = &mut khr {
+            // As many instance buffers as frames may be in flight.
+            k.set_slots(self.slots.len())?;
+        }
+        (self.rt, self.shadow_trace, self.khr) = (rt, shadow_trace, khr);
         Ok(())
     }
 

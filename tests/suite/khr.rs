@@ -209,6 +209,19 @@ fn khr_refusals_and_switching() {
     frame(&mut switched);
     switched.set_settings(khr.clone()).unwrap();
     assert_eq!(frame(&mut switched), want, "switched to khr in place");
+    // A moving scene switched with two frames in flight (the demo's): the second
+    // slot's frame has its own instances.
+    let drop = speculum::scene::builtin::by_name("drop").unwrap().unwrap();
+    let mut r = Renderer::new(&ctx, &drop, &lbvh).unwrap();
+    r.set_frames_in_flight(2).unwrap();
+    r.set_settings(khr.clone()).unwrap();
+    for slot in [0, 1, 0, 1] {
+        let cmd = ctx.allocate_command_buffer().unwrap();
+        ctx.rerecord(cmd, |cmd| r.record_frame(cmd, slot)).unwrap();
+        ctx.submit_and_wait(cmd).unwrap();
+        ctx.free_command_buffer(cmd);
+        r.frame_finished(slot).unwrap();
+    }
     assert_eq!(ctx.validation_messages(), 0);
 }
 

@@ -86,12 +86,9 @@ pub(super) fn reports(
     let n = (i.len() / 3).max(1) as f64;
     let mut out = Vec::new();
     for order in [StaticOrder::File, StaticOrder::Morton] {
-        let perm = order.permutation(v, i);
-        let ordered: Vec<u32> = perm
-            .iter()
-            .flat_map(|&t| i[3 * t as usize..3 * t as usize + 3].to_vec())
-            .collect();
-        let ordered_buf = crate::passes::lbvh::index_buffer(ctx, "bench.khr.ordered", Default::default(), &ordered)?;
+        let input = StaticInput::new(triangles.geometry(), v, i, order);
+        let ordered_buf =
+            crate::passes::lbvh::index_buffer(ctx, "bench.khr.ordered", Default::default(), &input.ordered)?;
         let t = crate::passes::khr::triangles(
             triangles.geometry().vertices,
             v.len() as u32,
@@ -115,12 +112,6 @@ pub(super) fn reports(
                 timing.add_measured(readouts.problem.as_deref(), discarded);
             }
         }
-        let input = StaticInput {
-            geometry: triangles.geometry(),
-            vertices: v,
-            indices: i,
-            order,
-        };
         let scene = KhrScene::new_static(ctx, &input)?;
         let tracing = scene.trace(triangles.geometry(), None).into();
         let mut agreement = [None; 3];

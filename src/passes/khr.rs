@@ -105,13 +105,30 @@ fn spread21(v: u32) -> u64 {
     x
 }
 
-/// The static triangles as the vendor tracer builds them: the vertices, and the
-/// scene's triangles (on the host) with the order to hand them over in.
+/// The static triangles as the vendor tracer builds them: their geometry on the GPU,
+/// and (made on the host) the order to hand them over in.
 pub struct StaticInput<'a> {
     pub geometry: Geometry<'a>,
-    pub vertices: &'a [GpuVertex],
-    pub indices: &'a [u32],
-    pub order: StaticOrder,
+    /// Each bottom-level primitive's scene triangle id (`StaticOrder::permutation`).
+    pub perm: Vec<u32>,
+    /// The scene's indices, three per primitive, in that order.
+    pub ordered: Vec<u32>,
+}
+
+impl<'a> StaticInput<'a> {
+    /// `geometry`, whose triangles are `vertices` and `indices` on the host, in `order`.
+    pub fn new(geometry: Geometry<'a>, vertices: &[GpuVertex], indices: &[u32], order: StaticOrder) -> Self {
+        let perm = order.permutation(vertices, indices);
+        let ordered = perm
+            .iter()
+            .flat_map(|&t| indices[3 * t as usize..3 * t as usize + 3].iter().copied())
+            .collect();
+        Self {
+            geometry,
+            perm,
+            ordered,
+        }
+    }
 }
 
 /// One rigid body: its triangles in the dynamic numbering and the body whose shape
@@ -208,14 +225,10 @@ impl KhrScene {
     ) -> Result<Self> {
         let g = &input.geometry;
         let static_tris = g.tri_count;
-        let perm = input.order.permutation(input.vertices, input.indices);
-        let ordered: Vec<u32> = perm
-            .iter()
-            .flat_map(|&t| input.indices[3 * t as usize..3 * t as usize + 3].iter().copied())
-            .collect();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | accel::input_usage(ctx);
-        let static_indices = Buffer::with_data(ctx, "as.static.indices", usage, bytemuck::cast_slice(&ordered))?;
-        let static_perm = Buffer::with_data(ctx, "as.static.perm", usage, bytemuck::cast_slice(&perm))?;
+        let ordered = bytemuck::cast_slice(&input.ordered);
+        let static_indices = Buffer::with_data(ctx, "as.static.indices", usage, ordered)?;
+        let static_perm = Buffer::with_data(ctx, "as.static.perm", usage, bytemuck::cast_slice(&input.perm))?;
         let static_blas = (static_tris > 0)
             .then(|| {
                 let t = triangles(g.vertices, vertex_count(g), &static_indices, (0, static_tris));

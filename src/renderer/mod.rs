@@ -148,12 +148,7 @@ fn khr_scene(
     let vertices: Vec<crate::gpu_types::GpuVertex> = bytemuck::pod_collect_to_vec(&geometry.vertices.read()?);
     let mut indices: Vec<u32> = bytemuck::pod_collect_to_vec(&geometry.indices.read()?);
     indices.truncate(3 * geometry.tri_count as usize);
-    let input = StaticInput {
-        geometry,
-        vertices: &vertices,
-        indices: &indices,
-        order: StaticOrder::Morton,
-    };
+    let input = StaticInput::new(geometry, &vertices, &indices, StaticOrder::Morton);
     let layout = dynamic.map(|d| d.khr_layout());
     let poses = dynamic.map(|d| d.world.poses()).unwrap_or_default();
     Ok(Some(KhrScene::new(ctx, &input, layout.as_ref(), &poses)?))

@@ -9,6 +9,7 @@ use super::pipeline::{merge, module, push_size, Pipeline, Resource, Shader};
 use crate::error::{Result, VkContext};
 use ash::vk;
 use bytemuck::Pod;
+use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 /// The shaders of a ray-tracing pipeline: group 0 is the ray generation, groups
@@ -228,16 +229,15 @@ fn shader_binding_table(
     }
     put(offsets[2], groups as u64 - 1);
     let usage = vk::BufferUsageFlags::SHADER_BINDING_TABLE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
-    // The table's start must be base-aligned too: over-allocate and shift.
-    let mut padded = vec![0u8; base as usize];
-    padded.extend_from_slice(&table);
-    let sbt = Buffer::with_data(ctx, &format!("{name}.sbt"), usage, &padded)?;
+    // The table's start must be base-aligned too: over-allocate by the alignment, and
+    // upload the table at the first aligned address inside.
+    let size = base + table.len() as u64;
+    let usage = usage | vk::BufferUsageFlags::TRANSFER_DST;
+    let sbt = Buffer::new(ctx, &format!("{name}.sbt"), size, usage, MemoryLocation::GpuOnly)?;
     let start = sbt.address().next_multiple_of(base);
-    let shift = start - sbt.address();
-    // Re-upload with the table at the aligned start.
-    let mut aligned = vec![0u8; shift as usize];
+    let mut aligned = vec![0u8; (start - sbt.address()) as usize];
     aligned.extend_from_slice(&table);
-    aligned.resize(padded.len(), 0);
+    aligned.resize(size as usize, 0);
     sbt.write(&aligned)?;
     let region = |at: u64, stride: u64, size: u64| {
         vk::StridedDeviceAddressRegionKHR::default()

@@ -43,12 +43,7 @@ fn traced(v: &[GpuVertex], i: &[u32], rays: &[Ray], any_hit: bool) -> Vec<Hit> {
     let mut out = Vec::new();
     // Either order of the triangles traces the same hits (ids mapped back).
     for order in [StaticOrder::File, StaticOrder::Morton] {
-        let input = StaticInput {
-            geometry: tris.geometry(),
-            vertices: v,
-            indices: i,
-            order,
-        };
+        let input = StaticInput::new(tris.geometry(), v, i, order);
         let scene = KhrScene::new_static(&ctx, &input).unwrap();
         let (hits, _) = pass.trace(rays, scene.trace(tris.geometry(), None), any_hit).unwrap();
         out.push(hits);
@@ -341,12 +336,7 @@ fn khr_empty_dynamic_set_and_the_index_limit() {
     }
     let (v, i) = random_soup(500, 1.0, default_size(500), 71);
     let tris = UploadedTriangles::new(&ctx, "khr", &v, &i).unwrap();
-    let input = StaticInput {
-        geometry: tris.geometry(),
-        vertices: &v,
-        indices: &i,
-        order: StaticOrder::Morton,
-    };
+    let input = StaticInput::new(tris.geometry(), &v, &i, StaticOrder::Morton);
     let empty = DynamicLayout {
         objects: tris.geometry().vertices,
         object_vertices: v.len() as u32,

@@ -2,6 +2,7 @@
 // gbuffer: writes normal + reflectivity, base colour + roughness, material id.
 #include "frame.glsl"
 #include "surface.glsl"
+#include "glossy.glsl"
 
 layout(binding = 2, std430) readonly buffer Materials { Material materials[]; };
 layout(binding = 4) uniform sampler2DArray scene_textures;
@@ -11,7 +12,8 @@ layout(location = 1) in vec3 in_normal;
 layout(location = 2) flat in uint in_material;
 layout(location = 3) in vec2 in_uv;
 
-// xyz: unit world normal facing the camera, its mirror direction above the facet; w: reflectivity
+// xyz: unit world normal facing the camera, its mirror direction above the facet; w: the
+// reflectivity the reflection passes trace (glossy.glsl: 0 past the rough cut-off)
 layout(location = 0) out vec4 out_normal;
 layout(location = 1) out vec4 out_albedo;   // rgb: base colour (textured), sRGB-encoded; a: roughness
 layout(location = 2) out uint out_material; // material index (MATERIAL_NONE where empty)
@@ -31,7 +33,7 @@ void main() {
     if (!any(isnan(g)) && !any(isinf(g))) { // a triangle seen edge-on has no plane here
         n = clamp_bent_normal(n, g, v);
     }
-    out_normal = vec4(n, m.reflectivity);
+    out_normal = vec4(n, traced_reflectivity(m.reflectivity, m.roughness));
     out_albedo = vec4(srgb_encode(base_color(m, scene_textures, in_uv)), m.roughness);
     out_material = in_material;
 }

@@ -52,7 +52,7 @@ void main() {
         if (MASK_ONLY) {
             fail = reflective ? FAIL_FORCED : 0u;
         } else if (reflective) {
-            SsrRay r = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz);
+            SsrRay r = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz, texelFetch(gb_albedo, p, 0).a, 0u);
             march = heading_confidence(r.vdir) >= pc.min_confidence;
             fail = march ? 0u : FAIL_LOW_CONFIDENCE;
             if (!march && pc.trace_min_weight > 0.0) {

@@ -345,28 +345,52 @@ void main() {
     ivec2 p = unpack_pixel(march_list[i]);
     ivec2 res = ivec2(frame.resolution);
     vec4 nr = texelFetch(gb_normal, p, 0); // xyz normal, w reflectivity
-    SsrRay ray = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz);
-    vec3 vpos = ray.vpos, vn = ray.vn, vdir = ray.vdir;
-    // Start a little off the surface so the first steps do not hit the pixel itself.
-    vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
-
-    float near_z = -frame.proj[3][2] / frame.proj[2][2];
-    // Lengths relative to the view depth keep SSR's answers the same at any scene scale.
-    float max_len = pc.max_distance * abs(origin.z);
-    float ray_len = (origin.z + vdir.z * max_len) > near_z ? (near_z - origin.z) / vdir.z : max_len;
-    vec3 end_point = origin + vdir * ray_len;
-    vec4 h0 = frame.proj * vec4(origin, 1.0);
-    vec4 h1 = frame.proj * vec4(end_point, 1.0);
-    Found found = HIZ ? march_hiz(h0, h1, res) : march_linear(h0, h1, origin, end_point, res);
-
+    float depth = texelFetch(gb_depth, p, 0).r;
+    float roughness = texelFetch(gb_albedo, p, 0).a;
+    uint rays = reflection_rays(roughness);
     vec3 base;
     float metallic;
     surface_at(p, base, metallic);
-    vec3 own = view_reflection(ray, nr.xyz, base, metallic, nr.w);
-    uint fail;
-    float confidence;
-    vec3 color;
-    judge(found, vdir, own, res, fail, confidence, color);
+    // Every ray of the pixel (one, or a glossy pixel's reflection_rays): SSR answers
+    // the pixel only if it answers each ray (the mean of their colours, the least
+    // confidence); the first ray it cannot answer sends the whole pixel to the tracer.
+    uint fail = 0u;
+    float confidence = 1.0;
+    vec3 color = vec3(0.0);
+    SsrRay ray;
+    vec3 own;
+    for (uint s = 0u; s < rays; ++s) {
+        ray = ssr_ray(p, depth, nr.xyz, roughness, s);
+        vec3 vpos = ray.vpos, vn = ray.vn, vdir = ray.vdir;
+        // Start a little off the surface so the first steps do not hit the pixel itself.
+        vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
+
+        float near_z = -frame.proj[3][2] / frame.proj[2][2];
+        // Lengths relative to the view depth keep SSR's answers the same at any scene scale.
+        float max_len = pc.max_distance * abs(origin.z);
+        float ray_len = (origin.z + vdir.z * max_len) > near_z ? (near_z - origin.z) / vdir.z : max_len;
+        vec3 end_point = origin + vdir * ray_len;
+        vec4 h0 = frame.proj * vec4(origin, 1.0);
+        vec4 h1 = frame.proj * vec4(end_point, 1.0);
+        Found found = HIZ ? march_hiz(h0, h1, res) : march_linear(h0, h1, origin, end_point, res);
+
+        own = view_reflection(ray, nr.xyz, base, metallic, nr.w);
+        uint f;
+        float c;
+        vec3 col;
+        judge(found, vdir, own, res, f, c, col);
+        if (f != 0u && f != FAIL_BLEND) {
+            fail = f;
+            color = vec3(0.0);
+            break;
+        }
+        fail |= f;
+        confidence = min(confidence, c);
+        color += col;
+    }
+    if (fail == 0u || fail == FAIL_BLEND) {
+        color /= float(rays);
+    }
     if (fail != 0u && pc.trace_min_weight > 0.0) {
         if (max(own.r, max(own.g, own.b)) < pc.trace_min_weight) {
             // Not traced: a faded hit is kept whole, a failure keeps the sky (but one

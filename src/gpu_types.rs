@@ -37,7 +37,7 @@ pub struct GpuMaterial {
     pub _pad0: f32,
 }
 
-/// Per-frame constants (std140 uniform buffer, 432 bytes).
+/// Per-frame constants (std140 uniform buffer, 464 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct FrameUniforms {
@@ -76,11 +76,28 @@ pub struct FrameUniforms {
     /// texel leaves the map unsure (`shadow_map_doubt`): the pixel gets a shadow ray in
     /// the hybrid shadows.
     pub shadow_band: f32,
+    /// Frames rendered before this one: the glossy rays' sample sequence advances with it.
+    pub frame_index: u32,
+    /// Sampled reflection rays per glossy pixel (`reflection_rays`).
+    pub reflection_rays: u32,
+    /// Perceptual roughness below which a reflective surface is a mirror (`glossy_mirror_max`).
+    pub mirror_roughness: f32,
+    /// Perceptual roughness from which a surface gets no traced reflection, only the
+    /// prefiltered sky (`glossy_rough_max`).
+    pub rough_roughness: f32,
+    /// Which sample stream the glossy rays draw (0: the renderer's; references use another
+    /// so that they are independent of the frames they judge).
+    pub sample_stream: u32,
+    /// 1: glossy reflections (`glossy`); 0: every reflective surface a mirror, as before
+    /// glossy tracing, and neither roughness cut-off applies.
+    pub glossy: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<GpuVertex>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 32);
-const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 432);
+const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 464);
 
 /// An internal node of the BVH (std430, 64 bytes; `glsl/shared/bvh.glsl`) with both
 /// children's boxes, so one fetch tests both. `child0`/`child1`: an internal node's

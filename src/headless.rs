@@ -6,7 +6,8 @@ use crate::metrics::compare_rgba8;
 use crate::renderer::{Renderer, FRAME};
 use crate::report::{FrameRecord, Header, PassTimes, Stat};
 use crate::scene::Scene;
-use crate::settings::{Mode, Settings, Shadows};
+use crate::settings::{Settings, Shadows};
+use crate::shader_defines::MAX_REFLECTION_RAYS;
 use crate::shadow_maps::ShadowsVsRays;
 use crate::vk::{Context, TimingCheck, Timings};
 use serde::Serialize;
@@ -91,7 +92,14 @@ pub struct FramePlan {
     /// the shadows are not `rays`, in its own mode with `rays` shadows and report how
     /// far its shadows are from them.
     pub reference: bool,
+    /// Samples per glossy pixel of the `rt` reference, in one frame and not denoised
+    /// (`Settings::glossy_reference`): the glossy ground truth. Unused without glossy
+    /// reflections, where one mirror ray per pixel is exact.
+    pub spp: u32,
 }
+
+/// The reference's samples per glossy pixel unless `--spp` says otherwise.
+pub const REFERENCE_SPP: u32 = 64;
 
 impl FramePlan {
     /// Frames `render` draws in all, for a progress bar.
@@ -117,6 +125,12 @@ impl FramePlan {
             return Err(Error::Settings(format!(
                 "--warmup {} is outside 0..={MAX_FRAMES}",
                 self.warmup
+            )));
+        }
+        if self.spp == 0 || self.spp > MAX_REFLECTION_RAYS {
+            return Err(Error::Settings(format!(
+                "--spp {} is outside 1..={MAX_REFLECTION_RAYS}",
+                self.spp
             )));
         }
         if self.reference {
@@ -218,11 +232,10 @@ fn renderers(
 ) -> Result<(Renderer, Option<Renderer>, Option<Renderer>)> {
     let renderer = Renderer::new(ctx, scene, settings)?;
     let reference = if plan.reference {
-        let rt = Settings {
-            mode: Mode::Rt,
-            ..settings.clone()
-        };
-        Some(Renderer::new(ctx, scene, &rt)?)
+        let mut r = Renderer::new(ctx, scene, &settings.glossy_reference(plan.spp))?;
+        // Its samples independent of those of the frames it judges.
+        r.set_sample_stream(1);
+        Some(r)
     } else {
         None
     };

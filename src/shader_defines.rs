@@ -140,6 +140,18 @@ pub const BLUR_LINE: u32 = 64;
 /// workgroup, so `BLUR_LINE + 2 * BLUR_MAX_EXTENT` texels (3 KiB) of shared memory.
 pub const BLUR_MAX_EXTENT: u32 = 64;
 
+/// Most sampled reflection rays per glossy pixel in one frame (`reflection_rays`; `render
+/// --spp N` references take N in one frame): the path loop's bound.
+pub const MAX_REFLECTION_RAYS: u32 = 1024;
+/// The R2 low-discrepancy sequence (Roberts 2018) in 32-bit fixed point: sample k of a
+/// pixel is fract(k * (1/g, 1/g^2) + the pixel's rotation), g the plastic number, so that
+/// integer wrap-around is the fraction and GPU and CPU draw the same bits.
+pub const R2_A1: u32 = 0xC13F_A9A9;
+pub const R2_A2: u32 = 0x91E1_0DA5;
+/// Taps of `reflect.denoise`'s spatial filter besides the centre (a golden-angle spiral,
+/// rotated per pixel and frame).
+pub const DENOISE_TAPS: u32 = 16;
+
 /// Fail-mask reason bits written by `ssr.classify` and `ssr.trace` (any nonzero value
 /// sends the pixel to the ray tracer): the march left the screen or crossed the near plane,
 pub const SHADOWS_MAP: u32 = 0;
@@ -243,6 +255,10 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("LIST_GROUPS_X", LIST_GROUPS_X),
     ("BLUR_LINE", BLUR_LINE),
     ("BLUR_MAX_EXTENT", BLUR_MAX_EXTENT),
+    ("MAX_REFLECTION_RAYS", MAX_REFLECTION_RAYS),
+    ("R2_A1", R2_A1),
+    ("R2_A2", R2_A2),
+    ("DENOISE_TAPS", DENOISE_TAPS),
     ("SHADOWS_MAP", SHADOWS_MAP),
     ("SHADOWS_RAYS", SHADOWS_RAYS),
     ("SHADOWS_HYBRID", SHADOWS_HYBRID),

@@ -5,7 +5,7 @@
 // CPU reference: cpu_ref::reflect::reflected_radiance (tests/rt_reflect.rs).
 #ifndef REFLECT_PATH_GLSL
 #define REFLECT_PATH_GLSL
-#include "shading.glsl"
+#include "glossy.glsl"
 #include "surface.glsl"
 #include "pixel_list.glsl"
 layout(binding = 1) uniform sampler2D gb_depth;
@@ -19,6 +19,7 @@ layout(binding = 7, rgba32f) uniform writeonly image2D rt_out;
 layout(binding = 16, std430) readonly buffer StaticUvs { vec2 s_uvs[]; };
 layout(binding = 17, std430) readonly buffer DynamicUvs { vec2 d_uvs[]; };
 layout(binding = 18) uniform sampler2DArray scene_textures;
+layout(binding = 19) uniform sampler2D gb_albedo; // a: perceptual roughness
 
 layout(push_constant) uniform Push {
     uint max_bounces;  // rays per path (1: a single reflection)
@@ -40,18 +41,9 @@ float pixel_spread() {
     return 2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y));
 }
 
-// The reflected radiance of list entry `i` (< the list's length), stored in rt_out.
-void reflect_entry(uint i) {
-    ivec2 p = unpack_pixel(pixels[i]);
-    float depth = texelFetch(gb_depth, p, 0).r;
-    vec3 pos = world_from_depth(p, depth);
-    vec3 n = normalize(texelFetch(gb_normal, p, 0).xyz);
-    vec3 dir = reflect(normalize(pos - frame.camera_pos.xyz), n);
-    vec3 origin = pos + n * offset_scale(pos);
-    float spread = pixel_spread();
-    // The ray cone's width at `origin`, grown along the path.
-    float cone = spread * length(pos - frame.camera_pos.xyz);
-
+// The radiance along one path from `origin` (just off the reflecting surface) in
+// direction `dir`, its ray cone `cone` wide at the origin and spreading by `spread`.
+vec3 trace_path(vec3 origin, vec3 dir, float cone, float spread) {
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     for (uint bounce = 0u; bounce < pc.max_bounces; ++bounce) {
@@ -93,13 +85,44 @@ void reflect_entry(uint i) {
             Hit sh = trace_ray(so, frame.light_dir.xyz, 0.0, 3.0e38, pc.static_tris, pc.dynamic_tris, true);
             vis = sh.prim == BVH_INVALID ? 1.0 : 0.0;
         }
-        radiance += throughput * shade_direct(albedo, m.roughness, m.reflectivity, m.metallic, hn, -dir, vis);
-        if (m.reflectivity <= 0.0) {
+        // A hit past the rough cut-off reflects only the prefiltered sky (glossy.glsl);
+        // a glossy one continues in its mirror direction (one ray per path: the
+        // lobe's blur of a reflection within a reflection is left out).
+        float reflectivity = traced_reflectivity(m.reflectivity, m.roughness);
+        radiance += throughput * shade_direct(albedo, m.roughness, reflectivity, m.metallic, hn, -dir, vis);
+        if (reflectivity <= 0.0) {
             break;
         }
-        throughput *= reflection_weight(albedo, m.metallic, m.reflectivity, hn, -dir);
+        throughput *= reflection_weight(albedo, m.metallic, reflectivity, hn, -dir);
         dir = reflect(dir, hn);
         origin = hp + g * offset_scale(hp); // off the facet itself, whatever the normal
+    }
+    return radiance;
+}
+
+// The reflected radiance of list entry `i` (< the list's length), stored in rt_out: the
+// mean of the pixel's rays (glossy.glsl: one for a mirror).
+void reflect_entry(uint i) {
+    ivec2 p = unpack_pixel(pixels[i]);
+    float depth = texelFetch(gb_depth, p, 0).r;
+    vec3 pos = world_from_depth(p, depth);
+    vec3 n = normalize(texelFetch(gb_normal, p, 0).xyz);
+    float roughness = texelFetch(gb_albedo, p, 0).a;
+    vec3 view_dir = normalize(pos - frame.camera_pos.xyz);
+    vec3 origin = pos + n * offset_scale(pos);
+    float spread = pixel_spread();
+    // The ray cone's width at `origin`, grown along the path.
+    float cone = spread * length(pos - frame.camera_pos.xyz);
+    vec3 radiance;
+    if (!is_glossy(roughness)) {
+        radiance = trace_path(origin, reflect(view_dir, n), cone, spread);
+    } else {
+        uint rays = reflection_rays(roughness);
+        radiance = vec3(0.0);
+        for (uint s = 0u; s < rays; ++s) {
+            radiance += trace_path(origin, glossy_direction(p, n, -view_dir, roughness, s), cone, spread);
+        }
+        radiance /= float(rays);
     }
     imageStore(rt_out, p, vec4(radiance, 1.0));
 }

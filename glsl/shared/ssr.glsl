@@ -2,7 +2,7 @@
 // confidence its heading allows. Mirrored by cpu_ref::ssr.
 #ifndef SSR_GLSL
 #define SSR_GLSL
-#include "shading.glsl"
+#include "glossy.glsl"
 
 // The reflected ray of pixel p (G-buffer depth and world normal) in view space.
 struct SsrRay {
@@ -11,11 +11,19 @@ struct SsrRay {
     vec3 vdir; // the unit reflected direction
 };
 
-SsrRay ssr_ray(ivec2 p, float depth, vec3 n_world) {
+// Ray `s` of the pixel (glossy.glsl): the mirror direction, or the sampled one of a
+// glossy surface of perceptual `roughness`.
+SsrRay ssr_ray(ivec2 p, float depth, vec3 n_world, float roughness, uint s) {
     SsrRay r;
     r.vpos = (frame.view * vec4(world_from_depth(p, depth), 1.0)).xyz;
     r.vn = normalize(mat3(frame.view) * normalize(n_world));
-    r.vdir = normalize(reflect(normalize(r.vpos), r.vn));
+    if (is_glossy(roughness)) {
+        vec3 v = transpose(mat3(frame.view)) * -normalize(r.vpos); // view is rigid
+        vec3 l = glossy_direction(p, normalize(n_world), normalize(v), roughness, s);
+        r.vdir = normalize(mat3(frame.view) * l);
+    } else {
+        r.vdir = normalize(reflect(normalize(r.vpos), r.vn));
+    }
     return r;
 }
 

@@ -35,6 +35,14 @@ struct Material {
     float shadow_bias;                                                                \
     float exposure;                                                                   \
     float ambient;                                                                    \
-    float shadow_band;
+    float shadow_band;                                                                \
+    uint frame_index;                                                                 \
+    uint reflection_rays;                                                             \
+    float mirror_roughness;                                                           \
+    float rough_roughness;                                                            \
+    uint sample_stream;                                                               \
+    uint glossy;                                                                      \
+    uint _pad0;                                                                       \
+    uint _pad1;
 
 #endif

@@ -32,6 +32,11 @@ pub struct RenderArgs {
     /// against it; the reference image is written next to --out as *_rt.png.
     #[arg(long)]
     pub reference: bool,
+    /// Rays per glossy pixel of the `rt` reference (`--reference`), in one frame with no
+    /// denoiser: the glossy ground truth [default: 64]. In `--mode rt`, the frame itself
+    /// is rendered so.
+    #[arg(long)]
+    pub spp: Option<u32>,
     /// Uncounted warm-up frames (pipeline JIT, caches).
     #[arg(long, default_value_t = 2)]
     pub warmup: u32,
@@ -112,7 +117,12 @@ fn check_before_gpu(args: &RenderArgs) -> Result<(Settings, headless::FramePlan,
         warmup: args.warmup,
         frames: args.frames,
         reference: args.reference,
+        spp: args.spp.unwrap_or(headless::REFERENCE_SPP),
     };
+    if let (Some(spp), Mode::Rt) = (args.spp, settings.mode) {
+        plan.validate(&settings)?;
+        settings = settings.glossy_reference(spp);
+    }
     plan.validate(&settings)?;
     if args.contact_sheet.is_some() && plan.frames < SHEET_FRAMES {
         anyhow::bail!(speculum::error::Error::Input(format!(

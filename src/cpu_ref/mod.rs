@@ -4,6 +4,8 @@
 pub mod cloth;
 pub mod compact;
 pub mod compose;
+pub mod denoise;
+pub mod glossy;
 pub mod lbvh;
 pub mod merge;
 pub mod reflect;

@@ -21,6 +21,7 @@ pub mod gbuffer;
 pub mod khr;
 pub mod lbvh;
 pub mod light_direct;
+pub mod reflect_denoise;
 pub mod reflect_merge;
 pub mod rt_reflect;
 pub mod rt_trace;

@@ -92,6 +92,7 @@ impl RtReflectPass {
             Resource::Buffer(inputs.surfaces.uvs[0]),
             Resource::Buffer(inputs.surfaces.uvs[1]),
             Resource::Sampled(inputs.surfaces.textures, inputs.surfaces.sampler),
+            Resource::Sampled(&inputs.gbuffer.albedo, s),
         ];
         let resources = with_trace(&before, trace, &after);
         // WAR/WAW: the previous frame's merge reads and tracer writes of the colour are

@@ -10,6 +10,7 @@ use crate::passes::compose::{self, ComposeInputs, ComposeMode};
 use crate::passes::khr;
 use crate::passes::lbvh::dynamic::DynamicBvh;
 use crate::passes::light_direct::Sun;
+use crate::passes::reflect_denoise::{self, DenoiseInputs, DenoiseParams};
 use crate::passes::reflect_merge::{self, BlurParams, MergeInputs, MergeParams};
 use crate::passes::rt_reflect::{self, ReflectInputs};
 use crate::passes::ssr_hiz;
@@ -55,12 +56,14 @@ pub enum Row {
     SsrCompact,
     RtReflect,
     ReflectMerge,
+    /// The spatial filter of glossy reflections (`glossy` on, `denoise_radius` > 0).
+    ReflectDenoise,
     Compose,
 }
 
 impl Row {
     /// Every row, in frame order.
-    pub const ALL: [Row; 19] = [
+    pub const ALL: [Row; 20] = [
         Row::Uniforms,
         Row::SimRigid,
         Row::SimTransform,
@@ -79,6 +82,7 @@ impl Row {
         Row::SsrCompact,
         Row::RtReflect,
         Row::ReflectMerge,
+        Row::ReflectDenoise,
         Row::Compose,
     ];
 
@@ -104,6 +108,7 @@ impl Row {
             Row::SsrCompact => &[ssr_compact::NAME],
             Row::RtReflect => &[rt_reflect::NAME],
             Row::ReflectMerge => &[reflect_merge::NAME],
+            Row::ReflectDenoise => &[reflect_denoise::NAME],
             Row::Compose => &[compose::NAME],
         }
     }
@@ -221,6 +226,8 @@ impl Renderer {
             scene,
             frame_ubo: ubo,
             uniforms,
+            frame_index,
+            sample_stream,
             shadow,
             gbuffer,
             light,
@@ -231,6 +238,7 @@ impl Renderer {
             shadow_compact,
             rt,
             merge,
+            denoise,
             compose,
             static_bvh,
             khr,
@@ -245,6 +253,13 @@ impl Renderer {
         let FrameSlot { timer, sim_ms } = &mut slots[slot];
         let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.out);
         let mut f = FrameRecorder::begin(timer, cmd);
+        // This frame's uniforms: the view's, and where the glossy rays' sequence is.
+        let uniforms = &FrameUniforms {
+            frame_index: *frame_index,
+            sample_stream: *sample_stream,
+            ..*uniforms
+        };
+        *frame_index = frame_index.wrapping_add(1);
         f.row(Row::Uniforms, || upload_uniforms(d, cmd, ubo, uniforms));
         if let Some(dy) = dynamic.as_mut().filter(|_| advance) {
             *sim_ms = Some(f.host_row(Row::SimRigid, || dy.step(slot)));
@@ -362,10 +377,24 @@ impl Renderer {
             };
             f.row(Row::ReflectMerge, || merge.record(cmd, &inputs, params));
         }
+        let denoised = mode.reflects() && st.glossy && (st.denoise_radius > 0 || st.denoise_history > 1);
+        if denoised {
+            let inputs = DenoiseInputs {
+                frame: ubo,
+                gbuffer: g,
+                merged: &merge.out,
+            };
+            let params = DenoiseParams {
+                radius: st.denoise_radius,
+                history: st.denoise_history,
+                reflective_min: st.reflective_min,
+            };
+            f.row(Row::ReflectDenoise, || denoise.record(cmd, &inputs, params, uniforms));
+        }
         let inputs = ComposeInputs {
             frame: ubo,
             hdr: &light.out,
-            reflection: &merge.out,
+            reflection: if denoised { denoise.result() } else { &merge.out },
             gbuffer: g,
             materials: &scene.materials,
             fail_mask: &ssr.out.mask,

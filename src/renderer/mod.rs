@@ -6,7 +6,7 @@
 //! `sim.cloth`, the dynamic BVH's `lbvh.*`) → `shadow.map` (unless the shadows are
 //! `rays`) → `gbuffer` → (shadows `rays` or `hybrid`) `shadow.classify` →
 //! `shadow.compact` → `shadow.trace` → `light.direct` → (by mode) `ssr.hiz` → `ssr.classify` → `ssr.trace` → `ssr.compact` →
-//! `rt.reflect` → `reflect.merge` → `compose`. The static BVH is built once, when the
+//! `rt.reflect` → `reflect.merge` → `reflect.denoise` → `compose`. The static BVH is built once, when the
 //! renderer is created; the dynamic one every frame, over that frame's geometry.
 //!
 //! Frames in flight: `render_frame` submits and waits (the headless path);
@@ -30,6 +30,7 @@ use crate::passes::gbuffer::GBufferPass;
 use crate::passes::khr::{KhrScene, StaticInput, StaticOrder};
 use crate::passes::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
 use crate::passes::light_direct::{self, LightDirectPass};
+use crate::passes::reflect_denoise::DenoisePass;
 use crate::passes::reflect_merge::MergePass;
 use crate::passes::rt_reflect::RtReflectPass;
 use crate::passes::shadow_map::ShadowMapPass;
@@ -83,6 +84,10 @@ pub struct Renderer {
     scene: SceneBuffers,
     frame_ubo: Buffer,
     uniforms: FrameUniforms,
+    /// Frames recorded so far: the glossy rays' sample index advances with it.
+    frame_index: u32,
+    /// The glossy rays' sample stream (`set_sample_stream`).
+    sample_stream: u32,
     pub shadow: ShadowMapPass,
     pub gbuffer: GBufferPass,
     pub light: LightDirectPass,
@@ -94,6 +99,7 @@ pub struct Renderer {
     pub shadow_compact: CompactPass,
     pub rt: RtReflectPass,
     pub merge: MergePass,
+    pub denoise: DenoisePass,
     pub compose: ComposePass,
     /// BVH over the scene's (static) triangles, built at creation.
     pub static_bvh: Bvh,
@@ -201,6 +207,8 @@ impl Renderer {
             scene: scene_buffers,
             frame_ubo,
             uniforms: view.uniforms(settings),
+            frame_index: 0,
+            sample_stream: 0,
             shadow: ShadowMapPass::new(ctx, settings.shadow_map_size, settings.shadow_slope_bias)?,
             gbuffer: GBufferPass::new(ctx, extent)?,
             light: LightDirectPass::new(ctx, extent)?,
@@ -211,6 +219,7 @@ impl Renderer {
             shadow_compact: CompactPass::new(ctx, shadow_trace::COMPACT_PIPELINES, extent)?,
             rt: RtReflectPass::new(ctx, extent, settings.tracer)?,
             merge: MergePass::new(ctx, extent)?,
+            denoise: DenoisePass::new(ctx, extent)?,
             compose: ComposePass::new(ctx, extent)?,
             static_bvh,
             static_bvh_build,
@@ -287,6 +296,7 @@ impl Renderer {
             self.shadow_compact.resize(e)?;
             self.rt.resize(e)?;
             self.merge.resize(e)?;
+            self.denoise.resize(e)?;
             self.compose.resize(e)?;
         }
         if !old.changed(&settings, Applies::StaticBvh).is_empty() {
@@ -322,6 +332,14 @@ impl Renderer {
         }
         (self.rt, self.shadow_trace, self.khr) = (rt, shadow_trace, khr);
         Ok(())
+    }
+
+    /// Draws the glossy rays from sample stream `stream` (0, the default, for frames; a
+    /// reference uses another, so its samples are independent of those of the frames it
+    /// judges) and restarts the sequence at frame 0.
+    pub fn set_sample_stream(&mut self, stream: u32) {
+        self.sample_stream = stream;
+        self.frame_index = 0;
     }
 
     /// The camera, in world space.

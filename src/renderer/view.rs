@@ -58,6 +58,14 @@ impl View {
             exposure: settings.exposure,
             ambient: settings.ambient,
             shadow_band: settings.shadow_band,
+            frame_index: 0,
+            reflection_rays: settings.reflection_rays,
+            mirror_roughness: settings.glossy_mirror_max,
+            rough_roughness: settings.glossy_rough_max,
+            sample_stream: 0,
+            glossy: settings.glossy as u32,
+            _pad0: 0,
+            _pad1: 0,
         }
     }
 }

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use std::path::Path;
 
 /// (name, scene file text) of every built-in scene; the first is the default.
-const SCENES: [(&str, &str); 7] = [
+const SCENES: [(&str, &str); 8] = [
     ("room", include_str!("../../assets/scenes/room.toml")),
     ("offscreen", include_str!("../../assets/scenes/offscreen.toml")),
     ("mirrors", include_str!("../../assets/scenes/mirrors.toml")),
@@ -15,11 +15,12 @@ const SCENES: [(&str, &str); 7] = [
     ("drop", include_str!("../../assets/scenes/drop.toml")),
     ("stress", include_str!("../../assets/scenes/stress.toml")),
     ("cloth", include_str!("../../assets/scenes/cloth.toml")),
+    ("glossy", include_str!("../../assets/scenes/glossy.toml")),
 ];
 
 /// Names accepted by `--scene`: the scene files, then `gallery` (generated; `gallery:N`
 /// for about N triangles).
-pub const NAMES: [&str; 8] = [
+pub const NAMES: [&str; 9] = [
     SCENES[0].0,
     SCENES[1].0,
     SCENES[2].0,
@@ -27,6 +28,7 @@ pub const NAMES: [&str; 8] = [
     SCENES[4].0,
     SCENES[5].0,
     SCENES[6].0,
+    SCENES[7].0,
     GALLERY,
 ];
 

@@ -7,7 +7,9 @@
 pub mod field;
 
 use crate::error::{Error, Result};
-use crate::shader_defines::{BLUR_MAX_EXTENT, MAX_PCF_RADIUS, SHADOWS_HYBRID, SHADOWS_MAP, SHADOWS_RAYS};
+use crate::shader_defines::{
+    BLUR_MAX_EXTENT, MAX_PCF_RADIUS, MAX_REFLECTION_RAYS, SHADOWS_HYBRID, SHADOWS_MAP, SHADOWS_RAYS,
+};
 pub use field::{Applies, Field, Hud, Range, Value};
 use serde::{Deserialize, Serialize};
 
@@ -291,6 +293,33 @@ settings_table! {
     /// not traced. Higher traces fewer pixels (a dielectric seen head-on weighs 4%) at
     /// a quarter of the detail in weak reflections; 0 traces every failure.
     trace_min_weight: f32 = 0.06, ANY_F32, slider(0.0, 0.5), NextFrame;
+    /// Glossy reflections: a reflective surface whose roughness lies between
+    /// `glossy_mirror_max` and `glossy_rough_max` reflects rays sampled from its GGX lobe
+    /// (visible normals), denoised by `reflect.denoise`, instead of a sharp mirror image.
+    /// Off: every reflective surface is a mirror, as before glossy tracing (cheaper, and
+    /// wrong for rough surfaces).
+    glossy: bool = false, Range::Any, Hud::Checkbox, NextFrame;
+    /// Sampled reflection rays per glossy pixel and frame: less noise before denoising vs
+    /// that many SSR marches and ray-traced paths per pixel (mirror pixels take one).
+    reflection_rays: u32 = 1, u32s(1, MAX_REFLECTION_RAYS), slider(1.0, 16.0), NextFrame;
+    /// Perceptual roughness below which a reflective surface is an exact mirror (one
+    /// ray, no denoising): at 0.05 the GGX lobe (alpha = r^2 = 0.0025) is about two
+    /// pixels wide at 960x540 and 60 degrees, so higher keeps more surfaces sharp and
+    /// cheap at the cost of visibly blurred ones shown as mirrors.
+    glossy_mirror_max: f32 = 0.05, Range::F32 { min: 0.0, max: 1.0, open_min: false }, slider(0.0, 0.3), NextFrame;
+    /// Perceptual roughness from which a surface gets no traced reflection, only the
+    /// prefiltered sky (FidelityFX SSSR's default cut-off, alpha 0.2): higher traces
+    /// wider, noisier lobes at more rays and denoising.
+    glossy_rough_max: f32 = 0.45, Range::F32 { min: 0.0, max: 1.0, open_min: false }, slider(0.0, 1.0), NextFrame;
+    /// Edge-aware spatial filter of glossy reflections (`reflect.denoise`), radius from
+    /// the lobe's width on screen, up to this many pixels (0: off, raw samples): wider
+    /// is smoother at more cost and more blur of detail.
+    denoise_radius: u32 = 8, u32s(0, 32), slider(0.0, 32.0), NextFrame;
+    /// Temporal accumulation of glossy reflections: the running mean's longest window
+    /// in frames (0 or 1: off), the history reprojected, dropped where disoccluded and
+    /// clamped to the current neighbourhood: longer is smoother and converges further
+    /// at more lag after changes.
+    denoise_history: u32 = 16, u32s(0, 256), slider(0.0, 64.0), NextFrame;
     /// Seam blur radius in pixels (0: off): smoother SSR/RT transitions vs detail.
     blur_radius: u32 = 3, u32s(0, 16), slider(0.0, 16.0), NextFrame;
     /// Half-width in pixels of the band around SSR/RT seams that the blur touches.
@@ -366,6 +395,22 @@ impl Settings {
         }
         // Parsed from the text again (not the value) so errors keep their line and column.
         serde_json::from_str(text).map_err(|e| Error::Settings(e.to_string()))
+    }
+
+    /// The `rt` reference of these settings: with glossy reflections, `spp` rays per
+    /// glossy pixel in one frame and no denoiser (the glossy ground truth); without,
+    /// the same settings in `rt` mode.
+    pub fn glossy_reference(&self, spp: u32) -> Settings {
+        let mut rt = Settings {
+            mode: Mode::Rt,
+            ..self.clone()
+        };
+        if self.glossy {
+            rt.reflection_rays = spp;
+            rt.denoise_radius = 0;
+            rt.denoise_history = 0;
+        }
+        rt
     }
 
     /// The names of the fields, in declaration order.
@@ -544,7 +589,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 30);
+        assert_eq!(Settings::field_names().len(), 36);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).

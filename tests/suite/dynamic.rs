@@ -43,6 +43,7 @@ fn dynamic_frames_are_deterministic_whatever_the_warmup() {
                 warmup,
                 frames,
                 reference: false,
+                spp: 1,
             };
             headless::render(&ctx, &scene, &settings, plan, &mut || {})
                 .unwrap()

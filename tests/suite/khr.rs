@@ -134,6 +134,7 @@ fn khr_renders_what_lbvh_renders() {
         warmup: 0,
         frames: 1,
         reference: false,
+        spp: 1,
     };
     for name in ["room", "mirrors", "spheres", "offscreen", "gallery"] {
         let scene = speculum::scene::builtin::by_name(name).unwrap().unwrap();

@@ -144,6 +144,14 @@ fn frame_uniforms_layout_matches_glsl() {
         exposure,
         ambient,
         shadow_band,
+        frame_index,
+        reflection_rays,
+        mirror_roughness,
+        rough_roughness,
+        sample_stream,
+        glossy,
+        _pad0,
+        _pad1,
     });
     for shader in [
         shaders::GBUFFER_VERT,

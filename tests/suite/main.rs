@@ -12,6 +12,7 @@ mod compact;
 mod device;
 mod dynamic;
 mod gbuffer;
+mod glossy;
 mod gltf;
 mod house;
 mod inputs;

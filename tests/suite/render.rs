@@ -163,6 +163,7 @@ fn render_room(change: impl FnOnce(&mut speculum::scene::Scene), w: u32, h: u32)
         warmup: 0,
         frames: 1,
         reference: false,
+        spp: 1,
     };
     headless::render(&ctx, &scene, &settings, plan, &mut || {})
         .unwrap()
@@ -392,6 +393,7 @@ fn every_kernel_specialization_renders_the_same_frames() {
             warmup: 0,
             frames: 3,
             reference: false,
+            spp: 1,
         };
         let cases = [
             (

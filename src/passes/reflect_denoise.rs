@@ -1,0 +1,209 @@
+//! `reflect.denoise`: the edge-aware, variance-guided spatial filter of glossy
+//! reflections over the merged reflection (`glsl/reflect_denoise.comp` says what it
+//! weighs), then their temporal accumulation with reprojection, disocclusion and
+//! history clamping (`glsl/reflect_temporal.comp`). Mirror pixels pass through
+//! unchanged. CPU reference: `cpu_ref::denoise`.
+
+use super::GBuffer;
+use crate::error::Result;
+use crate::gpu_types::FrameUniforms;
+use crate::shaders;
+use crate::vk::barrier::{self, access};
+use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
+use std::sync::Arc;
+
+pub const NAME: &str = "reflect.denoise";
+/// Linear HDR reflection, as `reflect.merge`'s.
+pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct DenoisePush {
+    radius: u32,
+    reflective_min: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct TemporalPush {
+    prev_view_proj: [f32; 16],
+    prev_camera: [f32; 4],
+    reflective_min: f32,
+    max_frames: u32,
+}
+
+/// The filter's settings.
+#[derive(Clone, Copy, Debug)]
+pub struct DenoiseParams {
+    /// The spatial filter's largest radius in pixels (`denoise_radius`; 0: off).
+    pub radius: u32,
+    /// The temporal running mean's longest window in frames (`denoise_history`; 0 or 1: off).
+    pub history: u32,
+    pub reflective_min: f32,
+}
+
+/// The view a history was made from.
+#[derive(Clone, Copy)]
+struct Past {
+    view_proj: Mat4,
+    camera: Vec4,
+    frame_index: u32,
+}
+
+/// What the filter reads.
+pub struct DenoiseInputs<'a> {
+    pub frame: &'a Buffer,
+    pub gbuffer: &'a GBuffer,
+    /// The merged reflection (`GENERAL`; rgb, a: source).
+    pub merged: &'a Image,
+}
+
+pub struct DenoisePass {
+    ctx: Arc<Context>,
+    pipeline: Pipeline,
+    temporal: Pipeline,
+    sampler: Sampler,
+    /// The spatially filtered reflection (rgb, a: the source, unchanged); always `GENERAL`.
+    pub out: Image,
+    /// The accumulated reflection (rgb, a: the source) and its distance and frame count
+    /// per pixel, of the last two frames (`parity` is the latest).
+    history: [Image; 2],
+    meta: [Image; 2],
+    parity: usize,
+    /// The last frame accumulated, if the last frame recorded was.
+    past: Option<Past>,
+    /// Whether the last frame's result is the history (else `out`).
+    accumulated: bool,
+}
+
+impl DenoisePass {
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
+        Ok(Self {
+            ctx: ctx.clone(),
+            pipeline: Pipeline::compute::<DenoisePush>(ctx, NAME, shaders::REFLECT_DENOISE_COMP)?,
+            temporal: Pipeline::compute::<TemporalPush>(ctx, "reflect.temporal", shaders::REFLECT_TEMPORAL_COMP)?,
+            sampler: Sampler::nearest_clamp(ctx, "denoise.sampler")?,
+            out: Image::storage(ctx, "denoise.out", extent, FORMAT)?,
+            history: Self::pair(ctx, "denoise.history", extent)?,
+            meta: Self::pair(ctx, "denoise.meta", extent)?,
+            parity: 0,
+            past: None,
+            accumulated: false,
+        })
+    }
+
+    fn pair(ctx: &Arc<Context>, name: &str, extent: vk::Extent2D) -> Result<[Image; 2]> {
+        Ok([
+            Image::storage(ctx, name, extent, FORMAT)?,
+            Image::storage(ctx, name, extent, FORMAT)?,
+        ])
+    }
+
+    pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
+        self.out = Image::storage(&self.ctx, "denoise.out", extent, FORMAT)?;
+        self.history = Self::pair(&self.ctx, "denoise.history", extent)?;
+        self.meta = Self::pair(&self.ctx, "denoise.meta", extent)?;
+        self.past = None;
+        Ok(())
+    }
+
+    /// The last frame's accumulated reflection and its meta (distance, frames) per pixel.
+    pub fn history(&self) -> (&Image, &Image) {
+        (&self.history[self.parity], &self.meta[self.parity])
+    }
+
+    /// The filtered reflection of the last frame recorded (`GENERAL`; rgb, a: source).
+    pub fn result(&self) -> &Image {
+        if self.accumulated {
+            &self.history[self.parity]
+        } else {
+            &self.out
+        }
+    }
+
+    /// Records the filters of the frame `frame` describes (its camera and frame index):
+    /// the spatial one, then (`params.history` > 1) the temporal one, whose history is
+    /// used only when the previous frame recorded was the one before this. The G-buffer
+    /// in `SHADER_READ_ONLY_OPTIMAL`. `result()` ends visible to its reader, `compose`.
+    pub fn record(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        inputs: &DenoiseInputs<'_>,
+        params: DenoiseParams,
+        frame: &FrameUniforms,
+    ) {
+        let d = &self.ctx.device;
+        let e = self.out.extent;
+        let s = &self.sampler;
+        let g = inputs.gbuffer;
+        // WAR: the previous frame's reads of `out` and of the history finish before
+        // they are overwritten.
+        barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
+        let push = DenoisePush {
+            radius: params.radius,
+            reflective_min: params.reflective_min,
+        };
+        self.pipeline.dispatch(
+            cmd,
+            &[
+                Resource::Buffer(inputs.frame),
+                Resource::StorageImage(inputs.merged),
+                Resource::Sampled(&g.depth, s),
+                Resource::Sampled(&g.normal, s),
+                Resource::Sampled(&g.albedo, s),
+                Resource::Sampled(&g.material, s),
+                Resource::StorageImage(&self.out),
+            ],
+            &push,
+            Groups::Cover([e.width, e.height, 1]),
+        );
+        // RAW: compose (or the temporal step) reads the filtered reflection.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
+        self.accumulated = params.history > 1;
+        if !self.accumulated {
+            self.past = None;
+            return;
+        }
+        let valid = self.past.filter(|p| p.frame_index.wrapping_add(1) == frame.frame_index);
+        let prev = valid.unwrap_or(Past {
+            view_proj: Mat4::IDENTITY,
+            camera: Vec4::ZERO,
+            frame_index: 0,
+        });
+        let push = TemporalPush {
+            prev_view_proj: prev.view_proj.to_cols_array(),
+            prev_camera: prev.camera.truncate().extend(valid.is_some() as u32 as f32).to_array(),
+            reflective_min: params.reflective_min,
+            max_frames: params.history,
+        };
+        let (old, new) = (self.parity, 1 - self.parity);
+        self.temporal.dispatch(
+            cmd,
+            &[
+                Resource::Buffer(inputs.frame),
+                Resource::StorageImage(&self.out),
+                Resource::Sampled(&g.depth, s),
+                Resource::Sampled(&g.normal, s),
+                Resource::Sampled(&g.albedo, s),
+                Resource::Sampled(&g.material, s),
+                Resource::StorageImage(&self.history[old]),
+                Resource::StorageImage(&self.meta[old]),
+                Resource::StorageImage(&self.history[new]),
+                Resource::StorageImage(&self.meta[new]),
+            ],
+            &push,
+            Groups::Cover([e.width, e.height, 1]),
+        );
+        // RAW: compose reads the accumulated reflection (and the next frame the history).
+        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
+        self.parity = new;
+        self.past = Some(Past {
+            view_proj: frame.view_proj,
+            camera: frame.camera_pos,
+            frame_index: frame.frame_index,
+        });
+    }
+}

@@ -9,40 +9,79 @@
 // - edge stops: the neighbour's distance from the pixel's tangent plane (relative to
 //   the pixel's distance from the camera), its normal's agreement and its roughness's;
 //   a neighbour that is not a glossy pixel takes no part;
-// - the variance of the taps (the guide): a tap whose luminance lies more than
-//   DENOISE_SIGMA standard deviations of the geometry-weighted taps from their mean
-//   weighs less, so a firefly is not spread over the disc.
+// - the variance of the taps (the guide): a tap whose luminance lies d standard
+//   deviations of the geometry-weighted taps from their mean weighs 1 / (1 + d^2 /
+//   (2 DENOISE_SIGMA^2)) as much (a Cauchy kernel: cheaper than a Gaussian and as
+//   good at this), so a firefly is not spread over the disc.
 // The disc's radius is the lobe's footprint on screen: alpha (r^2, the lobe's angular
-// half-width) over the angle a pixel subtends, as if the reflected surface were as far
-// as the reflecting one, at most the `denoise_radius` setting; under a pixel nothing is
-// filtered. Mirror and other pixels are copied as they are.
+// half-width) times the distance to what the rays hit (ssr.trace's and rt.reflect's
+// hit_distance), over the pixel's distance from the camera times the angle a pixel
+// subtends, at least DENOISE_MIN_RADIUS and at most the `denoise_radius` setting.
+// It runs over ssr.classify's list of glossy pixels (lavapipe would run the whole
+// filter for every pixel of a full-screen dispatch); the others are left alone.
 #include "glossy.glsl"
-layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
+#include "pixel_list.glsl"
+layout(local_size_x = SSR_LIST_WG) in;
 layout(binding = 1, rgba32f) uniform readonly image2D merged; // rgb, a: SOURCE_*
 layout(binding = 2) uniform sampler2D gb_depth;
 layout(binding = 3) uniform sampler2D gb_normal; // w: traced reflectivity
 layout(binding = 4) uniform sampler2D gb_albedo; // a: perceptual roughness
-layout(binding = 5) uniform usampler2D gb_material;
-layout(binding = 6, rgba32f) uniform writeonly image2D denoised;
+layout(binding = 5, rgba32f) uniform writeonly image2D denoised;
+layout(binding = 6, std430) readonly buffer GlossyList { uint glossy_list[]; };
+layout(binding = 7, std430) readonly buffer GlossyArgs { uvec4 glossy_args; }; // w: length
+layout(binding = 8, r32f) uniform readonly image2D hit_distance; // of the reflected rays
 layout(push_constant) uniform Push {
     uint radius;          // the largest disc radius, pixels
     float reflective_min; // reflectivity above which a pixel reflects
 } pc;
 
-const float GOLDEN_ANGLE = 2.39996323;
+// The taps' offsets in a unit disc: tap i at radius sqrt((i + 0.5) / DENOISE_TAPS) and
+// angle i x the golden angle (2.39996323), uniform over the disc; cpu_ref::denoise
+// holds the same numbers.
+const vec2 SPIRAL[DENOISE_TAPS] = vec2[](
+    vec2(0.1767766922712326, 0.0),
+    vec2(-0.2257721871137619, 0.20682582259178162),
+    vec2(0.03455805405974388, -0.3937711715698242),
+    vec2(0.28457123041152954, 0.3711727559566498),
+    vec2(-0.522223174571991, -0.09237392991781235),
+    vec2(0.49469539523124695, -0.3146847188472748),
+    vec2(-0.16546592116355896, 0.6155250072479248),
+    vec2(-0.3155614733695984, -0.6075944304466248),
+    vec2(0.6846421360969543, 0.2500302195549011),
+    vec2(-0.7122560739517212, 0.2940089702606201),
+    vec2(0.3433544933795929, -0.7337286472320557),
+    vec2(0.25373023748397827, 0.8089320063591003),
+    vec2(-0.7647458910942078, -0.44318586587905884),
+    vec2(0.897134006023407, -0.19723238050937653),
+    vec2(-0.5475069284439087, 0.778772234916687),
+    vec2(-0.12648676335811615, -0.9760897159576416));
 // A neighbour DENOISE_PLANE x the pixel's distance off its tangent plane weighs 1/e.
 const float DENOISE_PLANE = 0.01;
-const float DENOISE_NORMAL_POWER = 32.0;
 // A neighbour this much rougher or smoother weighs 1/e.
 const float DENOISE_ROUGHNESS = 0.1;
 const float DENOISE_SIGMA = 2.0;
+// The least disc radius, pixels: a glossy pixel's samples are noisy whatever its lobe's
+// footprint (a narrow lobe's one sample is as noisy as a wide one's: it only varies less
+// across the screen), and 2 px keeps the blur under the G-buffer's detail.
+const float DENOISE_MIN_RADIUS = 2.0;
 
+// Whether the surface at q is glossy: by its traced reflectivity and roughness alone
+// (the sky's normal target is cleared to 0, so its reflectivity is never above
+// reflective_min).
 bool glossy_at(ivec2 q, out vec3 n, out float roughness) {
-    uint m = texelFetch(gb_material, q, 0).r;
     vec4 nr = texelFetch(gb_normal, q, 0);
     n = normalize(nr.xyz);
     roughness = texelFetch(gb_albedo, q, 0).a;
-    return m != MATERIAL_NONE && nr.w > pc.reflective_min && is_glossy(roughness);
+    return nr.w > pc.reflective_min && is_glossy(roughness);
+}
+
+// cos^32 (DENOISE_NORMAL_POWER) by five squarings.
+float pow32(float c) {
+    c *= c;
+    c *= c;
+    c *= c;
+    c *= c;
+    return c * c;
 }
 
 float luminance(vec3 c) {
@@ -50,23 +89,28 @@ float luminance(vec3 c) {
 }
 
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 res = ivec2(frame.resolution);
-    if (any(greaterThanEqual(p, res))) {
+    uint entry = list_entry(glossy_args.w, SSR_LIST_WG);
+    if (entry >= glossy_args.w) {
         return;
     }
+    ivec2 p = unpack_pixel(glossy_list[entry]);
+    ivec2 res = ivec2(frame.resolution);
     vec4 c = imageLoad(merged, p);
     vec3 n;
     float roughness;
-    float radius = 0.0;
-    if (glossy_at(p, n, roughness)) {
-        float spread = 2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y));
-        radius = min(float(pc.radius), roughness * roughness / spread);
-    }
-    uint taps = radius >= 1.0 ? DENOISE_TAPS : 0u;
+    glossy_at(p, n, roughness); // listed: glossy
     vec3 x = world_from_depth(p, texelFetch(gb_depth, p, 0).r);
     float dist = length(x - frame.camera_pos.xyz);
+    // The lobe's footprint: alpha (its angular half-width) times the distance to what it
+    // reflects, seen from the camera, in pixels.
+    float spread = 2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y));
+    float hit = imageLoad(hit_distance, p).r;
+    float radius = min(float(pc.radius), max(roughness * roughness * hit / (dist * spread), DENOISE_MIN_RADIUS));
+    uint taps = radius >= 1.0 ? DENOISE_TAPS : 0u;
     float turn = float(pcg_hash(uint(p.x) + pcg_hash(uint(p.y) + pcg_hash(frame.frame_index))) >> 8u) * (1.0 / 16777216.0);
+    // The spiral turned by the pixel's angle and scaled to the disc.
+    float angle = 2.0 * PI * turn;
+    mat2 turn_by = radius * mat2(cos(angle), sin(angle), -sin(angle), cos(angle));
     vec3 col[DENOISE_TAPS + 1u];
     float w[DENOISE_TAPS + 1u];
     float lum[DENOISE_TAPS + 1u];
@@ -76,8 +120,7 @@ void main() {
     float wsum = 1.0, mean = lum[0], sq = lum[0] * lum[0];
     for (uint i = 0u; i < DENOISE_TAPS; ++i) {
         float t = (float(i) + 0.5) / float(DENOISE_TAPS);
-        float angle = float(i) * GOLDEN_ANGLE + 2.0 * PI * turn;
-        ivec2 q = p + ivec2(round(radius * sqrt(t) * vec2(cos(angle), sin(angle))));
+        ivec2 q = p + ivec2(round(turn_by * SPIRAL[i]));
         vec3 nq;
         float rq;
         float wi = 0.0;
@@ -86,7 +129,7 @@ void main() {
             vec3 xq = world_from_depth(q, texelFetch(gb_depth, q, 0).r);
             float plane = abs(dot(n, xq - x)) / (DENOISE_PLANE * dist);
             wi = exp(-2.0 * t - plane * plane - abs(rq - roughness) / DENOISE_ROUGHNESS)
-               * pow(max(dot(n, nq), 0.0), DENOISE_NORMAL_POWER);
+               * pow32(max(dot(n, nq), 0.0));
             col[i + 1u] = imageLoad(merged, q).rgb;
         }
         w[i + 1u] = wi;
@@ -104,7 +147,7 @@ void main() {
         float total = 0.0;
         for (uint i = 0u; i <= DENOISE_TAPS; ++i) {
             float d = lum[i] - mean;
-            float wi = w[i] * exp(-d * d * k);
+            float wi = w[i] / (1.0 + d * d * k);
             sum += wi * col[i];
             total += wi;
         }

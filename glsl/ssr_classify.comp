@@ -29,6 +29,13 @@ layout(binding = 7, std430) buffer MarchArgs { uvec4 march_args; };
 layout(binding = 8) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
 layout(binding = 9, std430) readonly buffer Materials { Material materials[]; };
 
+// The glossy pixels (glossy.glsl), for reflect.denoise: packed pixels, and its
+// VkDispatchIndirectCommand (x, y) and length (w), zeroed before as march_args.
+layout(binding = 10, std430) writeonly buffer GlossyList { uint glossy_list[]; };
+layout(binding = 11, std430) buffer GlossyArgs { uvec4 glossy_args; };
+// The reflected rays' distance to what they hit (glossy.glsl's HIT_FAR here, for pixels
+// not marched; ssr.trace and rt.reflect write the rest), for reflect.denoise's footprint.
+layout(binding = 12, r32f) uniform writeonly image2D hit_distance;
 // The rt mode's variant: no SSR, every reflective pixel fails (FAIL_FORCED).
 layout(constant_id = 0) const bool MASK_ONLY = false;
 
@@ -44,15 +51,18 @@ void main() {
     bool inside = all(lessThan(p, res));
     uint fail = 0u;
     bool march = false;
+    bool glossy = false;
     vec3 sky = vec3(0.0);
     if (inside) {
         uint material = texelFetch(gb_material, p, 0).r;
         vec4 nr = texelFetch(gb_normal, p, 0);
         bool reflective = material != MATERIAL_NONE && nr.w > pc.reflective_min;
+        float roughness = texelFetch(gb_albedo, p, 0).a;
+        glossy = reflective && is_glossy(roughness);
         if (MASK_ONLY) {
             fail = reflective ? FAIL_FORCED : 0u;
         } else if (reflective) {
-            SsrRay r = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz, texelFetch(gb_albedo, p, 0).a, 0u);
+            SsrRay r = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz, roughness, 0u);
             march = heading_confidence(r.vdir) >= pc.min_confidence;
             fail = march ? 0u : FAIL_LOW_CONFIDENCE;
             if (!march && pc.trace_min_weight > 0.0) {
@@ -66,6 +76,7 @@ void main() {
         if (!march) {
             imageStore(ssr_out, p, vec4(sky, 0.0));
             imageStore(fail_mask, p, uvec4(fail));
+            imageStore(hit_distance, p, vec4(HIT_FAR));
         }
     }
     // One atomic per subgroup for its listed pixels; the dispatch covers the list.
@@ -81,5 +92,19 @@ void main() {
     base = subgroupBroadcastFirst(base);
     if (march) {
         march_list[base + subgroupBallotExclusiveBitCount(ballot)] = pack_pixel(uvec2(p));
+    }
+    // The glossy list, likewise.
+    ballot = subgroupBallot(glossy);
+    n = subgroupBallotBitCount(ballot);
+    base = 0u;
+    if (subgroupElect() && n > 0u) {
+        base = atomicAdd(glossy_args.w, n);
+        uvec2 groups = list_groups((base + n + SSR_LIST_WG - 1u) / SSR_LIST_WG);
+        atomicMax(glossy_args.x, groups.x);
+        atomicMax(glossy_args.y, groups.y);
+    }
+    base = subgroupBroadcastFirst(base);
+    if (glossy) {
+        glossy_list[base + subgroupBallotExclusiveBitCount(ballot)] = pack_pixel(uvec2(p));
     }
 }

@@ -29,6 +29,9 @@ layout(binding = 9) uniform usampler2D gb_material;
 layout(binding = 10, std430) readonly buffer Materials { Material materials[]; };
 // ssr.hiz's pyramid: level after level, row-major, level k ceil(resolution / 2^k).
 layout(binding = 11, std430) readonly buffer Pyramid { float pyramid[]; };
+// The mean distance (view space) from the pixel's surface to its rays' hits; HIT_FAR
+// where SSR did not answer (rt.reflect writes the traced pixels').
+layout(binding = 12, r32f) uniform writeonly image2D hit_distance;
 
 // true: the hierarchical march through the pyramid; false: the linear DDA.
 layout(constant_id = 0) const bool HIZ = true;
@@ -359,6 +362,7 @@ void main() {
     vec3 color = vec3(0.0);
     SsrRay ray;
     vec3 own;
+    float distance_sum = 0.0;
     for (uint s = 0u; s < rays; ++s) {
         ray = ssr_ray(p, depth, nr.xyz, roughness, s);
         vec3 vpos = ray.vpos, vn = ray.vn, vdir = ray.vdir;
@@ -387,6 +391,9 @@ void main() {
         fail |= f;
         confidence = min(confidence, c);
         color += col;
+        ivec2 hp = found.hit_pixel;
+        vec3 hit = (frame.view * vec4(world_from_depth(hp, texelFetch(gb_depth, hp, 0).r), 1.0)).xyz;
+        distance_sum += length(hit - vpos);
     }
     if (fail == 0u || fail == FAIL_BLEND) {
         color /= float(rays);
@@ -406,4 +413,5 @@ void main() {
     bool kept = fail == 0u || fail == FAIL_BLEND;
     imageStore(ssr_out, p, vec4(color, kept ? confidence : 0.0));
     imageStore(fail_mask, p, uvec4(fail));
+    imageStore(hit_distance, p, vec4(kept ? distance_sum / float(rays) : HIT_FAR));
 }

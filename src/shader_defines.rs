@@ -148,6 +148,10 @@ pub const MAX_REFLECTION_RAYS: u32 = 1024;
 /// integer wrap-around is the fraction and GPU and CPU draw the same bits.
 pub const R2_A1: u32 = 0xC13F_A9A9;
 pub const R2_A2: u32 = 0x91E1_0DA5;
+/// The hit distance (`ssr.hit_distance`) of a reflection that met nothing the screen or
+/// the tracer holds (the sky, a failed march left to the tracer): as far as can be.
+pub const HIT_FAR: u32 = 0x7149_f2ca; // 1e30 as f32 bits
+
 /// Taps of `reflect.denoise`'s spatial filter besides the centre (a golden-angle spiral,
 /// rotated per pixel and frame).
 pub const DENOISE_TAPS: u32 = 16;
@@ -259,6 +263,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("R2_A1", R2_A1),
     ("R2_A2", R2_A2),
     ("DENOISE_TAPS", DENOISE_TAPS),
+    ("HIT_FAR_BITS", HIT_FAR),
     ("SHADOWS_MAP", SHADOWS_MAP),
     ("SHADOWS_RAYS", SHADOWS_RAYS),
     ("SHADOWS_HYBRID", SHADOWS_HYBRID),

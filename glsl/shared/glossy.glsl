@@ -76,6 +76,9 @@ void basis(vec3 n, out vec3 b1, out vec3 b2) {
     b2 = vec3(b, sgn + n.y * n.y * a, -n.y);
 }
 
+// The hit distance of a reflection that met nothing (ssr.hit_distance).
+#define HIT_FAR uintBitsToFloat(HIT_FAR_BITS)
+
 // Tries at a direction above the surface before falling back to the mirror direction.
 const uint GLOSSY_TRIES = 4u;
 

@@ -20,6 +20,9 @@ layout(binding = 16, std430) readonly buffer StaticUvs { vec2 s_uvs[]; };
 layout(binding = 17, std430) readonly buffer DynamicUvs { vec2 d_uvs[]; };
 layout(binding = 18) uniform sampler2DArray scene_textures;
 layout(binding = 19) uniform sampler2D gb_albedo; // a: perceptual roughness
+// The mean distance to the first hits of the pixel's rays (HIT_FAR for a miss), for
+// reflect.denoise's footprint.
+layout(binding = 20, r32f) uniform writeonly image2D hit_distance;
 
 layout(push_constant) uniform Push {
     uint max_bounces;  // rays per path (1: a single reflection)
@@ -42,8 +45,10 @@ float pixel_spread() {
 }
 
 // The radiance along one path from `origin` (just off the reflecting surface) in
-// direction `dir`, its ray cone `cone` wide at the origin and spreading by `spread`.
-vec3 trace_path(vec3 origin, vec3 dir, float cone, float spread) {
+// direction `dir`, its ray cone `cone` wide at the origin and spreading by `spread`;
+// `first` receives the distance to its first hit (HIT_FAR for a miss).
+vec3 trace_path(vec3 origin, vec3 dir, float cone, float spread, out float first) {
+    first = HIT_FAR;
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     for (uint bounce = 0u; bounce < pc.max_bounces; ++bounce) {
@@ -51,6 +56,9 @@ vec3 trace_path(vec3 origin, vec3 dir, float cone, float spread) {
         if (h.prim == BVH_INVALID) {
             radiance += throughput * sky_radiance(dir);
             break;
+        }
+        if (bounce == 0u) {
+            first = h.t;
         }
         Vertex a = hit_vertex(h.prim, 0u);
         Vertex b = hit_vertex(h.prim, 1u);
@@ -114,16 +122,21 @@ void reflect_entry(uint i) {
     // The ray cone's width at `origin`, grown along the path.
     float cone = spread * length(pos - frame.camera_pos.xyz);
     vec3 radiance;
+    float first;
     if (!is_glossy(roughness)) {
-        radiance = trace_path(origin, reflect(view_dir, n), cone, spread);
+        radiance = trace_path(origin, reflect(view_dir, n), cone, spread, first);
     } else {
         uint rays = reflection_rays(roughness);
         radiance = vec3(0.0);
+        float first_sum = 0.0;
         for (uint s = 0u; s < rays; ++s) {
-            radiance += trace_path(origin, glossy_direction(p, n, -view_dir, roughness, s), cone, spread);
+            radiance += trace_path(origin, glossy_direction(p, n, -view_dir, roughness, s), cone, spread, first);
+            first_sum += min(first, HIT_FAR);
         }
         radiance /= float(rays);
+        first = first_sum / float(rays);
     }
     imageStore(rt_out, p, vec4(radiance, 1.0));
+    imageStore(hit_distance, p, vec4(first));
 }
 #endif

@@ -53,12 +53,18 @@ struct Past {
     frame_index: u32,
 }
 
-/// What the filter reads.
+/// What the filter reads, and the image it leaves its result in.
 pub struct DenoiseInputs<'a> {
     pub frame: &'a Buffer,
     pub gbuffer: &'a GBuffer,
-    /// The merged reflection (`GENERAL`; rgb, a: source).
+    /// The merged reflection (`GENERAL`; rgb, a: source): read, then its glossy pixels
+    /// overwritten with their filtered reflection.
     pub merged: &'a Image,
+    /// `ssr.classify`'s list of glossy pixels and its indirect arguments.
+    pub list: &'a Buffer,
+    pub list_args: &'a Buffer,
+    /// The reflected rays' mean distance to their hits (`GENERAL`).
+    pub hit_distance: &'a Image,
 }
 
 pub struct DenoisePass {
@@ -75,8 +81,6 @@ pub struct DenoisePass {
     parity: usize,
     /// The last frame accumulated, if the last frame recorded was.
     past: Option<Past>,
-    /// Whether the last frame's result is the history (else `out`).
-    accumulated: bool,
 }
 
 impl DenoisePass {
@@ -91,7 +95,6 @@ impl DenoisePass {
             meta: Self::pair(ctx, "denoise.meta", extent)?,
             parity: 0,
             past: None,
-            accumulated: false,
         })
     }
 
@@ -115,19 +118,13 @@ impl DenoisePass {
         (&self.history[self.parity], &self.meta[self.parity])
     }
 
-    /// The filtered reflection of the last frame recorded (`GENERAL`; rgb, a: source).
-    pub fn result(&self) -> &Image {
-        if self.accumulated {
-            &self.history[self.parity]
-        } else {
-            &self.out
-        }
-    }
-
-    /// Records the filters of the frame `frame` describes (its camera and frame index):
-    /// the spatial one, then (`params.history` > 1) the temporal one, whose history is
-    /// used only when the previous frame recorded was the one before this. The G-buffer
-    /// in `SHADER_READ_ONLY_OPTIMAL`. `result()` ends visible to its reader, `compose`.
+    /// Records the filters of the frame `frame` describes (its camera and frame index)
+    /// over the glossy pixels' list: the spatial one into `out`, then the temporal one
+    /// (a plain copy with `params.history` <= 1), whose history is used only when the
+    /// previous frame recorded was the one before this, into `merged`'s glossy pixels
+    /// and the history. The G-buffer in `SHADER_READ_ONLY_OPTIMAL`; the list and its
+    /// arguments visible to compute reads and indirect dispatch. `merged` ends visible
+    /// to its reader, `compose`.
     pub fn record(
         &mut self,
         cmd: vk::CommandBuffer,
@@ -136,38 +133,40 @@ impl DenoisePass {
         frame: &FrameUniforms,
     ) {
         let d = &self.ctx.device;
-        let e = self.out.extent;
         let s = &self.sampler;
         let g = inputs.gbuffer;
         // WAR: the previous frame's reads of `out` and of the history finish before
-        // they are overwritten.
-        barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
+        // they are overwritten; WAW/WAR on `merged`: the merge's writes and reads are
+        // done before the temporal step writes it.
+        barrier::global(d, cmd, access::COMPUTE_ANY, access::COMPUTE_ANY);
         let push = DenoisePush {
             radius: params.radius,
             reflective_min: params.reflective_min,
         };
-        self.pipeline.dispatch(
-            cmd,
-            &[
-                Resource::Buffer(inputs.frame),
-                Resource::StorageImage(inputs.merged),
-                Resource::Sampled(&g.depth, s),
-                Resource::Sampled(&g.normal, s),
-                Resource::Sampled(&g.albedo, s),
-                Resource::Sampled(&g.material, s),
-                Resource::StorageImage(&self.out),
-            ],
-            &push,
-            Groups::Cover([e.width, e.height, 1]),
-        );
-        // RAW: compose (or the temporal step) reads the filtered reflection.
+        let list = [Resource::Buffer(inputs.list), Resource::Buffer(inputs.list_args)];
+        let gbuffer = [
+            Resource::Sampled(&g.depth, s),
+            Resource::Sampled(&g.normal, s),
+            Resource::Sampled(&g.albedo, s),
+        ];
+        let frame_ubo = [Resource::Buffer(inputs.frame)];
+        let resources = [
+            &frame_ubo[..],
+            &[Resource::StorageImage(inputs.merged)],
+            &gbuffer,
+            &[Resource::StorageImage(&self.out)],
+            &list,
+            &[Resource::StorageImage(inputs.hit_distance)],
+        ]
+        .concat();
+        self.pipeline
+            .dispatch(cmd, &resources, &push, Groups::Indirect(inputs.list_args));
+        // RAW: the temporal step reads the filtered reflection.
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
-        self.accumulated = params.history > 1;
-        if !self.accumulated {
-            self.past = None;
-            return;
-        }
-        let valid = self.past.filter(|p| p.frame_index.wrapping_add(1) == frame.frame_index);
+        let accumulate = params.history > 1;
+        let valid = self
+            .past
+            .filter(|p| accumulate && p.frame_index.wrapping_add(1) == frame.frame_index);
         let prev = valid.unwrap_or(Past {
             view_proj: Mat4::IDENTITY,
             camera: Vec4::ZERO,
@@ -177,30 +176,29 @@ impl DenoisePass {
             prev_view_proj: prev.view_proj.to_cols_array(),
             prev_camera: prev.camera.truncate().extend(valid.is_some() as u32 as f32).to_array(),
             reflective_min: params.reflective_min,
-            max_frames: params.history,
+            max_frames: params.history.max(1),
         };
         let (old, new) = (self.parity, 1 - self.parity);
-        self.temporal.dispatch(
-            cmd,
+        let resources = [
+            &frame_ubo[..],
+            &[Resource::StorageImage(&self.out)],
+            &gbuffer,
             &[
-                Resource::Buffer(inputs.frame),
-                Resource::StorageImage(&self.out),
-                Resource::Sampled(&g.depth, s),
-                Resource::Sampled(&g.normal, s),
-                Resource::Sampled(&g.albedo, s),
-                Resource::Sampled(&g.material, s),
                 Resource::StorageImage(&self.history[old]),
                 Resource::StorageImage(&self.meta[old]),
                 Resource::StorageImage(&self.history[new]),
                 Resource::StorageImage(&self.meta[new]),
+                Resource::StorageImage(inputs.merged),
             ],
-            &push,
-            Groups::Cover([e.width, e.height, 1]),
-        );
-        // RAW: compose reads the accumulated reflection (and the next frame the history).
+            &list,
+        ]
+        .concat();
+        self.temporal
+            .dispatch(cmd, &resources, &push, Groups::Indirect(inputs.list_args));
+        // RAW: compose reads the merged reflection (and the next frame the history).
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
         self.parity = new;
-        self.past = Some(Past {
+        self.past = accumulate.then_some(Past {
             view_proj: frame.view_proj,
             camera: frame.camera_pos,
             frame_index: frame.frame_index,

@@ -45,6 +45,9 @@ pub struct ReflectInputs<'a> {
     pub shadow_map: &'a Image,
     pub list: &'a CompactOutputs,
     pub scene: Tracing<'a>,
+    /// Where the traced pixels' mean first-hit distance goes (`GENERAL`; `ssr.classify`
+    /// and `ssr.trace` wrote the rest), for `reflect.denoise`.
+    pub hit_distance: &'a Image,
 }
 
 impl RtReflectPass {
@@ -93,6 +96,7 @@ impl RtReflectPass {
             Resource::Buffer(inputs.surfaces.uvs[1]),
             Resource::Sampled(inputs.surfaces.textures, inputs.surfaces.sampler),
             Resource::Sampled(&inputs.gbuffer.albedo, s),
+            Resource::StorageImage(inputs.hit_distance),
         ];
         let resources = with_trace(&before, trace, &after);
         // WAR/WAW: the previous frame's merge reads and tracer writes of the colour are

@@ -21,6 +21,8 @@ pub const CLASSIFY_NAME: &str = "ssr.classify";
 pub const COLOR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// The fail mask: `FAIL_*` bits per pixel, nonzero means "needs a ray".
 pub const MASK_FORMAT: vk::Format = vk::Format::R32_UINT;
+/// The reflected rays' distance to their hits.
+pub const HIT_DISTANCE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 
 /// Push constants of `ssr_classify.comp`.
 #[repr(C)]
@@ -55,6 +57,13 @@ pub struct SsrOutputs {
     /// `[groups_x, groups_y, 1, length]`: ssr.trace's indirect dispatch (`list_groups`
     /// of the workgroups the list needs) and the list's length.
     pub march_args: Buffer,
+    /// The glossy pixels (`glossy.glsl`), for `reflect.denoise`, and their
+    /// `[groups_x, groups_y, 1, length]` in `SSR_LIST_WG` workgroups.
+    pub glossy_list: Buffer,
+    pub glossy_args: Buffer,
+    /// The reflected rays' mean distance to their hits (`HIT_FAR` where SSR did not
+    /// answer; `rt.reflect` writes its pixels'), for `reflect.denoise`'s footprint.
+    pub hit_distance: Image,
 }
 
 impl SsrOutputs {
@@ -64,6 +73,9 @@ impl SsrOutputs {
             mask: Image::storage(ctx, "ssr.fail_mask", extent, MASK_FORMAT)?,
             march_list: Buffer::device_list(ctx, "ssr.march_list", extent.width as u64 * extent.height as u64 * 4)?,
             march_args: Buffer::device_list(ctx, "ssr.march_args", 16)?,
+            glossy_list: Buffer::device_list(ctx, "ssr.glossy_list", extent.width as u64 * extent.height as u64 * 4)?,
+            glossy_args: Buffer::device_list(ctx, "ssr.glossy_args", 16)?,
+            hit_distance: Image::storage(ctx, "ssr.hit_distance", extent, HIT_DISTANCE_FORMAT)?,
         })
     }
 }
@@ -117,7 +129,7 @@ impl SsrPass {
     }
 
     /// Records the classification: the fail mask and SSR colour of every pixel not to
-    /// be marched, and the march list; with `mask_only` (the `rt` mode) every
+    /// be marched, the march list and the glossy pixels' list; with `mask_only` (the `rt` mode) every
     /// reflective pixel fails (`FAIL_FORCED`) and the list stays empty. G-buffer in
     /// `SHADER_READ_ONLY_OPTIMAL`. Ends with the list and its dispatch arguments visible
     /// to `trace`, the mask and colour to `trace` and to the mask's readers
@@ -146,7 +158,10 @@ impl SsrPass {
             &[],
         );
         let args: [u32; 4] = [0, 1, 1, 0];
-        unsafe { d.cmd_update_buffer(cmd, out.march_args.raw, 0, bytemuck::bytes_of(&args)) };
+        unsafe {
+            d.cmd_update_buffer(cmd, out.march_args.raw, 0, bytemuck::bytes_of(&args));
+            d.cmd_update_buffer(cmd, out.glossy_args.raw, 0, bytemuck::bytes_of(&args));
+        }
         // RAW: the classification's atomics see the reset arguments.
         barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
         let s = &self.sampler;
@@ -165,6 +180,9 @@ impl SsrPass {
                 Resource::Buffer(&out.march_args),
                 Resource::Sampled(&gbuffer.albedo, s),
                 Resource::Buffer(materials),
+                Resource::Buffer(&out.glossy_list),
+                Resource::Buffer(&out.glossy_args),
+                Resource::StorageImage(&out.hit_distance),
             ],
             &ClassifyPush {
                 min_confidence: params.min_confidence,
@@ -215,6 +233,7 @@ impl SsrPass {
                 Resource::Sampled(&gbuffer.material, s),
                 Resource::Buffer(materials),
                 Resource::Buffer(&hiz.buffer),
+                Resource::StorageImage(&out.hit_distance),
             ],
             &MarchPush {
                 max_steps: params.max_steps,

@@ -354,6 +354,7 @@ impl Renderer {
                 shadow_map: &shadow.out,
                 list: &compact.out,
                 scene: trace_scene,
+                hit_distance: &ssr.out.hit_distance,
             };
             f.row(Row::RtReflect, || rt.record(cmd, &inputs, st.max_bounces, shadows));
         }
@@ -383,6 +384,9 @@ impl Renderer {
                 frame: ubo,
                 gbuffer: g,
                 merged: &merge.out,
+                list: &ssr.out.glossy_list,
+                list_args: &ssr.out.glossy_args,
+                hit_distance: &ssr.out.hit_distance,
             };
             let params = DenoiseParams {
                 radius: st.denoise_radius,
@@ -394,7 +398,7 @@ impl Renderer {
         let inputs = ComposeInputs {
             frame: ubo,
             hdr: &light.out,
-            reflection: if denoised { denoise.result() } else { &merge.out },
+            reflection: &merge.out,
             gbuffer: g,
             materials: &scene.materials,
             fail_mask: &ssr.out.mask,

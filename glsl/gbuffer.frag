@@ -33,7 +33,11 @@ void main() {
     if (!any(isnan(g)) && !any(isinf(g))) { // a triangle seen edge-on has no plane here
         n = clamp_bent_normal(n, g, v);
     }
-    out_normal = vec4(n, traced_reflectivity(m.reflectivity, m.roughness));
-    out_albedo = vec4(srgb_encode(base_color(m, scene_textures, in_uv)), m.roughness);
+    float roughness = m.roughness;
+    if (m.roughness_layer != TEXTURE_NONE) {
+        roughness *= texture(scene_textures, vec3(in_uv, float(m.roughness_layer))).g;
+    }
+    out_normal = vec4(n, traced_reflectivity(m.reflectivity, roughness));
+    out_albedo = vec4(srgb_encode(base_color(m, scene_textures, in_uv)), roughness);
     out_material = in_material;
 }

@@ -34,7 +34,9 @@ pub struct GpuMaterial {
     pub texture_layer: u32,
     /// 0: dielectric (specular reflectance 0.04), 1: metal (reflectance = `albedo`).
     pub metallic: f32,
-    pub _pad0: f32,
+    /// Layer of the scene's texture array whose green channel (linear data) multiplies
+    /// `roughness`, or `TEXTURE_NONE`.
+    pub roughness_layer: u32,
 }
 
 /// Per-frame constants (std140 uniform buffer, 464 bytes).

@@ -15,7 +15,7 @@ struct Material {
     float reflectivity;
     uint texture_layer; // TEXTURE_NONE: untextured
     float metallic;     // 0: dielectric, 1: metal (the base colour is its reflectance)
-    float _pad0;
+    uint roughness_layer; // green channel (linear data) x roughness; TEXTURE_NONE: none
 };
 
 #define FRAME_UNIFORMS_BLOCK                                                         \

@@ -190,6 +190,10 @@ pub struct MaterialDesc {
     /// `base_color` per texel.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<String>,
+    /// A roughness texture (PNG or JPEG, relative to the scene file) whose green channel
+    /// multiplies `roughness` per texel (as glTF's `metallicRoughnessTexture`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roughness_texture: Option<String>,
 }
 
 /// What an instance places: exactly one of the shape keys.
@@ -393,6 +397,10 @@ impl Build<'_> {
             }
             if let Some(file) = &m.texture {
                 material.texture = Some(self.b.texture(super::texture::load(&self.dir.join(file))?));
+            }
+            if let Some(file) = &m.roughness_texture {
+                let data = super::texture::data_texture(super::texture::load(&self.dir.join(file))?);
+                material.roughness_texture = Some(self.b.texture(data));
             }
             let id = self.b.material(material);
             self.ids.push((m.name.clone(), id));

@@ -6,8 +6,13 @@
 //! Material mapping: albedo = `baseColorFactor.rgb`, multiplied per texel by
 //! `baseColorTexture` (sampled with the texture coordinate set it names; sampler
 //! wrap modes and `KHR_texture_transform` are not read: textures repeat); roughness =
-//! `roughnessFactor`; metallic = `metallicFactor`; reflectivity (the traced mirror
-//! share of the specular reflection) = `reflectivity_from_roughness(roughnessFactor)`.
+//! `roughnessFactor`, multiplied per texel by the green channel of
+//! `metallicRoughnessTexture` (read as linear data, with the base colour's texture
+//! coordinates; its blue channel, metallic, is not read); metallic = `metallicFactor`;
+//! reflectivity (the traced share of the specular reflection) =
+//! `reflectivity_from_roughness(roughnessFactor)`, or 1 with a metallic-roughness
+//! texture (the factor alone does not say how rough the surface is: glossy tracing's
+//! cut-offs judge each texel).
 
 use super::geometry::{smooth_normals, CREASE_ANGLE_DEG};
 use super::Texture;
@@ -359,7 +364,8 @@ struct Walk<'a> {
     /// texture coordinate set its base colour texture uses.
     ids: Vec<(Option<usize>, u32, u32)>,
     /// glTF image index → scene texture (None: not usable, warned about once).
-    textures: Vec<(usize, Option<u32>)>,
+    /// (glTF image, as linear data (`texture::data_texture`), scene texture).
+    textures: Vec<(usize, bool, Option<u32>)>,
     warnings: Vec<String>,
 }
 
@@ -394,27 +400,50 @@ impl Walk<'_> {
         .metal(pbr.metallic_factor());
         let mut set = 0;
         if let Some(info) = pbr.base_color_texture() {
-            material.texture = self.texture(info.texture().source().index(), &name);
+            material.texture = self.texture(info.texture().source().index(), false, &name);
             set = info.tex_coord();
+        }
+        if let Some(info) = pbr.metallic_roughness_texture() {
+            if pbr
+                .base_color_texture()
+                .is_some_and(|b| b.tex_coord() != info.tex_coord())
+            {
+                self.warnings.push(format!(
+                    "material '{name}': its metallic-roughness texture uses another texture coordinate set than its \
+                     base colour; it is read with the base colour's"
+                ));
+            }
+            material.roughness_texture = self.texture(info.texture().source().index(), true, &name);
+            // The factor alone does not say how rough the surface is (often 1, the
+            // texture saying the rest): no fade by it; glossy tracing's cut-offs judge
+            // each texel instead.
+            material.reflectivity = 1.0;
+            if pbr.base_color_texture().is_none() {
+                set = info.tex_coord();
+            }
         }
         let id = self.b.material(material);
         self.ids.push((m.index(), id, set));
         (id, set)
     }
 
-    /// The scene texture of glTF image `image` (made on first use), for material `name`.
-    fn texture(&mut self, image: usize, name: &str) -> Option<u32> {
-        if let Some(&(_, t)) = self.textures.iter().find(|(i, _)| *i == image) {
+    /// The scene texture of glTF image `image` (made on first use), as colour or as
+    /// linear `data` (a metallic-roughness map), for material `name`.
+    fn texture(&mut self, image: usize, data: bool, name: &str) -> Option<u32> {
+        if let Some(&(_, _, t)) = self.textures.iter().find(|(i, d, _)| *i == image && *d == data) {
             return t;
         }
         let decoded = self.images.get(image).and_then(|d| d.as_ref());
         let t = match decoded.map(image_rgba8) {
             // Unreadable: already warned about when decoded.
             None => None,
-            Some(Some(img)) => Some(self.b.texture(Texture {
-                name: format!("{} image {image}", self.path.display()),
-                image: img,
-            })),
+            Some(Some(img)) => {
+                let t = Texture {
+                    name: format!("{} image {image}", self.path.display()),
+                    image: img,
+                };
+                Some(self.b.texture(if data { super::texture::data_texture(t) } else { t }))
+            }
             Some(None) => {
                 self.warnings.push(format!(
                     "image {image}: not 8- or 16-bit; material '{name}' uses its base colour factor alone"
@@ -422,7 +451,7 @@ impl Walk<'_> {
                 None
             }
         };
-        self.textures.push((image, t));
+        self.textures.push((image, data, t));
         t
     }
 

@@ -22,6 +22,10 @@ pub struct Material {
     pub metallic: f32,
     /// Base-colour texture (an index into `Scene::textures`), multiplying `albedo`.
     pub texture: Option<u32>,
+    /// Roughness texture (an index into `Scene::textures`, linear data stored as
+    /// `texture::data_texture` makes it) whose green channel multiplies `roughness`
+    /// (glTF's `metallicRoughnessTexture`).
+    pub roughness_texture: Option<u32>,
 }
 
 impl Material {
@@ -72,6 +76,7 @@ impl Material {
             reflectivity,
             metallic: 0.0,
             texture: None,
+            roughness_texture: None,
         }
     }
 
@@ -94,7 +99,7 @@ impl Material {
             reflectivity: self.reflectivity.clamp(0.0, 1.0),
             texture_layer: self.texture.unwrap_or(TEXTURE_NONE),
             metallic: self.metallic.clamp(0.0, 1.0),
-            _pad0: 0.0,
+            roughness_layer: self.roughness_texture.unwrap_or(TEXTURE_NONE),
         }
     }
 }

@@ -55,6 +55,43 @@ pub fn decode(bytes: &[u8], name: &str) -> std::result::Result<Texture, String> 
     })
 }
 
+/// A texture of linear data (a roughness map), stored so that the scene's sRGB texture
+/// array gives the data back: each colour channel sRGB-encoded (`linear_to_srgb` of the
+/// value / 255), which the array's sampling decodes, and mip levels averaged in that
+/// decoded, linear space like every other layer. The data keep 8 bits where the
+/// encoding is finest (near 0) and lose up to about 1/200 near 1.
+pub fn data_texture(t: Texture) -> Texture {
+    let mut image = t.image;
+    for p in image.pixels_mut() {
+        for c in &mut p.0[..3] {
+            *c = linear_to_srgb(*c as f32 / 255.0);
+        }
+    }
+    Texture { name: t.name, image }
+}
+
+#[cfg(test)]
+mod data_tests {
+    use super::*;
+
+    /// Data stored by `data_texture` decode to within 1/200 of what they were.
+    #[test]
+    fn data_textures_decode_to_their_data() {
+        let image = RgbaImage::from_fn(256, 1, |x, _| image::Rgba([x as u8, 255 - x as u8, x as u8, 7]));
+        let t = data_texture(Texture {
+            name: "ramp".into(),
+            image,
+        });
+        for (x, p) in t.image.pixels().enumerate() {
+            for (c, want) in [(0, x as f32 / 255.0), (1, (255 - x) as f32 / 255.0)] {
+                let got = srgb_to_linear(p.0[c]);
+                assert!((got - want).abs() <= 1.0 / 200.0, "{x}: {got} vs {want}");
+            }
+            assert_eq!(p.0[3], 7, "alpha kept");
+        }
+    }
+}
+
 /// The sRGB decoding of an 8-bit value (IEC 61966-2-1), as Vulkan's `_SRGB` formats do.
 pub fn srgb_to_linear(c: u8) -> f32 {
     let c = c as f32 / 255.0;

@@ -129,7 +129,9 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
 /// the albedo times the texture at the pixel's analytic texture coordinate. Tolerance:
 /// the target's 8-bit sRGB storage (half a step) plus the interpolation of the texture
 /// coordinate across the quad (a 1e-3 texel shift moves a texel step of contrast 1 by
-/// 1e-3); silhouette and texel-edge pixels are not special-cased.
+/// 1e-3); silhouette and texel-edge pixels are not special-cased. Its roughness texture
+/// (another random 16², stored as linear data) likewise: the G-buffer's roughness is the
+/// factor times its green channel there, within half an 8-bit step and the same shift.
 #[test]
 fn gbuffer_samples_textures_per_texel() {
     use rand::{Rng, SeedableRng};
@@ -143,10 +145,18 @@ fn gbuffer_samples_textures_per_texel() {
             image::Rgba([rng.random(), rng.random(), rng.random(), 255])
         }),
     };
+    let rough = Texture {
+        name: "random roughness 16x16".into(),
+        image: image::RgbaImage::from_fn(16, 16, |_, _| image::Rgba([0, rng.random(), 0, 255])),
+    };
     let mut b = SceneBuilder::new("textured plane");
     let t = b.texture(texture);
+    let tr = b.texture(speculum::scene::texture::data_texture(rough));
     let tint = [0.9, 0.8, 1.0];
-    let plane = b.material(Material::new("plane", tint, 0.5, 0.0).textured(t));
+    let roughness = 0.8;
+    let mut m = Material::new("plane", tint, roughness, 0.0).textured(t);
+    m.roughness_texture = Some(tr);
+    let plane = b.material(m);
     b.mesh(TriMesh::quad(4.0, 4.0), Mat4::IDENTITY, plane);
     b.camera(Camera {
         position: Vec3::new(0.3, 2.0, 2.5),
@@ -194,8 +204,14 @@ fn gbuffer_samples_textures_per_texel() {
                     "pixel {p}: base colour {got}, texture says {want}"
                 );
             }
+            let want_r = roughness * textures.sample_lod(tr, uv, 0.0).y;
+            let got_r = albedo[4 * i + 3] as f32 / 255.0;
+            assert!(
+                (got_r - want_r).abs() <= 0.5 / 255.0 + 2e-3,
+                "pixel {p}: roughness {got_r}, texture says {want_r}"
+            );
             checked += 1;
-            distinct.insert(albedo[4 * i..4 * i + 3].to_vec());
+            distinct.insert(albedo[4 * i..4 * i + 4].to_vec());
         }
     }
     assert!(

@@ -59,7 +59,7 @@ fn material_layout_matches_glsl() {
             reflectivity,
             texture_layer,
             metallic,
-            _pad0
+            roughness_layer
         }),
     );
     assert_eq!(r.array_strides["Material"] as usize, size_of::<GpuMaterial>());

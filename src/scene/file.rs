@@ -395,12 +395,18 @@ impl Build<'_> {
             if let Some(note) = note {
                 self.b.warn(format!("{} in '{}'", note, self.path.display()));
             }
+            // A texture that cannot be read fails the scene, named with its material.
+            let (dir, path) = (self.dir, self.path);
+            let load = |file: &String| {
+                super::texture::load(&dir.join(file)).map_err(|e| bad_file(path, format!("material '{}': {e}", m.name)))
+            };
             if let Some(file) = &m.texture {
-                material.texture = Some(self.b.texture(super::texture::load(&self.dir.join(file))?));
+                let t = load(file)?;
+                material.texture = Some(self.b.texture(t));
             }
             if let Some(file) = &m.roughness_texture {
-                let data = super::texture::data_texture(super::texture::load(&self.dir.join(file))?);
-                material.roughness_texture = Some(self.b.texture(data));
+                let t = super::texture::data_texture(load(file)?);
+                material.roughness_texture = Some(self.b.texture(t));
             }
             let id = self.b.material(material);
             self.ids.push((m.name.clone(), id));

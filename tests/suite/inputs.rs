@@ -171,6 +171,16 @@ fn scene_files_are_checked_like_flags() {
         scene(cam, sun, "", &format!("{mat}\nmetallic = nan")),
         "must be finite numbers",
     ));
+    // A roughness texture that is missing, or not an image.
+    std::fs::write(d.join("rough.png"), "not a png").unwrap();
+    cases.push((
+        scene(cam, sun, "", &format!("{mat}\nroughness_texture = \"gone.png\"")),
+        "gone.png",
+    ));
+    cases.push((
+        scene(cam, sun, "", &format!("{mat}\nroughness_texture = \"rough.png\"")),
+        "not an image file",
+    ));
     for (i, (text, needle)) in cases.iter().enumerate() {
         let name = format!("s{i}.toml");
         std::fs::write(d.join(&name), text).unwrap();

@@ -2,7 +2,7 @@
 // compose: the lit colour plus the merged reflection weighted by the surface's
 // reflectivity and Fresnel term (shading.glsl), then exposure, ACES tonemap (Narkowicz
 // 2015 fit) and sRGB encoding to LDR. Mirrored by cpu_ref::compose.
-#include "shading.glsl"
+#include "glossy.glsl"
 
 layout(local_size_x = WG_2D, local_size_y = WG_2D) in;
 
@@ -59,8 +59,12 @@ void main() {
         vec4 r = imageLoad(reflection, p);
         uint source = uint(r.a);
         if (pc.mode == COMPOSE_PROVENANCE) {
-            // The method's figures: pink = ray traced, blue = SSR, grey = no reflector.
+            // The method's figures: pink = ray traced, blue = SSR, grey = no reflector;
+            // a glossy surface's (glossy.glsl) in lighter pink and blue.
             vec3 tint = source == SOURCE_RT ? vec3(1.0, 0.25, 0.6) : (source == SOURCE_SSR ? vec3(0.15, 0.35, 1.0) : vec3(0.35));
+            if (source != SOURCE_NONE && is_glossy(texelFetch(gb_albedo, p, 0).a)) {
+                tint = source == SOURCE_RT ? vec3(1.0, 0.45, 0.75) : vec3(0.45, 0.6, 1.0);
+            }
             float luma = dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
             imageStore(ldr, p, vec4(tint * (0.55 + 0.45 * clamp(luma, 0.0, 1.0)), 1.0));
             return;

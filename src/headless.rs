@@ -99,7 +99,7 @@ pub struct FramePlan {
 }
 
 /// The reference's samples per glossy pixel unless `--spp` says otherwise.
-pub const REFERENCE_SPP: u32 = 64;
+pub const REFERENCE_SPP: u32 = crate::settings::GLOSSY_REFERENCE_SPP;
 
 impl FramePlan {
     /// Frames `render` draws in all, for a progress bar.

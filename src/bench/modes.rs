@@ -3,6 +3,8 @@
 //! the machine's speed touches every mode alike. Reports per-pass medians, each mode's
 //! frame time against `rt` (the median of the per-round ratios: neighbouring frames,
 //! so drift cancels), SSIM/RMSE against the `rt` image, and whether ssr < hybrid < rt.
+//! With glossy reflections each mode's image is also compared with the glossy ground
+//! truth (`rt` with many rays per glossy pixel, no denoiser).
 //! Checked in the same run: every mode sees the same reflective pixels, `rt` traces all
 //! of them, `hybrid` no more, `ssr` and `raster` none, and every frame time is finite.
 
@@ -10,7 +12,7 @@ use crate::error::Result;
 use crate::metrics::compare_rgba8;
 use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
-use crate::settings::{Mode, Settings};
+use crate::settings::{Mode, Settings, GLOSSY_REFERENCE_SPP};
 use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
 use std::sync::Arc;
@@ -31,6 +33,10 @@ pub struct ModeResult {
     /// Against the `rt` image of the same run.
     pub ssim_vs_rt: f64,
     pub rmse_vs_rt: f64,
+    /// With glossy reflections: against the glossy ground truth of the same frame (`rt`
+    /// with `GLOSSY_REFERENCE_SPP` rays per glossy pixel, no denoiser); `null` without.
+    pub ssim_vs_reference: Option<f64>,
+    pub rmse_vs_reference: Option<f64>,
     /// The self-check of this mode's measured frames (`vk::timing`).
     pub timing: TimingCheck,
 }
@@ -64,10 +70,19 @@ pub fn run(
     let super::Interleaved { timings, frames } = measured;
     let rt = Mode::ALL.iter().position(|&m| m == Mode::Rt).expect("rt is a mode");
     let rt_image = renderers[rt].read_output()?;
+    let reference = match base.glossy {
+        true => Some(glossy_reference(ctx, scene, base, warmup + rounds)?),
+        false => None,
+    };
     let mut modes = Vec::new();
     for (i, r) in renderers.iter().enumerate() {
         let stats = r.reflection_stats()?;
-        let quality = compare_rgba8(&r.read_output()?, &rt_image, base.width, base.height)?;
+        let image = r.read_output()?;
+        let quality = compare_rgba8(&image, &rt_image, base.width, base.height)?;
+        let vs_reference = match &reference {
+            Some(reference) => Some(compare_rgba8(&image, reference, base.width, base.height)?),
+            None => None,
+        };
         let ratios: Vec<f64> = frames[i].iter().zip(&frames[rt]).map(|(a, b)| a / b).collect();
         modes.push(ModeResult {
             mode: Mode::ALL[i].name().to_string(),
@@ -79,6 +94,8 @@ pub fn run(
             rt_pixel_fraction: stats.rt_pixel_fraction(),
             ssim_vs_rt: quality.ssim,
             rmse_vs_rt: quality.rmse,
+            ssim_vs_reference: vs_reference.as_ref().map(|q| q.ssim),
+            rmse_vs_reference: vs_reference.as_ref().map(|q| q.rmse),
             timing: timings[i].check().clone(),
         });
     }
@@ -101,4 +118,16 @@ pub fn run(
         ordered,
         valid,
     })
+}
+
+/// The glossy ground truth of the frame the modes ended on (`Settings::glossy_reference`
+/// with `GLOSSY_REFERENCE_SPP` rays, from its own sample stream): a static scene's one
+/// frame, a dynamic scene's after as many frames as each mode rendered.
+fn glossy_reference(ctx: &Arc<Context>, scene: &Scene, base: &Settings, frames: u32) -> Result<Vec<u8>> {
+    let mut r = crate::renderer::Renderer::new(ctx, scene, &base.glossy_reference(GLOSSY_REFERENCE_SPP))?;
+    r.set_sample_stream(1);
+    for _ in 0..if scene.is_dynamic() { frames } else { 1 } {
+        r.render_frame()?;
+    }
+    r.read_output()
 }

@@ -362,6 +362,10 @@ settings_table! {
     refit_rebuild_every: u32 = 60, u32s(1, u32::MAX), log_slider(1.0, 600.0), NewRenderer;
 }
 
+/// Rays per glossy pixel of the glossy ground truth (`Settings::glossy_reference`) that
+/// `render --reference` and `bench modes` measure against unless told otherwise.
+pub const GLOSSY_REFERENCE_SPP: u32 = 64;
+
 /// Why a setting of an older Speculum is refused, naming what replaced it.
 fn replaced(name: &str) -> Option<String> {
     (name == "shadow_rays").then(|| {

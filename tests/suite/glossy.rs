@@ -410,3 +410,50 @@ fn temporal_accumulation_matches_cpu_reference() {
     }
     assert!(kept > rig.glossy.len() / 2, "only {kept} pixels kept their history");
 }
+
+/// Provenance tells glossy pixels apart: on `glossy` with glossy reflections, the glossy
+/// pixels SSR answered are a lighter blue, and those the tracer answered a lighter pink,
+/// than the mirror pixels of either source; with glossy off, none is.
+#[test]
+fn provenance_shows_glossy_pixels() {
+    let ctx = common::context();
+    let scene = speculum::scene::builtin::by_name("glossy").unwrap().unwrap();
+    let (w, h) = (240usize, 135usize);
+    let mut counts = Vec::new();
+    for glossy in [true, false] {
+        let settings = speculum::Settings {
+            width: w as u32,
+            height: h as u32,
+            mode: speculum::settings::Mode::Provenance,
+            glossy,
+            ..Default::default()
+        };
+        let mut r = speculum::renderer::Renderer::new(&ctx, &scene, &settings).unwrap();
+        r.render_frame().unwrap();
+        let ldr = r.read_output().unwrap();
+        let albedo = r.read_target(&r.gbuffer.out.albedo).unwrap();
+        let maps = r.reflection_maps().unwrap();
+        let frame = speculum::gpu_types::FrameUniforms {
+            glossy: glossy as u32,
+            ..*r.uniforms()
+        };
+        let (mut light, mut glossy_pixels) = (0usize, 0usize);
+        for i in 0..w * h {
+            let is_glossy = maps.reflective[i] && glossy::is_glossy(&frame, albedo[4 * i + 3] as f32 / 255.0);
+            let (rr, g, b) = (ldr[4 * i] as i32, ldr[4 * i + 1] as i32, ldr[4 * i + 2] as i32);
+            // The lighter tints lift green to at least 0.45 of the strongest channel.
+            let lighter = maps.reflective[i] && 100 * g >= 40 * rr.max(b);
+            glossy_pixels += is_glossy as usize;
+            light += lighter as usize;
+            assert_eq!(
+                lighter,
+                is_glossy,
+                "glossy {glossy}, pixel {i}: {:?}",
+                &ldr[4 * i..4 * i + 3]
+            );
+        }
+        counts.push((glossy_pixels, light));
+    }
+    assert!(counts[0].0 > w * h / 10, "{counts:?}");
+    assert_eq!(counts[1], (0, 0), "glossy off: no glossy pixels");
+}

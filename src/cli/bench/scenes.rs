@@ -181,10 +181,10 @@ fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str
         r.scene, r.resolution[0], r.resolution[1]
     ));
     let header: String = r.modes.iter().map(|m| format!(" {:>10}", m.mode)).collect();
-    text.line(format_args!("  {:<14}{header}", "pass (ms)"));
+    text.line(format_args!("  {:<18}{header}", "pass (ms)"));
     let row = |name: &str, f: &dyn Fn(&speculum::bench::modes::ModeResult) -> String| {
         let cells: String = r.modes.iter().map(|m| format!(" {:>10}", f(m))).collect();
-        text.line(format_args!("  {name:<14}{cells}"));
+        text.line(format_args!("  {name:<18}{cells}"));
     };
     // Passes in frame order; the uniform upload is too small to matter.
     for p in SCOPES
@@ -201,6 +201,11 @@ fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str
     row("traced %", &|m| format!("{:.1}", 100.0 * m.rt_pixel_fraction));
     row("SSIM vs rt", &|m| format!("{:.4}", m.ssim_vs_rt));
     row("RMSE vs rt", &|m| format!("{:.4}", m.rmse_vs_rt));
+    if r.modes.iter().any(|m| m.ssim_vs_reference.is_some()) {
+        let f = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.4}"));
+        row("SSIM vs glossy ref", &|m| f(m.ssim_vs_reference));
+        row("RMSE vs glossy ref", &|m| f(m.rmse_vs_reference));
+    }
     text.line(format_args!(
         "  ssr < hybrid < rt: {}; checks {}",
         if r.ordered { "yes" } else { "NO" },

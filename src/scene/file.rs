@@ -718,12 +718,17 @@ mod tests {
         std::fs::create_dir(dir.path().join("textures")).unwrap();
         let tiles = image::RgbImage::from_fn(8, 8, |x, y| image::Rgb([(x * 30) as u8, (y * 30) as u8, 128]));
         tiles.save(dir.path().join("textures/tiles.jpg")).unwrap();
+        let rough = image::GrayImage::from_fn(4, 4, |x, y| image::Luma([((x + y) * 30) as u8]));
+        rough.save(dir.path().join("textures/tiles_rough.png")).unwrap();
         let s = build(text, dir.path()).unwrap();
         assert_eq!(s.name, "teapot on a mirror");
         assert_eq!(s.triangle_count(), 2 + 12 + 1);
-        assert_eq!(s.textures.len(), 1);
+        assert_eq!(s.textures.len(), 2);
         let mirror = &s.materials[0];
         assert_eq!((mirror.metallic, mirror.reflectivity, mirror.texture), (1.0, 1.0, None));
-        assert_eq!(s.materials[1].texture, Some(0));
+        assert_eq!(
+            (s.materials[1].texture, s.materials[1].roughness_texture),
+            (Some(0), Some(1))
+        );
     }
 }

@@ -1,6 +1,7 @@
 //! Reference of `glsl/rt_reflect.comp` (`rt.reflect`): one pixel's
 //! reflected path through the scene, shaded as the kernel shades it.
 
+use super::glossy;
 use super::shading::{self, ShadowMap};
 use super::texture::{self, TextureArray};
 use super::trace::CpuBvh;
@@ -81,9 +82,52 @@ pub fn shadow_ray(s: &PathScene<'_>, pos: Vec3, n: Vec3) -> f32 {
     }
 }
 
-/// The radiance the reflected path from pixel `p` (G-buffer depth, world normal as
-/// stored) gathers in up to `max_bounces` rays, and the number of rays it traced.
-pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3, max_bounces: u32) -> (Vec3, u32) {
+/// The reflected radiance of pixel `p` (G-buffer depth, world normal as stored,
+/// perceptual roughness): the mirror path, or the mean of a glossy pixel's paths
+/// (`glossy::glossy_direction`), each of up to `max_bounces` rays; the number of rays
+/// traced, and the mean distance to the paths' first hits (`HIT_FAR` for a miss).
+pub fn reflected_radiance(
+    s: &PathScene<'_>,
+    p: IVec2,
+    (depth, normal, roughness): (f32, Vec3, f32),
+    max_bounces: u32,
+) -> (Vec3, u32, f32) {
+    let frame = s.frame;
+    let pos = shading::world_from_depth(frame, p, depth);
+    let n = normal.normalize();
+    let view_dir = (pos - frame.camera_pos.xyz()).normalize();
+    let origin = pos + n * offset_scale(frame, pos);
+    let spread = 2.0 / (frame.proj.y_axis.y.abs() * frame.resolution[1] as f32);
+    let cone = spread * (pos - frame.camera_pos.xyz()).length();
+    if !glossy::is_glossy(frame, roughness) {
+        return trace_path(s, (origin, view_dir.reflect(n)), (cone, spread), max_bounces);
+    }
+    let rays = glossy::reflection_rays(frame, roughness);
+    let (mut radiance, mut traced, mut first) = (Vec3::ZERO, 0, 0.0);
+    for k in 0..rays {
+        let dir = glossy::glossy_direction(frame, p, n, -view_dir, roughness, k);
+        let (l, t, f) = trace_path(s, (origin, dir), (cone, spread), max_bounces);
+        radiance += l;
+        traced += t;
+        first += f.min(hit_far());
+    }
+    (radiance / rays as f32, traced, first / rays as f32)
+}
+
+/// `HIT_FAR`: the hit distance of a miss.
+pub fn hit_far() -> f32 {
+    f32::from_bits(crate::shader_defines::HIT_FAR)
+}
+
+/// `trace_path`: the radiance one path from `origin` in direction `dir` gathers in up
+/// to `max_bounces` rays (its ray cone `cone` wide at the origin, spreading by
+/// `spread`), the rays traced and the distance to its first hit.
+fn trace_path(
+    s: &PathScene<'_>,
+    (mut origin, mut dir): (Vec3, Vec3),
+    (mut cone, spread): (f32, f32),
+    max_bounces: u32,
+) -> (Vec3, u32, f32) {
     let frame = s.frame;
     let trace = |origin: Vec3, dir: Vec3| trace_scene(s, origin, dir);
     let statics = Triangles {
@@ -92,21 +136,19 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
         indices: s.indices,
         uvs: s.uvs,
     };
-    let pos = shading::world_from_depth(frame, p, depth);
-    let n = normal.normalize();
-    let mut dir = (pos - frame.camera_pos.xyz()).normalize().reflect(n);
-    let mut origin = pos + n * offset_scale(frame, pos);
-    let spread = 2.0 / (frame.proj.y_axis.y.abs() * frame.resolution[1] as f32);
-    let mut cone = spread * (pos - frame.camera_pos.xyz()).length();
+    let mut first = hit_far();
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
     let mut rays = 0;
-    for _ in 0..max_bounces {
+    for bounce in 0..max_bounces {
         rays += 1;
         let h = trace(origin, dir);
         if h.prim == BVH_INVALID {
             radiance += throughput * shading::sky(frame, dir);
             break;
+        }
+        if bounce == 0 {
+            first = h.t;
         }
         let tris = if h.prim & 0x8000_0000 != 0 {
             s.dynamic.expect("a dynamic hit needs dynamic triangles")
@@ -148,19 +190,21 @@ pub fn reflected_radiance(s: &PathScene<'_>, p: IVec2, depth: f32, normal: Vec3,
                 _ => shadow_ray(s, hp, g),
             }
         };
+        // Past the rough cut-off a hit reflects only the prefiltered sky.
+        let reflectivity = glossy::traced_reflectivity(frame, m.reflectivity, m.roughness);
         let surface = shading::Surface {
             base: albedo,
             roughness: m.roughness,
-            reflectivity: m.reflectivity,
+            reflectivity,
             metallic: m.metallic,
         };
         radiance += throughput * shading::shade_direct(frame, surface, hn, -dir, vis);
-        if m.reflectivity <= 0.0 {
+        if reflectivity <= 0.0 {
             break;
         }
-        throughput *= shading::reflection_weight(albedo, m.metallic, m.reflectivity, hn, -dir);
+        throughput *= shading::reflection_weight(albedo, m.metallic, reflectivity, hn, -dir);
         dir = dir.reflect(hn);
         origin = hp + g * offset_scale(frame, hp);
     }
-    (radiance, rays)
+    (radiance, rays, first)
 }

@@ -113,6 +113,11 @@ impl DenoisePass {
         Ok(())
     }
 
+    /// Forgets the history: the next frame accumulates from scratch.
+    pub fn reset_history(&mut self) {
+        self.past = None;
+    }
+
     /// The last frame's accumulated reflection and its meta (distance, frames) per pixel.
     pub fn history(&self) -> (&Image, &Image) {
         (&self.history[self.parity], &self.meta[self.parity])

@@ -18,6 +18,7 @@
 
 mod frame;
 mod gpu_scene;
+mod readback;
 mod view;
 
 pub use frame::{Row, FRAME, SCOPES, SIM_RIGID, UNIFORMS};
@@ -29,7 +30,7 @@ use crate::passes::compose::ComposePass;
 use crate::passes::gbuffer::GBufferPass;
 use crate::passes::khr::{KhrScene, StaticInput, StaticOrder};
 use crate::passes::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
-use crate::passes::light_direct::{self, LightDirectPass};
+use crate::passes::light_direct::LightDirectPass;
 use crate::passes::reflect_denoise::DenoisePass;
 use crate::passes::reflect_merge::MergePass;
 use crate::passes::rt_reflect::RtReflectPass;
@@ -41,11 +42,9 @@ use crate::passes::ssr_compact::{self, CompactPass};
 use crate::passes::ssr_hiz::HiZPass;
 use crate::passes::ssr_trace::SsrPass;
 use crate::passes::Traceable;
-use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
 use crate::scene::{Camera, Scene};
 use crate::settings::{Applies, Mode, Settings, Tracer};
-use crate::shadow_maps::ShadowMaps;
-use crate::vk::{Buffer, Context, GpuTimer, Image, TimerReadout, Wall};
+use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
 use ash::vk;
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
@@ -298,6 +297,8 @@ impl Renderer {
             self.merge.resize(e)?;
             self.denoise.resize(e)?;
             self.compose.resize(e)?;
+            // A new size starts the glossy rays' sequence over, as a fresh renderer's.
+            self.frame_index = 0;
         }
         if !old.changed(&settings, Applies::StaticBvh).is_empty() {
             // WAR: frames in flight still walk the old tree.
@@ -429,7 +430,8 @@ impl Renderer {
     }
 
     /// Puts a dynamic scene back to its initial state: the next frame is its first
-    /// time step again. Nothing changes for a static scene.
+    /// time step again; the glossy rays' sequence and the denoiser's history start over
+    /// (for a static scene, only they).
     pub fn reset_simulation(&mut self) -> Result<()> {
         if let Some(d) = &mut self.dynamic {
             self.ctx.wait_idle()?;
@@ -438,6 +440,10 @@ impl Renderer {
         if let Some(k) = &mut self.khr {
             k.reset();
         }
+        // The glossy rays' sequence and the denoiser's history start over with it, so
+        // frame k is the same image whatever came before.
+        self.frame_index = 0;
+        self.denoise.reset_history();
         Ok(())
     }
 
@@ -510,82 +516,6 @@ impl Renderer {
     /// Switches the reflection mode for the next frames (for reference renders).
     pub fn set_mode(&mut self, mode: Mode) {
         self.settings.mode = mode;
-    }
-
-    /// Per pixel of the last frame: whether it reflects, and its fail-mask bits (0 in
-    /// `raster` mode). A readback, for stats, debug images and tests.
-    pub fn reflection_maps(&self) -> Result<ReflectionMaps> {
-        let (normal, material) = self.read_normals_and_materials()?;
-        let min = self.settings.reflective_min;
-        let reflective = normal
-            .iter()
-            .zip(&material)
-            .map(|(n, &m)| m != crate::shader_defines::MATERIAL_NONE && n[3] > min)
-            .collect();
-        let mask = if self.settings.mode == Mode::Raster {
-            vec![0; material.len()]
-        } else {
-            bytemuck::pod_collect_to_vec(&self.ssr.out.mask.read(vk::ImageLayout::GENERAL)?)
-        };
-        Ok(ReflectionMaps {
-            reflective,
-            mask,
-            traced: self.settings.mode.traces(),
-        })
-    }
-
-    /// The last frame's G-buffer normals (xyz; w: reflectivity) and material ids.
-    fn read_normals_and_materials(&self) -> Result<(Vec<[f32; 4]>, Vec<u32>)> {
-        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.out.normal)?);
-        let material = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.out.material)?);
-        Ok((normal, material))
-    }
-
-    /// The last frame's shadow state (a readback: for stats, tests and images).
-    pub fn shadow_maps(&self) -> Result<ShadowMaps> {
-        let (normal, material) = self.read_normals_and_materials()?;
-        let l = self.uniforms.light_dir.truncate();
-        let lit = normal
-            .iter()
-            .zip(&material)
-            .map(|(n, &m)| {
-                m != crate::shader_defines::MATERIAL_NONE && Vec3::new(n[0], n[1], n[2]).normalize().dot(l) > 0.0
-            })
-            .collect();
-        let read = |image: &Image| image.read(vk::ImageLayout::GENERAL);
-        let mask = if self.settings.shadows.traces() {
-            bytemuck::pod_collect_to_vec(&read(&self.shadow_trace.out.mask)?)
-        } else {
-            vec![0; material.len()]
-        };
-        Ok(ShadowMaps {
-            lit,
-            mask,
-            visibility: bytemuck::pod_collect_to_vec(&read(&self.shadow_trace.out.visibility)?),
-        })
-    }
-
-    /// Reflective pixels and failed (ray-traced) pixels of the last frame, counted from
-    /// the G-buffer and the fail mask (a readback: for stats and tests).
-    pub fn reflection_stats(&self) -> Result<ReflectionStats> {
-        Ok(self.reflection_maps()?.stats())
-    }
-
-    /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).
-    pub fn read_output(&self) -> Result<Vec<u8>> {
-        self.compose.out.read(vk::ImageLayout::GENERAL)
-    }
-
-    /// The last frame's lit HDR image as RGBA f32.
-    pub fn read_lit(&self) -> Result<Vec<[f32; 4]>> {
-        let raw = self.light.out.read(vk::ImageLayout::GENERAL)?;
-        debug_assert_eq!(light_direct::FORMAT, vk::Format::R32G32B32A32_SFLOAT);
-        Ok(bytemuck::pod_collect_to_vec(&raw))
-    }
-
-    /// Reads a G-buffer (or shadow map) image left in `SHADER_READ_ONLY_OPTIMAL`.
-    pub fn read_target(&self, image: &Image) -> Result<Vec<u8>> {
-        image.read(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
     }
 }
 

@@ -78,19 +78,26 @@ fn textured_scene() -> Scene {
 /// shadows the visible surface and the hits alike; up to three bounces, and paths of
 /// two or more rays must occur for the comparison to cover them. Under rays and the
 /// hybrid the frame's visibility (shadow.classify, shadow.compact, shadow.trace; the
-/// dynamic scenes' from that frame's dynamic BVH) is compared with the CPU's too.
+/// dynamic scenes' from that frame's dynamic BVH) is compared with the CPU's too. With
+/// glossy reflections (`glossy` with 2 rays per pixel, `room` and `drop` with 1) the
+/// glossy pixels' sampled paths are compared as well, and every pixel's distance to its
+/// first hit (`ssr.hit_distance`).
 #[test]
 fn reflected_paths_match_cpu_reference() {
     let ctx = common::context();
-    for (name, shadows) in [
-        ("room", Shadows::Hybrid),
-        ("room", Shadows::Map),
-        ("mirrors", Shadows::Rays),
-        ("textured", Shadows::Map),
-        ("drop", Shadows::Map),
-        ("drop", Shadows::Hybrid),
-        ("cloth", Shadows::Rays),
+    for (name, shadows, rays) in [
+        ("room", Shadows::Hybrid, 0),
+        ("room", Shadows::Map, 0),
+        ("mirrors", Shadows::Rays, 0),
+        ("textured", Shadows::Map, 0),
+        ("drop", Shadows::Map, 0),
+        ("drop", Shadows::Hybrid, 0),
+        ("cloth", Shadows::Rays, 0),
+        ("glossy", Shadows::Map, 2),
+        ("room", Shadows::Hybrid, 1),
+        ("drop", Shadows::Map, 1),
     ] {
+        // rays 0: glossy off; else glossy on with that many rays per glossy pixel.
         let scene = if name == "textured" {
             textured_scene()
         } else {
@@ -102,6 +109,8 @@ fn reflected_paths_match_cpu_reference() {
             height: 108,
             mode: Mode::Rt,
             shadows,
+            glossy: rays > 0,
+            reflection_rays: rays.max(1),
             ..Default::default()
         };
         let (w, h) = (settings.width as usize, settings.height as usize);
@@ -126,7 +135,13 @@ fn reflected_paths_match_cpu_reference() {
         let shadow: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.shadow.out).unwrap());
         let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.rt.out.read(general).unwrap());
         let reflective = r.reflection_maps().unwrap().reflective;
-        let frame = *r.uniforms();
+        let albedo = r.read_target(&r.gbuffer.out.albedo).unwrap();
+        let hit: Vec<f32> = bytemuck::pod_collect_to_vec(&r.ssr.out.hit_distance.read(general).unwrap());
+        // The uniforms of the frame read back (the last: its index).
+        let frame = speculum::gpu_types::FrameUniforms {
+            frame_index: frames - 1,
+            ..*r.uniforms()
+        };
         let bvh = CpuBvh::build(&scene.vertices, &scene.indices);
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(|m| m.gpu()).collect();
         let textures = TextureArray::new(&scene.textures, texture::LAYER_MAX);
@@ -181,18 +196,22 @@ fn reflected_paths_match_cpu_reference() {
         if shadows.traces() {
             check_visibility(name, &r, &path_scene, (&depth, &normal));
         }
-        let (mut compared, mut parted, mut multi) = (0usize, 0usize, 0usize);
+        let (mut compared, mut parted, mut multi, mut glossy) = (0usize, 0usize, 0usize, 0usize);
 
         for i in (0..w * h).filter(|&i| reflective[i]) {
             let p = IVec2::new((i % w) as i32, (i / w) as i32);
             let n = Vec3::new(normal[i][0], normal[i][1], normal[i][2]);
-            let (want, rays) = reflected_radiance(&path_scene, p, depth[i], n, settings.max_bounces);
+            let roughness = albedo[4 * i + 3] as f32 / 255.0;
+            let surface = (depth[i], n, roughness);
+            let (want, traced, first) = reflected_radiance(&path_scene, p, surface, settings.max_bounces);
             let got = Vec3::new(gpu[i][0], gpu[i][1], gpu[i][2]);
             assert_eq!(gpu[i][3], 1.0, "{name} pixel {p}: not traced ({:?})", gpu[i]);
             compared += 1;
-            multi += (rays >= 2) as usize;
+            multi += (traced >= 2) as usize;
+            glossy += speculum::cpu_ref::glossy::is_glossy(&frame, roughness) as usize;
             let filtering = if textured { 8e-3 } else { 0.0 };
-            let close = (0..3).all(|c| (got[c] - want[c]).abs() <= 2e-3 * want[c].abs() + 2e-4 + filtering);
+            let close = (0..3).all(|c| (got[c] - want[c]).abs() <= 2e-3 * want[c].abs() + 2e-4 + filtering)
+                && (hit[i] - first).abs() <= 1e-3 * first;
 
             if !close {
                 parted += 1;
@@ -200,6 +219,11 @@ fn reflected_paths_match_cpu_reference() {
         }
         assert!(compared > w * h / 4, "{name}: {compared} reflective pixels");
         assert!(multi > compared / 50, "{name}: {multi} paths of two or more rays");
+        assert_eq!(
+            glossy > compared / 10,
+            rays > 0,
+            "{name}: {glossy} glossy of {compared} pixels"
+        );
         assert!(
             parted * 200 <= compared,
             "{name}: {parted} of {compared} paths differ from the CPU's"

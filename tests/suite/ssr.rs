@@ -220,7 +220,12 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
         let (mut counts, mut borderline, mut untraced) = ([0usize; 3], 0, 0);
         for i in 0..n {
             let p = IVec2::new((i % w) as i32, (i / w) as i32);
-            let texel = (g.depth[i], g.normal[i], g.material[i]);
+            let texel = (
+                g.depth[i],
+                g.normal[i],
+                g.material[i],
+                f.albedo[4 * i + 3] as f32 / 255.0,
+            );
             let (want, [heading, weight]) =
                 ssr::classify(frame, p, texel, f.inputs(&[]).surface(i), &params, mask_only);
             let got = if listed[i] {
@@ -361,6 +366,76 @@ fn compare_march(
         c.grazing += 1;
     }
     c
+}
+
+/// The march of glossy pixels (random roughness: mirrors, glossy and rough pixels side
+/// by side; two rays each) against the CPU's on the random G-buffer of
+/// `march_matches_cpu_on_a_random_gbuffer`: the mask, colour and confidence as there,
+/// and the hit distance of the pixels SSR answered within 1e-3 relative.
+#[test]
+fn glossy_march_matches_cpu_on_a_random_gbuffer() {
+    let ctx = common::context();
+    let (w, h) = (131usize, 77usize);
+    let mut f = Fixture::new(&ctx, 92, w as u32, h as u32, |g| {
+        for y in 0..h {
+            for x in 0..w {
+                let patch = ((x / 16) + 7 * (y / 16)) % 5;
+                let d = 0.95 + 0.008 * patch as f32 + 0.0004 * ((x % 16) as f32 - (y % 16) as f32);
+                g.depth[y * w + x] = if patch == 4 && x % 16 < 5 { 1.0 } else { d };
+            }
+        }
+    });
+    f.frame = speculum::gpu_types::FrameUniforms {
+        glossy: 1,
+        reflection_rays: 2,
+        frame_index: 5,
+        ..f.frame
+    };
+    f.ubo = common::frame_ubo(&ctx, &f.frame);
+    let general = vk::ImageLayout::GENERAL;
+    let pyramid = f.pyramid();
+    let params = SsrParams {
+        recursion_min: 0.6,
+        max_steps: 9,
+        ..SsrParams::from_settings(&f.settings)
+    };
+    let out = &f.pass.out;
+    f.poison();
+    ctx.one_shot(|cmd| {
+        f.pass.classify(cmd, (&f.ubo, &f.gb, &f.materials), &params, false);
+        f.record_march(cmd, &params);
+    })
+    .unwrap();
+    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
+    let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap());
+    let hit: Vec<f32> = bytemuck::pod_collect_to_vec(&out.hit_distance.read(general).unwrap());
+    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
+    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
+    let listed = listed_pixels(&list, args[3] as usize);
+    let inputs = f.inputs(&pyramid);
+    let c = compare_march(&f.frame, &inputs, &params, &listed, &mask, &color);
+    assert!(c.grazing * 100 <= c.listed, "{c:?}");
+    c.assert_outcomes(&[0, FAIL_BEHIND, FAIL_LEFT_SCREEN, FAIL_OUT_OF_STEPS, FAIL_BACK_FACE]);
+    let (mut glossy, mut answered) = (0usize, 0usize);
+    for &p in &listed {
+        let i = p.y as usize * w + p.x as usize;
+        let roughness = f.albedo[4 * i + 3] as f32 / 255.0;
+        glossy += speculum::cpu_ref::glossy::is_glossy(&f.frame, roughness) as usize;
+        let want = ssr::march(&f.frame, p, &inputs, &params);
+        if mask[i] == want.fail && want.fail == 0 && want.margin >= GRAZE && want.pixel_margin >= GRAZE_PX {
+            answered += 1;
+            assert!(
+                (hit[i] - want.hit_distance).abs() <= 1e-3 * want.hit_distance,
+                "pixel {p}: hit distance {} vs {}",
+                hit[i],
+                want.hit_distance
+            );
+        }
+    }
+    assert!(
+        glossy > c.listed / 4 && answered > 100,
+        "{glossy} glossy, {answered} answered of {c:?}"
+    );
 }
 
 /// Unpacks the first `len` entries of a march list.

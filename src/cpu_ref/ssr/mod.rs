@@ -23,11 +23,19 @@ pub struct SsrRay {
     pub vdir: Vec3,
 }
 
-/// `ssr_ray`: pixel `p`'s surface point, normal and reflected direction in view space.
-pub fn ssr_ray(frame: &FrameUniforms, p: IVec2, depth: f32, n_world: Vec3) -> SsrRay {
+/// `ssr_ray`: pixel `p`'s surface point, normal and reflected direction in view space:
+/// the mirror direction, or ray `s` of a glossy surface of perceptual `roughness`.
+pub fn ssr_ray(frame: &FrameUniforms, p: IVec2, depth: f32, n_world: Vec3, (roughness, s): (f32, u32)) -> SsrRay {
     let vpos = (frame.view * world_from_depth(frame, p, depth).extend(1.0)).xyz();
-    let vn = (Mat3::from_mat4(frame.view) * n_world.normalize()).normalize();
-    let vdir = vpos.normalize().reflect(vn).normalize();
+    let view = Mat3::from_mat4(frame.view);
+    let vn = (view * n_world.normalize()).normalize();
+    let vdir = if super::glossy::is_glossy(frame, roughness) {
+        let v = view.transpose() * -vpos.normalize();
+        let l = super::glossy::glossy_direction(frame, p, n_world.normalize(), v.normalize(), roughness, s);
+        (view * l).normalize()
+    } else {
+        vpos.normalize().reflect(vn).normalize()
+    };
     SsrRay { vpos, vn, vdir }
 }
 
@@ -82,18 +90,18 @@ pub enum Class {
 }
 
 /// `ssr_classify.comp` for one pixel: G-buffer depth, normal.xyz + reflectivity in w,
-/// material id, and its base colour (linear) and metallic. Also returns the heading
+/// material id, roughness, and its base colour (linear) and metallic. Also returns the heading
 /// confidence and the reflection weight it compared (NaN where none was), so a test
 /// can tell pixels on a threshold, where float rounding decides.
 pub fn classify(
     frame: &FrameUniforms,
     p: IVec2,
-    gbuffer: (f32, [f32; 4], u32),
+    gbuffer: (f32, [f32; 4], u32, f32),
     own: (Vec3, f32),
     params: &SsrParams,
     mask_only: bool,
 ) -> (Class, [f32; 2]) {
-    let (depth, nr, material) = gbuffer;
+    let (depth, nr, material, roughness) = gbuffer;
     let reflective = material != MATERIAL_NONE && nr[3] > params.reflective_min;
     let none = [f32::NAN; 2];
     if mask_only {
@@ -103,7 +111,7 @@ pub fn classify(
         return (Class::Done(0, [0.0; 3]), none);
     }
     let n = Vec3::new(nr[0], nr[1], nr[2]);
-    let ray = ssr_ray(frame, p, depth, n);
+    let ray = ssr_ray(frame, p, depth, n, (roughness, 0));
     let h = heading_confidence(ray.vdir);
     if h >= params.min_confidence {
         return (Class::March, [h, f32::NAN]);
@@ -155,9 +163,12 @@ pub struct March {
     pub fail: u32,
     /// The SSR colour (rgb) and confidence (a; 0 unless the hit is kept).
     pub color: [f32; 4],
-    /// The pixel the hit was taken from, if there was one.
+    /// The pixel the (last ray's) hit was taken from, if SSR answered.
     pub hit_pixel: Option<IVec2>,
-    /// Steps marched.
+    /// The mean view-space distance to the rays' hits (`ssr.hit_distance`; `HIT_FAR`
+    /// where the pixel failed).
+    pub hit_distance: f32,
+    /// Steps marched (by all of the pixel's rays).
     pub steps: u32,
     /// The smallest relative margin of any comparison the march decided on (a depth
     /// test, the end of the ray, the back-face and confidence tests). Where it is tiny
@@ -253,40 +264,46 @@ struct Margins {
 pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: &SsrParams) -> March {
     let res = IVec2::new(frame.resolution[0] as i32, frame.resolution[1] as i32);
     let at = |q: IVec2| (q.y * res.x + q.x) as usize;
-    let proj = frame.proj;
     let nr = inputs.normal[at(p)];
-    let ray = ssr_ray(frame, p, inputs.depth[at(p)], Vec3::new(nr[0], nr[1], nr[2]));
-    let (vpos, vn, vdir) = (ray.vpos, ray.vn, ray.vdir);
-    let origin = vpos + vn * (1e-3 * vpos.z.abs());
-
-    let near_z = -proj.w_axis.z / proj.z_axis.z;
-    let max_len = params.max_distance * origin.z.abs();
-    let ray_len = if origin.z + vdir.z * max_len > near_z {
-        (near_z - origin.z) / vdir.z
-    } else {
-        max_len
-    };
-    let end_point = origin + vdir * ray_len;
-    let h0 = proj * origin.extend(1.0);
-    let h1 = proj * end_point.extend(1.0);
+    let n = Vec3::new(nr[0], nr[1], nr[2]);
+    let roughness = inputs.albedo[4 * at(p) + 3] as f32 / 255.0;
+    let rays = super::glossy::reflection_rays(frame, roughness);
     let mut m = Margins {
         margin: f32::INFINITY,
         pixel: f32::INFINITY,
         steps: 0,
     };
-    let found = if params.hiz {
-        march_hiz(frame, h0, h1, inputs, params, &mut m)
-    } else {
-        march_linear(frame, (h0, h1), (origin, end_point), inputs, params, &mut m)
-    };
-    let own = view_reflection(
-        frame,
-        &ray,
-        Vec3::new(nr[0], nr[1], nr[2]),
-        inputs.surface(at(p)),
-        nr[3],
-    );
-    let (mut fail, mut color) = judge(frame, &found, (vdir, own), inputs, params, &mut m.margin);
+    // Every ray of the pixel: SSR answers it only if it answers each (the mean colour,
+    // the least confidence); the first it cannot answer fails the pixel.
+    let (mut fail, mut confidence, mut sum) = (0u32, 1.0f32, Vec3::ZERO);
+    let (mut hit_pixel, mut distance_sum) = (None, 0.0f32);
+    let mut ray = ssr_ray(frame, p, inputs.depth[at(p)], n, (roughness, 0));
+    let mut own = Vec3::ZERO;
+    let mut steps = 0;
+    for s in 0..rays {
+        ray = ssr_ray(frame, p, inputs.depth[at(p)], n, (roughness, s));
+        // Each ray has the whole step budget.
+        m.steps = 0;
+        let found = march_ray(frame, &ray, inputs, params, &mut m);
+        steps += m.steps;
+        own = view_reflection(frame, &ray, n, inputs.surface(at(p)), nr[3]);
+        let (f, c) = judge(frame, &found, (ray.vdir, own), inputs, params, &mut m.margin);
+        if f != 0 && f != FAIL_BLEND {
+            (fail, sum) = (f, Vec3::ZERO);
+            hit_pixel = (found.reason == 0).then_some(found.hit_pixel);
+            break;
+        }
+        fail |= f;
+        confidence = confidence.min(c[3]);
+        sum += Vec3::new(c[0], c[1], c[2]);
+        hit_pixel = Some(found.hit_pixel);
+        let hp = found.hit_pixel;
+        let hit = (frame.view * world_from_depth(frame, hp, inputs.depth[at(hp)]).extend(1.0)).xyz();
+        distance_sum += (hit - ray.vpos).length();
+    }
+    let kept = fail == 0 || fail == FAIL_BLEND;
+    let mean = if kept { sum / rays as f32 } else { sum };
+    let mut color = [mean.x, mean.y, mean.z, if kept { confidence } else { 0.0 }];
     if fail != 0 && params.trace_min_weight > 0.0 {
         let w = own.max_element();
         m.margin = m.margin.min(gap(w, params.trace_min_weight));
@@ -300,13 +317,48 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
             }
         }
     }
+    let kept = fail == 0 || fail == FAIL_BLEND;
     March {
         fail,
         color,
-        hit_pixel: (found.reason == 0).then_some(found.hit_pixel),
-        steps: m.steps,
+        hit_pixel,
+        hit_distance: if kept {
+            distance_sum / rays as f32
+        } else {
+            super::reflect::hit_far()
+        },
+        steps,
         margin: m.margin,
         pixel_margin: m.pixel,
+    }
+}
+
+/// One ray of `ssr_trace.comp`'s march, from just off the surface to its end, through
+/// the Hi-Z pyramid or by the linear DDA as `params.hiz` says.
+fn march_ray(
+    frame: &FrameUniforms,
+    ray: &SsrRay,
+    inputs: &MarchInputs<'_>,
+    params: &SsrParams,
+    m: &mut Margins,
+) -> Found {
+    let proj = frame.proj;
+    let (vpos, vn, vdir) = (ray.vpos, ray.vn, ray.vdir);
+    let origin = vpos + vn * (1e-3 * vpos.z.abs());
+    let near_z = -proj.w_axis.z / proj.z_axis.z;
+    let max_len = params.max_distance * origin.z.abs();
+    let ray_len = if origin.z + vdir.z * max_len > near_z {
+        (near_z - origin.z) / vdir.z
+    } else {
+        max_len
+    };
+    let end_point = origin + vdir * ray_len;
+    let h0 = proj * origin.extend(1.0);
+    let h1 = proj * end_point.extend(1.0);
+    if params.hiz {
+        march_hiz(frame, h0, h1, inputs, params, m)
+    } else {
+        march_linear(frame, (h0, h1), (origin, end_point), inputs, params, m)
     }
 }
 

@@ -1,0 +1,90 @@
+//! The renderer's readbacks of the last frame: its images and per-pixel maps, for
+//! reports, stats, debug images and tests.
+
+use super::Renderer;
+use crate::error::Result;
+use crate::passes::light_direct;
+use crate::reflection_maps::{ReflectionMaps, ReflectionStats};
+use crate::settings::Mode;
+use crate::shadow_maps::ShadowMaps;
+use crate::vk::Image;
+use ash::vk;
+use glam::Vec3;
+
+impl Renderer {
+    /// Per pixel of the last frame: whether it reflects, and its fail-mask bits (0 in
+    /// `raster` mode). A readback, for stats, debug images and tests.
+    pub fn reflection_maps(&self) -> Result<ReflectionMaps> {
+        let (normal, material) = self.read_normals_and_materials()?;
+        let min = self.settings.reflective_min;
+        let reflective = normal
+            .iter()
+            .zip(&material)
+            .map(|(n, &m)| m != crate::shader_defines::MATERIAL_NONE && n[3] > min)
+            .collect();
+        let mask = if self.settings.mode == Mode::Raster {
+            vec![0; material.len()]
+        } else {
+            bytemuck::pod_collect_to_vec(&self.ssr.out.mask.read(vk::ImageLayout::GENERAL)?)
+        };
+        Ok(ReflectionMaps {
+            reflective,
+            mask,
+            traced: self.settings.mode.traces(),
+        })
+    }
+
+    /// The last frame's G-buffer normals (xyz; w: reflectivity) and material ids.
+    fn read_normals_and_materials(&self) -> Result<(Vec<[f32; 4]>, Vec<u32>)> {
+        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.out.normal)?);
+        let material = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.out.material)?);
+        Ok((normal, material))
+    }
+
+    /// The last frame's shadow state (a readback: for stats, tests and images).
+    pub fn shadow_maps(&self) -> Result<ShadowMaps> {
+        let (normal, material) = self.read_normals_and_materials()?;
+        let l = self.uniforms.light_dir.truncate();
+        let lit = normal
+            .iter()
+            .zip(&material)
+            .map(|(n, &m)| {
+                m != crate::shader_defines::MATERIAL_NONE && Vec3::new(n[0], n[1], n[2]).normalize().dot(l) > 0.0
+            })
+            .collect();
+        let read = |image: &Image| image.read(vk::ImageLayout::GENERAL);
+        let mask = if self.settings.shadows.traces() {
+            bytemuck::pod_collect_to_vec(&read(&self.shadow_trace.out.mask)?)
+        } else {
+            vec![0; material.len()]
+        };
+        Ok(ShadowMaps {
+            lit,
+            mask,
+            visibility: bytemuck::pod_collect_to_vec(&read(&self.shadow_trace.out.visibility)?),
+        })
+    }
+
+    /// Reflective pixels and failed (ray-traced) pixels of the last frame, counted from
+    /// the G-buffer and the fail mask (a readback: for stats and tests).
+    pub fn reflection_stats(&self) -> Result<ReflectionStats> {
+        Ok(self.reflection_maps()?.stats())
+    }
+
+    /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).
+    pub fn read_output(&self) -> Result<Vec<u8>> {
+        self.compose.out.read(vk::ImageLayout::GENERAL)
+    }
+
+    /// The last frame's lit HDR image as RGBA f32.
+    pub fn read_lit(&self) -> Result<Vec<[f32; 4]>> {
+        let raw = self.light.out.read(vk::ImageLayout::GENERAL)?;
+        debug_assert_eq!(light_direct::FORMAT, vk::Format::R32G32B32A32_SFLOAT);
+        Ok(bytemuck::pod_collect_to_vec(&raw))
+    }
+
+    /// Reads a G-buffer (or shadow map) image left in `SHADER_READ_ONLY_OPTIMAL`.
+    pub fn read_target(&self, image: &Image) -> Result<Vec<u8>> {
+        image.read(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+    }
+}

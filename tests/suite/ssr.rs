@@ -140,6 +140,24 @@ impl Fixture {
         }
     }
 
+    /// Poisons the outputs, classifies and marches (as the frame does) and reads back the
+    /// fail mask and SSR colour.
+    fn classify_and_march(&self, ctx: &speculum::vk::Context, params: &SsrParams) -> (Vec<u32>, Vec<[f32; 4]>) {
+        let general = vk::ImageLayout::GENERAL;
+        self.poison();
+        ctx.one_shot(|cmd| {
+            self.pass
+                .classify(cmd, (&self.ubo, &self.gb, &self.materials), params, false);
+            self.record_march(cmd, params);
+        })
+        .unwrap();
+        let out = &self.pass.out;
+        (
+            bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap()),
+            bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap()),
+        )
+    }
+
     /// Poisons the SSR colour and fail mask, so a pixel no kernel wrote shows.
     fn poison(&self) {
         let n = (self.settings.width * self.settings.height) as usize;
@@ -400,14 +418,7 @@ fn glossy_march_matches_cpu_on_a_random_gbuffer() {
         ..SsrParams::from_settings(&f.settings)
     };
     let out = &f.pass.out;
-    f.poison();
-    ctx.one_shot(|cmd| {
-        f.pass.classify(cmd, (&f.ubo, &f.gb, &f.materials), &params, false);
-        f.record_march(cmd, &params);
-    })
-    .unwrap();
-    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
-    let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap());
+    let (mask, color) = f.classify_and_march(&ctx, &params);
     let hit: Vec<f32> = bytemuck::pod_collect_to_vec(&out.hit_distance.read(general).unwrap());
     let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
     let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
@@ -731,15 +742,7 @@ fn the_hiz_march_does_not_see_through_thin_geometry() {
             trace_min_weight: 0.0,
             ..SsrParams::from_settings(&f.settings)
         };
-        let out = &f.pass.out;
-        f.poison();
-        ctx.one_shot(|cmd| {
-            f.pass.classify(cmd, (&f.ubo, &f.gb, &f.materials), &params, false);
-            f.record_march(cmd, &params);
-        })
-        .unwrap();
-        let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(general).unwrap());
-        let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(general).unwrap());
+        let (mask, color) = f.classify_and_march(&ctx, &params);
         let row = (h - 1) * w..h * w;
         let behind = row.clone().filter(|&i| mask[i] == FAIL_BEHIND).count();
         let wall = row

@@ -158,6 +158,29 @@ pub fn measure_scene(
     let mut reference = Renderer::new(ctx, scene, &reference_settings)?;
     let mut renderer: Option<Renderer> = None;
     let dynamic = scene.is_dynamic();
+    // With glossy reflections quality is judged against the glossy ground truth (`rt`
+    // with many rays per glossy pixel, no denoiser; its own sample stream), which runs
+    // in lockstep with a dynamic scene and is rendered once for a static one; the
+    // frame time is still against `rt`'s.
+    let mut truth = match sweep.base.glossy {
+        true => {
+            let settings = sweep.base.glossy_reference(crate::settings::GLOSSY_REFERENCE_SPP);
+            let mut t = Renderer::new(ctx, scene, &settings)?;
+            t.set_sample_stream(1);
+            Some(t)
+        }
+        false => None,
+    };
+    let advance = |t: &mut Option<Renderer>| -> Result<Option<Vec<u8>>> {
+        match t {
+            Some(t) => {
+                t.render_frame()?;
+                Ok(Some(t.read_output()?))
+            }
+            None => Ok(None),
+        }
+    };
+    let static_truth = if dynamic { None } else { advance(&mut truth)? };
     for (key, point) in points {
         let mut r = renderer_for(ctx, scene, renderer.take(), &point.settings)?;
         let (w, h) = (point.settings.width, point.settings.height);
@@ -166,35 +189,45 @@ pub fn measure_scene(
         let (mut frame, mut rt, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
         let (mut ssim, mut rmse, mut flip, mut traced) = (0.0, 0.0, 0.0, 0.0);
         let mut measured = 0u32;
-        let mut measure = |r: &mut Renderer, reference: &mut Renderer, compare: bool| -> Result<()> {
-            let (a, a_discarded) = r.render_frame_measured()?;
-            let (b, b_discarded) = reference.render_frame_measured()?;
-            let ms = |t: &crate::vk::TimerReadout| t.get(crate::renderer::FRAME).unwrap_or(0.0);
-            frame.push(ms(&a));
-            rt.push(ms(&b));
-            ratio.push(ms(&a) / ms(&b).max(1e-9));
-            timings.add_measured(&a, a_discarded);
-            reference_check.add_measured(b.problem.as_deref(), b_discarded);
-            if compare {
-                let (img, reference_img) = (r.read_output()?, reference.read_output()?);
-                let c = compare_rgba8(&img, &reference_img, w, h)?;
-                ssim += c.ssim;
-                rmse += c.rmse;
-                flip += flip_mean(&img, &reference_img, w, h)?;
-                traced += r.reflection_stats()?.rt_pixel_fraction();
-                measured += 1;
-            }
-            Ok(())
-        };
+        let mut measure =
+            |r: &mut Renderer, reference: &mut Renderer, compare: bool, truth: Option<&[u8]>| -> Result<()> {
+                let (a, a_discarded) = r.render_frame_measured()?;
+                let (b, b_discarded) = reference.render_frame_measured()?;
+                let ms = |t: &crate::vk::TimerReadout| t.get(crate::renderer::FRAME).unwrap_or(0.0);
+                frame.push(ms(&a));
+                rt.push(ms(&b));
+                ratio.push(ms(&a) / ms(&b).max(1e-9));
+                timings.add_measured(&a, a_discarded);
+                reference_check.add_measured(b.problem.as_deref(), b_discarded);
+                if compare {
+                    let img = r.read_output()?;
+                    let reference_img = match truth {
+                        Some(t) => t.to_vec(),
+                        None => reference.read_output()?,
+                    };
+                    let c = compare_rgba8(&img, &reference_img, w, h)?;
+                    ssim += c.ssim;
+                    rmse += c.rmse;
+                    flip += flip_mean(&img, &reference_img, w, h)?;
+                    traced += r.reflection_stats()?.rt_pixel_fraction();
+                    measured += 1;
+                }
+                Ok(())
+            };
         if dynamic {
             r.reset_simulation()?;
             reference.reset_simulation()?;
+            if let Some(t) = &mut truth {
+                t.reset_simulation()?;
+            }
             for _ in 0..sweep.frames[0] {
                 r.render_frame()?;
                 reference.render_frame()?;
+                advance(&mut truth)?;
             }
             for _ in sweep.frames[0]..sweep.frames[1] {
-                measure(&mut r, &mut reference, true)?;
+                let t = advance(&mut truth)?;
+                measure(&mut r, &mut reference, true, t.as_deref())?;
             }
         } else {
             for _ in 0..sweep.warmup {
@@ -202,7 +235,12 @@ pub fn measure_scene(
                 reference.render_frame()?;
             }
             for round in 0..sweep.rounds {
-                measure(&mut r, &mut reference, round + 1 == sweep.rounds)?;
+                measure(
+                    &mut r,
+                    &mut reference,
+                    round + 1 == sweep.rounds,
+                    static_truth.as_deref(),
+                )?;
             }
         }
         let mut check = timings.check().clone();

@@ -158,29 +158,7 @@ pub fn measure_scene(
     let mut reference = Renderer::new(ctx, scene, &reference_settings)?;
     let mut renderer: Option<Renderer> = None;
     let dynamic = scene.is_dynamic();
-    // With glossy reflections quality is judged against the glossy ground truth (`rt`
-    // with many rays per glossy pixel, no denoiser; its own sample stream), which runs
-    // in lockstep with a dynamic scene and is rendered once for a static one; the
-    // frame time is still against `rt`'s.
-    let mut truth = match sweep.base.glossy {
-        true => {
-            let settings = sweep.base.glossy_reference(crate::settings::GLOSSY_REFERENCE_SPP);
-            let mut t = Renderer::new(ctx, scene, &settings)?;
-            t.set_sample_stream(1);
-            Some(t)
-        }
-        false => None,
-    };
-    let advance = |t: &mut Option<Renderer>| -> Result<Option<Vec<u8>>> {
-        match t {
-            Some(t) => {
-                t.render_frame()?;
-                Ok(Some(t.read_output()?))
-            }
-            None => Ok(None),
-        }
-    };
-    let static_truth = if dynamic { None } else { advance(&mut truth)? };
+    let mut truth = Truth::new(ctx, scene, sweep)?;
     for (key, point) in points {
         let mut r = renderer_for(ctx, scene, renderer.take(), &point.settings)?;
         let (w, h) = (point.settings.width, point.settings.height);
@@ -201,10 +179,7 @@ pub fn measure_scene(
                 reference_check.add_measured(b.problem.as_deref(), b_discarded);
                 if compare {
                     let img = r.read_output()?;
-                    let reference_img = match truth {
-                        Some(t) => t.to_vec(),
-                        None => reference.read_output()?,
-                    };
+                    let reference_img = truth.map_or_else(|| reference.read_output(), |t| Ok(t.to_vec()))?;
                     let c = compare_rgba8(&img, &reference_img, w, h)?;
                     ssim += c.ssim;
                     rmse += c.rmse;
@@ -214,19 +189,19 @@ pub fn measure_scene(
                 }
                 Ok(())
             };
+        // Every point starts afresh: a dynamic scene's animation, and the glossy
+        // sequence and history (a renderer reused from the last point carries them).
+        r.reset_simulation()?;
+        reference.reset_simulation()?;
+        truth.reset()?;
         if dynamic {
-            r.reset_simulation()?;
-            reference.reset_simulation()?;
-            if let Some(t) = &mut truth {
-                t.reset_simulation()?;
-            }
             for _ in 0..sweep.frames[0] {
                 r.render_frame()?;
                 reference.render_frame()?;
-                advance(&mut truth)?;
+                truth.advance()?;
             }
             for _ in sweep.frames[0]..sweep.frames[1] {
-                let t = advance(&mut truth)?;
+                let t = truth.advance()?;
                 measure(&mut r, &mut reference, true, t.as_deref())?;
             }
         } else {
@@ -235,27 +210,15 @@ pub fn measure_scene(
                 reference.render_frame()?;
             }
             for round in 0..sweep.rounds {
-                measure(
-                    &mut r,
-                    &mut reference,
-                    round + 1 == sweep.rounds,
-                    static_truth.as_deref(),
-                )?;
+                let last = round + 1 == sweep.rounds;
+                measure(&mut r, &mut reference, last, truth.still.as_deref())?;
             }
         }
         let mut check = timings.check().clone();
         check.merge(&reference_check);
         let n = measured.max(1) as f64;
         let stat = |v: &[f64]| Stat::of(v).ok_or_else(|| Error::Input("no frames measured".into()));
-        let passes_ms = crate::renderer::SCOPES
-            .iter()
-            .filter_map(|s| {
-                timings
-                    .samples(s)
-                    .and_then(Stat::of)
-                    .map(|st| (s.to_string(), st.median))
-            })
-            .collect();
+        let passes_ms = median_passes(&timings);
         done(PointResult {
             scene: name.to_string(),
             key: key.clone(),
@@ -275,6 +238,62 @@ pub fn measure_scene(
         renderer = Some(r);
     }
     Ok(())
+}
+
+/// Median ms per GPU scope, in frame order.
+fn median_passes(timings: &crate::vk::Timings) -> Vec<(String, f64)> {
+    crate::renderer::SCOPES
+        .iter()
+        .filter_map(|s| {
+            timings
+                .samples(s)
+                .and_then(Stat::of)
+                .map(|st| (s.to_string(), st.median))
+        })
+        .collect()
+}
+
+/// With glossy reflections a sweep's quality is judged against the glossy ground truth
+/// (`rt` with many rays per glossy pixel, no denoiser; its own sample stream): rendered
+/// once for a static scene (`still`), stepped in lockstep with a dynamic one. The frame
+/// time is still against `rt`'s.
+struct Truth {
+    renderer: Option<Renderer>,
+    still: Option<Vec<u8>>,
+}
+
+impl Truth {
+    fn new(ctx: &Arc<Context>, scene: &Scene, sweep: &Sweep) -> Result<Self> {
+        let mut t = Truth {
+            renderer: None,
+            still: None,
+        };
+        if sweep.base.glossy {
+            let settings = sweep.base.glossy_reference(crate::settings::GLOSSY_REFERENCE_SPP);
+            let mut r = Renderer::new(ctx, scene, &settings)?;
+            r.set_sample_stream(1);
+            t.renderer = Some(r);
+            if !scene.is_dynamic() {
+                t.still = t.advance()?;
+            }
+        }
+        Ok(t)
+    }
+
+    fn reset(&mut self) -> Result<()> {
+        self.renderer.as_mut().map_or(Ok(()), |r| r.reset_simulation())
+    }
+
+    /// The next frame's ground truth, if there is one.
+    fn advance(&mut self) -> Result<Option<Vec<u8>>> {
+        match &mut self.renderer {
+            Some(r) => {
+                r.render_frame()?;
+                Ok(Some(r.read_output()?))
+            }
+            None => Ok(None),
+        }
+    }
 }
 
 /// The speedup of `candidate` over the base settings on `scene`, measured again in

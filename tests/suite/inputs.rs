@@ -428,3 +428,33 @@ fn gltf_is_checked_before_it_is_trusted() {
     let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
     assert!(warnings.len() == 1 && warnings[0].contains("image 0"), "{err}");
 }
+
+/// A glTF material's `metallicRoughnessTexture` becomes its roughness texture: a second
+/// scene texture even where the same image is its base colour too, holding the green
+/// channel as sRGB-encoded data (so the array's sampling decodes it back), and the
+/// material's reflectivity is 1 (the factor alone does not say how rough it is).
+#[test]
+fn gltf_metallic_roughness_texture_is_read_as_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let img = image::RgbaImage::from_fn(4, 4, |x, y| image::Rgba([10, (x * 60 + y * 3) as u8, 200, 255]));
+    img.save(d.join("mr.png")).unwrap();
+    let extra = ", \"materials\": [{\"pbrMetallicRoughness\": {\"baseColorTexture\": {\"index\": 0}, \
+                 \"metallicRoughnessTexture\": {\"index\": 0}, \"roughnessFactor\": 1.0}}], \
+                 \"textures\": [{\"source\": 0}], \"images\": [{\"uri\": \"mr.png\"}]";
+    gltf(d, "t.gltf", &format!("[{POSITIONS}, {INDICES}]"), VIEWS, NODES, extra);
+    let scene = speculum::scene::load(d.join("t.gltf").to_str().unwrap()).unwrap();
+    let m = &scene.materials[0];
+    let (colour, rough) = (m.texture.unwrap() as usize, m.roughness_texture.unwrap() as usize);
+    assert_ne!(colour, rough, "the data texture is a texture of its own");
+    assert_eq!((m.roughness, m.reflectivity), (1.0, 1.0));
+    let (c, r) = (&scene.textures[colour].image, &scene.textures[rough].image);
+    assert_eq!(c, &img, "the base colour is the image as it is");
+    for (p, q) in img.pixels().zip(r.pixels()) {
+        let back = speculum::scene::texture::srgb_to_linear(q.0[1]);
+        assert!(
+            (back - p.0[1] as f32 / 255.0).abs() <= 1.0 / 200.0,
+            "{p:?} stored as {q:?}"
+        );
+    }
+}

@@ -103,11 +103,10 @@ void main() {
     float dist = length(x - frame.camera_pos.xyz);
     // The lobe's footprint: alpha (its angular half-width) times the distance to what it
     // reflects, seen from the camera, in pixels.
-    float spread = 2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y));
     float hit = imageLoad(hit_distance, p).r;
-    float radius = min(float(pc.radius), max(roughness * roughness * hit / (dist * spread), DENOISE_MIN_RADIUS));
+    float radius = min(float(pc.radius), max(roughness * roughness * hit / (dist * pixel_spread()), DENOISE_MIN_RADIUS));
     uint taps = radius >= 1.0 ? DENOISE_TAPS : 0u;
-    float turn = float(pcg_hash(uint(p.x) + pcg_hash(uint(p.y) + pcg_hash(frame.frame_index))) >> 8u) * (1.0 / 16777216.0);
+    float turn = float(pixel_hash(p, frame.frame_index) >> 8u) * (1.0 / 16777216.0);
     // The spiral turned by the pixel's angle and scaled to the disc.
     float angle = 2.0 * PI * turn;
     mat2 turn_by = radius * mat2(cos(angle), sin(angle), -sin(angle), cos(angle));

@@ -98,9 +98,6 @@ pub struct FramePlan {
     pub spp: u32,
 }
 
-/// The reference's samples per glossy pixel unless `--spp` says otherwise.
-pub const REFERENCE_SPP: u32 = crate::settings::GLOSSY_REFERENCE_SPP;
-
 impl FramePlan {
     /// Frames `render` draws in all, for a progress bar.
     pub fn total_frames(&self, settings: &Settings) -> u64 {
@@ -232,10 +229,7 @@ fn renderers(
 ) -> Result<(Renderer, Option<Renderer>, Option<Renderer>)> {
     let renderer = Renderer::new(ctx, scene, settings)?;
     let reference = if plan.reference {
-        let mut r = Renderer::new(ctx, scene, &settings.glossy_reference(plan.spp))?;
-        // Its samples independent of those of the frames it judges.
-        r.set_sample_stream(1);
-        Some(r)
+        Some(Renderer::reference(ctx, scene, settings, plan.spp)?)
     } else {
         None
     };

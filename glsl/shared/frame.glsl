@@ -29,6 +29,12 @@ float offset_scale(vec3 pos) {
     return 2e-4 * max(1.0, length(pos - frame.camera_pos.xyz));
 }
 
+// The angle one pixel subtends at the camera (vertical; square pixels). Mirrored by
+// cpu_ref::shading::pixel_spread.
+float pixel_spread() {
+    return 2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y));
+}
+
 // The sRGB transfer function and its inverse (IEC 61966-2-1), for the G-buffer's base
 // colour (gbuffer::ALBEDO_FORMAT). Mirrored by scene::texture::{srgb_to_linear, linear_to_srgb}.
 vec3 srgb_encode(vec3 c) {

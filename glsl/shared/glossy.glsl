@@ -37,9 +37,14 @@ uint pcg_hash(uint v) {
     return (word >> 22u) ^ word;
 }
 
+// A hash of pixel p and `seed` (the glossy rays' rotation, the denoiser's turn).
+uint pixel_hash(ivec2 p, uint seed) {
+    return pcg_hash(uint(p.x) + pcg_hash(uint(p.y) + pcg_hash(seed)));
+}
+
 // The pixel's rotation of the sequence, in 32-bit fixed point.
 uvec2 sample_rotation(ivec2 p, uint stream) {
-    uint h = pcg_hash(uint(p.x) + pcg_hash(uint(p.y) + pcg_hash(stream)));
+    uint h = pixel_hash(p, stream);
     return uvec2(h, pcg_hash(h));
 }
 

@@ -39,11 +39,6 @@ vec2 hit_uv(uint prim, uint k) {
     return d_uvs[d_indices[3u * t + k]];
 }
 
-// The angle one pixel subtends at the camera (vertical; square pixels).
-float pixel_spread() {
-    return 2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y));
-}
-
 // The radiance along one path from `origin` (just off the reflecting surface) in
 // direction `dir`, its ray cone `cone` wide at the origin and spreading by `spread`;
 // `first` receives the distance to its first hit (HIT_FAR for a miss).

@@ -124,8 +124,7 @@ pub fn run(
 /// with `GLOSSY_REFERENCE_SPP` rays, from its own sample stream): a static scene's one
 /// frame, a dynamic scene's after as many frames as each mode rendered.
 fn glossy_reference(ctx: &Arc<Context>, scene: &Scene, base: &Settings, frames: u32) -> Result<Vec<u8>> {
-    let mut r = crate::renderer::Renderer::new(ctx, scene, &base.glossy_reference(GLOSSY_REFERENCE_SPP))?;
-    r.set_sample_stream(1);
+    let mut r = crate::renderer::Renderer::reference(ctx, scene, base, GLOSSY_REFERENCE_SPP)?;
     for _ in 0..if scene.is_dynamic() { frames } else { 1 } {
         r.render_frame()?;
     }

@@ -117,7 +117,7 @@ fn check_before_gpu(args: &RenderArgs) -> Result<(Settings, headless::FramePlan,
         warmup: args.warmup,
         frames: args.frames,
         reference: args.reference,
-        spp: args.spp.unwrap_or(headless::REFERENCE_SPP),
+        spp: args.spp.unwrap_or(speculum::settings::GLOSSY_REFERENCE_SPP),
     };
     if let (Some(spp), Mode::Rt) = (args.spp, settings.mode) {
         plan.validate(&settings)?;

@@ -1,7 +1,7 @@
 //! Reference of `glsl/reflect_denoise.comp` (reflect.denoise): the edge-aware,
 //! variance-guided spatial filter of glossy reflections.
 
-use super::glossy::{is_glossy, pcg_hash};
+use super::glossy::{is_glossy, pixel_hash};
 use super::shading::world_from_depth;
 use crate::gpu_types::FrameUniforms;
 use crate::shader_defines::{DENOISE_TAPS, MATERIAL_NONE};
@@ -86,7 +86,7 @@ pub fn denoise(
     let (w, h) = (frame.resolution[0] as i32, frame.resolution[1] as i32);
     let at = |q: IVec2| (q.y * w + q.x) as usize;
     let camera = frame.camera_pos.truncate();
-    let spread = 2.0 / (frame.proj.y_axis.y.abs() * frame.resolution[1] as f32);
+    let spread = super::shading::pixel_spread(frame);
     let mut out = merged.to_vec();
     for &p in list {
         let c = merged[at(p)];
@@ -96,8 +96,7 @@ pub fn denoise(
         let footprint = roughness * roughness * hit_distance[at(p)] / (dist * spread);
         let disc = (radius as f32).min(footprint.max(DENOISE_MIN_RADIUS));
         let taps = if disc >= 1.0 { DENOISE_TAPS } else { 0 };
-        let hash =
-            pcg_hash((p.x as u32).wrapping_add(pcg_hash((p.y as u32).wrapping_add(pcg_hash(frame.frame_index)))));
+        let hash = pixel_hash(p, frame.frame_index);
         let angle = 2.0 * PI * ((hash >> 8) as f32 * (1.0 / 16_777_216.0));
         let turn_by = disc * glam::Mat2::from_cols_array(&[angle.cos(), angle.sin(), -angle.sin(), angle.cos()]);
         let mut taken = vec![(rgb(c), 1.0f32, luminance(rgb(c)))];

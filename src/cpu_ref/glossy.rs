@@ -32,8 +32,13 @@ pub fn pcg_hash(v: u32) -> u32 {
     (word >> 22) ^ word
 }
 
+/// `pixel_hash`: a hash of pixel `p` and `seed`.
+pub fn pixel_hash(p: IVec2, seed: u32) -> u32 {
+    pcg_hash((p.x as u32).wrapping_add(pcg_hash((p.y as u32).wrapping_add(pcg_hash(seed)))))
+}
+
 pub fn sample_rotation(p: IVec2, stream: u32) -> [u32; 2] {
-    let h = pcg_hash((p.x as u32).wrapping_add(pcg_hash((p.y as u32).wrapping_add(pcg_hash(stream)))));
+    let h = pixel_hash(p, stream);
     [h, pcg_hash(h)]
 }
 

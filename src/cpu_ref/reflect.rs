@@ -97,7 +97,7 @@ pub fn reflected_radiance(
     let n = normal.normalize();
     let view_dir = (pos - frame.camera_pos.xyz()).normalize();
     let origin = pos + n * offset_scale(frame, pos);
-    let spread = 2.0 / (frame.proj.y_axis.y.abs() * frame.resolution[1] as f32);
+    let spread = shading::pixel_spread(frame);
     let cone = spread * (pos - frame.camera_pos.xyz()).length();
     if !glossy::is_glossy(frame, roughness) {
         return trace_path(s, (origin, view_dir.reflect(n)), (cone, spread), max_bounces);

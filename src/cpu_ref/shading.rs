@@ -24,6 +24,11 @@ pub fn world_from_depth(frame: &FrameUniforms, p: IVec2, depth: f32) -> Vec3 {
     w.xyz() / w.w
 }
 
+/// `pixel_spread`: the angle one pixel subtends at the camera (vertical).
+pub fn pixel_spread(frame: &FrameUniforms) -> f32 {
+    2.0 / (frame.proj.y_axis.y.abs() * frame.resolution[1] as f32)
+}
+
 /// A square shadow map of `size`² depths, row-major.
 pub struct ShadowMap<'a> {
     pub size: u32,

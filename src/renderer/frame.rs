@@ -56,7 +56,8 @@ pub enum Row {
     SsrCompact,
     RtReflect,
     ReflectMerge,
-    /// The spatial filter of glossy reflections (`glossy` on, `denoise_radius` > 0).
+    /// The glossy reflections' spatial and temporal filters (`glossy` on, with a
+    /// `denoise_radius` or a `denoise_history` to apply).
     ReflectDenoise,
     Compose,
 }

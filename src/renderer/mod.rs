@@ -73,6 +73,9 @@ fn extent(settings: &Settings) -> vk::Extent2D {
     }
 }
 
+/// The glossy rays' sample stream of a reference renderer (`Renderer::reference`).
+const REFERENCE_STREAM: u32 = 1;
+
 pub struct Renderer {
     ctx: Arc<Context>,
     /// World position of the renderer's origin (`render_origin`): the G-buffer, the
@@ -85,7 +88,7 @@ pub struct Renderer {
     uniforms: FrameUniforms,
     /// Frames recorded so far: the glossy rays' sample index advances with it.
     frame_index: u32,
-    /// The glossy rays' sample stream (`set_sample_stream`).
+    /// The glossy rays' sample stream: 0, or `REFERENCE_STREAM` (`Renderer::reference`).
     sample_stream: u32,
     pub shadow: ShadowMapPass,
     pub gbuffer: GBufferPass,
@@ -335,12 +338,14 @@ impl Renderer {
         Ok(())
     }
 
-    /// Draws the glossy rays from sample stream `stream` (0, the default, for frames; a
-    /// reference uses another, so its samples are independent of those of the frames it
-    /// judges) and restarts the sequence at frame 0.
-    pub fn set_sample_stream(&mut self, stream: u32) {
-        self.sample_stream = stream;
-        self.frame_index = 0;
+    /// The `rt` reference of `settings` (`Settings::glossy_reference`: with glossy
+    /// reflections `spp` rays per glossy pixel and no denoiser, the glossy ground truth),
+    /// drawing its glossy rays from a sample stream of its own, so that its samples are
+    /// independent of those of the frames it judges (which draw from stream 0).
+    pub fn reference(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, spp: u32) -> Result<Self> {
+        let mut r = Self::new(ctx, scene, &settings.glossy_reference(spp))?;
+        r.sample_stream = REFERENCE_STREAM;
+        Ok(r)
     }
 
     /// The camera, in world space.

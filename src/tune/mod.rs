@@ -269,10 +269,8 @@ impl Truth {
             still: None,
         };
         if sweep.base.glossy {
-            let settings = sweep.base.glossy_reference(crate::settings::GLOSSY_REFERENCE_SPP);
-            let mut r = Renderer::new(ctx, scene, &settings)?;
-            r.set_sample_stream(1);
-            t.renderer = Some(r);
+            let spp = crate::settings::GLOSSY_REFERENCE_SPP;
+            t.renderer = Some(Renderer::reference(ctx, scene, &sweep.base, spp)?);
             if !scene.is_dynamic() {
                 t.still = t.advance()?;
             }

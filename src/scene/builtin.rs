@@ -111,8 +111,36 @@ fn gallery_toml(name: &str, triangles: u32) -> String {
 pub fn by_name(name: &str) -> Option<Result<Scene>> {
     file(name).map(|f| {
         let path = Path::new("assets/scenes").join(format!("{name}.toml"));
-        f?.build(&path, Path::new("assets/scenes"))
+        let mut scene = f?.build(&path, Path::new("assets/scenes"))?;
+        if name == "glossy" {
+            roughness_ramp(&mut scene, RAMP_MATERIAL);
+        }
+        Ok(scene)
     })
+}
+
+/// The material of `glossy` whose roughness `roughness_ramp` ramps.
+const RAMP_MATERIAL: &str = "floor ramp";
+
+/// Gives material `name` a generated roughness texture (a scene file's textures are
+/// files beside it, which a built-in scene has not): green runs from 0 at u = 0 to 1 at
+/// u = 1, so the roughness runs from a mirror to the material's factor across it.
+fn roughness_ramp(scene: &mut Scene, name: &str) {
+    let image = image::RgbaImage::from_fn(256, 4, |x, _| {
+        let g = x as u8;
+        image::Rgba([g, g, g, 255])
+    });
+    let layer = scene.textures.len() as u32;
+    scene.textures.push(super::texture::data_texture(super::Texture {
+        name: format!("{name}: roughness ramp"),
+        image,
+    }));
+    let m = scene
+        .materials
+        .iter_mut()
+        .find(|m| m.name == name)
+        .expect("the ramp's material");
+    m.roughness_texture = Some(layer);
 }
 
 fn named(name: &str) -> Result<Scene> {

@@ -1,5 +1,5 @@
 #version 460
-// gbuffer: writes normal + reflectivity, base colour + roughness, material id.
+// gbuffer: writes normal + reflectivity, base colour + roughness, material id, motion.
 #include "frame.glsl"
 #include "surface.glsl"
 #include "glossy.glsl"
@@ -11,12 +11,15 @@ layout(location = 0) in vec3 in_world;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) flat in uint in_material;
 layout(location = 3) in vec2 in_uv;
+layout(location = 4) in vec3 in_motion;
 
 // xyz: unit world normal facing the camera, its mirror direction above the facet; w: the
 // reflectivity the reflection passes trace (glossy.glsl: 0 past the rough cut-off)
 layout(location = 0) out vec4 out_normal;
 layout(location = 1) out vec4 out_albedo;   // rgb: base colour (textured), sRGB-encoded; a: roughness
 layout(location = 2) out uint out_material; // material index (MATERIAL_NONE where empty)
+// xyz: the surface point's world position the frame before minus this frame's
+layout(location = 3) out vec4 out_motion;
 
 void main() {
     // The triangle's own plane (from the position's screen derivatives), facing the viewer.
@@ -40,4 +43,5 @@ void main() {
     out_normal = vec4(n, traced_reflectivity(m.reflectivity, roughness));
     out_albedo = vec4(srgb_encode(base_color(m, scene_textures, in_uv)), roughness);
     out_material = in_material;
+    out_motion = vec4(in_motion, 0.0);
 }

@@ -1,10 +1,10 @@
 #version 460
 // reflect.denoise, step 2: temporal accumulation of glossy reflections after the
 // spatial filter. Each glossy pixel's surface point is reprojected into the previous
-// frame (its camera; the scene is assumed still there); the history there is kept
-// only where the previous frame saw a glossy surface at the distance from its camera
-// that this point has (within TEMPORAL_DISOCCLUSION of it: else disoccluded, history
-// dropped), is clamped to the mean +- TEMPORAL_GAMMA standard deviations of the
+// frame (where the G-buffer's motion says it was, seen by that frame's camera); the
+// history there is kept only where the previous frame saw a glossy surface at the
+// distance from its camera that this point had (within TEMPORAL_DISOCCLUSION of it:
+// else disoccluded, history dropped), is clamped to the mean +- TEMPORAL_GAMMA standard deviations of the
 // spatially filtered 3x3 neighbourhood (so a reflection that changed does not ghost),
 // and is blended with this frame's value as a running mean of at most pc.max_frames
 // frames. The result goes into the merged reflection, which compose reads. It runs
@@ -26,6 +26,7 @@ layout(binding = 8, rgba32f) uniform writeonly image2D meta_out;
 layout(binding = 9, rgba32f) uniform writeonly image2D merged; // the glossy pixels' final reflection
 layout(binding = 10, std430) readonly buffer GlossyList { uint glossy_list[]; };
 layout(binding = 11, std430) readonly buffer GlossyArgs { uvec4 glossy_args; }; // w: length
+layout(binding = 12) uniform sampler2D gb_motion; // xyz: the point last frame minus now
 layout(push_constant) uniform Push {
     mat4 prev_view_proj;
     vec4 prev_camera;     // xyz: the previous frame's camera; w: 1 when the history is valid
@@ -75,12 +76,13 @@ void main() {
         }
         m1 /= count;
         vec3 sigma = sqrt(max(m2 / count - m1 * m1, vec3(0.0)));
-        vec4 h = pc.prev_view_proj * vec4(x, 1.0);
+        vec3 was = x + texelFetch(gb_motion, p, 0).xyz;
+        vec4 h = pc.prev_view_proj * vec4(was, 1.0);
         vec2 uv = h.xy / h.w * 0.5 + 0.5;
         ivec2 q = ivec2(floor(uv * vec2(res)));
         if (h.w > 0.0 && all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, res))) {
             vec4 meta = imageLoad(meta_in, q);
-            float expected = length(x - pc.prev_camera.xyz);
+            float expected = length(was - pc.prev_camera.xyz);
             bool fresh = meta.b == stamp(frame.frame_index - 1u);
             if (fresh && abs(meta.r - expected) < TEMPORAL_DISOCCLUSION * expected) {
                 vec3 hist = clamp(imageLoad(history_in, q).rgb, m1 - TEMPORAL_GAMMA * sigma, m1 + TEMPORAL_GAMMA * sigma);

@@ -52,6 +52,8 @@ pub struct Surfaces<'a> {
     /// Perceptual roughness (the base-colour texel's alpha).
     pub roughness: &'a [f32],
     pub material: &'a [u32],
+    /// xyz: the surface point's world position the frame before minus this frame's.
+    pub motion: &'a [[f32; 4]],
 }
 
 fn luminance(c: Vec3) -> f32 {
@@ -192,13 +194,15 @@ pub fn temporal(
             }
             m1 /= count;
             let sigma = (m2 / count - m1 * m1).max(Vec3::ZERO).powf(0.5);
-            let hc = hist.view_proj * xp.extend(1.0);
+            let motion = g.motion[at(p)];
+            let was = xp + Vec3::new(motion[0], motion[1], motion[2]);
+            let hc = hist.view_proj * was.extend(1.0);
             let uv = hc.truncate().truncate() / hc.w * 0.5 + 0.5;
             let qf = (uv * glam::Vec2::new(w as f32, h as f32)).floor();
             let q = IVec2::new(qf.x as i32, qf.y as i32);
             if hc.w > 0.0 && q.x >= 0 && q.y >= 0 && q.x < w && q.y < h {
                 let m = hist.meta[at(q)];
-                let expected = (xp - hist.camera).length();
+                let expected = (was - hist.camera).length();
                 let fresh = m[2] == stamp(frame.frame_index.wrapping_sub(1));
                 if fresh && (m[0] - expected).abs() < TEMPORAL_DISOCCLUSION * expected {
                     let prev = rgb(hist.color[at(q)]).clamp(m1 - TEMPORAL_GAMMA * sigma, m1 + TEMPORAL_GAMMA * sigma);

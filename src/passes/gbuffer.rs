@@ -1,6 +1,7 @@
 //! `gbuffer`: rasterizes the scene from the camera into depth, normal + reflectivity
 //! (the normal clamped so its mirror direction stays above the facet), base colour
-//! (textured, sRGB-encoded) + roughness and material id.
+//! (textured, sRGB-encoded) + roughness, material id and motion (where each surface
+//! point was the frame before: `SceneGeometry::previous`).
 //! No CPU reference of its own (a raster pass): `tests/suite/gbuffer.rs` checks its targets
 //! against analytic ray casts of a plane and a sphere, and texels against the CPU lookup.
 
@@ -24,6 +25,10 @@ pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// Material index, `MATERIAL_NONE` where no geometry covers the pixel.
 pub const MATERIAL_FORMAT: vk::Format = vk::Format::R32_UINT;
+/// xyz: the surface point's world position the frame before minus this frame's
+/// (exactly 0 on geometry that did not move: half floats keep a millimetre of a
+/// metre's motion).
+pub const MOTION_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 impl GBuffer {
     /// Creates the targets. They accept transfers too, so tests can fill and read them.
@@ -36,12 +41,13 @@ impl GBuffer {
             normal: Image::new(ctx, "gbuffer.normal", extent, NORMAL_FORMAT, color)?,
             albedo: Image::new(ctx, "gbuffer.albedo", extent, ALBEDO_FORMAT, color)?,
             material: Image::new(ctx, "gbuffer.material", extent, MATERIAL_FORMAT, color)?,
+            motion: Image::new(ctx, "gbuffer.motion", extent, MOTION_FORMAT, color)?,
         })
     }
 
     /// The colour targets, in attachment order.
-    pub fn colors(&self) -> [&Image; 3] {
-        [&self.normal, &self.albedo, &self.material]
+    pub fn colors(&self) -> [&Image; 4] {
+        [&self.normal, &self.albedo, &self.material, &self.motion]
     }
 }
 
@@ -59,7 +65,7 @@ impl GBufferPass {
             &GraphicsDesc {
                 vertex: shaders::GBUFFER_VERT,
                 fragment: Some(shaders::GBUFFER_FRAG),
-                color_formats: &[NORMAL_FORMAT, ALBEDO_FORMAT, MATERIAL_FORMAT],
+                color_formats: &[NORMAL_FORMAT, ALBEDO_FORMAT, MATERIAL_FORMAT, MOTION_FORMAT],
                 depth_format: DEPTH_FORMAT,
                 depth_bias: None,
             },
@@ -88,13 +94,13 @@ impl GBufferPass {
     ) {
         use vk::ImageLayout as L;
         let device = &self.ctx.device;
-        let [normal, albedo, material] = self.out.colors();
+        let colors = self.out.colors();
         let depth_target = [&self.out.depth];
         // WAR: the previous frame's compute reads finish before the targets are cleared.
         barrier::transition(
             device,
             cmd,
-            &[normal, albedo, material],
+            &colors,
             (access::COMPUTE_READ, access::COLOR_WRITE),
             (L::UNDEFINED, L::COLOR_ATTACHMENT_OPTIMAL),
         );
@@ -105,7 +111,7 @@ impl GBufferPass {
             (access::COMPUTE_READ, access::DEPTH_WRITE),
             (L::UNDEFINED, L::DEPTH_ATTACHMENT_OPTIMAL),
         );
-        let (colors, depth) = self.attachments();
+        let (attachments, depth) = self.attachments();
         let extent = self.out.depth.extent;
         let info = vk::RenderingInfo::default()
             .render_area(vk::Rect2D {
@@ -113,7 +119,7 @@ impl GBufferPass {
                 extent,
             })
             .layer_count(1)
-            .color_attachments(&colors)
+            .color_attachments(&attachments)
             .depth_attachment(&depth);
         unsafe { device.cmd_begin_rendering(cmd, &info) };
         set_viewport(device, cmd, extent);
@@ -126,6 +132,7 @@ impl GBufferPass {
                     Resource::Buffer(surfaces.materials),
                     Resource::Buffer(geometry.uvs),
                     Resource::Sampled(surfaces.textures, surfaces.sampler),
+                    Resource::Buffer(geometry.previous),
                 ],
                 &(),
             );
@@ -139,7 +146,7 @@ impl GBufferPass {
         barrier::transition(
             device,
             cmd,
-            &[normal, albedo, material],
+            &colors,
             (access::COLOR_WRITE, access::COMPUTE_READ),
             (L::COLOR_ATTACHMENT_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
         );
@@ -172,7 +179,7 @@ impl GBufferPass {
             .out
             .colors()
             .iter()
-            .zip([clear_float, clear_float, clear_none])
+            .zip([clear_float, clear_float, clear_none, clear_float])
             .map(|(img, clear)| {
                 vk::RenderingAttachmentInfo::default()
                     .image_view(img.view)

@@ -85,6 +85,9 @@ pub struct Surfaces<'a> {
 /// `sim.transform` moved): vertices in world space, their texture coordinates, indices.
 pub struct SceneGeometry<'a> {
     pub vertices: &'a crate::vk::Buffer,
+    /// The same vertices as the frame before saw them (`vertices` itself where they have
+    /// not moved since): the G-buffer's motion.
+    pub previous: &'a crate::vk::Buffer,
     pub uvs: &'a crate::vk::Buffer,
     pub indices: &'a crate::vk::Buffer,
     pub index_count: u32,
@@ -96,6 +99,9 @@ pub struct GBuffer {
     pub normal: Image,
     pub albedo: Image,
     pub material: Image,
+    /// xyz: where the surface point was the frame before, minus where it is (world
+    /// space; 0 on geometry that did not move), for reprojection.
+    pub motion: Image,
 }
 
 /// `ssr.hiz`'s min-depth pyramid: its buffer (floats, level after level) and the levels

@@ -45,6 +45,14 @@ pub struct DenoiseParams {
     pub reflective_min: f32,
 }
 
+/// Where the history stands (`DenoisePass::sequence`), to record a frame again as if
+/// the last try had not been.
+#[derive(Clone, Copy)]
+pub struct Sequence {
+    parity: usize,
+    past: Option<Past>,
+}
+
 /// The view a history was made from.
 #[derive(Clone, Copy)]
 struct Past {
@@ -111,6 +119,20 @@ impl DenoisePass {
         self.meta = Self::pair(&self.ctx, "denoise.meta", extent)?;
         self.past = None;
         Ok(())
+    }
+
+    /// Where the history stands now.
+    pub fn sequence(&self) -> Sequence {
+        Sequence {
+            parity: self.parity,
+            past: self.past,
+        }
+    }
+
+    /// Back to `s`: the frame recorded next reads the history `s` saw (a frame writes
+    /// only the other history image, so the one it read is still there).
+    pub fn restore(&mut self, s: Sequence) {
+        (self.parity, self.past) = (s.parity, s.past);
     }
 
     /// Forgets the history: the next frame accumulates from scratch.
@@ -196,6 +218,7 @@ impl DenoisePass {
                 Resource::StorageImage(inputs.merged),
             ],
             &list,
+            &[Resource::Sampled(&g.motion, s)],
         ]
         .concat();
         self.temporal

@@ -262,15 +262,23 @@ impl Renderer {
         };
         *frame_index = frame_index.wrapping_add(1);
         f.row(Row::Uniforms, || upload_uniforms(d, cmd, ubo, uniforms));
+        if let Some(dy) = dynamic.as_mut().filter(|_| !advance) {
+            dy.keep_previous(d, cmd, false);
+        }
         if let Some(dy) = dynamic.as_mut().filter(|_| advance) {
             *sim_ms = Some(f.host_row(Row::SimRigid, || dy.step(slot)));
+            // The first of the steps keeps the last frame's vertices for the motion.
             if dy.rigid.vertex_count > 0 {
                 f.row(Row::SimTransform, || {
+                    dy.keep_previous(d, cmd, true);
                     transform.record_posed(cmd, &dy.rigid, slot, &dy.mesh.vertices)
                 });
             }
             if !dy.cloths.is_empty() {
                 f.row(Row::SimCloth, || {
+                    if dy.rigid.vertex_count == 0 {
+                        dy.keep_previous(d, cmd, true);
+                    }
                     dy.cloths.iter().for_each(|c| cloth.record(cmd, c, &dy.mesh.vertices))
                 });
             }
@@ -289,7 +297,7 @@ impl Renderer {
         }
         let dynamic = dynamic.as_ref();
         let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.mesh.geometry())
-            .chain(dynamic.map(|dy| dy.mesh.geometry()))
+            .chain(dynamic.map(|dy| dy.geometry()))
             .collect();
         let shadows = st.shadows;
         if shadows.uses_map() {

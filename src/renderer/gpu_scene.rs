@@ -16,6 +16,7 @@ use crate::passes::{SceneGeometry, Surfaces};
 use crate::scene::{texture, Scene};
 use crate::settings::Settings;
 use crate::sim::rigid::RigidWorld;
+use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Image, Sampler};
 use ash::vk;
 use glam::Vec3;
@@ -56,6 +57,7 @@ impl MeshBuffers {
     pub fn geometry(&self) -> SceneGeometry<'_> {
         SceneGeometry {
             vertices: &self.vertices,
+            previous: &self.vertices,
             uvs: &self.uvs,
             indices: &self.indices,
             index_count: self.index_count,
@@ -174,6 +176,10 @@ pub(super) struct DynamicGeometry {
     pub khr_ranges: (Vec<BodyRange>, Option<(u32, u32)>),
     /// `refit_rebuild_every`, or 1 where the LBVH rebuilds every frame.
     pub rebuild_every: u32,
+    /// The world-space vertices of the frame before the last step (`keep_previous`),
+    /// and whether the last frame recorded stepped (else nothing moved).
+    previous: Buffer,
+    moved: bool,
 }
 
 impl DynamicGeometry {
@@ -211,6 +217,13 @@ impl DynamicGeometry {
             let layout = RigidLayout::new(&meshes.vertices, &meshes.indices, scene.bodies.len() as u32)?;
             bvh = bvh.with_rigid(RigidKeys::new(ctx, &layout)?);
         }
+        let previous = Buffer::new(
+            ctx,
+            "dynamic.previous",
+            world_vertices.size,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
         let mut dynamic = Self {
             world: RigidWorld::relative_to(scene, settings.sim_dt, origin)?,
             rigid: RigidBodies::new(ctx, &meshes.vertices, vertex_count, scene.bodies.len())?,
@@ -219,6 +232,8 @@ impl DynamicGeometry {
             bvh,
             khr_ranges: khr_ranges(scene),
             rebuild_every: if refit { settings.refit_rebuild_every } else { 1 },
+            previous,
+            moved: false,
         };
         dynamic.rigid.write(0, &dynamic.world.poses());
         Ok(dynamic)
@@ -236,6 +251,36 @@ impl DynamicGeometry {
         }
         self.bvh.reset();
         Ok(())
+    }
+
+    /// Records the copy of the world-space vertices as they are (the last frame's)
+    /// before this frame's step rewrites them, for the G-buffer's motion; or, `stepped`
+    /// false (paused), nothing: this frame's geometry is the last one's.
+    pub fn keep_previous(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, stepped: bool) {
+        self.moved = stepped;
+        if !stepped {
+            return;
+        }
+        // RAW on the vertices (the last step's writes), WAR on the copy (the last
+        // frame's vertex shaders read it).
+        barrier::global(device, cmd, access::ALL_READ_WRITE, access::TRANSFER_WRITE_READ);
+        let region = vk::BufferCopy::default().size(self.mesh.vertices.size);
+        unsafe { device.cmd_copy_buffer(cmd, self.mesh.vertices.raw, self.previous.raw, &[region]) };
+        // RAW: the G-buffer's vertex shader reads the copy. (The step's own leading
+        // barrier waits for the copy's reads before it rewrites the vertices.)
+        barrier::global(device, cmd, access::TRANSFER_WRITE, access::ANY_SHADER_READ);
+    }
+
+    /// The moving geometry as the G-buffer draws it, with its motion since last frame.
+    pub fn geometry(&self) -> SceneGeometry<'_> {
+        SceneGeometry {
+            previous: if self.moved {
+                &self.previous
+            } else {
+                &self.mesh.vertices
+            },
+            ..self.mesh.geometry()
+        }
     }
 
     /// The moving geometry as the vendor tracer builds it.

@@ -469,14 +469,21 @@ impl Renderer {
     }
 
     /// `render_frame` for a measurement: a static scene's frame (the same work every
-    /// time) is rendered again while its readout fails the self-check (`remeasure`); a
-    /// dynamic scene's frame advances the world, so it is measured once. Returns the
-    /// readout and how many failed readouts were discarded before it.
+    /// time) is rendered again while its readout fails the self-check (`remeasure`),
+    /// as the same frame (its glossy samples and the denoiser's history as at the first
+    /// try, so the image does not depend on how busy the machine was); a dynamic
+    /// scene's frame advances the world, so it is measured once. Returns the readout
+    /// and how many failed readouts were discarded before it.
     pub fn render_frame_measured(&mut self) -> Result<(TimerReadout, u32)> {
         if self.is_dynamic() {
             return Ok((self.render_frame()?, 0));
         }
-        crate::vk::remeasure_readout(|| self.render_frame())
+        let (index, history) = (self.frame_index, self.denoise.sequence());
+        crate::vk::remeasure_readout(|| {
+            self.frame_index = index;
+            self.denoise.restore(history);
+            self.render_frame()
+        })
     }
 
     /// Holds a dynamic scene still from the next frame on (its geometry and BVH stay

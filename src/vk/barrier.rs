@@ -102,6 +102,11 @@ pub mod access {
     pub const NONE: (S, A) = (S::NONE, A::NONE);
     pub const TRANSFER_WRITE: (S, A) = (S::ALL_TRANSFER, A::TRANSFER_WRITE);
     pub const TRANSFER_READ: (S, A) = (S::ALL_TRANSFER, A::TRANSFER_READ);
+    /// A copy: it reads its source and writes its destination.
+    pub const TRANSFER_WRITE_READ: (S, A) = (
+        S::ALL_TRANSFER,
+        A::from_raw(A::TRANSFER_WRITE.as_raw() | A::TRANSFER_READ.as_raw()),
+    );
     pub const HOST_READ: (S, A) = (S::HOST, A::HOST_READ);
     pub const COMPUTE_READ: (S, A) = (S::COMPUTE_SHADER, A::SHADER_READ);
     pub const COMPUTE_WRITE: (S, A) = (S::COMPUTE_SHADER, A::SHADER_WRITE);

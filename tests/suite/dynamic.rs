@@ -193,3 +193,98 @@ fn bodies_above_the_screen_appear_in_hybrid_where_rt_puts_them() {
         shown.len()
     );
 }
+
+/// The G-buffer's motion takes each surface point back to where it was the frame
+/// before: on `drop` (rigid bodies) and `cloth` (the GPU cloth) at 160x120, for pixels
+/// where it is not zero, it equals the displacement a CPU ray cast through the pixel
+/// finds on the moving triangle it hits (its vertices' last-frame positions minus this
+/// frame's, interpolated at the hit), within half-float rounding; it is zero on the
+/// static geometry, and everywhere once the scene is paused.
+#[test]
+fn motion_takes_each_point_back_to_where_it_was() {
+    use glam::{IVec2, Vec3};
+    use speculum::cpu_ref::trace::CpuBvh;
+    let ctx = common::context();
+    for scene in dynamic_scenes() {
+        let (w, h) = (160usize, 120usize);
+        let settings = Settings {
+            width: w as u32,
+            height: h as u32,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
+        for _ in 0..12 {
+            r.render_frame().unwrap();
+        }
+        let before = r.read_dynamic_vertices().unwrap().unwrap();
+        r.render_frame().unwrap();
+        let now = r.read_dynamic_vertices().unwrap().unwrap();
+        let frame = *r.uniforms();
+        let g = &r.gbuffer.out;
+        let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&g.depth).unwrap());
+        let motion = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&g.motion).unwrap());
+        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&g.material).unwrap());
+        let indices = scene.dynamic_meshes().indices;
+        let bvh = CpuBvh::build(&now, &indices);
+        let camera = frame.camera_pos.truncate();
+        let (mut moving, mut checked) = (0usize, 0usize);
+        for i in 0..w * h {
+            let m = Vec3::new(motion[i][0], motion[i][1], motion[i][2]);
+            if material[i] == speculum::shader_defines::MATERIAL_NONE || m == Vec3::ZERO {
+                continue;
+            }
+            moving += 1;
+            if moving % 7 != 0 {
+                continue; // a sample of them: the CPU cast is slow
+            }
+            let p = IVec2::new((i % w) as i32, (i / w) as i32);
+            let x = speculum::cpu_ref::shading::world_from_depth(&frame, p, depth[i]);
+            let ray = speculum::gpu_types::Ray {
+                origin: camera.into(),
+                tmin: 0.0,
+                dir: (x - camera).normalize().into(),
+                tmax: 3.0e38,
+            };
+            let hit = bvh.trace(&ray, &now, &indices);
+            assert_ne!(
+                hit.prim,
+                speculum::shader_defines::BVH_INVALID,
+                "pixel {p}: moves but hits nothing moving"
+            );
+            assert!(
+                (hit.t - (x - camera).length()).abs() < 0.01,
+                "pixel {p}: not the visible surface"
+            );
+            let t = hit.prim as usize;
+            let weights = [1.0 - hit.u - hit.v, hit.u, hit.v];
+            let want: Vec3 = (0..3)
+                .map(|k| {
+                    let v = indices[3 * t + k] as usize;
+                    weights[k] * (Vec3::from(before[v].position) - Vec3::from(now[v].position))
+                })
+                .sum();
+            // Half floats (1/1024 relative), and the pixel centre vs the hit's rounding.
+            let tolerance = 2e-3 * want.length() + 2e-4;
+            assert!(
+                (m - want).length() <= tolerance,
+                "pixel {p}: motion {m}, the cast finds {want}"
+            );
+            checked += 1;
+        }
+        assert!(checked > 50, "{}: only {checked} moving pixels checked", scene.name);
+        // The static geometry (the floor, the walls) does not move.
+        let still = (0..w * h)
+            .filter(|&i| material[i] != speculum::shader_defines::MATERIAL_NONE && motion[i][..3] == [0.0; 3])
+            .count();
+        assert!(still > w * h / 4, "{}: {still} still pixels", scene.name);
+        r.set_paused(true);
+        r.render_frame().unwrap();
+        let paused = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.out.motion).unwrap());
+        assert!(
+            paused.iter().all(|m| m[..3] == [0.0; 3]),
+            "{}: paused, yet moving",
+            scene.name
+        );
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}

@@ -99,8 +99,9 @@ fn glossy_directions_match_cpu_reference() {
 }
 
 /// A G-buffer in patches (a normal, a depth slope, a roughness from mirror past the
-/// rough cut-off per patch, with noise), sky and weak reflectors among them, and a noisy
-/// merged reflection with fireflies.
+/// rough cut-off per patch, with noise; three in ten patches moved since the frame
+/// before), sky and weak reflectors among them, and a noisy merged reflection with
+/// fireflies.
 struct FilterCase {
     depth: Vec<f32>,
     normal: Vec<[f32; 4]>,
@@ -109,18 +110,28 @@ struct FilterCase {
     roughness: Vec<f32>,
     material: Vec<u32>,
     merged: Vec<[f32; 4]>,
+    /// The motion as the GPU reads it (rounded through RGBA16F), and its texels.
+    motion: Vec<[f32; 4]>,
+    motion_bytes: Vec<u8>,
 }
 
 fn filter_case(rng: &mut impl Rng, w: usize, h: usize) -> FilterCase {
     let patch = |x: usize, y: usize| (x / 23 + 7 * (y / 19)) as u64;
     let mut normal = Vec::new();
     let (mut depth, mut albedo, mut material, mut merged) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut motion = Vec::new();
     for y in 0..h {
         for x in 0..w {
             let mut prng = common::rng(patch(x, y));
             let n0 = random_unit(&mut prng);
             let r_byte: u8 = prng.random_range(0..150);
             let d0 = prng.random_range(0.95..0.995f32);
+            let moved = if prng.random_bool(0.3) {
+                random_unit(&mut prng) * prng.random_range(0.005..0.05f32)
+            } else {
+                Vec3::ZERO
+            };
+            motion.push([moved.x, moved.y, moved.z, 0.0]);
             let n = (n0 + 0.05 * random_unit(rng)).normalize();
             let sky = rng.random_bool(0.05);
             // The sky's normal target is cleared to 0, its reflectivity too.
@@ -147,7 +158,11 @@ fn filter_case(rng: &mut impl Rng, w: usize, h: usize) -> FilterCase {
     let normal_bytes = speculum::cpu_ref::f32_to_rgba16f(&normal);
     let normal = speculum::gpu_types::rgba16f_to_f32(&normal_bytes);
     let roughness = albedo.chunks(4).map(|t| t[3] as f32 / 255.0).collect();
+    let motion_bytes = speculum::cpu_ref::f32_to_rgba16f(&motion);
+    let motion = speculum::gpu_types::rgba16f_to_f32(&motion_bytes);
     FilterCase {
+        motion,
+        motion_bytes,
         depth,
         normal,
         normal_bytes,
@@ -193,6 +208,9 @@ impl FilterRig {
             material: case.material.clone(),
         };
         let gb = common::upload_gbuffer(ctx, extent, &g, Some(&case.albedo));
+        gb.motion
+            .write(&case.motion_bytes, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+            .unwrap();
         let format = speculum::passes::reflect_denoise::FORMAT;
         let merged = Image::storage(ctx, "test.merged", extent, format).unwrap();
         merged
@@ -260,6 +278,7 @@ impl FilterRig {
             normal: &self.case.normal,
             roughness: &self.case.roughness,
             material: &self.case.material,
+            motion: &self.case.motion,
         }
     }
 }
@@ -331,9 +350,10 @@ fn read(img: &Image) -> Vec<[f32; 4]> {
 }
 
 /// The temporal step equals the CPU's over three frames of random G-buffers: the first
-/// without history, the second from the same camera (the history kept), the third from
-/// a moved camera (reprojected, partly disoccluded); the CPU is given the GPU's own
-/// spatial output and previous history, so the step is checked alone.
+/// without history, the second from the same camera (the history kept where nothing
+/// moved; the moved patches reprojected by their motion), the third from a moved camera
+/// (reprojected, partly disoccluded); the CPU is given the GPU's own spatial output and
+/// previous history, so the step is checked alone.
 #[test]
 fn temporal_accumulation_matches_cpu_reference() {
     let ctx = common::context();

@@ -14,7 +14,7 @@ layout(binding = 4) uniform sampler2D gb_normal; // w: reflectivity
 layout(binding = 5) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
 layout(binding = 6) uniform sampler2D gb_depth;
 layout(binding = 7) uniform usampler2D gb_material;
-layout(binding = 8, std430) readonly buffer Materials { Material materials[]; };
+layout(binding = 8) uniform sampler2D gb_motion; // w: metallic
 layout(binding = 9, r32ui) uniform readonly uimage2D fail_mask; // read by COMPOSE_FAIL_MASK
 
 layout(push_constant) uniform ComposePush {
@@ -75,7 +75,7 @@ void main() {
             vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
             vec3 w = world_from_depth(p, texelFetch(gb_depth, p, 0).r);
             vec3 v = normalize(frame.camera_pos.xyz - w);
-            c += reflection_weight(base, materials[material].metallic, nr.w, normalize(nr.xyz), v) * r.rgb;
+            c += reflection_weight(base, texelFetch(gb_motion, p, 0).w, nr.w, normalize(nr.xyz), v) * r.rgb;
         }
     }
     c = max(c, vec3(0.0)) * pc.exposure;

@@ -1,5 +1,6 @@
 #version 460
-// gbuffer: writes normal + reflectivity, base colour + roughness, material id, motion.
+// gbuffer: writes normal + reflectivity, base colour + roughness, material id, motion +
+// metallic.
 #include "frame.glsl"
 #include "surface.glsl"
 #include "glossy.glsl"
@@ -18,7 +19,8 @@ layout(location = 4) in vec3 in_motion;
 layout(location = 0) out vec4 out_normal;
 layout(location = 1) out vec4 out_albedo;   // rgb: base colour (textured), sRGB-encoded; a: roughness
 layout(location = 2) out uint out_material; // material index (MATERIAL_NONE where empty)
-// xyz: the surface point's world position the frame before minus this frame's
+// xyz: the surface point's world position the frame before minus this frame's;
+// w: metallic (per texel)
 layout(location = 3) out vec4 out_motion;
 
 void main() {
@@ -36,12 +38,14 @@ void main() {
     if (!any(isnan(g)) && !any(isinf(g))) { // a triangle seen edge-on has no plane here
         n = clamp_bent_normal(n, g, v);
     }
-    float roughness = m.roughness;
-    if (m.roughness_layer != TEXTURE_NONE) {
-        roughness *= texture(scene_textures, vec3(in_uv, float(m.roughness_layer))).g;
+    float roughness = m.roughness, metallic = m.metallic;
+    if (m.roughness_layer != TEXTURE_NONE) { // glTF's layout: green roughness, blue metallic
+        vec4 t = texture(scene_textures, vec3(in_uv, float(m.roughness_layer)));
+        roughness *= t.g;
+        metallic *= t.b;
     }
     out_normal = vec4(n, traced_reflectivity(m.reflectivity, roughness));
     out_albedo = vec4(srgb_encode(base_color(m, scene_textures, in_uv)), roughness);
     out_material = in_material;
-    out_motion = vec4(in_motion, 0.0);
+    out_motion = vec4(in_motion, metallic);
 }

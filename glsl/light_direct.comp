@@ -12,7 +12,7 @@ layout(binding = 3) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encod
 layout(binding = 4) uniform usampler2D gb_material;
 layout(binding = 5) uniform sampler2D shadow_map;
 layout(binding = 6, rgba32f) uniform writeonly image2D lit;
-layout(binding = 7, std430) readonly buffer Materials { Material materials[]; };
+layout(binding = 7) uniform sampler2D gb_motion; // w: metallic
 layout(binding = 8, r32f) uniform image2D visibility; // written under the map: what it gave
 
 layout(push_constant) uniform Push {
@@ -36,7 +36,7 @@ void main() {
         vec4 nr = texelFetch(gb_normal, p, 0);
         vec4 ar = texelFetch(gb_albedo, p, 0);
         vis = pc.traced != 0u ? imageLoad(visibility, p).r : shadow_visibility(shadow_map, w);
-        float metallic = materials[material].metallic;
+        float metallic = texelFetch(gb_motion, p, 0).w;
         color = shade_direct(srgb_decode(ar.rgb), ar.a, nr.w, metallic, normalize(nr.xyz), normalize(to_camera), vis);
     }
     imageStore(lit, p, vec4(color, 1.0));

@@ -27,7 +27,7 @@ layout(binding = 6, std430) writeonly buffer MarchList { uint march_list[]; };
 // zeroed before, y and z are 1.
 layout(binding = 7, std430) buffer MarchArgs { uvec4 march_args; };
 layout(binding = 8) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
-layout(binding = 9, std430) readonly buffer Materials { Material materials[]; };
+layout(binding = 9) uniform sampler2D gb_motion; // w: metallic
 
 // The glossy pixels (glossy.glsl), for reflect.denoise: packed pixels, and its
 // VkDispatchIndirectCommand (x, y) and length (w), zeroed before as march_args.
@@ -67,7 +67,7 @@ void main() {
             fail = march ? 0u : FAIL_LOW_CONFIDENCE;
             if (!march && pc.trace_min_weight > 0.0) {
                 vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
-                if (!traced_for_block(p) && view_reflection_weight(r, nr.xyz, base, materials[material].metallic, nr.w) < pc.trace_min_weight) {
+                if (!traced_for_block(p) && view_reflection_weight(r, nr.xyz, base, texelFetch(gb_motion, p, 0).w, nr.w) < pc.trace_min_weight) {
                     fail |= FAIL_UNTRACED;
                     sky = untraced_sky(r);
                 }

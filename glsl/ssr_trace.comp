@@ -25,13 +25,12 @@ layout(binding = 5, r32ui) uniform writeonly uimage2D fail_mask;
 layout(binding = 6, std430) readonly buffer MarchList { uint march_list[]; };
 layout(binding = 7, std430) readonly buffer MarchArgs { uvec4 march_args; }; // w: length
 layout(binding = 8) uniform sampler2D gb_albedo; // rgb: base colour, sRGB-encoded
-layout(binding = 9) uniform usampler2D gb_material;
-layout(binding = 10, std430) readonly buffer Materials { Material materials[]; };
+layout(binding = 9) uniform sampler2D gb_motion; // w: metallic (0 on the sky)
 // ssr.hiz's pyramid: level after level, row-major, level k ceil(resolution / 2^k).
-layout(binding = 11, std430) readonly buffer Pyramid { float pyramid[]; };
+layout(binding = 10, std430) readonly buffer Pyramid { float pyramid[]; };
 // The mean distance (view space) from the pixel's surface to its rays' hits; HIT_FAR
 // where SSR did not answer (rt.reflect writes the traced pixels').
-layout(binding = 12, r32f) uniform writeonly image2D hit_distance;
+layout(binding = 11, r32f) uniform writeonly image2D hit_distance;
 
 // true: the hierarchical march through the pyramid; false: the linear DDA.
 layout(constant_id = 0) const bool HIZ = true;
@@ -71,8 +70,7 @@ vec3 lit_bilinear(vec2 x, ivec2 res) {
 
 // The base colour (linear) and metallic of the surface at pixel q.
 void surface_at(ivec2 q, out vec3 base, out float metallic) {
-    uint id = texelFetch(gb_material, q, 0).r;
-    metallic = id == MATERIAL_NONE ? 0.0 : materials[id].metallic;
+    metallic = texelFetch(gb_motion, q, 0).w;
     base = srgb_decode(texelFetch(gb_albedo, q, 0).rgb);
 }
 

@@ -155,11 +155,12 @@ fn json(path: &Path) -> serde_json::Value {
 
 /// A window shot (the swapchain image copied out after the blit) with the HUD hidden
 /// is the frame itself, pixel for pixel: the blit at the same size copies, and the
-/// copy's channel order is undone; with the HUD shown it differs.
+/// copy's channel order is undone; with the HUD shown it differs. Glossy reflections
+/// are off: their samples change every frame, and the window shot is the frame after.
 fn window_shot_is_the_frame(display: &Display, dir: &Path) {
     let d = dir.display();
     let text = format!(
-        "wait 2\nwindow-shot {d}/with_hud.png\nwait 1\nkey h\nwait 2\nscreenshot {d}/frame.png\n\
+        "set glossy false\nwait 2\nwindow-shot {d}/with_hud.png\nwait 1\nkey h\nwait 2\nscreenshot {d}/frame.png\n\
          window-shot {d}/window.png\nwait 2\n"
     );
     scripted(
@@ -315,11 +316,12 @@ fn settings_change_the_image(display: &Display, dir: &Path) {
     );
 }
 
-/// A dynamic scene: paused it holds still, `.` steps it once, Backspace restarts it.
+/// A dynamic scene: paused it holds still, `.` steps it once, Backspace restarts it
+/// (glossy reflections off: their samples change every frame, paused or not).
 fn animation_controls(display: &Display, dir: &Path) {
     let d = dir.display();
     let text = format!(
-        "wait 4\nkey space\nwait 2\nscreenshot {d}/a.png\nwait 2\nscreenshot {d}/b.png\nkey .\nwait 2\n\
+        "set glossy false\nwait 4\nkey space\nwait 2\nscreenshot {d}/a.png\nwait 2\nscreenshot {d}/b.png\nkey .\nwait 2\n\
          screenshot {d}/c.png\nkey backspace\nwait 2\nscreenshot {d}/d.png\n"
     );
     scripted(

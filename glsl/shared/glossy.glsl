@@ -19,9 +19,10 @@ bool is_glossy(float roughness) {
     return frame.glossy != 0u && roughness >= frame.mirror_roughness && roughness < frame.rough_roughness;
 }
 
-// The reflectivity the reflection passes see: 0 past the rough cut-off.
+// The reflectivity the reflection passes see: 0 past the rough cut-off (with glossy
+// reflections on or off: such a surface's reflection is the prefiltered sky).
 float traced_reflectivity(float reflectivity, float roughness) {
-    return (frame.glossy != 0u && roughness >= frame.rough_roughness) ? 0.0 : reflectivity;
+    return roughness >= frame.rough_roughness ? 0.0 : reflectivity;
 }
 
 // Rays a reflective pixel of this roughness takes per frame.

@@ -11,7 +11,7 @@ pub fn is_glossy(frame: &FrameUniforms, roughness: f32) -> bool {
 }
 
 pub fn traced_reflectivity(frame: &FrameUniforms, reflectivity: f32, roughness: f32) -> f32 {
-    if frame.glossy != 0 && roughness >= frame.rough_roughness {
+    if roughness >= frame.rough_roughness {
         0.0
     } else {
         reflectivity

@@ -58,10 +58,9 @@ pub struct ComposeInputs<'a> {
     pub hdr: &'a Image,
     /// Merged reflection (rgb, a: source); read unless the mode is `Plain`.
     pub reflection: &'a Image,
-    /// The G-buffer (normal + reflectivity, base colour, depth, material id) and the
-    /// materials (metallic), for the reflection's Fresnel weight.
+    /// The G-buffer (normal + reflectivity, base colour, depth, material id, metallic),
+    /// for the reflection's Fresnel weight.
     pub gbuffer: &'a GBuffer,
-    pub materials: &'a Buffer,
     /// The SSR fail mask (`GENERAL`); read by `FailMask` only.
     pub fail_mask: &'a Image,
     /// `FailMask`: reflectivity above which a pixel reflects (`Settings::reflective_min`).
@@ -116,7 +115,7 @@ impl ComposePass {
                 Resource::Sampled(&inputs.gbuffer.albedo, &self.sampler),
                 Resource::Sampled(&inputs.gbuffer.depth, &self.sampler),
                 Resource::Sampled(&inputs.gbuffer.material, &self.sampler),
-                Resource::Buffer(inputs.materials),
+                Resource::Sampled(&inputs.gbuffer.motion, &self.sampler),
                 Resource::StorageImage(inputs.fail_mask),
             ],
             &push,

@@ -27,7 +27,8 @@ pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 pub const MATERIAL_FORMAT: vk::Format = vk::Format::R32_UINT;
 /// xyz: the surface point's world position the frame before minus this frame's
 /// (exactly 0 on geometry that did not move: half floats keep a millimetre of a
-/// metre's motion).
+/// metre's motion); w: metallic (the material's, times its roughness texture's blue
+/// channel: glTF's metallic-roughness layout).
 pub const MOTION_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 impl GBuffer {

@@ -59,7 +59,7 @@ impl LightDirectPass {
 
     /// Records the shading dispatch. G-buffer in `SHADER_READ_ONLY_OPTIMAL`. `lit` ends
     /// visible to its readers, `ssr.trace` and `compose` (compute).
-    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, sun: Sun<'_>, materials: &Buffer) {
+    pub fn record(&self, cmd: vk::CommandBuffer, frame: &Buffer, gbuffer: &GBuffer, sun: Sun<'_>) {
         let d = &self.ctx.device;
         let s = &self.sampler;
         // WAR: the previous frame's reads of `lit` finish before it is overwritten.
@@ -75,7 +75,7 @@ impl LightDirectPass {
                 Resource::Sampled(&gbuffer.material, s),
                 Resource::Sampled(sun.map, s),
                 Resource::StorageImage(&self.out),
-                Resource::Buffer(materials),
+                Resource::Sampled(&gbuffer.motion, s),
                 Resource::StorageImage(sun.visibility),
             ],
             &LightPush {

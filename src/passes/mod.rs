@@ -100,7 +100,7 @@ pub struct GBuffer {
     pub albedo: Image,
     pub material: Image,
     /// xyz: where the surface point was the frame before, minus where it is (world
-    /// space; 0 on geometry that did not move), for reprojection.
+    /// space; 0 on geometry that did not move), for reprojection; w: metallic per texel.
     pub motion: Image,
 }
 

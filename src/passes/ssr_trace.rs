@@ -87,7 +87,6 @@ pub struct MarchInputs<'a> {
     pub gbuffer: &'a GBuffer,
     /// The lit image, `GENERAL`.
     pub lit: &'a Image,
-    pub materials: &'a Buffer,
     /// `ssr.hiz`'s pyramid.
     pub hiz: &'a HiZ,
 }
@@ -133,16 +132,10 @@ impl SsrPass {
     /// reflective pixel fails (`FAIL_FORCED`) and the list stays empty. G-buffer in
     /// `SHADER_READ_ONLY_OPTIMAL`. Ends with the list and its dispatch arguments visible
     /// to `trace`, the mask and colour to `trace` and to the mask's readers
-    /// (`ssr.compact`, `reflect.merge`). `materials` gives the pixels' metallic for
-    /// their own reflection's weight (`trace_min_weight`).
-    pub fn classify(
-        &self,
-        cmd: vk::CommandBuffer,
-        inputs: (&Buffer, &GBuffer, &Buffer),
-        params: &SsrParams,
-        mask_only: bool,
-    ) {
-        let (frame, gbuffer, materials) = inputs;
+    /// (`ssr.compact`, `reflect.merge`). The G-buffer's metallic weighs the pixels' own
+    /// reflection (`trace_min_weight`).
+    pub fn classify(&self, cmd: vk::CommandBuffer, inputs: (&Buffer, &GBuffer), params: &SsrParams, mask_only: bool) {
+        let (frame, gbuffer) = inputs;
         let d = &self.ctx.device;
         let out = &self.out;
         // WAR/WAW: the previous frame's march (list and argument reads, the indirect
@@ -179,7 +172,7 @@ impl SsrPass {
                 Resource::Buffer(&out.march_list),
                 Resource::Buffer(&out.march_args),
                 Resource::Sampled(&gbuffer.albedo, s),
-                Resource::Buffer(materials),
+                Resource::Sampled(&gbuffer.motion, s),
                 Resource::Buffer(&out.glossy_list),
                 Resource::Buffer(&out.glossy_args),
                 Resource::StorageImage(&out.hit_distance),
@@ -200,15 +193,14 @@ impl SsrPass {
 
     /// Records the march over the classification's list: SSR colour + confidence and
     /// the fail mask of the listed pixels, visible at the end to their readers
-    /// (`ssr.compact`, `reflect.merge`). `lit` in `GENERAL`; `materials` gives the hit
-    /// surfaces' metallic for their own reflection's weight; the pyramid (`ssr.hiz`'s,
+    /// (`ssr.compact`, `reflect.merge`). `lit` in `GENERAL`; the G-buffer's metallic
+    /// weighs the hit surfaces' own reflection; the pyramid (`ssr.hiz`'s,
     /// visible to compute reads) is read when `params.hiz`.
     pub fn trace(&self, cmd: vk::CommandBuffer, inputs: &MarchInputs<'_>, params: &SsrParams) {
         let MarchInputs {
             frame,
             gbuffer,
             lit,
-            materials,
             hiz,
         } = *inputs;
         let out = &self.out;
@@ -230,8 +222,7 @@ impl SsrPass {
                 Resource::Buffer(&out.march_list),
                 Resource::Buffer(&out.march_args),
                 Resource::Sampled(&gbuffer.albedo, s),
-                Resource::Sampled(&gbuffer.material, s),
-                Resource::Buffer(materials),
+                Resource::Sampled(&gbuffer.motion, s),
                 Resource::Buffer(&hiz.buffer),
                 Resource::StorageImage(&out.hit_distance),
             ],

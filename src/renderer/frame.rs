@@ -333,23 +333,20 @@ impl Renderer {
             visibility: &shadow_trace.out.visibility,
             traced: shadows.traces(),
         };
-        f.row(Row::LightDirect, || light.record(cmd, ubo, g, sun, &scene.materials));
+        f.row(Row::LightDirect, || light.record(cmd, ubo, g, sun));
         let params = SsrParams::from_settings(st);
         if mode.marches() && params.hiz {
             f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
         }
         if mode.reflects() {
             let mask_only = !mode.marches();
-            f.row(Row::SsrClassify, || {
-                ssr.classify(cmd, (ubo, g, &scene.materials), &params, mask_only)
-            });
+            f.row(Row::SsrClassify, || ssr.classify(cmd, (ubo, g), &params, mask_only));
         }
         if mode.marches() {
             let inputs = MarchInputs {
                 frame: ubo,
                 gbuffer: g,
                 lit: &light.out,
-                materials: &scene.materials,
                 hiz: &hiz.out,
             };
             f.row(Row::SsrTrace, || ssr.trace(cmd, &inputs, &params));
@@ -409,7 +406,6 @@ impl Renderer {
             hdr: &light.out,
             reflection: &merge.out,
             gbuffer: g,
-            materials: &scene.materials,
             fail_mask: &ssr.out.mask,
             reflective_min: st.reflective_min,
         };

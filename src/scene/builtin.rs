@@ -127,8 +127,8 @@ const RAMP_MATERIAL: &str = "floor ramp";
 /// u = 1, so the roughness runs from a mirror to the material's factor across it.
 fn roughness_ramp(scene: &mut Scene, name: &str) {
     let image = image::RgbaImage::from_fn(256, 4, |x, _| {
-        let g = x as u8;
-        image::Rgba([g, g, g, 255])
+        // Blue 1: the G-buffer reads it as glTF's layout (blue x metallic).
+        image::Rgba([x as u8, x as u8, 255, 255])
     });
     let layer = scene.textures.len() as u32;
     scene.textures.push(super::texture::data_texture(super::Texture {

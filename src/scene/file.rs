@@ -405,7 +405,10 @@ impl Build<'_> {
                 material.texture = Some(self.b.texture(t));
             }
             if let Some(file) = &m.roughness_texture {
-                let t = super::texture::data_texture(load(file)?);
+                // Blue 1: the G-buffer reads glTF's layout (blue x metallic).
+                let mut t = load(file)?;
+                t.image.pixels_mut().for_each(|p| p.0[2] = 255);
+                let t = super::texture::data_texture(t);
                 material.roughness_texture = Some(self.b.texture(t));
             }
             let id = self.b.material(material);

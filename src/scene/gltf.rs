@@ -8,11 +8,11 @@
 //! wrap modes and `KHR_texture_transform` are not read: textures repeat); roughness =
 //! `roughnessFactor`, multiplied per texel by the green channel of
 //! `metallicRoughnessTexture` (read as linear data, with the base colour's texture
-//! coordinates; its blue channel, metallic, is not read); metallic = `metallicFactor`;
-//! reflectivity (the traced share of the specular reflection) =
-//! `reflectivity_from_roughness(roughnessFactor)`, or 1 with a metallic-roughness
-//! texture (the factor alone does not say how rough the surface is: glossy tracing's
-//! cut-offs judge each texel).
+//! coordinates); metallic = `metallicFactor`, multiplied per texel by that texture's
+//! blue channel;
+//! reflectivity (the traced share of the specular reflection, an artist's scale glTF
+//! does not have) = 1: the roughness cut-offs judge each texel (a mirror below
+//! `glossy_mirror_max`, a GGX lobe below `glossy_rough_max`, the sky term above).
 
 use super::geometry::{smooth_normals, CREASE_ANGLE_DEG};
 use super::Texture;
@@ -20,17 +20,6 @@ use super::{Camera, Material, Scene, SceneBuilder, TriMesh};
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::Path;
-
-/// Roughness at and above which a PBR material (glTF, MTL with `Pr`) gets no traced
-/// mirror reflection.
-pub const MIRROR_ROUGHNESS_MAX: f32 = 0.6;
-
-/// The traced mirror share of a PBR material's specular reflection: 1 for a perfectly
-/// smooth surface, falling linearly to 0 at `MIRROR_ROUGHNESS_MAX` (Speculum traces
-/// sharp reflections only; a rougher surface's blurred one is left to the sky term).
-pub fn reflectivity_from_roughness(roughness: f32) -> f32 {
-    (1.0 - roughness / MIRROR_ROUGHNESS_MAX).clamp(0.0, 1.0)
-}
 
 /// A decoded glTF image as sRGB RGBA8 texels: 8- and 16-bit images with one to four
 /// channels (grey is spread to RGB, a missing alpha is opaque); `None` for float ones.
@@ -391,13 +380,7 @@ impl Walk<'_> {
             None => "default".into(),
         });
         let roughness = pbr.roughness_factor();
-        let mut material = Material::new(
-            &name,
-            [f[0], f[1], f[2]],
-            roughness,
-            reflectivity_from_roughness(roughness),
-        )
-        .metal(pbr.metallic_factor());
+        let mut material = Material::new(&name, [f[0], f[1], f[2]], roughness, 1.0).metal(pbr.metallic_factor());
         let mut set = 0;
         if let Some(info) = pbr.base_color_texture() {
             material.texture = self.texture(info.texture().source().index(), false, &name);
@@ -414,10 +397,6 @@ impl Walk<'_> {
                 ));
             }
             material.roughness_texture = self.texture(info.texture().source().index(), true, &name);
-            // The factor alone does not say how rough the surface is (often 1, the
-            // texture saying the rest): no fade by it; glossy tracing's cut-offs judge
-            // each texel instead.
-            material.reflectivity = 1.0;
             if pbr.base_color_texture().is_none() {
                 set = info.tex_coord();
             }

@@ -23,8 +23,9 @@ pub struct Material {
     /// Base-colour texture (an index into `Scene::textures`), multiplying `albedo`.
     pub texture: Option<u32>,
     /// Roughness texture (an index into `Scene::textures`, linear data stored as
-    /// `texture::data_texture` makes it) whose green channel multiplies `roughness`
-    /// (glTF's `metallicRoughnessTexture`).
+    /// `texture::data_texture` makes it) in glTF's `metallicRoughnessTexture` layout:
+    /// its green channel multiplies `roughness`, its blue channel `metallic` (a scene
+    /// file's roughness texture has its blue set to 1).
     pub roughness_texture: Option<u32>,
 }
 

@@ -9,9 +9,10 @@
 //! - metallic = `Pm` when given; else 1 for a coloured `Ks` (channels differing by more
 //!   than a quarter of the largest: a metal's tinted reflection, as gold MTLs give) with
 //!   a reflection model (`illum` 3-9), the base colour then `Ks`; else 0;
-//! - reflectivity (the traced mirror share) = `refl` (a Speculum key) when given; else,
-//!   with `Pr`, `gltf::reflectivity_from_roughness(Pr)`; else `max(Ks)` for
-//!   illumination models 3-9 (the MTL models with reflection on); else 0.
+//! - reflectivity (the traced share of the specular reflection) = `refl` (a Speculum
+//!   key) when given; else 1 with `Pr` (a PBR material: the roughness cut-offs judge
+//!   it, as for glTF); else `max(Ks)` for illumination models 3-9 (the MTL models with
+//!   reflection on); else 0.
 //!
 //! Faces are triangulated; texture coordinates are read with v flipped (OBJ's v runs
 //! up the image, Speculum's down); missing normals are computed by `geometry::smooth_normals`
@@ -118,7 +119,7 @@ fn convert_material(m: &tobj::Material, mtl: &Path, texture: Option<u32>) -> Res
         .unwrap_or(0.8);
     let reflective_model = matches!(m.illumination_model, Some(3..=9));
     let reflectivity = mtl_number(m, "refl")
-        .or_else(|| mtl_number(m, "Pr").map(super::gltf::reflectivity_from_roughness))
+        .or_else(|| mtl_number(m, "Pr").map(|_| 1.0))
         .unwrap_or_else(|| {
             if reflective_model {
                 m.specular.map_or(0.0, |s| s[0].max(s[1]).max(s[2]))

@@ -298,7 +298,7 @@ settings_table! {
     /// (visible normals), denoised by `reflect.denoise`, instead of a sharp mirror image.
     /// Off: every reflective surface is a mirror, as before glossy tracing (cheaper, and
     /// wrong for rough surfaces).
-    glossy: bool = false, Range::Any, Hud::Checkbox, NextFrame;
+    glossy: bool = true, Range::Any, Hud::Checkbox, NextFrame;
     /// Sampled reflection rays per glossy pixel and frame: less noise before denoising vs
     /// that many SSR marches and ray-traced paths per pixel (mirror pixels take one).
     reflection_rays: u32 = 1, u32s(1, MAX_REFLECTION_RAYS), slider(1.0, 16.0), NextFrame;

@@ -187,24 +187,29 @@ pub fn shadow_map_image(ctx: &Arc<Context>, size: u32, depth: &[f32]) -> speculu
     map
 }
 
-/// Materials for the four ids of `random_gbuffer`: a dielectric, a metal and two
-/// blends (only `metallic` is read by the screen-space kernels), and their buffer.
-pub fn random_materials(ctx: &Arc<Context>) -> (Vec<speculum::gpu_types::GpuMaterial>, speculum::vk::Buffer) {
-    let materials: Vec<speculum::gpu_types::GpuMaterial> = [0.0, 1.0, 0.37, 0.81]
+/// The G-buffer's metallic (the motion target's w) for the four material ids of
+/// `random_gbuffer` (a dielectric, a metal and two blends), each texel off by a little
+/// (it is per texel), 0 on the sky; written to `gb` (motion 0), and returned as the
+/// GPU reads it (rounded through RGBA16F).
+pub fn random_metallic(rng: &mut impl rand::Rng, gb: &speculum::passes::GBuffer, material: &[u32]) -> Vec<f32> {
+    let texels: Vec<[f32; 4]> = material
         .iter()
-        .map(|&metallic| speculum::gpu_types::GpuMaterial {
-            metallic,
-            ..Default::default()
+        .map(|&id| {
+            let m = match id {
+                speculum::shader_defines::MATERIAL_NONE => 0.0,
+                id => [0.0, 1.0, 0.37, 0.81][id as usize % 4] * rng.random_range(0.9..1.0f32),
+            };
+            [0.0, 0.0, 0.0, m]
         })
         .collect();
-    let buffer = speculum::vk::Buffer::with_data(
-        ctx,
-        "test.materials",
-        ash::vk::BufferUsageFlags::STORAGE_BUFFER,
-        bytemuck::cast_slice(&materials),
-    )
-    .unwrap();
-    (materials, buffer)
+    let bytes = speculum::cpu_ref::f32_to_rgba16f(&texels);
+    gb.motion
+        .write(&bytes, ash::vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+        .unwrap();
+    speculum::gpu_types::rgba16f_to_f32(&bytes)
+        .iter()
+        .map(|t| t[3])
+        .collect()
 }
 
 /// The frame uniform buffer (binding 0 of the screen-space kernels) holding `frame`.

@@ -104,7 +104,10 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
                     );
                     assert_eq!(material[i], id, "pixel {p}: material");
                     let m = &scene.materials[id as usize];
-                    assert!((normal[i][3] - m.reflectivity).abs() < 1e-3, "pixel {p}: reflectivity");
+                    // Past glossy_rough_max (the plane's 0.5) no ray is traced: reflectivity 0.
+                    let traced = speculum::cpu_ref::glossy::traced_reflectivity(&frame, m.reflectivity, m.roughness);
+                    assert_eq!(traced == 0.0, id == 0);
+                    assert!((normal[i][3] - traced).abs() < 1e-3, "pixel {p}: reflectivity");
                     assert!((albedo[i * 4 + 3] as f32 / 255.0 - m.roughness).abs() <= 0.5 / 255.0 + 1e-6);
                     let srgb = speculum::scene::texture::linear_to_srgb(m.albedo.x);
                     assert!(albedo[i * 4].abs_diff(srgb) <= 1, "pixel {p}: base colour");
@@ -131,7 +134,9 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
 /// coordinate across the quad (a 1e-3 texel shift moves a texel step of contrast 1 by
 /// 1e-3); silhouette and texel-edge pixels are not special-cased. Its roughness texture
 /// (another random 16², stored as linear data) likewise: the G-buffer's roughness is the
-/// factor times its green channel there, within half an 8-bit step and the same shift.
+/// factor times its green channel there, within half an 8-bit step and the same shift,
+/// and its metallic the factor times its blue channel (glTF's layout), within the
+/// half float's rounding and the same shift.
 #[test]
 fn gbuffer_samples_textures_per_texel() {
     use rand::{Rng, SeedableRng};
@@ -147,14 +152,14 @@ fn gbuffer_samples_textures_per_texel() {
     };
     let rough = Texture {
         name: "random roughness 16x16".into(),
-        image: image::RgbaImage::from_fn(16, 16, |_, _| image::Rgba([0, rng.random(), 0, 255])),
+        image: image::RgbaImage::from_fn(16, 16, |_, _| image::Rgba([0, rng.random(), rng.random(), 255])),
     };
     let mut b = SceneBuilder::new("textured plane");
     let t = b.texture(texture);
     let tr = b.texture(speculum::scene::texture::data_texture(rough));
     let tint = [0.9, 0.8, 1.0];
-    let roughness = 0.8;
-    let mut m = Material::new("plane", tint, roughness, 0.0).textured(t);
+    let (roughness, metallic) = (0.8, 0.9);
+    let mut m = Material::new("plane", tint, roughness, 0.0).textured(t).metal(metallic);
     m.roughness_texture = Some(tr);
     let plane = b.material(m);
     b.mesh(TriMesh::quad(4.0, 4.0), Mat4::IDENTITY, plane);
@@ -175,6 +180,7 @@ fn gbuffer_samples_textures_per_texel() {
     let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
     let albedo = r.read_target(&r.gbuffer.out.albedo).unwrap();
+    let motion = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.out.motion).unwrap());
     let material: Vec<u32> = bytemuck::cast_slice(&r.read_target(&r.gbuffer.out.material).unwrap()).to_vec();
     let frame = *r.uniforms();
     let textures = TextureArray::new(&scene.textures, speculum::scene::texture::LAYER_MAX);
@@ -210,6 +216,13 @@ fn gbuffer_samples_textures_per_texel() {
                 (got_r - want_r).abs() <= 0.5 / 255.0 + 2e-3,
                 "pixel {p}: roughness {got_r}, texture says {want_r}"
             );
+            let want_m = metallic * textures.sample_lod(tr, uv, 0.0).z;
+            assert!(
+                (motion[i][3] - want_m).abs() <= 5e-4 + 2e-3,
+                "pixel {p}: metallic {}, texture says {want_m}",
+                motion[i][3]
+            );
+            assert_eq!(motion[i][..3], [0.0; 3], "pixel {p}: a still plane moves");
             checked += 1;
             distinct.insert(albedo[4 * i..4 * i + 4].to_vec());
         }

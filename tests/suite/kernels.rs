@@ -78,7 +78,7 @@ fn compose_matches_cpu_reference() {
     gb.normal.write(&g.normal_bytes, ro).unwrap();
     gb.albedo.write(&albedo, ro).unwrap();
     gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
-    let (materials, materials_buffer) = common::random_materials(&ctx);
+    let metallic = common::random_metallic(&mut rng, &gb, &g.material);
     let scene = speculum::scene::builtin::room().unwrap();
     let settings = speculum::Settings {
         width: extent.width,
@@ -106,7 +106,6 @@ fn compose_matches_cpu_reference() {
         hdr: &hdr,
         reflection: &reflection,
         gbuffer: &gb,
-        materials: &materials_buffer,
         fail_mask: &fail_mask,
         reflective_min,
     };
@@ -126,8 +125,7 @@ fn compose_matches_cpu_reference() {
                 let v = (frame.camera_pos.xyz() - w).normalize();
                 let nrm = Vec3::new(g.normal[i][0], g.normal[i][1], g.normal[i][2]).normalize();
                 let base = cpu_ref::albedo_texel(&albedo[4 * i..4 * i + 4]).0;
-                let metallic = materials[g.material[i] as usize].metallic;
-                let weight = shading::reflection_weight(base, metallic, g.normal[i][3], nrm, v);
+                let weight = shading::reflection_weight(base, metallic[i], g.normal[i][3], nrm, v);
                 for c in 0..3 {
                     hdr[c] += weight[c] * reflected[i][c];
                 }
@@ -198,7 +196,7 @@ fn light_direct_case(traced: bool) {
     let gb = common::upload_gbuffer(&ctx, extent, &g, Some(&albedo));
     let shadow_map = common::shadow_map_image(&ctx, 64, &shadow);
     let ubo = common::frame_ubo(&ctx, &frame);
-    let (materials, materials_buffer) = common::random_materials(&ctx);
+    let metallic = common::random_metallic(&mut rng, &gb, material);
     let pass = LightDirectPass::new(&ctx, extent).unwrap();
     pass.out
         .write(
@@ -217,7 +215,7 @@ fn light_direct_case(traced: bool) {
         traced,
     };
     ctx.one_shot(|cmd| {
-        pass.record(cmd, &ubo, &gb, sun, &materials_buffer);
+        pass.record(cmd, &ubo, &gb, sun);
         // RAW: the readback copy sees the shader's writes.
         let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
         barrier::record(&ctx.device, cmd, &[b], &[]);
@@ -263,7 +261,7 @@ fn light_direct_case(traced: bool) {
                     base,
                     roughness,
                     reflectivity: normal[i][3],
-                    metallic: materials[material[i] as usize].metallic,
+                    metallic: metallic[i],
                 };
                 shading::shade_direct(&frame, surface, nrm, to_camera.normalize(), vis)
             };

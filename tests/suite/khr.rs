@@ -204,6 +204,8 @@ fn khr_refusals_and_switching() {
     let mut switched = Renderer::new(&ctx, &room, &lbvh).unwrap();
     frame(&mut switched);
     switched.set_settings(khr.clone()).unwrap();
+    // The glossy sequence and history restarted, as a fresh renderer's are.
+    switched.reset_simulation().unwrap();
     assert_eq!(frame(&mut switched), want, "switched to khr in place");
     // A moving scene switched with two frames in flight (the demo's): the second
     // slot's frame has its own instances.

@@ -224,7 +224,7 @@ fn light_direct_bindings_are_reflected() {
             D::COMBINED_IMAGE_SAMPLER,
             D::COMBINED_IMAGE_SAMPLER,
             D::STORAGE_IMAGE,
-            D::STORAGE_BUFFER,
+            D::COMBINED_IMAGE_SAMPLER,
             D::STORAGE_IMAGE
         ]
     );

@@ -42,10 +42,9 @@ struct Fixture {
     ubo: speculum::vk::Buffer,
     pass: SsrPass,
     hiz: HiZPass,
-    /// Random base colours (sRGB-encoded) and the metallic of each material id.
+    /// Random base colours (sRGB-encoded) and metallic per texel.
     albedo: Vec<u8>,
     metallic: Vec<f32>,
-    materials: speculum::vk::Buffer,
 }
 
 impl Fixture {
@@ -78,8 +77,7 @@ impl Fixture {
         gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
         let albedo: Vec<u8> = (0..n * 4).map(|_| rng.random()).collect();
         gb.albedo.write(&albedo, ro).unwrap();
-        let (gpu_materials, materials) = common::random_materials(ctx);
-        let metallic = gpu_materials.iter().map(|m| m.metallic).collect();
+        let metallic = common::random_metallic(&mut rng, &gb, &g.material);
         let lit_texels: Vec<[f32; 4]> = (0..n)
             .map(|_| {
                 [
@@ -105,12 +103,19 @@ impl Fixture {
             lit,
             albedo,
             metallic,
-            materials,
         }
     }
 }
 
 impl Fixture {
+    /// The same inputs with glossy reflections off: every reflective pixel a mirror.
+    fn without_glossy(mut self, ctx: &std::sync::Arc<speculum::vk::Context>) -> Self {
+        self.settings.glossy = false;
+        self.frame = speculum::renderer::frame_uniforms(&speculum::scene::builtin::room().unwrap(), &self.settings);
+        self.ubo = common::frame_ubo(ctx, &self.frame);
+        self
+    }
+
     /// Records the march over the classification's list (after the pyramid, when
     /// `params.hiz`), as the frame does.
     fn record_march(&self, cmd: vk::CommandBuffer, params: &SsrParams) {
@@ -121,7 +126,6 @@ impl Fixture {
             frame: &self.ubo,
             gbuffer: &self.gb,
             lit: &self.lit,
-            materials: &self.materials,
             hiz: &self.hiz.out,
         };
         self.pass.trace(cmd, &inputs, params);
@@ -146,8 +150,7 @@ impl Fixture {
         let general = vk::ImageLayout::GENERAL;
         self.poison();
         ctx.one_shot(|cmd| {
-            self.pass
-                .classify(cmd, (&self.ubo, &self.gb, &self.materials), params, false);
+            self.pass.classify(cmd, (&self.ubo, &self.gb), params, false);
             self.record_march(cmd, params);
         })
         .unwrap();
@@ -186,7 +189,7 @@ impl Fixture {
 #[test]
 fn classify_matches_cpu_and_the_march_covers_its_list() {
     let ctx = common::context();
-    let f = Fixture::new(&ctx, 77, 157, 83, |_| {});
+    let f = Fixture::new(&ctx, 78, 157, 83, |_| {});
     let (frame, g, gb, ubo, pass, settings) = (&f.frame, &f.g, &f.gb, &f.ubo, &f.pass, &f.settings);
     let (w, h) = (settings.width as usize, settings.height as usize);
     let n = w * h;
@@ -210,7 +213,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
             .unwrap();
         out.march_args.write(&[0xcdu8; 16]).unwrap();
         ctx.one_shot(|cmd| {
-            pass.classify(cmd, (ubo, gb, &f.materials), &params, mask_only);
+            pass.classify(cmd, (ubo, gb), &params, mask_only);
             if march {
                 f.record_march(cmd, &params);
             }
@@ -501,7 +504,7 @@ fn march_matches_cpu_on_a_random_gbuffer() {
                 .unwrap();
         }
         ctx.one_shot(|cmd| {
-            pass.classify(cmd, (ubo, gb, &f.materials), &params, false);
+            pass.classify(cmd, (ubo, gb), &params, false);
             f.record_march(cmd, &params);
         })
         .unwrap();
@@ -568,7 +571,10 @@ fn march_matches_cpu_on_room() {
         let list: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_list.read().unwrap());
         let albedo = r.read_target(&t.albedo).unwrap();
         let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.material).unwrap());
-        let metallic: Vec<f32> = scene.materials.iter().map(|m| m.metallic).collect();
+        let metallic: Vec<f32> = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.motion).unwrap())
+            .iter()
+            .map(|t| t[3])
+            .collect();
         let inputs = ssr::MarchInputs {
             depth: &depth,
             normal: &normal,
@@ -621,7 +627,7 @@ fn a_march_list_beyond_one_row_of_workgroups_is_covered() {
     f.poison();
     let params = SsrParams::from_settings(&f.settings);
     ctx.one_shot(|cmd| {
-        f.pass.classify(cmd, (&f.ubo, &f.gb, &f.materials), &params, false);
+        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, false);
         f.record_march(cmd, &params);
     })
     .unwrap();
@@ -776,7 +782,7 @@ fn a_ray_passing_just_behind_a_silhouette_is_not_a_hit() {
     let (w, h) = (131usize, 77usize);
     let (band, bar) = (20..30usize, 80..84usize);
     let mirror_depth = 0.97f32;
-    let probe = Fixture::new(&ctx, 3, w as u32, h as u32, |_| {});
+    let probe = Fixture::new(&ctx, 3, w as u32, h as u32, |_| {}).without_glossy(&ctx);
     let frame = probe.frame;
     drop(probe);
     let p = frame.proj;
@@ -812,6 +818,8 @@ fn a_ray_passing_just_behind_a_silhouette_is_not_a_hit() {
             }
         }
     });
+    // Mirror rays: a glossy lobe's rays would not all run along the band.
+    let f = f.without_glossy(&ctx);
     let general = vk::ImageLayout::GENERAL;
     // The default march and thickness, every failure traced (the march's outcome alone).
     let params = SsrParams {
@@ -821,7 +829,7 @@ fn a_ray_passing_just_behind_a_silhouette_is_not_a_hit() {
     assert!(params.hiz && params.thickness > 0.02, "the default march and thickness");
     f.poison();
     ctx.one_shot(|cmd| {
-        f.pass.classify(cmd, (&f.ubo, &f.gb, &f.materials), &params, false);
+        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, false);
         f.record_march(cmd, &params);
     })
     .unwrap();

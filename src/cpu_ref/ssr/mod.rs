@@ -136,7 +136,7 @@ pub struct MarchInputs<'a> {
     /// G-buffer base colour texels (RGBA8, sRGB-encoded rgb) and material ids.
     pub albedo: &'a [u8],
     pub material: &'a [u32],
-    /// `metallic` of each material id.
+    /// The G-buffer's metallic per texel (as the GPU reads RGBA16F; 0 on the sky).
     pub metallic: &'a [f32],
     /// The Hi-Z pyramid of `depth` (`hiz`), for the hierarchical march.
     pub pyramid: &'a [Vec<f32>],
@@ -146,13 +146,7 @@ impl MarchInputs<'_> {
     /// `surface_at`: the base colour (linear) and metallic of the surface at texel `i`
     /// (row-major; metallic 0 where no material is).
     pub fn surface(&self, i: usize) -> (Vec3, f32) {
-        let id = self.material[i];
-        let metallic = if id == MATERIAL_NONE {
-            0.0
-        } else {
-            self.metallic[id as usize]
-        };
-        (super::albedo_texel(&self.albedo[4 * i..4 * i + 4]).0, metallic)
+        (super::albedo_texel(&self.albedo[4 * i..4 * i + 4]).0, self.metallic[i])
     }
 }
 

@@ -296,8 +296,8 @@ settings_table! {
     /// Glossy reflections: a reflective surface whose roughness lies between
     /// `glossy_mirror_max` and `glossy_rough_max` reflects rays sampled from its GGX lobe
     /// (visible normals), denoised by `reflect.denoise`, instead of a sharp mirror image.
-    /// Off: every reflective surface is a mirror, as before glossy tracing (cheaper, and
-    /// wrong for rough surfaces).
+    /// Off: every reflective surface below `glossy_rough_max` is a mirror, as before
+    /// glossy tracing (cheaper, and wrong for rough surfaces).
     glossy: bool = true, Range::Any, Hud::Checkbox, NextFrame;
     /// Sampled reflection rays per glossy pixel and frame: less noise before denoising vs
     /// that many SSR marches and ray-traced paths per pixel (mirror pixels take one).

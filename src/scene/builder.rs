@@ -42,6 +42,7 @@ impl SceneBuilder {
                     horizon: Vec3::new(0.75, 0.8, 0.9),
                 },
                 warnings: Vec::new(),
+                rig: None,
             },
         }
     }

@@ -153,6 +153,49 @@ fn check_indices(doc: &gltf::Document) -> std::result::Result<(), String> {
     for (ti, t) in j.textures.iter().enumerate() {
         within(format!("texture {ti}"), t.source.value(), j.images.len(), "image")?;
     }
+    check_rig_indices(j, within)
+}
+
+/// `check_indices` for the animations and skins: channel targets and samplers, sampler
+/// and inverse-bind accessors, joints and skeletons, nodes' skins.
+fn check_rig_indices(
+    j: &gltf::json::Root,
+    within: impl Fn(String, usize, usize, &str) -> std::result::Result<(), String>,
+) -> std::result::Result<(), String> {
+    let (nodes, accessors) = (j.nodes.len(), j.accessors.len());
+    for (ai, a) in j.animations.iter().enumerate() {
+        for (ci, c) in a.channels.iter().enumerate() {
+            let at = format!("animation {ai} channel {ci}");
+            within(format!("{at}'s target"), c.target.node.value(), nodes, "node")?;
+            within(at, c.sampler.value(), a.samplers.len(), "sampler")?;
+        }
+        for (si, s) in a.samplers.iter().enumerate() {
+            let at = format!("animation {ai} sampler {si}");
+            within(format!("{at}'s input"), s.input.value(), accessors, "accessor")?;
+            within(format!("{at}'s output"), s.output.value(), accessors, "accessor")?;
+        }
+    }
+    for (si, s) in j.skins.iter().enumerate() {
+        for jn in &s.joints {
+            within(format!("skin {si}'s joints"), jn.value(), nodes, "node")?;
+        }
+        if let Some(m) = &s.inverse_bind_matrices {
+            within(
+                format!("skin {si}'s inverse bind matrices"),
+                m.value(),
+                accessors,
+                "accessor",
+            )?;
+        }
+        if let Some(k) = &s.skeleton {
+            within(format!("skin {si}'s skeleton"), k.value(), nodes, "node")?;
+        }
+    }
+    for (ni, n) in j.nodes.iter().enumerate() {
+        if let Some(s) = &n.skin {
+            within(format!("node {ni}"), s.value(), j.skins.len(), "skin")?;
+        }
+    }
     Ok(())
 }
 
@@ -308,11 +351,21 @@ fn walk(path: &Path, doc: &gltf::Document, buffers: &[gltf::buffer::Data], base:
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "gltf".into());
+    let rig = super::gltf_rig::read(doc, buffers, &mut w.warnings).map_err(|e| w.bad(e))?;
+    if let Some(r) = &rig {
+        w.warnings.push(format!(
+            "'{}': {} animation(s) and {} skin(s) read and checked; they do not play yet (the model stands in its bind pose)",
+            path.display(),
+            r.animations.len(),
+            r.skins.len()
+        ));
+    }
     let mut scene = w.b.build()?;
     let (lo, hi) = scene.bounds();
     scene.camera = Camera::framing(lo, hi);
     scene.name = name;
     scene.warnings = w.warnings;
+    scene.rig = rig;
     Ok(scene)
 }
 

@@ -7,6 +7,7 @@
 //! sees it: at least one triangle, finite coordinates and texture coordinates, indices
 //! and texture references in range.
 
+pub mod animation;
 mod bodies;
 mod builder;
 pub mod builtin;
@@ -15,6 +16,7 @@ pub mod cloth;
 pub mod file;
 pub mod geometry;
 pub mod gltf;
+mod gltf_rig;
 mod material;
 pub mod obj;
 pub mod ply;
@@ -115,6 +117,9 @@ pub struct Scene {
     /// What loading changed without failing (e.g. out-of-range MTL values clamped), one
     /// line each, for the command line to print.
     pub warnings: Vec<String>,
+    /// A glTF file's node hierarchy, animations and skins, read and checked
+    /// (`animation::Rig`); not yet played: the model renders in its bind pose.
+    pub rig: Option<animation::Rig>,
 }
 
 impl Scene {

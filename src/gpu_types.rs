@@ -20,6 +20,32 @@ pub struct GpuVertex {
     pub object: u32,
 }
 
+/// A skinned vertex's influences (std430, 32 bytes): four joint indices, 16 bits each,
+/// two to a `u32` (low half first), and their weights (divided by their sum).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuInfluence {
+    pub joints: [u32; 2],
+    pub pad: [u32; 2],
+    pub weights: [f32; 4],
+}
+
+impl GpuInfluence {
+    pub fn new(joints: [u16; 4], weights: [f32; 4]) -> Self {
+        let pack = |a: u16, b: u16| a as u32 | (b as u32) << 16;
+        Self {
+            joints: [pack(joints[0], joints[1]), pack(joints[2], joints[3])],
+            pad: [0; 2],
+            weights,
+        }
+    }
+
+    pub fn joint_indices(&self) -> [u16; 4] {
+        let [a, b] = self.joints;
+        [a as u16, (a >> 16) as u16, b as u16, (b >> 16) as u16]
+    }
+}
+
 /// A material (std430, 32 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -99,6 +125,7 @@ pub struct FrameUniforms {
 
 const _: () = assert!(std::mem::size_of::<GpuVertex>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 32);
+const _: () = assert!(std::mem::size_of::<GpuInfluence>() == 32);
 const _: () = assert!(std::mem::size_of::<FrameUniforms>() == 464);
 
 /// An internal node of the BVH (std430, 64 bytes; `glsl/shared/bvh.glsl`) with both

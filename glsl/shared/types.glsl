@@ -9,6 +9,14 @@ struct Vertex {
     uint object; // dynamic geometry: the body's index; 0 in static geometry
 };
 
+// A skinned vertex's joints (four 16-bit indices, two to a uint, low half first) and
+// their weights (sim.skin normalizes them by their sum).
+struct Influence {
+    uvec2 joints;
+    uvec2 pad;
+    vec4 weights;
+};
+
 struct Material {
     vec3 albedo;
     float roughness;

@@ -28,6 +28,7 @@ pub mod rt_trace;
 pub mod shadow_map;
 pub mod shadow_trace;
 pub mod sim_cloth;
+pub mod sim_skin;
 pub mod sim_transform;
 pub mod ssr_compact;
 pub mod ssr_hiz;

@@ -65,6 +65,15 @@ fn material_layout_matches_glsl() {
     assert_eq!(r.array_strides["Material"] as usize, size_of::<GpuMaterial>());
 }
 
+/// `Influence` (std430 storage buffer, `sim.skin`): offsets and array stride.
+#[test]
+fn influence_layout_matches_glsl() {
+    use speculum::gpu_types::GpuInfluence;
+    let r = reflected(shaders::SIM_SKIN_COMP);
+    check(&r, "Influence", rust_layout!(GpuInfluence { joints, pad, weights }));
+    assert_eq!(r.array_strides["Influence"] as usize, size_of::<GpuInfluence>());
+}
+
 /// The tracer's structs (std430): the BVH's `TraversalNode` and `TraversalTri` as the
 /// fit writes them and `rt.trace` reads them, `Ray` and `Hit` as `rt.trace` reads and
 /// writes them: offsets and strides.

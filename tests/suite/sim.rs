@@ -186,3 +186,114 @@ fn cloth_steps_match_cpu_reference() {
     let start = cloth.particles();
     assert!((Vec3::from(cpu[n / 2].pos) - Vec3::from(start[n / 2].pos)).length() > 0.01);
 }
+
+/// `sim.skin` against `scene::animation::skin_vertex` on a random skin: 3,001 vertices
+/// (not a multiple of the workgroup), 40 joints of random rotation, non-uniform scale
+/// and translation, up to four influences a vertex (repeated joints, zero weights, and
+/// some vertices with none, which keep their bind pose). Tolerance: positions 1e-5 of
+/// their size + 1e-5 (the blend's sums round in another order on a GPU); normals 2e-3
+/// where the blend is well conditioned (|det| > 0.05 of its 3x3: a blend of opposed
+/// rotations nearly flattens it, and the inverse transpose then amplifies rounding).
+/// Outputs poisoned; nothing past the count is written.
+#[test]
+fn skin_matches_cpu_reference() {
+    use speculum::gpu_types::GpuInfluence;
+    use speculum::passes::sim_skin::SimSkinPass;
+    use speculum::scene::animation::skin_vertex;
+    let ctx = common::context();
+    let mut rng = common::rng(41);
+    let random_vec = |rng: &mut rand::rngs::StdRng, r: f32| {
+        Vec3::new(
+            rng.random_range(-r..r),
+            rng.random_range(-r..r),
+            rng.random_range(-r..r),
+        )
+    };
+    let joints: Vec<Mat4> = (0..40)
+        .map(|_| {
+            let axis = random_vec(&mut rng, 1.0).normalize_or(Vec3::Y);
+            let scale = Vec3::new(
+                rng.random_range(0.5..2.0),
+                rng.random_range(0.5..2.0),
+                rng.random_range(0.5..2.0),
+            );
+            Mat4::from_scale_rotation_translation(
+                scale,
+                Quat::from_axis_angle(axis, rng.random_range(-3.2..3.2)),
+                random_vec(&mut rng, 5.0),
+            )
+        })
+        .collect();
+    let count = 3001;
+    let vertices: Vec<GpuVertex> = (0..count)
+        .map(|_| GpuVertex {
+            position: random_vec(&mut rng, 2.0).to_array(),
+            material: rng.random_range(0..9),
+            normal: random_vec(&mut rng, 1.0).normalize_or(Vec3::X).to_array(),
+            object: 0,
+        })
+        .collect();
+    let influences: Vec<GpuInfluence> = (0..count)
+        .map(|_| {
+            let j: [u16; 4] = std::array::from_fn(|_| rng.random_range(0..40));
+            let none = rng.random_bool(0.05);
+            let w: [f32; 4] = std::array::from_fn(|_| {
+                if none || rng.random_bool(0.3) {
+                    0.0
+                } else {
+                    rng.random_range(0.0..1.0)
+                }
+            });
+            GpuInfluence::new(j, w)
+        })
+        .collect();
+    let storage = ash::vk::BufferUsageFlags::STORAGE_BUFFER;
+    let buffer = |name: &str, bytes: &[u8]| Buffer::with_data(&ctx, name, storage, bytes).unwrap();
+    let objects = buffer("test.objects", bytemuck::cast_slice(&vertices));
+    let influence_buffer = buffer("test.influences", bytemuck::cast_slice(&influences));
+    let joint_buffer = buffer("test.joints", bytemuck::cast_slice(&joints));
+    let poison = vec![
+        GpuVertex {
+            position: [f32::NAN; 3],
+            material: 0xdead,
+            normal: [-7.0; 3],
+            object: 0xbeef,
+        };
+        count + 5
+    ];
+    let readable = storage | ash::vk::BufferUsageFlags::TRANSFER_SRC;
+    let world = Buffer::with_data(&ctx, "test.world", readable, bytemuck::cast_slice(&poison)).unwrap();
+    let pass = SimSkinPass::new(&ctx).unwrap();
+    ctx.one_shot(|cmd| pass.record(cmd, (&objects, &influence_buffer, &joint_buffer), &world, count as u32))
+        .unwrap();
+    let gpu: Vec<GpuVertex> = bytemuck::pod_collect_to_vec(&world.read().unwrap());
+    let (mut normals, mut still) = (0, 0);
+    for (i, (v, f)) in vertices.iter().zip(&influences).enumerate() {
+        let (p, n) = (Vec3::from(v.position), Vec3::from(v.normal));
+        let (q, m) = skin_vertex(p, n, f.joint_indices(), f.weights, &joints);
+        let got = &gpu[i];
+        assert_eq!((got.material, got.object), (v.material, v.object), "vertex {i}");
+        let gp = Vec3::from(got.position);
+        assert!((gp - q).length() <= 1e-5 * q.length() + 1e-5, "vertex {i}: {gp} vs {q}");
+        still += (q == p) as usize;
+        let total: f32 = f.weights.iter().sum();
+        let blend: Mat4 = (0..4)
+            .filter(|&k| f.weights[k] != 0.0)
+            .map(|k| joints[f.joint_indices()[k] as usize] * (f.weights[k] / total.max(1e-30)))
+            .fold(Mat4::ZERO, |a, b| a + b);
+        if total == 0.0 || glam::Mat3::from_mat4(blend).determinant().abs() > 0.05 {
+            let gn = Vec3::from(got.normal);
+            assert!((gn - m).length() <= 2e-3, "vertex {i}: normal {gn} vs {m}");
+            normals += 1;
+        }
+    }
+    assert!(normals > count * 4 / 5, "only {normals} normals compared");
+    assert!(
+        still > count / 50 && still < count / 10,
+        "{still} vertices in their bind pose"
+    );
+    for v in &gpu[count..count + 5] {
+        assert_eq!((v.material, v.object), (0xdead, 0xbeef), "written past the count");
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}

@@ -177,9 +177,12 @@ pub(super) struct DynamicGeometry {
     /// `refit_rebuild_every`, or 1 where the LBVH rebuilds every frame.
     pub rebuild_every: u32,
     /// The world-space vertices of the frame before the last step (`keep_previous`),
-    /// and whether the last frame recorded stepped (else nothing moved).
+    /// whether the last frame recorded moved them from there (else nothing moved), and
+    /// whether the vertices hold a step's result at all (not before the first step
+    /// after creation or a reset: there is no frame before to move from).
     previous: Buffer,
     moved: bool,
+    stepped: bool,
 }
 
 impl DynamicGeometry {
@@ -234,6 +237,7 @@ impl DynamicGeometry {
             rebuild_every: if refit { settings.refit_rebuild_every } else { 1 },
             previous,
             moved: false,
+            stepped: false,
         };
         dynamic.rigid.write(0, &dynamic.world.poses());
         Ok(dynamic)
@@ -250,15 +254,18 @@ impl DynamicGeometry {
             c.reset()?;
         }
         self.bvh.reset();
+        self.stepped = false;
         Ok(())
     }
 
     /// Records the copy of the world-space vertices as they are (the last frame's)
     /// before this frame's step rewrites them, for the G-buffer's motion; or, `stepped`
-    /// false (paused), nothing: this frame's geometry is the last one's.
+    /// false (paused), nothing: this frame's geometry is the last one's. The first
+    /// step (after creation or a reset) has no frame before it: no motion.
     pub fn keep_previous(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, stepped: bool) {
-        self.moved = stepped;
-        if !stepped {
+        self.moved = stepped && self.stepped;
+        self.stepped |= stepped;
+        if !self.moved {
             return;
         }
         // RAW on the vertices (the last step's writes), WAR on the copy (the last

@@ -199,7 +199,8 @@ fn bodies_above_the_screen_appear_in_hybrid_where_rt_puts_them() {
 /// where it is not zero, it equals the displacement a CPU ray cast through the pixel
 /// finds on the moving triangle it hits (its vertices' last-frame positions minus this
 /// frame's, interpolated at the hit), within half-float rounding; it is zero on the
-/// static geometry, and everywhere once the scene is paused.
+/// static geometry, and everywhere in the first frame (of a renderer, and after a
+/// restart: no frame before it) and once the scene is paused.
 #[test]
 fn motion_takes_each_point_back_to_where_it_was() {
     use glam::{IVec2, Vec3};
@@ -213,7 +214,22 @@ fn motion_takes_each_point_back_to_where_it_was() {
             ..Default::default()
         };
         let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
-        for _ in 0..12 {
+        let motionless = |r: &Renderer| {
+            let m = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.out.motion).unwrap());
+            m.iter().all(|m| m[..3] == [0.0; 3])
+        };
+        // The first frame has no frame before it, nor the first after a restart.
+        r.render_frame().unwrap();
+        assert!(motionless(&r), "{}: motion in the first frame", scene.name);
+        r.render_frame().unwrap();
+        r.reset_simulation().unwrap();
+        r.render_frame().unwrap();
+        assert!(
+            motionless(&r),
+            "{}: motion in the first frame after a reset",
+            scene.name
+        );
+        for _ in 0..11 {
             r.render_frame().unwrap();
         }
         let before = r.read_dynamic_vertices().unwrap().unwrap();
@@ -279,12 +295,7 @@ fn motion_takes_each_point_back_to_where_it_was() {
         assert!(still > w * h / 4, "{}: {still} still pixels", scene.name);
         r.set_paused(true);
         r.render_frame().unwrap();
-        let paused = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.out.motion).unwrap());
-        assert!(
-            paused.iter().all(|m| m[..3] == [0.0; 3]),
-            "{}: paused, yet moving",
-            scene.name
-        );
+        assert!(motionless(&r), "{}: paused, yet moving", scene.name);
     }
     assert_eq!(ctx.validation_messages(), 0);
 }

@@ -13,6 +13,20 @@ use speculum::gpu_types::GpuVertex;
 use speculum::passes::sim_transform::SimTransformPass;
 use speculum::vk::Buffer;
 
+/// What a vertex no kernel wrote reads as.
+const POISON: GpuVertex = GpuVertex {
+    position: [f32::NAN; 3],
+    material: 0xdead,
+    normal: [-7.0; 3],
+    object: 0xbeef,
+};
+
+/// A world-space vertex buffer of `len` vertices, all `POISON`, that tests read back.
+fn poisoned_world(ctx: &std::sync::Arc<speculum::vk::Context>, len: usize) -> Buffer {
+    let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
+    Buffer::with_data(ctx, "test.world", usage, bytemuck::cast_slice(&vec![POISON; len])).unwrap()
+}
+
 #[test]
 fn transform_matches_cpu_reference() {
     let ctx = common::context();
@@ -59,17 +73,7 @@ fn transform_matches_cpu_reference() {
     let storage = ash::vk::BufferUsageFlags::STORAGE_BUFFER;
     let objects = Buffer::with_data(&ctx, "test.objects", storage, bytemuck::cast_slice(&vertices)).unwrap();
     let pose_buffer = Buffer::with_data(&ctx, "test.poses", storage, bytemuck::cast_slice(&poses)).unwrap();
-    let poison = vec![
-        GpuVertex {
-            position: [f32::NAN; 3],
-            material: 0xdead,
-            normal: [-7.0; 3],
-            object: 0xbeef,
-        };
-        count + 5
-    ];
-    let readable = storage | ash::vk::BufferUsageFlags::TRANSFER_SRC;
-    let world = Buffer::with_data(&ctx, "test.world", readable, bytemuck::cast_slice(&poison)).unwrap();
+    let world = poisoned_world(&ctx, count + 5);
     let pass = SimTransformPass::new(&ctx).unwrap();
     ctx.one_shot(|cmd| pass.record(cmd, &objects, &pose_buffer, &world, count as u32))
         .unwrap();
@@ -85,7 +89,7 @@ fn transform_matches_cpu_reference() {
     }
     // Past the count nothing is written.
     for v in &gpu[count..count + 5] {
-        assert_eq!((v.material, v.object), (0xdead, 0xbeef));
+        assert_eq!((v.material, v.object), (POISON.material, POISON.object));
     }
 }
 
@@ -141,17 +145,7 @@ fn cloth_steps_match_cpu_reference() {
     }
     state.push.stiffness = 0.8;
     let n = cpu.len();
-    let storage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_SRC;
-    let poison = vec![
-        GpuVertex {
-            position: [f32::NAN; 3],
-            material: 0xdead,
-            normal: [-7.0; 3],
-            object: 0xbeef
-        };
-        base as usize + n + 3
-    ];
-    let world = Buffer::with_data(&ctx, "test.world", storage, bytemuck::cast_slice(&poison)).unwrap();
+    let world = poisoned_world(&ctx, base as usize + n + 3);
     let pass = ClothPass::new(&ctx).unwrap();
     let spheres = cloth.spheres.clone();
     for step in 0..6 {
@@ -170,7 +164,10 @@ fn cloth_steps_match_cpu_reference() {
     let want = speculum::cpu_ref::cloth::vertices(&cpu, &state.push);
     let got: Vec<GpuVertex> = bytemuck::pod_collect_to_vec(&world.read().unwrap());
     for v in &got[..base as usize] {
-        assert_eq!(v.material, 0xdead, "nothing before the cloth's vertices is written");
+        assert_eq!(
+            v.material, POISON.material,
+            "nothing before the cloth's vertices is written"
+        );
     }
     for (i, (g, w)) in got[base as usize..base as usize + n].iter().zip(&want).enumerate() {
         assert_eq!(g.material, 3, "vertex {i}");
@@ -181,7 +178,7 @@ fn cloth_steps_match_cpu_reference() {
             w.normal
         );
     }
-    assert_eq!(got[base as usize + n].material, 0xdead);
+    assert_eq!(got[base as usize + n].material, POISON.material);
     // The sheet moved.
     let start = cloth.particles();
     assert!((Vec3::from(cpu[n / 2].pos) - Vec3::from(start[n / 2].pos)).length() > 0.01);
@@ -252,17 +249,7 @@ fn skin_matches_cpu_reference() {
     let objects = buffer("test.objects", bytemuck::cast_slice(&vertices));
     let influence_buffer = buffer("test.influences", bytemuck::cast_slice(&influences));
     let joint_buffer = buffer("test.joints", bytemuck::cast_slice(&joints));
-    let poison = vec![
-        GpuVertex {
-            position: [f32::NAN; 3],
-            material: 0xdead,
-            normal: [-7.0; 3],
-            object: 0xbeef,
-        };
-        count + 5
-    ];
-    let readable = storage | ash::vk::BufferUsageFlags::TRANSFER_SRC;
-    let world = Buffer::with_data(&ctx, "test.world", readable, bytemuck::cast_slice(&poison)).unwrap();
+    let world = poisoned_world(&ctx, count + 5);
     let pass = SimSkinPass::new(&ctx).unwrap();
     ctx.one_shot(|cmd| pass.record(cmd, (&objects, &influence_buffer, &joint_buffer), &world, count as u32))
         .unwrap();
@@ -293,7 +280,11 @@ fn skin_matches_cpu_reference() {
         "{still} vertices in their bind pose"
     );
     for v in &gpu[count..count + 5] {
-        assert_eq!((v.material, v.object), (0xdead, 0xbeef), "written past the count");
+        assert_eq!(
+            (v.material, v.object),
+            (POISON.material, POISON.object),
+            "written past the count"
+        );
     }
     assert_eq!(ctx.validation_messages(), 0);
 }

@@ -16,6 +16,8 @@ layout(binding = 3, std430) writeonly buffer World { Vertex world_vertices[]; };
 
 layout(push_constant) uniform Push {
     uint vertex_count;
+    // Where the first vertex goes in the world vertices.
+    uint first;
 } pc;
 
 void main() {
@@ -39,5 +41,5 @@ void main() {
         float len = length(n);
         v.normal = len > 0.0 ? n / len : v.normal;
     }
-    world_vertices[i] = v;
+    world_vertices[pc.first + i] = v;
 }

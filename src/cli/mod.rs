@@ -103,6 +103,14 @@ pub struct ViewArgs {
     /// Bodies a scene with a [spawn] table drops (`stress`: 100 by default), 1..=4000.
     #[arg(long)]
     pub bodies: Option<u32>,
+    /// The animation an animated model plays, by index or name [default: the scene
+    /// file's, or the model's first].
+    #[arg(long)]
+    pub animation: Option<speculum::scene::animated::Choice>,
+    /// The animation's time at the first frame, seconds [default: the start]: render
+    /// one instant with `--frames 1`.
+    #[arg(long, allow_hyphen_values = true)]
+    pub time: Option<f32>,
 }
 
 /// "x,y,z" as a vector of three finite numbers.
@@ -151,6 +159,29 @@ impl ViewArgs {
         if let Some(d) = self.sun_dir {
             scene.light.direction = d.normalize_or_zero();
             scene.light.check().map_err(|e| anyhow::anyhow!("--sun-dir: {e}"))?;
+        }
+        self.apply_animation(scene)
+    }
+
+    /// `--animation` and `--time`, for a scene with an animated model.
+    fn apply_animation(&self, scene: &mut speculum::scene::Scene) -> Result<()> {
+        if self.animation.is_none() && self.time.is_none() {
+            return Ok(());
+        }
+        let Some(a) = &mut scene.animated else {
+            anyhow::bail!(
+                "--animation and --time need a scene with an animated model; '{}' has none",
+                scene.name
+            );
+        };
+        if let Some(choice) = &self.animation {
+            a.select(choice).map_err(|e| anyhow::anyhow!("--animation: {e}"))?;
+        }
+        if let Some(t) = self.time {
+            if !t.is_finite() {
+                anyhow::bail!("--time {t} is not a finite number of seconds");
+            }
+            a.start = t;
         }
         Ok(())
     }

@@ -9,10 +9,9 @@ use crate::error::Result;
 use crate::shader_defines::LBVH_WG;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
+use crate::vk::{Buffer, Context, Groups, Pipeline, Resource, Staged};
 use ash::vk;
 use glam::Mat4;
-use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub const NAME: &str = "sim.transform";
@@ -23,10 +22,8 @@ pub const MAX_VERTICES: u32 = 65535 * LBVH_WG;
 /// The rigid bodies on the GPU: their vertices in their own spaces (`GpuVertex`,
 /// `object` = the body), and their poses, written by the host per frame slot.
 pub struct RigidBodies {
-    ctx: Arc<Context>,
     objects: Buffer,
-    poses: Buffer,
-    staging: Vec<Buffer>,
+    poses: Staged,
     /// Vertices the transform moves.
     pub vertex_count: u32,
 }
@@ -42,33 +39,21 @@ impl RigidBodies {
     ) -> Result<Self> {
         let bytes = (bodies * std::mem::size_of::<Mat4>()) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let poses = storage | vk::BufferUsageFlags::TRANSFER_DST;
         Ok(Self {
-            ctx: ctx.clone(),
             objects: Buffer::with_data(
                 ctx,
                 "dynamic.objects",
                 storage | crate::vk::accel::input_usage(ctx),
                 bytemuck::cast_slice(vertices),
             )?,
-            poses: Buffer::new(ctx, "dynamic.poses", bytes, poses, MemoryLocation::GpuOnly)?,
-            staging: vec![Self::staging(ctx, bytes)?],
+            poses: Staged::new(ctx, "dynamic.poses", bytes, storage)?,
             vertex_count: count,
         })
     }
 
-    fn staging(ctx: &Arc<Context>, bytes: u64) -> Result<Buffer> {
-        let usage = vk::BufferUsageFlags::TRANSFER_SRC;
-        Buffer::new(ctx, "dynamic.poses_staging", bytes, usage, MemoryLocation::CpuToGpu)
-    }
-
     /// Frame slots (one staging buffer each); the GPU must be idle.
     pub fn set_slots(&mut self, n: usize) -> Result<()> {
-        self.staging.truncate(n);
-        while self.staging.len() < n {
-            self.staging.push(Self::staging(&self.ctx, self.poses.size)?);
-        }
-        Ok(())
+        self.poses.set_slots(n)
     }
 
     /// The bodies' vertices in their own spaces.
@@ -79,18 +64,17 @@ impl RigidBodies {
     /// The poses `record_posed` last copied (one `Mat4` per body), which a rigid
     /// rebuild of the BVH reads.
     pub fn poses(&self) -> &Buffer {
-        &self.poses
+        &self.poses.device
     }
 
     pub fn slots(&self) -> usize {
-        self.staging.len()
+        self.poses.slots()
     }
 
     /// Writes `poses` (one per body) for the next frame recorded with `slot`, whose
     /// previous frame must have finished.
     pub fn write(&mut self, slot: usize, poses: &[Mat4]) {
-        let bytes: &[u8] = bytemuck::cast_slice(poses);
-        self.staging[slot].mapped_mut().expect("CpuToGpu is mapped")[..bytes.len()].copy_from_slice(bytes);
+        self.poses.write(slot, bytemuck::cast_slice(poses));
     }
 }
 
@@ -110,14 +94,9 @@ impl SimTransformPass {
     /// Records the copy of `slot`'s poses of `bodies` to the GPU, then the transform of
     /// their vertices into `world` (as `record`).
     pub fn record_posed(&self, cmd: vk::CommandBuffer, bodies: &RigidBodies, slot: usize, world: &Buffer) {
-        let d = &self.ctx.device;
-        // WAR: the previous frame's transform read the poses before they change.
-        barrier::global(d, cmd, access::COMPUTE_READ, access::TRANSFER_WRITE);
-        let region = vk::BufferCopy::default().size(bodies.poses.size);
-        unsafe { d.cmd_copy_buffer(cmd, bodies.staging[slot].raw, bodies.poses.raw, &[region]) };
-        // RAW: the transform reads the poses just copied.
-        barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ);
-        self.record(cmd, &bodies.objects, &bodies.poses, world, bodies.vertex_count);
+        // After the previous frame's compute reads; visible to this one's.
+        bodies.poses.record_upload(cmd, slot);
+        self.record(cmd, &bodies.objects, &bodies.poses.device, world, bodies.vertex_count);
     }
 
     /// Records the transform of `count` vertices of `objects` (`GpuVertex`, `object` =

@@ -16,7 +16,7 @@ use crate::passes::rt_reflect::{self, ReflectInputs};
 use crate::passes::ssr_hiz;
 use crate::passes::ssr_trace::{self, MarchInputs};
 use crate::passes::{
-    gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_transform, ssr_compact, SceneGeometry,
+    gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_skin, sim_transform, ssr_compact, SceneGeometry,
 };
 use crate::passes::{TraceScene, Traceable, Tracing};
 use crate::settings::Mode;
@@ -39,6 +39,7 @@ pub enum Row {
     SimRigid,
     SimTransform,
     SimCloth,
+    SimSkin,
     /// The dynamic BVH's rebuild or refit (`lbvh.*`; the static BVH is built once).
     DynamicBvh,
     /// The vendor tracer's structures of a moving scene (`as.*`; the static ones are
@@ -64,11 +65,12 @@ pub enum Row {
 
 impl Row {
     /// Every row, in frame order.
-    pub const ALL: [Row; 20] = [
+    pub const ALL: [Row; 21] = [
         Row::Uniforms,
         Row::SimRigid,
         Row::SimTransform,
         Row::SimCloth,
+        Row::SimSkin,
         Row::DynamicBvh,
         Row::DynamicAccel,
         Row::ShadowMap,
@@ -95,6 +97,7 @@ impl Row {
             Row::SimRigid => &[SIM_RIGID],
             Row::SimTransform => &[sim_transform::NAME],
             Row::SimCloth => &[sim_cloth::NAME],
+            Row::SimSkin => &[sim_skin::NAME],
             Row::DynamicBvh => &DynamicBvh::SCOPES,
             Row::DynamicAccel => &khr::SCOPES,
             Row::ShadowMap => &[shadow_map::NAME],
@@ -246,6 +249,7 @@ impl Renderer {
             dynamic,
             transform,
             cloth,
+            skin,
             builder,
             slots,
             fail_mask_view,
@@ -280,6 +284,15 @@ impl Renderer {
                         dy.keep_previous(d, cmd, true);
                     }
                     dy.cloths.iter().for_each(|c| cloth.record(cmd, c, &dy.mesh.vertices))
+                });
+            }
+            if dy.animated.is_some() {
+                f.row(Row::SimSkin, || {
+                    if dy.rigid.vertex_count == 0 && dy.cloths.is_empty() {
+                        dy.keep_previous(d, cmd, true);
+                    }
+                    let (model, _) = dy.animated.as_ref().expect("checked");
+                    skin.record_posed(cmd, model, slot, &dy.mesh.vertices)
                 });
             }
             match khr {

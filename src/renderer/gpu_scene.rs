@@ -10,9 +10,11 @@ use crate::passes::lbvh::dynamic::DynamicBvh;
 use crate::passes::lbvh::rigid::{self, RigidKeys, RigidLayout};
 use crate::passes::lbvh::{self, Geometry, TriangleTexels};
 use crate::passes::sim_cloth::ClothState;
+use crate::passes::sim_skin::{self, Skinned};
 use crate::passes::sim_transform::{self, RigidBodies};
 use crate::passes::Traceable;
 use crate::passes::{SceneGeometry, Surfaces};
+use crate::scene::animated::Animated;
 use crate::scene::{texture, Scene};
 use crate::settings::Settings;
 use crate::sim::rigid::RigidWorld;
@@ -141,8 +143,9 @@ fn upload_textures(ctx: &Arc<Context>, scene: &Scene) -> Result<Image> {
 }
 
 /// The bodies' triangle ranges in the dynamic numbering with the first body of the same
-/// shape (`BodyShape`: the same object-space triangles), and the cloths' range: what the
-/// vendor tracer builds its bottom levels over.
+/// shape (`BodyShape`: the same object-space triangles), and the deformable range (the
+/// cloths' and the animated model's triangles): what the vendor tracer builds its
+/// bottom levels over.
 pub(super) fn khr_ranges(scene: &Scene) -> (Vec<BodyRange>, Option<(u32, u32)>) {
     let mut first_of_shape = std::collections::HashMap::new();
     let mut first_tri = 0u32;
@@ -158,19 +161,24 @@ pub(super) fn khr_ranges(scene: &Scene) -> (Vec<BodyRange>, Option<(u32, u32)>) 
         });
         first_tri += tris;
     }
-    let cloth_tris: u32 = scene.cloths.iter().map(|c| 2 * (c.resolution - 1).pow(2)).sum();
+    // The animated model's triangles follow the cloths': one deformable range.
+    let cloth_tris: u32 = scene.cloths.iter().map(|c| 2 * (c.resolution - 1).pow(2)).sum::<u32>()
+        + scene.animated.as_ref().map_or(0, |a| a.indices.len() as u32 / 3);
     (bodies, (cloth_tris > 0).then_some((first_tri, cloth_tris)))
 }
 
-/// The moving geometry of a scene with bodies: its simulation (`sim.rigid` on the
-/// host), the rigid bodies' vertices and poses (`sim.transform`), the cloths
-/// (`sim.cloth`), the world-space vertices those two write, and the BVH over them.
+/// The moving geometry of a dynamic scene: its simulation (`sim.rigid` on the host),
+/// the rigid bodies' vertices and poses (`sim.transform`), the cloths (`sim.cloth`),
+/// the animated model and its clock (`sim.skin`), the world-space vertices those
+/// write, and the BVH over them.
 pub(super) struct DynamicGeometry {
     pub world: RigidWorld,
     pub rigid: RigidBodies,
     /// The world-space vertices `sim.transform` and `sim.cloth` write.
     pub mesh: MeshBuffers,
     pub cloths: Vec<ClothState>,
+    /// The animated model on the GPU, and as the scene has it (its clock and rig).
+    pub animated: Option<(Skinned, Animated)>,
     pub bvh: DynamicBvh,
     /// `khr_ranges` of the scene.
     pub khr_ranges: (Vec<BodyRange>, Option<(u32, u32)>),
@@ -183,6 +191,9 @@ pub(super) struct DynamicGeometry {
     previous: Buffer,
     moved: bool,
     stepped: bool,
+    /// The renderer's origin and the time step (for the animated model's matrices).
+    origin: Vec3,
+    dt: f64,
 }
 
 impl DynamicGeometry {
@@ -212,6 +223,21 @@ impl DynamicGeometry {
             cloths.push(ClothState::new(ctx, c, settings.sim_dt, base, origin)?);
             base += c.resolution * c.resolution;
         }
+        let animated = match &scene.animated {
+            Some(a) => {
+                ctx.check_limit(
+                    || "the animated model".to_string(),
+                    a.vertices.len() as u64,
+                    "vertices",
+                    "sim.skin's dispatch (65535 workgroups)",
+                    sim_skin::MAX_VERTICES as u64,
+                )?;
+                let first = meshes.animated_vertices as u32;
+                let gpu = Skinned::new(ctx, &a.vertices, &a.influences, a.joints.len(), first)?;
+                Some((gpu, a.clone()))
+            }
+            None => None,
+        };
         // Refit (cloth only, unless `cloth_rebuild`): rigid bodies move too far apart.
         let refit = scene.bodies.is_empty() && !settings.cloth_rebuild;
         let mut bvh = DynamicBvh::new(ctx, tris, refit, settings.refit_rebuild_every)?;
@@ -232,15 +258,45 @@ impl DynamicGeometry {
             rigid: RigidBodies::new(ctx, &meshes.vertices, vertex_count, scene.bodies.len())?,
             mesh: MeshBuffers::new(ctx, "dynamic", world_vertices, &meshes.uvs, &meshes.indices)?,
             cloths,
+            animated,
             bvh,
             khr_ranges: khr_ranges(scene),
             rebuild_every: if refit { settings.refit_rebuild_every } else { 1 },
             previous,
             moved: false,
             stepped: false,
+            origin,
+            dt: settings.sim_dt as f64,
         };
         dynamic.rigid.write(0, &dynamic.world.poses());
+        dynamic.pose_model(0);
         Ok(dynamic)
+    }
+
+    /// Frame slots (one staging buffer each for the poses and the joints); the GPU
+    /// must be idle.
+    pub fn set_slots(&mut self, n: usize) -> Result<()> {
+        self.rigid.set_slots(n)?;
+        if let Some((gpu, _)) = &mut self.animated {
+            gpu.set_slots(n)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the animated model's matrices at the current step for the frame
+    /// recorded with `slot` (the first frame after a reset shows the start).
+    fn pose_model(&mut self, slot: usize) {
+        let elapsed = self.world.steps() as f64 * self.dt;
+        if let Some((gpu, a)) = &mut self.animated {
+            gpu.write(slot, &a.matrices(a.time(elapsed), self.origin));
+        }
+    }
+
+    /// The animation's time of the frame last recorded (after `step`), if the scene
+    /// has an animated model.
+    pub fn animation_time(&self) -> Option<f32> {
+        let a = &self.animated.as_ref()?.1;
+        Some(a.time(self.world.steps().saturating_sub(1) as f64 * self.dt))
     }
 
     /// Back to the initial state: the world, the cloths, and a fresh build next frame.
@@ -252,6 +308,9 @@ impl DynamicGeometry {
         }
         for c in &self.cloths {
             c.reset()?;
+        }
+        for slot in 0..self.rigid.slots() {
+            self.pose_model(slot);
         }
         self.bvh.reset();
         self.stepped = false;
@@ -312,6 +371,7 @@ impl DynamicGeometry {
     /// One `sim.rigid` step, its poses written for the frame recorded with `slot`
     /// (whose previous frame has finished: nothing reads its staging poses).
     pub fn step(&mut self, slot: usize) {
+        self.pose_model(slot);
         self.world.step();
         self.rigid.write(slot, &self.world.poses());
     }

@@ -37,6 +37,7 @@ use crate::passes::rt_reflect::RtReflectPass;
 use crate::passes::shadow_map::ShadowMapPass;
 use crate::passes::shadow_trace::{self, ShadowTracePass};
 use crate::passes::sim_cloth::ClothPass;
+use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_compact::{self, CompactPass};
 use crate::passes::ssr_hiz::HiZPass;
@@ -113,6 +114,7 @@ pub struct Renderer {
     dynamic: Option<DynamicGeometry>,
     transform: SimTransformPass,
     cloth: ClothPass,
+    skin: SimSkinPass,
     builder: LbvhBuilder,
     /// One per frame that may be in flight (`set_frames_in_flight`); `render_frame`
     /// uses the first.
@@ -229,6 +231,7 @@ impl Renderer {
             dynamic,
             transform: SimTransformPass::new(ctx)?,
             cloth: ClothPass::new(ctx)?,
+            skin: SimSkinPass::new(ctx)?,
             builder,
             slots: vec![FrameSlot::new(ctx)?],
             fail_mask_view: false,
@@ -388,7 +391,7 @@ impl Renderer {
             self.slots.push(FrameSlot::new(&self.ctx)?);
         }
         if let Some(d) = &mut self.dynamic {
-            d.rigid.set_slots(n)?;
+            d.set_slots(n)?;
         }
         if let Some(k) = &mut self.khr {
             k.set_slots(n)?;
@@ -404,6 +407,12 @@ impl Renderer {
     /// Time steps the dynamic scene has taken since its initial state (0 for a static one).
     pub fn sim_steps(&self) -> u64 {
         self.dynamic.as_ref().map_or(0, |d| d.world.steps())
+    }
+
+    /// The animation's time (seconds) of the last frame rendered, if the scene has an
+    /// animated model.
+    pub fn animation_time(&self) -> Option<f32> {
+        self.dynamic.as_ref().and_then(|d| d.animation_time())
     }
 
     /// Triangles of the dynamic geometry (0 for a static scene).

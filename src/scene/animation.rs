@@ -7,6 +7,7 @@
 //! gives a skin's matrices from that, and `skin_vertex` is the linear blend skinning of
 //! one vertex: the CPU reference of the skinning pass to come.
 
+use crate::gpu_types::GpuInfluence;
 use glam::{Mat3, Mat4, Quat, Vec3, Vec4};
 
 /// The deepest node hierarchy a rig may have (root = depth 1): the pose walk and the
@@ -314,6 +315,27 @@ impl Rig {
         world.into_iter().map(|m| m.unwrap_or(Mat4::IDENTITY)).collect()
     }
 
+    /// Which nodes some animation moves: a channel's target and every node beneath
+    /// one. A checked rig.
+    pub fn moved(&self) -> Vec<bool> {
+        let mut target = vec![false; self.parents.len()];
+        for ch in self.animations.iter().flat_map(|a| &a.channels) {
+            target[ch.node] = true;
+        }
+        (0..self.parents.len())
+            .map(|i| {
+                let mut at = Some(i);
+                while let Some(n) = at {
+                    if target[n] {
+                        return true;
+                    }
+                    at = self.parents[n];
+                }
+                false
+            })
+            .collect()
+    }
+
     /// The skinning matrices of `skin` from the nodes' `world` matrices: each joint's
     /// world matrix times its inverse bind matrix, in the world of the skinned mesh's
     /// node `mesh_world` (glTF: the mesh node's own transform is ignored; its
@@ -348,6 +370,26 @@ pub fn skin_vertex(p: Vec3, n: Vec3, joints: [u16; 4], weights: [f32; 4], matric
     (m.transform_point3(p), normal.normalize_or(n))
 }
 
+/// `mesh` skinned by `influences` (one per vertex) and `matrices` (`skin_vertex`).
+pub fn skin_mesh(
+    mesh: &crate::scene::TriMesh,
+    influences: &[GpuInfluence],
+    matrices: &[Mat4],
+) -> crate::scene::TriMesh {
+    let (positions, normals) = mesh
+        .positions
+        .iter()
+        .zip(&mesh.normals)
+        .zip(influences)
+        .map(|((&p, &n), f)| skin_vertex(p, n, f.joint_indices(), f.weights, matrices))
+        .unzip();
+    crate::scene::TriMesh {
+        positions,
+        normals,
+        ..mesh.clone()
+    }
+}
+
 /// A generated skinned mesh: a tube (`segments` around, `rings` along, height 2, radius
 /// 0.2, on the y axis from 0 up) bound to a chain of `joints` joints spaced evenly up
 /// it (node k the child of node k - 1, k > 0), each vertex weighted to the two joints
@@ -355,11 +397,7 @@ pub fn skin_vertex(p: Vec3, n: Vec3, joints: [u16; 4], weights: [f32; 4], matric
 /// 17 linear keys) turns joint k about z by 0.4 sin(2 pi t) (k + 1) / joints radians,
 /// so at t = 0 and 0.5 the tube stands straight. 2 x segments x rings triangles: the
 /// animated-geometry benchmark's mesh (issue 41 asks for one of 200K or more).
-pub fn skinned_tube(
-    segments: u32,
-    rings: u32,
-    joints: u32,
-) -> (crate::scene::TriMesh, Vec<crate::gpu_types::GpuInfluence>, Rig) {
+pub fn skinned_tube(segments: u32, rings: u32, joints: u32) -> (crate::scene::TriMesh, Vec<GpuInfluence>, Rig) {
     let (height, radius) = (2.0f32, 0.2f32);
     let step = height / joints as f32;
     let mut mesh = crate::scene::TriMesh::default();
@@ -377,10 +415,7 @@ pub fn skinned_tube(
             mesh.normals.push(n);
             mesh.uvs
                 .push(glam::Vec2::new(s as f32 / segments as f32, r as f32 / rings as f32));
-            influences.push(crate::gpu_types::GpuInfluence::new(
-                [j, above, 0, 0],
-                [1.0 - share, share, 0.0, 0.0],
-            ));
+            influences.push(GpuInfluence::new([j, above, 0, 0], [1.0 - share, share, 0.0, 0.0]));
         }
     }
     for r in 0..rings {

@@ -42,7 +42,7 @@ impl SceneBuilder {
                     horizon: Vec3::new(0.75, 0.8, 0.9),
                 },
                 warnings: Vec::new(),
-                rig: None,
+                animated: None,
             },
         }
     }
@@ -102,7 +102,8 @@ impl SceneBuilder {
     }
 
     /// Adds every triangle of `scene` moved by `transform`, with its own materials, or
-    /// all with `material` when given.
+    /// all with `material` when given; its animated model too (placed by `transform`),
+    /// replacing any this scene had.
     pub fn append(&mut self, scene: &Scene, transform: Mat4, material: Option<u32>) -> &mut Self {
         let offset = self.scene.materials.len() as u32;
         if material.is_none() {
@@ -129,6 +130,15 @@ impl SceneBuilder {
         }));
         self.scene.indices.extend(scene.indices.iter().map(|i| base + i));
         self.scene.warnings.extend(scene.warnings.iter().cloned());
+        if let Some(a) = &scene.animated {
+            let mut a = a.clone();
+            a.placement = transform * a.placement;
+            for v in &mut a.vertices {
+                v.material = material.unwrap_or(v.material + offset);
+            }
+            // One animated model a scene (the caller refuses a second).
+            self.scene.animated = Some(a);
+        }
         self
     }
 

@@ -6,9 +6,11 @@
 //! A transform is `translate * rotate * scale`, `rotate` in degrees about x, then y, then
 //! z (the matrix `Rz * Ry * Rx`), `scale` uniform or per axis.
 
+use super::instance::plays_as;
+pub use super::instance::{Instance, Scale};
 use super::{Camera, Light, Material, Scene, SceneBuilder, Sky, TriMesh};
 use crate::error::{Error, Result};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -196,76 +198,6 @@ pub struct MaterialDesc {
     pub roughness_texture: Option<String>,
 }
 
-/// What an instance places: exactly one of the shape keys.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Instance {
-    /// A rectangle [width, depth] in the xz-plane facing +y.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub plane: Option<[f32; 2]>,
-    /// A box of these full extents, centred.
-    #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
-    pub cuboid: Option<[f32; 3]>,
-    /// A UV sphere of this radius (`segments` around, 3..=1024, `rings` pole to pole,
-    /// 2..=512).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sphere: Option<f32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub segments: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rings: Option<u32>,
-    /// A model file (OBJ with its MTL, or PLY), relative to the scene file.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub model: Option<String>,
-    /// A material of `materials` by name: required for primitives; for a model it
-    /// replaces every material of the file.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub material: Option<String>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub translate: Option<[f32; 3]>,
-    /// Degrees about x, then y, then z.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rotate: Option<[f32; 3]>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub scale: Option<Scale>,
-}
-
-/// Uniform or per-axis scale.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
-pub enum Scale {
-    Uniform(f32),
-    Axes([f32; 3]),
-}
-
-impl Instance {
-    /// `translate * Rz * Ry * Rx * scale`; factors that are the identity are left out,
-    /// so a plain translation is exactly `Mat4::from_translation`.
-    pub fn transform(&self) -> Mat4 {
-        let mut m = Mat4::IDENTITY;
-        if let Some(t) = self.translate {
-            m = Mat4::from_translation(Vec3::from(t));
-        }
-        if let Some([x, y, z]) = self.rotate {
-            for (angle, rot) in [
-                (z, Mat4::from_rotation_z as fn(f32) -> Mat4),
-                (y, Mat4::from_rotation_y),
-                (x, Mat4::from_rotation_x),
-            ] {
-                if angle != 0.0 {
-                    m *= rot(angle.to_radians());
-                }
-            }
-        }
-        match self.scale {
-            Some(Scale::Uniform(s)) if s != 1.0 => m *= Mat4::from_scale(Vec3::splat(s)),
-            Some(Scale::Axes(s)) if s != [1.0; 3] => m *= Mat4::from_scale(Vec3::from(s)),
-            _ => {}
-        }
-        m
-    }
-}
-
 /// Most segments around and rings from pole to pole of a scene file's sphere.
 const MAX_SEGMENTS: u32 = 1024;
 const MAX_RINGS: u32 = 512;
@@ -441,11 +373,37 @@ impl Build<'_> {
             })
         };
         let transform = inst.transform();
+        let plays = inst.animation.is_some() || inst.speed.is_some() || inst.looping.is_some();
         if let Some(model) = &inst.model {
             let scene = super::load_model(&self.dir.join(model))?;
             let material = inst.material.as_deref().map(find).transpose()?;
+            match (&scene.animated, &self.b.scene.animated) {
+                (Some(_), Some(_)) => {
+                    return Err(self.bad(format!(
+                        "instance {}: a second animated model ('{model}'); a scene plays one",
+                        i + 1
+                    )))
+                }
+                (None, _) if plays => {
+                    return Err(self.bad(format!(
+                        "instance {}: animation, speed and loop are for a model with animations; '{model}' has none",
+                        i + 1
+                    )))
+                }
+                _ => {}
+            }
             self.b.append(&scene, transform, material);
+            if scene.animated.is_some() {
+                let a = self.b.scene.animated.as_mut().expect("appended");
+                plays_as(a, inst).map_err(|e| self.bad(format!("instance {}: {e}", i + 1)))?;
+            }
             return Ok(());
+        }
+        if plays {
+            return Err(self.bad(format!(
+                "instance {}: animation, speed and loop are for an animated model",
+                i + 1
+            )));
         }
         let mesh = if let Some([w, d]) = inst.plane {
             TriMesh::quad(w, d)

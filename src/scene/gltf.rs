@@ -14,10 +14,13 @@
 //! does not have) = 1: the roughness cut-offs judge each texel (a mirror below
 //! `glossy_mirror_max`, a GGX lobe below `glossy_rough_max`, the sky term above).
 
+use super::animated::{Animated, MAX_JOINTS};
+use super::animation::Rig;
 use super::geometry::{smooth_normals, CREASE_ANGLE_DEG};
 use super::Texture;
 use super::{Camera, Material, Scene, SceneBuilder, TriMesh};
 use crate::error::{Error, Result};
+use crate::gpu_types::GpuInfluence;
 use glam::{Mat4, Vec2, Vec3};
 use std::path::Path;
 
@@ -153,50 +156,7 @@ fn check_indices(doc: &gltf::Document) -> std::result::Result<(), String> {
     for (ti, t) in j.textures.iter().enumerate() {
         within(format!("texture {ti}"), t.source.value(), j.images.len(), "image")?;
     }
-    check_rig_indices(j, within)
-}
-
-/// `check_indices` for the animations and skins: channel targets and samplers, sampler
-/// and inverse-bind accessors, joints and skeletons, nodes' skins.
-fn check_rig_indices(
-    j: &gltf::json::Root,
-    within: impl Fn(String, usize, usize, &str) -> std::result::Result<(), String>,
-) -> std::result::Result<(), String> {
-    let (nodes, accessors) = (j.nodes.len(), j.accessors.len());
-    for (ai, a) in j.animations.iter().enumerate() {
-        for (ci, c) in a.channels.iter().enumerate() {
-            let at = format!("animation {ai} channel {ci}");
-            within(format!("{at}'s target"), c.target.node.value(), nodes, "node")?;
-            within(at, c.sampler.value(), a.samplers.len(), "sampler")?;
-        }
-        for (si, s) in a.samplers.iter().enumerate() {
-            let at = format!("animation {ai} sampler {si}");
-            within(format!("{at}'s input"), s.input.value(), accessors, "accessor")?;
-            within(format!("{at}'s output"), s.output.value(), accessors, "accessor")?;
-        }
-    }
-    for (si, s) in j.skins.iter().enumerate() {
-        for jn in &s.joints {
-            within(format!("skin {si}'s joints"), jn.value(), nodes, "node")?;
-        }
-        if let Some(m) = &s.inverse_bind_matrices {
-            within(
-                format!("skin {si}'s inverse bind matrices"),
-                m.value(),
-                accessors,
-                "accessor",
-            )?;
-        }
-        if let Some(k) = &s.skeleton {
-            within(format!("skin {si}'s skeleton"), k.value(), nodes, "node")?;
-        }
-    }
-    for (ni, n) in j.nodes.iter().enumerate() {
-        if let Some(s) = &n.skin {
-            within(format!("node {ni}"), s.value(), j.skins.len(), "skin")?;
-        }
-    }
-    Ok(())
+    super::gltf_rig::check_indices(j, within)
 }
 
 /// The node graph is a forest: no node is its own descendant (the walk below would
@@ -338,34 +298,61 @@ fn walk(path: &Path, doc: &gltf::Document, buffers: &[gltf::buffer::Data], base:
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| w.bad("no scene".into()))?;
+    let rig = super::gltf_rig::read(doc, buffers, &mut w.warnings).map_err(|e| w.bad(e))?;
+    let moved = rig.as_ref().map(Rig::moved).unwrap_or_default();
+    let rest = rig.as_ref().map(|r| r.world(None, 0.0)).unwrap_or_default();
+    // With an animation, what it moves is dynamic (`Animated`); without, skins stand
+    // posed at rest.
+    let mut animated = rig.clone().filter(|r| !r.animations.is_empty()).map(Animated::new);
+    let too_many = || format!("its animated meshes need more than {MAX_JOINTS} joints");
     let mut stack: Vec<(gltf::Node<'_>, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
         let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         stack.extend(node.children().map(|c| (c, m)));
         let Some(mesh) = node.mesh() else { continue };
         for prim in mesh.primitives() {
-            w.primitive(&mesh, &prim, m)?;
+            let Some((tri, id, source)) = w.primitive(&mesh, &prim)? else {
+                continue;
+            };
+            match (node.skin(), animated.as_mut(), &rig) {
+                (Some(skin), Some(a), _) => {
+                    let base = a.skin_joints(skin.index()).ok_or_else(|| w.bad(too_many()))?;
+                    a.push(&tri, id, &w.influences(&prim, &source, base));
+                }
+                (Some(skin), None, Some(rig)) => {
+                    let matrices = rig.joint_matrices(&rig.skins[skin.index()], &rest, Mat4::IDENTITY);
+                    let posed = super::animation::skin_mesh(&tri, &w.influences(&prim, &source, 0), &matrices);
+                    w.b.mesh(posed, Mat4::IDENTITY, id);
+                }
+                (None, Some(a), _) if moved[node.index()] => {
+                    let joint = a.node_joint(node.index()).ok_or_else(|| w.bad(too_many()))?;
+                    let one = GpuInfluence::new([joint, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]);
+                    a.push(&tri, id, &vec![one; tri.positions.len()]);
+                }
+                _ => {
+                    w.b.mesh(tri, m, id);
+                }
+            }
         }
     }
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "gltf".into());
-    let rig = super::gltf_rig::read(doc, buffers, &mut w.warnings).map_err(|e| w.bad(e))?;
-    if let Some(r) = &rig {
-        w.warnings.push(format!(
-            "'{}': {} animation(s) and {} skin(s) read and checked; they do not play yet (the model stands in its bind pose)",
-            path.display(),
-            r.animations.len(),
-            r.skins.len()
-        ));
-    }
-    let mut scene = w.b.build()?;
+    w.b.scene.animated = animated.filter(|a| !a.indices.is_empty());
+    let mut scene = match &w.b.scene.animated {
+        // All of it moves: no static triangles until a floor or a scene file's other
+        // instances join it (which validate the whole).
+        Some(a) if w.b.scene.indices.is_empty() => {
+            a.check().map_err(|e| w.bad(format!("its animated meshes: {e}")))?;
+            w.b.scene
+        }
+        _ => w.b.build()?,
+    };
     let (lo, hi) = scene.bounds();
     scene.camera = Camera::framing(lo, hi);
     scene.name = name;
     scene.warnings = w.warnings;
-    scene.rig = rig;
     Ok(scene)
 }
 
@@ -487,17 +474,22 @@ impl Walk<'_> {
         t
     }
 
-    /// One primitive of `mesh` placed by `m`: triangles only (others are skipped with a
+    /// One primitive of `mesh` in its own space, its material, and the file's vertex
+    /// each of its vertices came from: triangles only (others are skipped with a
     /// warning), indices and texture coordinates checked, the file's normals or smooth
-    /// ones.
-    fn primitive(&mut self, mesh: &gltf::Mesh<'_>, prim: &gltf::Primitive<'_>, m: Mat4) -> Result<()> {
+    /// ones (which weld vertices at equal positions: each takes the first's).
+    fn primitive(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        prim: &gltf::Primitive<'_>,
+    ) -> Result<Option<(TriMesh, u32, Vec<u32>)>> {
         let mesh_name = mesh.name().unwrap_or("(unnamed)");
         if prim.mode() != gltf::mesh::Mode::Triangles {
             self.warnings.push(format!(
                 "mesh '{mesh_name}': a {:?} primitive is skipped (triangles only)",
                 prim.mode()
             ));
-            return Ok(());
+            return Ok(None);
         }
         let buffers = self.buffers;
         let reader = prim.reader(|buf| buffers.get(buf.index()).map(|d| &d.0[..]));
@@ -525,16 +517,48 @@ impl Walk<'_> {
             )));
         }
         let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+        let source: Vec<u32>;
         let tri = match normals {
-            Some(normals) if normals.len() == positions.len() => TriMesh {
-                positions,
-                normals: normals.into_iter().map(|n| n.normalize_or(Vec3::Y)).collect(),
-                uvs,
-                indices,
-            },
-            _ => smooth_normals(&positions, &uvs, &indices, CREASE_ANGLE_DEG),
+            Some(normals) if normals.len() == positions.len() => {
+                source = (0..positions.len() as u32).collect();
+                TriMesh {
+                    positions,
+                    normals: normals.into_iter().map(|n| n.normalize_or(Vec3::Y)).collect(),
+                    uvs,
+                    indices,
+                }
+            }
+            _ => {
+                let tri = smooth_normals(&positions, &uvs, &indices, CREASE_ANGLE_DEG);
+                let key = |p: &Vec3| (*p + Vec3::ZERO).to_array().map(f32::to_bits);
+                let mut first = std::collections::HashMap::new();
+                for (i, p) in positions.iter().enumerate().rev() {
+                    first.insert(key(p), i as u32);
+                }
+                source = tri.positions.iter().map(|p| first[&key(p)]).collect();
+                tri
+            }
         };
-        self.b.mesh(tri, m, id);
-        Ok(())
+        Ok(Some((tri, id, source)))
+    }
+
+    /// The influences of `prim`'s vertices (`source`: each one's vertex in the file),
+    /// their joints moved by `base` into the model's palette. Checked already
+    /// (`gltf_rig`): one set of four, as many as the positions, within the skin.
+    fn influences(&self, prim: &gltf::Primitive<'_>, source: &[u32], base: u16) -> Vec<GpuInfluence> {
+        let buffers = self.buffers;
+        let reader = prim.reader(|buf| buffers.get(buf.index()).map(|d| &d.0[..]));
+        let joints: Vec<[u16; 4]> = reader
+            .read_joints(0)
+            .map(|j| j.into_u16().collect())
+            .unwrap_or_default();
+        let weights: Vec<[f32; 4]> = reader
+            .read_weights(0)
+            .map(|w| w.into_f32().collect())
+            .unwrap_or_default();
+        source
+            .iter()
+            .map(|&i| GpuInfluence::new(joints[i as usize].map(|j| j + base), weights[i as usize]))
+            .collect()
     }
 }

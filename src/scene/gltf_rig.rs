@@ -122,18 +122,70 @@ fn check_skinned_primitives(doc: &gltf::Document, rig: &Rig, buffers: &[gltf::bu
             let (Some(js), Some(ws)) = (reader.read_joints(0), reader.read_weights(0)) else {
                 return Err(format!("{at}: a skinned primitive without JOINTS_0 and WEIGHTS_0"));
             };
-            for (v, j) in js.into_u16().enumerate() {
+            let positions = reader.read_positions().map_or(0, |p| p.len());
+            let (js, ws): (Vec<[u16; 4]>, Vec<[f32; 4]>) = (js.into_u16().collect(), ws.into_f32().collect());
+            if js.len() != positions || ws.len() != positions {
+                return Err(format!(
+                    "{at}: {} joint sets and {} weight sets for {positions} positions",
+                    js.len(),
+                    ws.len()
+                ));
+            }
+            for (v, j) in js.iter().enumerate() {
                 if let Some(&bad) = j.iter().find(|&&j| j as usize >= joints) {
                     return Err(format!("{at} vertex {v}: joint {bad}, but its skin has {joints}"));
                 }
             }
-            for (v, w) in ws.into_f32().enumerate() {
+            for (v, w) in ws.iter().enumerate() {
                 if w.iter().any(|w| !w.is_finite() || *w < 0.0) {
                     return Err(format!(
                         "{at} vertex {v}: weights {w:?} are not finite and non-negative"
                     ));
                 }
             }
+        }
+    }
+    Ok(())
+}
+
+/// `gltf::check_indices` for the animations and skins: channel targets and samplers, sampler
+/// and inverse-bind accessors, joints and skeletons, nodes' skins.
+pub(super) fn check_indices(
+    j: &gltf::json::Root,
+    within: impl Fn(String, usize, usize, &str) -> std::result::Result<(), String>,
+) -> std::result::Result<(), String> {
+    let (nodes, accessors) = (j.nodes.len(), j.accessors.len());
+    for (ai, a) in j.animations.iter().enumerate() {
+        for (ci, c) in a.channels.iter().enumerate() {
+            let at = format!("animation {ai} channel {ci}");
+            within(format!("{at}'s target"), c.target.node.value(), nodes, "node")?;
+            within(at, c.sampler.value(), a.samplers.len(), "sampler")?;
+        }
+        for (si, s) in a.samplers.iter().enumerate() {
+            let at = format!("animation {ai} sampler {si}");
+            within(format!("{at}'s input"), s.input.value(), accessors, "accessor")?;
+            within(format!("{at}'s output"), s.output.value(), accessors, "accessor")?;
+        }
+    }
+    for (si, s) in j.skins.iter().enumerate() {
+        for jn in &s.joints {
+            within(format!("skin {si}'s joints"), jn.value(), nodes, "node")?;
+        }
+        if let Some(m) = &s.inverse_bind_matrices {
+            within(
+                format!("skin {si}'s inverse bind matrices"),
+                m.value(),
+                accessors,
+                "accessor",
+            )?;
+        }
+        if let Some(k) = &s.skeleton {
+            within(format!("skin {si}'s skeleton"), k.value(), nodes, "node")?;
+        }
+    }
+    for (ni, n) in j.nodes.iter().enumerate() {
+        if let Some(s) = &n.skin {
+            within(format!("node {ni}"), s.value(), j.skins.len(), "skin")?;
         }
     }
     Ok(())

@@ -7,6 +7,7 @@
 //! sees it: at least one triangle, finite coordinates and texture coordinates, indices
 //! and texture references in range.
 
+pub mod animated;
 pub mod animation;
 mod bodies;
 mod builder;
@@ -17,6 +18,7 @@ pub mod file;
 pub mod geometry;
 pub mod gltf;
 mod gltf_rig;
+mod instance;
 mod material;
 pub mod obj;
 pub mod ply;
@@ -38,9 +40,11 @@ use glam::{Mat4, Vec2, Vec3};
 /// `object` is its body's index; triangles index these vertices.
 #[derive(Clone, Debug, Default)]
 pub struct DynamicMeshes {
-    /// The rigid bodies' vertices first (`rigid_vertices` of them), then the cloths'.
+    /// The rigid bodies' vertices first (`rigid_vertices` of them), then the cloths',
+    /// then the animated model's (from `animated_vertices` on), in their bind pose.
     pub vertices: Vec<GpuVertex>,
     pub rigid_vertices: usize,
+    pub animated_vertices: usize,
     pub uvs: Vec<[f32; 2]>,
     pub indices: Vec<u32>,
 }
@@ -117,14 +121,14 @@ pub struct Scene {
     /// What loading changed without failing (e.g. out-of-range MTL values clamped), one
     /// line each, for the command line to print.
     pub warnings: Vec<String>,
-    /// A glTF file's node hierarchy, animations and skins, read and checked
-    /// (`animation::Rig`); not yet played: the model renders in its bind pose.
-    pub rig: Option<animation::Rig>,
+    /// A glTF model's animated parts (skinned meshes, meshes its node animations
+    /// move) and the animation they play (`animated::Animated`): dynamic geometry.
+    pub animated: Option<animated::Animated>,
 }
 
 impl Scene {
-    /// Axis-aligned bounds of the static vertices and of the bodies where they start
-    /// (min, max).
+    /// Axis-aligned bounds of the static vertices, of the bodies where they start and
+    /// of the animated model at its first frame (min, max).
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let statics = self
             .vertices
@@ -137,9 +141,14 @@ impl Scene {
             let r = Vec3::splat(b.radius());
             (lo.min(b.position - r), hi.max(b.position + r))
         });
-        self.cloths.iter().fold(with_bodies, |(lo, hi), c| {
+        let with_cloths = self.cloths.iter().fold(with_bodies, |(lo, hi), c| {
             let r = Vec3::splat(0.5 * c.size);
             (lo.min(c.center - r), hi.max(c.center + r))
+        });
+        let posed = self.animated.as_ref().map(|a| a.posed(a.time(0.0), Vec3::ZERO));
+        posed.iter().flatten().fold(with_cloths, |(lo, hi), v| {
+            let p = Vec3::from(v.position);
+            (lo.min(p), hi.max(p))
         })
     }
 
@@ -165,7 +174,7 @@ impl Scene {
 
     /// Whether anything moves.
     pub fn is_dynamic(&self) -> bool {
-        !self.bodies.is_empty() || !self.cloths.is_empty()
+        !self.bodies.is_empty() || !self.cloths.is_empty() || self.animated.is_some()
     }
 
     /// A body's mesh in its own space.
@@ -202,6 +211,13 @@ impl Scene {
             out.uvs.extend(uvs);
             out.indices.extend(indices.iter().map(|t| base + t));
         }
+        out.animated_vertices = out.vertices.len();
+        if let Some(a) = &self.animated {
+            let base = out.vertices.len() as u32;
+            out.vertices.extend(&a.vertices);
+            out.uvs.extend(&a.uvs);
+            out.indices.extend(a.indices.iter().map(|t| base + t));
+        }
         out
     }
 
@@ -213,6 +229,7 @@ impl Scene {
             .map(|b| self.body_mesh(b).indices.len() / 3)
             .sum::<usize>()
             + cloth
+            + self.animated.as_ref().map_or(0, |a| a.indices.len() / 3)
     }
 
     /// Number of triangles.
@@ -245,6 +262,16 @@ impl Scene {
         }
         for (i, c) in self.cloths.iter().enumerate() {
             self.check_cloth(i, c).or_else(bad)?;
+        }
+        if let Some(a) = &self.animated {
+            a.check().map_err(|e| format!("the animated model: {e}")).or_else(bad)?;
+            if let Some(m) = a.vertices.iter().find(|v| v.material as usize >= self.materials.len()) {
+                return bad(format!(
+                    "the animated model uses material {}, but there are {}",
+                    m.material,
+                    self.materials.len()
+                ));
+            }
         }
         let (lo, hi) = self.bounds();
         if (hi - lo).max_element() > 1e7 {
@@ -453,10 +480,11 @@ pub fn is_model(name_or_path: &str) -> bool {
 }
 
 /// Puts a model on a square floor `floor` under its lowest point, 8x its footprint
-/// wide, and frames the model with the camera (the far plane taking in the floor).
+/// wide; on a mirror, the camera frames the model and the upper half of its
+/// reflection (the far plane taking in the floor).
 fn stand_on_floor(mut scene: Scene, floor: Floor) -> Result<Scene> {
     let material = match floor {
-        Floor::None => return Ok(scene),
+        Floor::None => return scene.validate().map(|_| scene),
         Floor::Mirror => Material::new("floor (mirror)", [0.6, 0.6, 0.62], 0.03, 1.0).metal(1.0),
         Floor::Matte => Material::new("floor (matte)", [0.55, 0.55, 0.55], 0.9, 0.0),
     };
@@ -466,6 +494,10 @@ fn stand_on_floor(mut scene: Scene, floor: Floor) -> Result<Scene> {
     // A hair below the lowest point: a flat-bottomed model does not z-fight the floor.
     let y = lo.y - 1e-4 * size.max_element().max(1e-3);
     let center = Vec3::new(0.5 * (lo.x + hi.x), y, 0.5 * (lo.z + hi.z));
+    if floor == Floor::Mirror {
+        // Frame the model with the upper half of its reflection: the floor's point.
+        scene.camera = Camera::framing(Vec3::new(lo.x, y - 0.5 * size.y, lo.z), hi);
+    }
     scene.camera.far = scene.camera.far.max((scene.camera.position - center).length() + side);
     let mut b = SceneBuilder { scene };
     let id = b.material(material);

@@ -237,6 +237,64 @@ impl TexelView {
     }
 }
 
+/// A device-local buffer the host rewrites every frame: one mapped staging buffer per
+/// frame slot (a slot's frame has finished before the host writes it again), copied
+/// into the device buffer when the slot's frame is recorded.
+pub struct Staged {
+    ctx: Arc<Context>,
+    name: String,
+    pub device: Buffer,
+    staging: Vec<Buffer>,
+}
+
+impl Staged {
+    /// `size` bytes on the device (with `usage` and as a copy's destination), with one
+    /// staging slot.
+    pub fn new(ctx: &Arc<Context>, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<Self> {
+        let usage = usage | vk::BufferUsageFlags::TRANSFER_DST;
+        Ok(Self {
+            ctx: ctx.clone(),
+            name: name.into(),
+            device: Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?,
+            staging: vec![Self::staging(ctx, name, size)?],
+        })
+    }
+
+    fn staging(ctx: &Arc<Context>, name: &str, size: u64) -> Result<Buffer> {
+        let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+        Buffer::new(ctx, &format!("{name}_staging"), size, usage, MemoryLocation::CpuToGpu)
+    }
+
+    /// One staging buffer per frame slot.
+    pub fn set_slots(&mut self, n: usize) -> Result<()> {
+        self.staging.truncate(n.max(1));
+        while self.staging.len() < n {
+            self.staging
+                .push(Self::staging(&self.ctx, &self.name, self.device.size)?);
+        }
+        Ok(())
+    }
+
+    pub fn slots(&self) -> usize {
+        self.staging.len()
+    }
+
+    /// Writes `bytes` (at most the buffer's size) into slot `slot`'s staging.
+    pub fn write(&mut self, slot: usize, bytes: &[u8]) {
+        self.staging[slot].mapped_mut().expect("CpuToGpu is mapped")[..bytes.len()].copy_from_slice(bytes);
+    }
+
+    /// Records the copy of slot `slot`'s staging into the device buffer, after the
+    /// compute reads of the last frame and visible to this frame's compute reads.
+    pub fn record_upload(&self, cmd: vk::CommandBuffer, slot: usize) {
+        let d = &self.ctx.device;
+        barrier::global(d, cmd, access::COMPUTE_READ, access::TRANSFER_WRITE);
+        let region = vk::BufferCopy::default().size(self.device.size);
+        unsafe { d.cmd_copy_buffer(cmd, self.staging[slot].raw, self.device.raw, &[region]) };
+        barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ);
+    }
+}
+
 impl Drop for TexelView {
     fn drop(&mut self) {
         unsafe { self.ctx.device.destroy_buffer_view(self.raw, None) };

@@ -14,7 +14,7 @@ pub mod spirv;
 pub mod swapchain;
 pub mod timing;
 
-pub use buffer::{Buffer, TexelView};
+pub use buffer::{Buffer, Staged, TexelView};
 pub use context::{list_devices, Context, ContextDesc, Surface, WindowHandles};
 pub use device::DeviceInfo;
 pub use frame_sync::{Acquired, FrameSync};

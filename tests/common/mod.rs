@@ -2,6 +2,7 @@
 //! dropped, random inputs, the binary runner.
 #![allow(dead_code)]
 
+pub mod figure;
 pub mod showcase;
 
 use speculum::vk::{Context, ContextDesc};

@@ -59,7 +59,7 @@ pub fn bricks_jpeg() -> Vec<u8> {
 }
 
 /// Appends `bytes` to the binary buffer (4-byte aligned) and returns a buffer view.
-fn view(bin: &mut Vec<u8>, views: &mut Vec<Value>, bytes: &[u8], target: Option<u32>) -> usize {
+pub fn view(bin: &mut Vec<u8>, views: &mut Vec<Value>, bytes: &[u8], target: Option<u32>) -> usize {
     while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }

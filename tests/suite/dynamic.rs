@@ -22,11 +22,13 @@ fn small(mode: Mode) -> Settings {
     }
 }
 
-/// `drop` (rigid bodies) and `cloth` (the GPU cloth, its BVH refit).
-fn dynamic_scenes() -> [speculum::scene::Scene; 2] {
+/// `drop` (rigid bodies), `cloth` (the GPU cloth, its BVH refit) and the walking
+/// figure (a skinned glTF on a mirror floor, its BVH refit).
+fn dynamic_scenes() -> [speculum::scene::Scene; 3] {
     [
         speculum::scene::builtin::drop().unwrap(),
         speculum::scene::builtin::cloth().unwrap(),
+        speculum::scene::load(crate::animation::FIGURE).unwrap(),
     ]
 }
 

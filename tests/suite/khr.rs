@@ -238,8 +238,8 @@ fn frames(scene: &speculum::scene::Scene, settings: &speculum::Settings, n: usiz
 }
 
 /// Every frame of `drop` (rigid bodies: instances of their shapes' bottom levels, the
-/// top level rebuilt from the poses) and of `cloth` (its bottom level updated every
-/// frame) through the vendor tracer matches the LBVH's, 60 frames each, hybrid with
+/// top level rebuilt from the poses), of `cloth` and of the walking figure (their
+/// deformable bottom level updated every frame) through the vendor tracer matches the LBVH's, 60 frames each, hybrid with
 /// ray shadows; and the cloth updated 29 times in 30 frames renders as the cloth
 /// rebuilt every frame.
 #[test]
@@ -250,8 +250,8 @@ fn khr_moving_scenes_render_what_lbvh_renders() {
         return;
     }
     let (w, h) = (128, 72);
-    for name in ["drop", "cloth"] {
-        let scene = speculum::scene::builtin::by_name(name).unwrap().unwrap();
+    for name in ["drop", "cloth", "assets/models/figure.glb"] {
+        let scene = speculum::scene::load(name).unwrap();
         let settings = |tracer| Settings {
             width: w,
             height: h,

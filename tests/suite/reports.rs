@@ -71,10 +71,11 @@ fn check_stat(v: &Value, what: &str) {
 }
 
 /// The scopes only a dynamic scene runs (these reports are of static scenes).
-const DYNAMIC_SCOPES: [&str; 10] = [
+const DYNAMIC_SCOPES: [&str; 11] = [
     "sim.rigid",
     "sim.transform",
     "sim.cloth",
+    "sim.skin",
     "lbvh.bounds",
     "lbvh.morton",
     "lbvh.sort",

@@ -249,11 +249,15 @@ fn skin_matches_cpu_reference() {
     let objects = buffer("test.objects", bytemuck::cast_slice(&vertices));
     let influence_buffer = buffer("test.influences", bytemuck::cast_slice(&influences));
     let joint_buffer = buffer("test.joints", bytemuck::cast_slice(&joints));
-    let world = poisoned_world(&ctx, count + 5);
+    // The model's vertices start at `first` in the world vertices (after others').
+    let first = 3;
+    let world = poisoned_world(&ctx, first + count + 5);
     let pass = SimSkinPass::new(&ctx).unwrap();
-    ctx.one_shot(|cmd| pass.record(cmd, (&objects, &influence_buffer, &joint_buffer), &world, count as u32))
+    let buffers = (&objects, &influence_buffer, &joint_buffer);
+    ctx.one_shot(|cmd| pass.record(cmd, buffers, &world, first as u32, count as u32))
         .unwrap();
-    let gpu: Vec<GpuVertex> = bytemuck::pod_collect_to_vec(&world.read().unwrap());
+    let all: Vec<GpuVertex> = bytemuck::pod_collect_to_vec(&world.read().unwrap());
+    let gpu = &all[first..];
     let (mut normals, mut still) = (0, 0);
     for (i, (v, f)) in vertices.iter().zip(&influences).enumerate() {
         let (p, n) = (Vec3::from(v.position), Vec3::from(v.normal));
@@ -279,11 +283,11 @@ fn skin_matches_cpu_reference() {
         still > count / 50 && still < count / 10,
         "{still} vertices in their bind pose"
     );
-    for v in &gpu[count..count + 5] {
+    for v in all[..first].iter().chain(&gpu[count..count + 5]) {
         assert_eq!(
             (v.material, v.object),
             (POISON.material, POISON.object),
-            "written past the count"
+            "written outside the model's range"
         );
     }
     assert_eq!(ctx.validation_messages(), 0);

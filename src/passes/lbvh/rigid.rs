@@ -33,7 +33,10 @@ pub const MAX_BODIES: u32 = 1 << 12;
 /// Whether the dynamic BVH of `scene` gets the rigid rebuild (with `rigid_order` on):
 /// its dynamic geometry is rigid bodies alone, 1 to `MAX_BODIES` of them.
 pub fn applies(scene: &Scene, rigid_order: bool) -> bool {
-    rigid_order && scene.cloths.is_empty() && (1..=MAX_BODIES).contains(&(scene.bodies.len() as u32))
+    rigid_order
+        && scene.cloths.is_empty()
+        && scene.animated.is_none()
+        && (1..=MAX_BODIES).contains(&(scene.bodies.len() as u32))
 }
 
 /// The bodies' object-space data a rigid rebuild needs, computed once.

@@ -281,7 +281,7 @@ mod tests {
         assert!(
             json.starts_with(
                 "{\"uniforms\":null,\"sim.rigid\":null,\"sim.transform\":null,\"sim.cloth\":null,\
-                 \"lbvh.bounds\":null,\"lbvh.morton\":null,\"lbvh.sort\":null,\
+                 \"sim.skin\":null,\"lbvh.bounds\":null,\"lbvh.morton\":null,\"lbvh.sort\":null,\
                  \"lbvh.fit\":null,\"lbvh.refit\":null,\"as.cloth\":null,\"as.tlas\":null,\
                  \"shadow.map\":null,\"gbuffer\":{\"median\":2.0"
             ),

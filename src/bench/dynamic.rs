@@ -1,7 +1,8 @@
 //! `speculum bench dynamic`: what a moving scene costs per frame as its dynamic
-//! geometry grows. For each body count of a scene with a `[spawn]` (`stress`), or each
-//! cloth resolution of a scene with cloths (`cloth`), the
-//! frames of one run give the medians of `sim.rigid` (CPU), `sim.transform`, the
+//! geometry grows. For each body count of a scene with a `[spawn]` (`stress`), each
+//! cloth resolution of a scene with cloths (`cloth`), or each size of a skinned tube
+//! (`builtin::skinned_tube`), the
+//! frames of one run give the medians of `sim.rigid` (CPU), `sim.transform`, `sim.skin`, the
 //! dynamic BVH's rebuild (its five `lbvh.*` stages summed per frame), a refit of the
 //! same BVH over the same frame (timed after the frame, side by side), `rt.reflect`
 //! and the frame. At the last frame, rays are traced through the BVH rebuilt that
@@ -44,12 +45,17 @@ pub struct DynamicPoint {
     pub sim_transform_ms: Stat,
     /// The cloths' step (0 without cloth).
     pub sim_cloth_ms: Stat,
+    /// The animated model's skinning (0 without one).
+    pub sim_skin_ms: Stat,
     /// The per-frame rebuild: `lbvh.bounds` … `lbvh.fit` summed.
     pub rebuild_ms: Stat,
     /// `lbvh.refit` of the same BVH over the same frame's vertices.
     pub refit_ms: Stat,
     /// Median over frames of refit / rebuild.
     pub refit_over_rebuild: f64,
+    /// With an animated model, the median over frames of (`sim.skin` + refit) /
+    /// rebuild: what following the skin costs against rebuilding its tree.
+    pub skin_refit_over_rebuild: Option<f64>,
     pub rt_reflect_ms: Stat,
     pub frame_ms: Stat,
     /// GPU ms (`rt.trace`, median of 3) to trace `rays` random rays at the last frame
@@ -129,11 +135,12 @@ fn trace_median(
 }
 
 /// Per measured frame, the figures `measure_frames` lists.
-type Series = [Vec<f64>; 8];
+type Series = [Vec<f64>; 10];
 
 /// Renders `frames` frames of `r`: per frame the ms of `sim.rigid`, `sim.transform`,
-/// `sim.cloth`, the rebuild, the scheduled refit a frame would do instead (timed apart,
-/// its schedule made outside the timing), `rt.reflect`, the frame, and refit / rebuild;
+/// `sim.cloth`, `sim.skin`, the rebuild, the scheduled refit a frame would do instead (timed apart,
+/// its schedule made outside the timing), `rt.reflect`, the frame, refit / rebuild and
+/// (skin + refit) / rebuild;
 /// and a tree built at the first frame with its refit schedule, to refit at the end.
 fn measure_frames(
     ctx: &Arc<Context>,
@@ -172,15 +179,18 @@ fn measure_frames(
         timing.add_measured(refit.problem.as_deref(), discarded);
         let refit = refit.get(lbvh::REFIT).unwrap_or(f64::NAN);
         let rebuild: f64 = BUILD.iter().map(|s| get(s)).sum();
+        let skin = get(crate::passes::sim_skin::NAME);
         for (s, v) in series.iter_mut().zip([
             get(SIM_RIGID),
             get(crate::passes::sim_transform::NAME),
             get(crate::passes::sim_cloth::NAME),
+            skin,
             rebuild,
             refit,
             get(crate::passes::rt_reflect::NAME),
             get(FRAME),
             refit / rebuild,
+            (skin + refit) / rebuild,
         ]) {
             s.push(v);
         }
@@ -241,7 +251,7 @@ pub fn run_point(
     let sample = rays.min(2000);
     let (m1, _) = check_hits(&ray_set, &rebuilt_hits, &cpu, &vertices, &indices, sample);
     let (m2, _) = check_hits(&ray_set, &refit_hits, &cpu, &vertices, &indices, sample);
-    let [sim, transform, cloth, rebuild, refit, rt_reflect, frame, ratio] = series;
+    let [sim, transform, cloth, skin, rebuild, refit, rt_reflect, frame, ratio, skin_ratio] = series;
     let mismatches = m1 + m2;
     let frame_ms = stat(&frame);
     let khr = match ctx.ray_tracing {
@@ -263,9 +273,11 @@ pub fn run_point(
         sim_rigid_ms: stat(&sim),
         sim_transform_ms: stat(&transform),
         sim_cloth_ms: stat(&cloth),
+        sim_skin_ms: stat(&skin),
         rebuild_ms: stat(&rebuild),
         refit_ms: stat(&refit),
         refit_over_rebuild: stat(&ratio).median,
+        skin_refit_over_rebuild: scene.animated.is_some().then(|| stat(&skin_ratio).median),
         rt_reflect_ms: stat(&rt_reflect),
         frame_ms,
         trace_rebuilt_ms,

@@ -184,6 +184,37 @@ pub fn stress() -> Result<Scene> {
     named("stress")
 }
 
+/// The triangle counts `skinned_tube` takes.
+pub const TUBE_TRIANGLES: std::ops::RangeInclusive<u32> = 1_000..=4_000_000;
+
+/// A generated skinned tube (`animation::skinned_tube`: 256 around, 16 joints, its
+/// one-second sway looping) of about `triangles` triangles (the next whole ring up) in
+/// `TUBE_TRIANGLES`, in chrome on a mirror floor: the animated-geometry benchmark's
+/// scene (`bench dynamic --skinned`).
+pub fn skinned_tube(triangles: u32) -> Result<Scene> {
+    use super::{animated::Animated, camera::Camera, Material, SceneBuilder, TriMesh};
+    use glam::{Mat4, Vec3};
+    if !TUBE_TRIANGLES.contains(&triangles) {
+        return Err(Error::Input(format!(
+            "a skinned tube takes {}..={} triangles, not {triangles}",
+            TUBE_TRIANGLES.start(),
+            TUBE_TRIANGLES.end()
+        )));
+    }
+    let segments = 256;
+    let (mesh, influences, rig) = super::animation::skinned_tube(segments, triangles.div_ceil(2 * segments), 16);
+    let mut b = SceneBuilder::new(&format!("tube:{triangles}"));
+    let floor = b.material(Material::new("floor (mirror)", [0.6, 0.6, 0.62], 0.03, 1.0).metal(1.0));
+    let chrome = b.material(Material::new("chrome", [0.95, 0.93, 0.88], 0.15, 1.0).metal(1.0));
+    b.mesh(TriMesh::quad(6.0, 6.0), Mat4::IDENTITY, floor);
+    b.camera(Camera::framing(Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, 2.2, 1.0)));
+    let mut a = Animated::new(rig);
+    a.skin_joints(0).expect("16 joints");
+    a.push(&mesh, chrome, &influences);
+    b.scene.animated = Some(a);
+    b.build()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

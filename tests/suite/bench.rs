@@ -249,6 +249,52 @@ fn small_dynamic_benchmark_is_valid() {
     assert!(points[1].dynamic_triangles > 2 * points[0].dynamic_triangles);
 }
 
+/// `bench dynamic --skinned`: a skinned tube's point is valid, its skinning and
+/// (skin + refit) / rebuild measured, none without an animated model; the command
+/// takes one axis and a size in range, or says why in one line.
+#[test]
+fn skinned_dynamic_benchmark_is_valid() {
+    let ctx = common::context();
+    let settings = speculum::Settings {
+        width: 96,
+        height: 54,
+        ..Default::default()
+    };
+    let scene = speculum::scene::builtin::skinned_tube(20_000).unwrap();
+    assert_eq!(scene.dynamic_triangle_count(), 2 * 256 * 40);
+    let p = speculum::bench::dynamic::run_point(&ctx, &scene, &settings, 1, 4, 3000, &mut || {}).unwrap();
+    assert!(p.valid, "{p:?}");
+    assert!(p.sim_skin_ms.median > 0.0 && p.refit_ms.median > 0.0 && p.rebuild_ms.median > 0.0);
+    let want = (p.sim_skin_ms.median + p.refit_ms.median) / p.rebuild_ms.median;
+    let got = p.skin_refit_over_rebuild.unwrap();
+    assert!(
+        got > 0.0 && got < 10.0 * want && want < 10.0 * got,
+        "{got} vs medians' {want}"
+    );
+    let mut stress = speculum::scene::builtin::stress().unwrap();
+    stress.set_spawn_count(2).unwrap();
+    let q = speculum::bench::dynamic::run_point(&ctx, &stress, &settings, 0, 1, 100, &mut || {}).unwrap();
+    assert_eq!((q.skin_refit_over_rebuild, q.sim_skin_ms.median), (None, 0.0));
+    for (args, says) in [
+        (
+            &["--skinned", "10"][..],
+            "a skinned tube takes 1000..=4000000 triangles, not 10",
+        ),
+        (
+            &["--skinned", "5000", "--bodies", "3"][..],
+            "give one of --bodies, --cloth-res and --skinned",
+        ),
+    ] {
+        let out = speculum_bin(&[&["bench", "dynamic", "--quiet"][..], args].concat());
+        let lines: Vec<&str> = out.stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert!(
+            !out.ok() && lines.len() == 1 && lines[0].contains(says),
+            "{}",
+            out.stderr
+        );
+    }
+}
+
 fn speculum_bin(args: &[&str]) -> common::Output {
     common::speculum(args).run()
 }

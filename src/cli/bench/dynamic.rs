@@ -1,4 +1,5 @@
-//! `speculum bench dynamic`: a dynamic scene's per-frame costs as its bodies grow.
+//! `speculum bench dynamic`: a dynamic scene's per-frame costs as its bodies, its
+//! cloths or a skinned mesh grow.
 
 use super::{valid_or_fail, Common};
 use crate::cli::{check_count, check_outputs, progress, SettingsArgs, Text};
@@ -20,6 +21,11 @@ pub struct DynamicArgs {
     /// each resolution in its own run.
     #[arg(long, num_args = 1..)]
     pub cloth_res: Vec<u32>,
+    /// Instead: a generated skinned tube of about this many triangles (1000..=4000000;
+    /// 16 joints swaying, on a mirror floor), each size in its own run (`--scene` is
+    /// not read).
+    #[arg(long, num_args = 1..)]
+    pub skinned: Vec<u32>,
     /// Measured frames per body count.
     #[arg(long, default_value_t = 30)]
     pub frames: u32,
@@ -47,7 +53,7 @@ pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
         &[("--settings", args.frame.settings.as_deref())],
     )?;
     // Every body count's scene first: a bad one fails before any GPU work.
-    let (scenes, by_cloth) = point_scenes(&args)?;
+    let (scenes, axis) = point_scenes(&args)?;
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
     let per = (args.frames + args.warmup) as u64;
@@ -68,7 +74,10 @@ pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
     let (first, last) = (&points[0], &points[points.len() - 1]);
     let report = DynamicReport {
         header: Header::new("bench.dynamic", Some(&ctx), Some(&settings)),
-        scene: args.scene.clone(),
+        scene: match axis {
+            Axis::Skinned => "skinned tube".into(),
+            _ => args.scene.clone(),
+        },
         resolution: [settings.width, settings.height],
         frames: args.frames,
         warmup_frames: args.warmup,
@@ -82,7 +91,7 @@ pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
         &report,
         &ctx.device_name,
         (&scenes, &settings),
-        by_cloth,
+        axis,
         args.frames,
     );
     let timing: speculum::vk::TimingCheck = report.points.iter().map(|p| &p.timing).collect();
@@ -94,13 +103,49 @@ pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
     valid_or_fail(report.valid)
 }
 
-/// The scene of every point (`--bodies` counts, or `--cloth-res` resolutions), each
-/// checked; and whether the points vary the cloth.
-fn point_scenes(args: &DynamicArgs) -> Result<(Vec<speculum::scene::Scene>, bool)> {
-    if !args.bodies.is_empty() && !args.cloth_res.is_empty() {
-        anyhow::bail!("give --bodies or --cloth-res, not both");
+/// What the points vary.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Axis {
+    Bodies,
+    Cloth,
+    Skinned,
+}
+
+impl Axis {
+    /// The table's first column, its step column, and their values of `p`.
+    fn columns(self) -> (&'static str, &'static str) {
+        match self {
+            Axis::Bodies => ("bodies", "sim.transform"),
+            Axis::Cloth => ("cloth", "sim.cloth"),
+            Axis::Skinned => ("joints", "sim.skin"),
+        }
     }
-    let by_cloth = !args.cloth_res.is_empty();
+
+    fn values(self, p: &speculum::bench::dynamic::DynamicPoint) -> (u32, f64) {
+        match self {
+            Axis::Bodies => (p.bodies, p.sim_transform_ms.median),
+            Axis::Cloth => (p.cloth_resolution, p.sim_cloth_ms.median),
+            Axis::Skinned => (16, p.sim_skin_ms.median),
+        }
+    }
+}
+
+/// The scene of every point (`--bodies` counts, `--cloth-res` resolutions or
+/// `--skinned` sizes), each checked; and what the points vary.
+fn point_scenes(args: &DynamicArgs) -> Result<(Vec<speculum::scene::Scene>, Axis)> {
+    let given = [
+        !args.bodies.is_empty(),
+        !args.cloth_res.is_empty(),
+        !args.skinned.is_empty(),
+    ];
+    if given.iter().filter(|g| **g).count() > 1 {
+        anyhow::bail!("give one of --bodies, --cloth-res and --skinned");
+    }
+    if given[2] {
+        let scenes = args.skinned.iter().map(|&n| speculum::scene::builtin::skinned_tube(n));
+        return Ok((scenes.collect::<speculum::error::Result<Vec<_>>>()?, Axis::Skinned));
+    }
+    let by_cloth = given[1];
     let scenes = if !by_cloth {
         let counts = if args.bodies.is_empty() {
             vec![10, 100, 1000]
@@ -134,7 +179,7 @@ fn point_scenes(args: &DynamicArgs) -> Result<(Vec<speculum::scene::Scene>, bool
             })
             .collect::<Result<Vec<_>>>()?
     };
-    Ok((scenes, by_cloth))
+    Ok((scenes, if by_cloth { Axis::Cloth } else { Axis::Bodies }))
 }
 
 /// The table of points, with which rebuild the bodies got.
@@ -143,47 +188,35 @@ fn print_points(
     report: &speculum::bench::dynamic::DynamicReport,
     device: &str,
     (scenes, settings): (&[speculum::scene::Scene], &speculum::Settings),
-    by_cloth: bool,
+    axis: Axis,
     frames: u32,
 ) {
     // Which rebuild the bodies get (the renderer's rule).
     let rigid = scenes
         .iter()
         .all(|s| speculum::passes::lbvh::rigid::applies(s, settings.rigid_order));
-    let rebuild = match (by_cloth, rigid) {
-        (true, _) => "",
-        (false, true) => "; bodies rebuilt in their own order, rigid_order",
-        (false, false) => "; every triangle sorted at each rebuild",
+    let rebuild = match (axis, rigid) {
+        (Axis::Cloth | Axis::Skinned, _) => "",
+        (Axis::Bodies, true) => "; bodies rebuilt in their own order, rigid_order",
+        (Axis::Bodies, false) => "; every triangle sorted at each rebuild",
     };
+    let (first, step) = axis.columns();
     text.line(format_args!(
         "{} on {}: {}x{}, median of {} frames per body count (ms; sim.rigid is CPU{rebuild})",
         report.scene, device, settings.width, settings.height, frames
     ));
     text.line(format_args!(
         "  {:>6} {:>9} {:>9} {:>13} {:>9} {:>8} {:>7} {:>10} {:>9} {:>9} {:>9}",
-        if by_cloth { "cloth" } else { "bodies" },
-        "tris",
-        "sim.rigid",
-        if by_cloth { "sim.cloth" } else { "sim.transform" },
-        "rebuild",
-        "refit",
-        "ratio",
-        "rt.reflect",
-        "frame",
-        "trace new",
-        "trace old"
+        first, "tris", "sim.rigid", step, "rebuild", "refit", "ratio", "rt.reflect", "frame", "trace new", "trace old"
     ));
     for p in &report.points {
+        let (value, step_ms) = axis.values(p);
         text.line(format_args!(
             "  {:>6} {:>9} {:>9.2} {:>13.2} {:>9.2} {:>8.2} {:>7.3} {:>10.1} {:>9.1} {:>9.2} {:>9.2}",
-            if by_cloth { p.cloth_resolution } else { p.bodies },
+            value,
             p.dynamic_triangles,
             p.sim_rigid_ms.median,
-            if by_cloth {
-                p.sim_cloth_ms.median
-            } else {
-                p.sim_transform_ms.median
-            },
+            step_ms,
             p.rebuild_ms.median,
             p.refit_ms.median,
             p.refit_over_rebuild,
@@ -199,11 +232,19 @@ fn print_points(
         report.triangle_growth,
         if report.valid { "valid" } else { "INVALID" }
     ));
-    print_khr_points(text, report, by_cloth);
+    for p in &report.points {
+        if let Some(r) = p.skin_refit_over_rebuild {
+            text.line(format_args!(
+                "  {} triangles: (sim.skin + refit) / rebuild = {r:.3} (median of per-frame ratios)",
+                p.dynamic_triangles
+            ));
+        }
+    }
+    print_khr_points(text, report, axis);
 }
 
 /// The same frames through the vendor tracer, where the device has it.
-fn print_khr_points(text: &Text, report: &speculum::bench::dynamic::DynamicReport, by_cloth: bool) {
+fn print_khr_points(text: &Text, report: &speculum::bench::dynamic::DynamicReport, axis: Axis) {
     if report.points.iter().all(|p| p.khr.is_none()) {
         return;
     }
@@ -212,7 +253,7 @@ fn print_khr_points(text: &Text, report: &speculum::bench::dynamic::DynamicRepor
     ));
     text.line(format_args!(
         "  {:>6} {:>9} {:>9} {:>10} {:>9} {:>15}",
-        if by_cloth { "cloth" } else { "bodies" },
+        axis.columns().0,
         "as.tlas",
         "as.cloth",
         "rt.reflect",
@@ -223,7 +264,7 @@ fn print_khr_points(text: &Text, report: &speculum::bench::dynamic::DynamicRepor
         if let Some(k) = &p.khr {
             text.line(format_args!(
                 "  {:>6} {:>9.2} {:>9.2} {:>10.1} {:>9.1} {:>14.2}x",
-                if by_cloth { p.cloth_resolution } else { p.bodies },
+                axis.values(p).0,
                 k.as_tlas_ms.median,
                 k.as_cloth_ms.median,
                 k.rt_reflect_ms.median,

@@ -188,6 +188,7 @@ impl Demo {
             dynamic: self.renderer.is_dynamic(),
             paused: self.renderer.paused(),
             sim_steps: self.renderer.sim_steps(),
+            animation_time: self.renderer.animation_time(),
             fail_mask: self.renderer.fail_mask_view(),
             compare: self.compare,
             message: &self.message,

@@ -34,6 +34,8 @@ pub struct HudInfo<'a> {
     pub dynamic: bool,
     pub paused: bool,
     pub sim_steps: u64,
+    /// The animated model's time in its animation, if the scene has one.
+    pub animation_time: Option<f32>,
     pub fail_mask: bool,
     /// SSIM and RMSE of the last "compare with rt", and the mode compared.
     pub compare: Option<(f64, f64, Mode)>,
@@ -113,9 +115,11 @@ pub fn draw(ctx: &egui::Context, info: &HudInfo<'_>) -> Vec<Request> {
                     .default_open(true)
                     .show(ui, |ui| {
                         ui.label(format!(
-                            "step {} · t = {:.2} s{}",
+                            "step {} · t = {:.2} s{}{}",
                             info.sim_steps,
                             info.sim_steps as f32 * s.sim_dt,
+                            info.animation_time
+                                .map_or(String::new(), |t| format!(" · animation at {t:.2} s")),
                             if info.paused { " · paused" } else { "" }
                         ));
                         ui.horizontal(|ui| {
@@ -419,6 +423,7 @@ mod tests {
             dynamic: true,
             paused: false,
             sim_steps: 3,
+            animation_time: Some(0.05),
             fail_mask: true,
             compare: Some((0.99, 0.01, Mode::Hybrid)),
             message: "",

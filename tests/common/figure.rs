@@ -1,6 +1,6 @@
 //! The animated sample character (`assets/models/figure.glb`): a jointed figure of 21
 //! joints (hips, spine, chest, neck, head; each side a clavicle, upper arm, forearm,
-//! hand, thigh, shin, foot and toe) skinned by tubes along its bones, about 2,700
+//! hand, thigh, shin, foot and toe) skinned by tubes along its bones, 2,964
 //! triangles: a blue suit and a chrome head and hands. Two animations: "walk" (one
 //! second, looping in place: legs and arms swinging by linear keys, the hips bobbing
 //! on a cubic spline, the head nodding by step keys) and "wave" (two seconds: the right

@@ -112,7 +112,7 @@ enum Axis {
 }
 
 impl Axis {
-    /// The table's first column, its step column, and their values of `p`.
+    /// The table's first column and its step column.
     fn columns(self) -> (&'static str, &'static str) {
         match self {
             Axis::Bodies => ("bodies", "sim.transform"),
@@ -121,6 +121,7 @@ impl Axis {
         }
     }
 
+    /// Point `p`'s values of those two columns.
     fn values(self, p: &speculum::bench::dynamic::DynamicPoint) -> (u32, f64) {
         match self {
             Axis::Bodies => (p.bodies, p.sim_transform_ms.median),

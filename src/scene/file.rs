@@ -464,6 +464,12 @@ impl Build<'_> {
             Some(other) => return Err(self.bad(format!("body {}: collider '{other}' is neither hull nor mesh", i + 1))),
         };
         let m = super::load_model(&self.dir.join(model))?;
+        if m.animated.is_some() {
+            return Err(self.bad(format!(
+                "body {}: '{model}' is animated; an animated model plays as an [[instance]], not as a body",
+                i + 1
+            )));
+        }
         let scale = body.scale.unwrap_or(1.0);
         if !(scale.is_finite() && scale > 0.0) {
             return Err(self.bad(format!("body {}: scale {scale} must be > 0", i + 1)));

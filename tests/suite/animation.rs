@@ -363,7 +363,8 @@ fn scene_files_and_flags_choose_how_it_plays() {
 /// animation the model does not have (by name or index), a time that is not finite,
 /// `--time` on a scene that does not move so, and in a scene file an unknown
 /// animation, a speed that is not finite, animation keys on a primitive or on a
-/// model without animations, and a second animated model.
+/// model without animations, a second animated model, and an animated model as a
+/// rigid body.
 #[test]
 fn bad_ways_to_play_are_refused_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
@@ -391,6 +392,10 @@ fn bad_ways_to_play_are_refused_in_one_line() {
         (
             "[[instance]]\nmodel = \"tri.obj\"\nanimation = 0\n",
             "'tri.obj' has none",
+        ),
+        (
+            "[[body]]\nmodel = \"figure.glb\"\nmaterial = \"m\"\ntranslate = [0, 2, 0]\n",
+            "body 1: 'figure.glb' is animated; an animated model plays as an [[instance]]",
         ),
         (
             "[[instance]]\nmodel = \"figure.glb\"\n[[instance]]\nmodel = \"plain.gltf\"\n",

@@ -24,8 +24,9 @@ layout(push_constant) uniform ComposePush {
     float reflective_min; // COMPOSE_FAIL_MASK: which pixels reflect
 } pc;
 
-const uint FAIL_COLOURS[9] = uint[](MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3,
-                                    MASK_COLOUR_4, MASK_COLOUR_5, MASK_COLOUR_6, MASK_COLOUR_7, MASK_COLOUR_8);
+const uint FAIL_COLOURS[10] = uint[](MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3,
+                                     MASK_COLOUR_4, MASK_COLOUR_5, MASK_COLOUR_6, MASK_COLOUR_7, MASK_COLOUR_8,
+                                     MASK_COLOUR_9);
 
 // Beyond 7.24 the ACES fit is flat at 1, and clamping its input here keeps x * x far
 // from f32 overflow (near 1.8e19, where inf / inf would give NaN): e.g. exposure 1e20.
@@ -49,7 +50,7 @@ void main() {
         if (texelFetch(gb_material, p, 0).r != MATERIAL_NONE && texelFetch(gb_normal, p, 0).w > pc.reflective_min) {
             uint m = imageLoad(fail_mask, p).r;
             uint reason = (m & FAIL_UNTRACED) != 0u ? FAIL_UNTRACED : m;
-            rgb = m == 0u ? MASK_COLOUR_SSR_OK : FAIL_COLOURS[uint(findLSB(reason)) % 9u];
+            rgb = m == 0u ? MASK_COLOUR_SSR_OK : FAIL_COLOURS[uint(findLSB(reason)) % 10u];
         }
         imageStore(ldr, p, vec4(unpackUnorm4x8(rgb).rgb, 1.0));
         return;
@@ -60,10 +61,14 @@ void main() {
         uint source = uint(r.a);
         if (pc.mode == COMPOSE_PROVENANCE) {
             // The method's figures: pink = ray traced, blue = SSR, grey = no reflector;
-            // a glossy surface's (glossy.glsl) in lighter pink and blue.
+            // a glossy surface's (glossy.glsl) in lighter pink and blue; a rays-only
+            // tile's traced pixels (FAIL_SKIPPED, the adaptive hybrid) orange.
             vec3 tint = source == SOURCE_RT ? vec3(1.0, 0.25, 0.6) : (source == SOURCE_SSR ? vec3(0.15, 0.35, 1.0) : vec3(0.35));
             if (source != SOURCE_NONE && is_glossy(texelFetch(gb_albedo, p, 0).a)) {
                 tint = source == SOURCE_RT ? vec3(1.0, 0.45, 0.75) : vec3(0.45, 0.6, 1.0);
+            }
+            if (source == SOURCE_RT && imageLoad(fail_mask, p).r == FAIL_SKIPPED) {
+                tint = vec3(1.0, 0.55, 0.1);
             }
             float luma = dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
             imageStore(ldr, p, vec4(tint * (0.55 + 0.45 * clamp(luma, 0.0, 1.0)), 1.0));

@@ -10,7 +10,11 @@
 // edges and for rays heading back to the camera. Writes SSR colour + confidence and the fail mask (reason bits,
 // shader_defines.rs) of the listed pixels; nonzero sends the pixel to rt.trace
 // (FAIL_BLEND: a faded hit, kept and blended with the ray-traced colour by merge).
+// Counts each tile's marched pixels and those SSR answered (fail 0) into the adaptive
+// hybrid's tile buffer (ssr_classify.comp), for the next frame's classification.
 // CPU reference: cpu_ref::ssr::march (tests/ssr.rs).
+#extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "ssr.glsl"
 #include "shading.glsl"
 #include "pixel_list.glsl"
@@ -31,6 +35,8 @@ layout(binding = 10, std430) readonly buffer Pyramid { float pyramid[]; };
 // The mean distance (view space) from the pixel's surface to its rays' hits; HIT_FAR
 // where SSR did not answer (rt.reflect writes the traced pixels').
 layout(binding = 11, r32f) uniform writeonly image2D hit_distance;
+// This frame's tile state and counts (TILE_WORDS a tile; ssr.classify zeroed the counts).
+layout(binding = 12, std430) buffer Tiles { uint tiles[]; };
 
 // true: the hierarchical march through the pyramid; false: the linear DDA.
 layout(constant_id = 0) const bool HIZ = true;
@@ -338,6 +344,28 @@ void judge(Found found, vec3 vdir, vec3 own, ivec2 res, out uint fail, out float
     }
 }
 
+// Adds the marched pixel p, answered or not, to its tile's counts: one atomic pair a
+// subgroup when all its lanes are in one tile (the list is appended a classify
+// subgroup at a time, so runs of entries share a tile), else one a lane.
+void count_in_tile(ivec2 p, bool answered) {
+    uint groups_x = (frame.resolution.x + WG_2D - 1u) / WG_2D;
+    uint t = (uint(p.y) / WG_2D) * groups_x + uint(p.x) / WG_2D;
+    uint first = subgroupBroadcastFirst(t);
+    bool one_tile = subgroupBallotBitCount(subgroupBallot(t == first)) == subgroupBallotBitCount(subgroupBallot(true));
+    if (one_tile) {
+        uint m = subgroupAdd(1u), a = subgroupAdd(answered ? 1u : 0u);
+        if (subgroupElect()) {
+            atomicAdd(tiles[t * TILE_WORDS + 1u], m);
+            atomicAdd(tiles[t * TILE_WORDS + 2u], a);
+        }
+    } else {
+        atomicAdd(tiles[t * TILE_WORDS + 1u], 1u);
+        if (answered) {
+            atomicAdd(tiles[t * TILE_WORDS + 2u], 1u);
+        }
+    }
+}
+
 void main() {
     uint i = list_entry(march_args.w, SSR_LIST_WG);
     if (i >= march_args.w) {
@@ -408,6 +436,7 @@ void main() {
             }
         }
     }
+    count_in_tile(p, fail == 0u);
     bool kept = fail == 0u || fail == FAIL_BLEND;
     imageStore(ssr_out, p, vec4(color, kept ? confidence : 0.0));
     imageStore(fail_mask, p, uvec4(fail));

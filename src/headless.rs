@@ -66,8 +66,27 @@ pub struct TimingsReport {
     pub ssim_vs_rt: Option<f64>,
     pub rmse_vs_rt: Option<f64>,
     pub rt_frame_ms: Option<Stat>,
+    /// A hybrid frame's split of the work (`hybrid_policy`); `null` in other modes.
+    pub hybrid: Option<HybridSplit>,
     /// The self-check of every measured frame, the reference's included (`vk::timing`).
     pub timing: TimingCheck,
+}
+
+/// How the last hybrid frame split its reflective tiles between the march and the ray
+/// tracer.
+#[derive(Clone, Debug, Serialize)]
+pub struct HybridSplit {
+    pub policy: String,
+    /// The exchange rate the tiles used (a march's cost in rays; 0: every tile
+    /// SSR-first), and with `exchange_rate = 0` the running mean it was measured from.
+    pub exchange_rate: f64,
+    pub exchange_rate_measured: Option<f64>,
+    /// Tiles (8x8 pixels) marching first, sending their pixels straight to rays, and
+    /// not known yet (nothing marched there: nothing to reflect, or just seen; they
+    /// march first).
+    pub ssr_first_tiles: u64,
+    pub rays_only_tiles: u64,
+    pub unknown_tiles: u64,
 }
 
 /// A finished headless render.
@@ -314,6 +333,7 @@ fn finish(
         ssim_vs_rt: ssim,
         rmse_vs_rt: rmse,
         rt_frame_ms,
+        hybrid: hybrid_split(renderer, settings)?,
         timing: Timings::check_all(&[timings, ref_timings]),
     };
     Ok(Rendered {
@@ -334,4 +354,27 @@ pub fn render(
     tick: Tick<'_>,
 ) -> Result<Rendered> {
     render_frames(ctx, scene, settings, plan, tick, None)
+}
+
+/// The last frame's `HybridSplit`, in the modes that have one (`hybrid`, `provenance`).
+fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<Option<HybridSplit>> {
+    if !(settings.mode.marches() && settings.mode.traces()) {
+        return Ok(None);
+    }
+    let [ssr_first_tiles, rays_only_tiles, unknown_tiles] = renderer.tile_classes()?;
+    let measured = settings.hybrid_policy == crate::settings::HybridPolicy::Adaptive && settings.exchange_rate == 0.0;
+    let rate = renderer.exchange_rate();
+    let exchange_rate = match settings.hybrid_policy {
+        crate::settings::HybridPolicy::SsrFirst => 0.0,
+        _ if measured => rate.fraction(),
+        _ => settings.exchange_rate as f64,
+    };
+    Ok(Some(HybridSplit {
+        policy: settings.hybrid_policy.name().to_string(),
+        exchange_rate,
+        exchange_rate_measured: rate.estimate.filter(|_| measured),
+        ssr_first_tiles,
+        rays_only_tiles,
+        unknown_tiles,
+    }))
 }

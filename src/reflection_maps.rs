@@ -3,8 +3,8 @@
 
 use crate::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
-    FAIL_OUT_OF_STEPS, FAIL_UNTRACED, MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3, MASK_COLOUR_4,
-    MASK_COLOUR_5, MASK_COLOUR_6, MASK_COLOUR_7, MASK_COLOUR_8, MASK_COLOUR_SSR_OK,
+    FAIL_OUT_OF_STEPS, FAIL_SKIPPED, FAIL_UNTRACED, MASK_COLOUR_0, MASK_COLOUR_1, MASK_COLOUR_2, MASK_COLOUR_3,
+    MASK_COLOUR_4, MASK_COLOUR_5, MASK_COLOUR_6, MASK_COLOUR_7, MASK_COLOUR_8, MASK_COLOUR_9, MASK_COLOUR_SSR_OK,
 };
 use std::collections::BTreeMap;
 
@@ -92,8 +92,8 @@ const fn unpack(c: u32) -> [u8; 3] {
 pub const SSR_OK_COLOUR: [u8; 3] = unpack(MASK_COLOUR_SSR_OK);
 /// Colour of each fail reason, indexed by bit position (the order of
 /// `FAIL_REASONS`): yellow, orange, red, magenta, cyan, green, white, light blue (an
-/// SSR hit blended with the ray tracer's), grey (untraced).
-pub const FAIL_COLOURS: [[u8; 3]; 9] = [
+/// SSR hit blended with the ray tracer's), grey (untraced), brown (a rays-only tile's).
+pub const FAIL_COLOURS: [[u8; 3]; 10] = [
     unpack(MASK_COLOUR_0),
     unpack(MASK_COLOUR_1),
     unpack(MASK_COLOUR_2),
@@ -103,10 +103,11 @@ pub const FAIL_COLOURS: [[u8; 3]; 9] = [
     unpack(MASK_COLOUR_6),
     unpack(MASK_COLOUR_7),
     unpack(MASK_COLOUR_8),
+    unpack(MASK_COLOUR_9),
 ];
 
 /// Names of the fail-mask reason bits, for reports.
-pub const FAIL_REASONS: [(u32, &str); 9] = [
+pub const FAIL_REASONS: [(u32, &str); 10] = [
     (FAIL_LEFT_SCREEN, "left_screen"),
     (FAIL_BEHIND, "behind_geometry"),
     (FAIL_OUT_OF_STEPS, "out_of_steps"),
@@ -116,6 +117,7 @@ pub const FAIL_REASONS: [(u32, &str); 9] = [
     (FAIL_FORCED, "forced"),
     (FAIL_BLEND, "ssr_blend"),
     (FAIL_UNTRACED, "untraced"),
+    (FAIL_SKIPPED, "rays_only_tile"),
 ];
 
 #[cfg(test)]

@@ -197,6 +197,24 @@ pub const FAIL_BLEND: u32 = 128;
 /// that corner's ray-traced colour, or where that was not traced SSR's answer, the sky
 /// in the reflected direction (what a miss of the ray tracer returns).
 pub const FAIL_UNTRACED: u32 = 256;
+/// Not marched: its tile is rays-only (the adaptive hybrid, `hybrid_policy`), so the
+/// pixel goes straight to the ray tracer; alone in the mask.
+pub const FAIL_SKIPPED: u32 = 512;
+
+/// The adaptive hybrid's tiles: `WG_2D` x `WG_2D` pixels, `ssr.classify`'s workgroups.
+/// A tile's state word holds its smoothed SSR success (`TILE_SUCCESS`: 0 to
+/// `TILE_ONE`, the share of its marched pixels SSR answered, in 1/256), whether that
+/// is known yet (`TILE_KNOWN`), and its class (`TILE_RAYS_ONLY`; clear: SSR-first).
+pub const TILE_SUCCESS: u32 = 0x3ff;
+pub const TILE_ONE: u32 = 256;
+pub const TILE_KNOWN: u32 = 1 << 10;
+pub const TILE_RAYS_ONLY: u32 = 1 << 11;
+/// A tile changes class only when its success passes the exchange rate by this much
+/// (in 1/256): noise in a few marched pixels does not flip it every frame.
+pub const TILE_HYSTERESIS: u32 = 16;
+/// Words per tile in the tile buffers: the state, then the frame's marched pixels and
+/// those SSR answered (atomics of `ssr.trace`).
+pub const TILE_WORDS: u32 = 3;
 
 /// Provenance of a pixel's reflection, as `reflect.merge` labels it.
 pub const SOURCE_NONE: u32 = 0;
@@ -219,7 +237,8 @@ pub const fn rgb8(r: u8, g: u8, b: u8) -> u32 {
 /// Fail-mask colours (`--fail-mask` images and the demo's view): a reflective pixel
 /// SSR answered is dark blue; a failed one is coloured by its lowest reason bit:
 /// yellow, orange, red, magenta, cyan, green, white, light blue (an SSR hit blended
-/// with the ray tracer's); an untraced one (`FAIL_UNTRACED`) grey, whatever its reason.
+/// with the ray tracer's); an untraced one (`FAIL_UNTRACED`) grey, whatever its reason;
+/// one of a rays-only tile (`FAIL_SKIPPED`) brown.
 pub const MASK_COLOUR_SSR_OK: u32 = rgb8(30, 50, 140);
 pub const MASK_COLOUR_0: u32 = rgb8(240, 220, 40);
 pub const MASK_COLOUR_1: u32 = rgb8(250, 130, 20);
@@ -230,6 +249,7 @@ pub const MASK_COLOUR_5: u32 = rgb8(40, 200, 60);
 pub const MASK_COLOUR_6: u32 = rgb8(255, 255, 255);
 pub const MASK_COLOUR_7: u32 = rgb8(120, 170, 255);
 pub const MASK_COLOUR_8: u32 = rgb8(110, 110, 120);
+pub const MASK_COLOUR_9: u32 = rgb8(150, 90, 40);
 
 /// Every constant above, as `(name, value)`, in the form build.rs hands to shaderc.
 pub const SHADER_DEFINES: &[(&str, u32)] = &[
@@ -281,6 +301,13 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("FAIL_FORCED", FAIL_FORCED),
     ("FAIL_BLEND", FAIL_BLEND),
     ("FAIL_UNTRACED", FAIL_UNTRACED),
+    ("FAIL_SKIPPED", FAIL_SKIPPED),
+    ("TILE_SUCCESS", TILE_SUCCESS),
+    ("TILE_ONE", TILE_ONE),
+    ("TILE_KNOWN", TILE_KNOWN),
+    ("TILE_RAYS_ONLY", TILE_RAYS_ONLY),
+    ("TILE_HYSTERESIS", TILE_HYSTERESIS),
+    ("TILE_WORDS", TILE_WORDS),
     ("SOURCE_NONE", SOURCE_NONE),
     ("SOURCE_SSR", SOURCE_SSR),
     ("SOURCE_RT", SOURCE_RT),
@@ -298,4 +325,5 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("MASK_COLOUR_6", MASK_COLOUR_6),
     ("MASK_COLOUR_7", MASK_COLOUR_7),
     ("MASK_COLOUR_8", MASK_COLOUR_8),
+    ("MASK_COLOUR_9", MASK_COLOUR_9),
 ];

@@ -60,3 +60,37 @@ vec3 untraced_sky(SsrRay r) {
     return sky_radiance(transpose(mat3(frame.view)) * r.vdir);
 }
 #endif
+
+// The adaptive hybrid's tile state after a frame in which `marched` of its pixels were
+// marched and `answered` of those answered by SSR (mirrored by
+// cpu_ref::ssr::tile_update): the success share (1/256, rounded) joins the smoothed
+// one, 3:1 (taken whole the first time it is known); then the class: SSR-first while
+// unknown or with `rate` 0 (the SSR-first policy), else it turns rays-only when the
+// success falls TILE_HYSTERESIS below `rate` (the march's cost in rays, 1/256: a tile
+// pays rate + (1 - success) rays a pixel SSR-first against 1 rays-only) and back when
+// it rises that much above. Integers: the CPU matches it exactly.
+uint tile_update(uint state, uint marched, uint answered, uint rate) {
+    uint s = state & TILE_SUCCESS;
+    bool known = (state & TILE_KNOWN) != 0u;
+    bool rays_only = (state & TILE_RAYS_ONLY) != 0u;
+    if (marched > 0u) {
+        uint share = (answered * TILE_ONE + marched / 2u) / marched;
+        s = known ? (3u * s + share + 2u) / 4u : share;
+        known = true;
+    }
+    if (rate == 0u || !known) {
+        rays_only = false;
+    } else if (rays_only && s > rate + TILE_HYSTERESIS) {
+        rays_only = false;
+    } else if (!rays_only && s + TILE_HYSTERESIS < rate) {
+        rays_only = true;
+    }
+    return s | (known ? TILE_KNOWN : 0u) | (rays_only ? TILE_RAYS_ONLY : 0u);
+}
+
+// Whether pixel p of a rays-only tile is marched anyway in frame `frame` (a probe): one
+// pixel in each 4x4 block, the block's (frame mod 4, frame / 4 mod 4), so 4 of a tile's
+// 64 pixels a frame and each pixel every 16 frames. Mirrored by cpu_ref::ssr::tile_probe.
+bool tile_probe(uvec2 p, uint frame) {
+    return (p.x & 3u) == (frame & 3u) && (p.y & 3u) == ((frame >> 2u) & 3u);
+}

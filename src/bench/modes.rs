@@ -5,14 +5,18 @@
 //! so drift cancels), SSIM/RMSE against the `rt` image, and whether ssr < hybrid < rt.
 //! With glossy reflections each mode's image is also compared with the glossy ground
 //! truth (`rt` with many rays per glossy pixel, no denoiser).
+//! After the modes, `hybrid` again with the other `hybrid_policy` (named
+//! `hybrid_ssr_first` or `hybrid_adaptive`), interleaved with them: the two policies
+//! side by side.
 //! Checked in the same run: every mode sees the same reflective pixels, `rt` traces all
-//! of them, `hybrid` no more, `ssr` and `raster` none, and every frame time is finite.
+//! of them, `hybrid` (either policy) no more, `ssr` and `raster` none, and every frame
+//! time is finite.
 
 use crate::error::Result;
 use crate::metrics::compare_rgba8;
 use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
-use crate::settings::{Mode, Settings, GLOSSY_REFERENCE_SPP};
+use crate::settings::{HybridPolicy, Mode, Settings, GLOSSY_REFERENCE_SPP};
 use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
 use std::sync::Arc;
@@ -64,7 +68,18 @@ pub fn run(
     rounds: u32,
     tick: super::Tick<'_>,
 ) -> Result<SceneModes> {
-    let variants = Mode::ALL.iter().map(|&mode| Settings { mode, ..base.clone() });
+    let other = match base.hybrid_policy {
+        HybridPolicy::Adaptive => HybridPolicy::SsrFirst,
+        HybridPolicy::SsrFirst => HybridPolicy::Adaptive,
+    };
+    let names: Vec<String> = (Mode::ALL.iter().map(|m| m.name().to_string()))
+        .chain([format!("hybrid_{}", other.name())])
+        .collect();
+    let variants = (Mode::ALL.iter().map(|&mode| Settings { mode, ..base.clone() })).chain([Settings {
+        mode: Mode::Hybrid,
+        hybrid_policy: other,
+        ..base.clone()
+    }]);
     let (renderers, measured) =
         super::interleave_variants(ctx, scene, variants, (warmup, rounds), tick, "bench modes")?;
     let super::Interleaved { timings, frames } = measured;
@@ -85,7 +100,7 @@ pub fn run(
         };
         let ratios: Vec<f64> = frames[i].iter().zip(&frames[rt]).map(|(a, b)| a / b).collect();
         modes.push(ModeResult {
-            mode: Mode::ALL[i].name().to_string(),
+            mode: names[i].clone(),
             passes_ms: PassTimes::of(&timings[i]),
             frame_ms: Stat::of(&frames[i]).expect("rounds > 0"),
             frame_over_rt: Stat::of(&ratios).expect("rounds > 0"),
@@ -107,7 +122,8 @@ pub fn run(
         && modes.iter().all(|m| m.reflective_pixels == reflective)
         && by(Mode::Rt).traced_pixels == reflective
         && by(Mode::Hybrid).traced_pixels <= reflective
-        && by(Mode::Hybrid).traced_pixels == by(Mode::Provenance).traced_pixels;
+        && by(Mode::Hybrid).traced_pixels == by(Mode::Provenance).traced_pixels
+        && modes[Mode::ALL.len()].traced_pixels <= reflective;
     // By the per-round ratios to rt, which cancel drift between rounds.
     let ratio = |m: Mode| by(m).frame_over_rt.median;
     let ordered = ratio(Mode::Ssr) < ratio(Mode::Hybrid) && ratio(Mode::Hybrid) < 1.0;

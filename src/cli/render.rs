@@ -287,6 +287,15 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
         r.traced_pixels,
         100.0 * r.rt_pixel_fraction
     ));
+    if let Some(h) = &r.hybrid {
+        let measured = h
+            .exchange_rate_measured
+            .map_or(String::new(), |m| format!(", measured {m:.3}"));
+        text.line(format_args!(
+            "  hybrid {}: exchange rate {:.3}{measured}; tiles SSR-first {}, rays-only {}, unknown {}",
+            h.policy, h.exchange_rate, h.ssr_first_tiles, h.rays_only_tiles, h.unknown_tiles
+        ));
+    }
     text.line(format_args!(
         "  {} shadows: lit pixels {}, shadow rays {} ({:.1}%)",
         r.shadows,

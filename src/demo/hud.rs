@@ -5,7 +5,7 @@
 use super::script::Action;
 use crate::reflection_maps::{ReflectionStats, FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
-use crate::settings::{Applies, Field, Hud, Mode, Settings, Shadows, Tracer, Value, FIELDS};
+use crate::settings::{Applies, Field, Hud, HybridPolicy, Mode, Settings, Shadows, Tracer, Value, FIELDS};
 use crate::shadow_maps::ShadowStats;
 use crate::vk::swapchain::present_mode_name;
 use ash::vk;
@@ -194,6 +194,13 @@ fn mode_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: &mut
         ui.label("tracer");
         for t in Tracer::ALL {
             ui.selectable_value(&mut s.tracer, t, t.name()).on_hover_text(t.about());
+        }
+    });
+    ui.horizontal(|ui| {
+        ui.label("hybrid");
+        for p in HybridPolicy::ALL {
+            ui.selectable_value(&mut s.hybrid_policy, p, p.name())
+                .on_hover_text(p.about());
         }
     });
     let mut fail = info.fail_mask;

@@ -8,11 +8,13 @@
 use super::{GBuffer, HiZ};
 use crate::error::Result;
 use crate::settings::SsrParams;
+use crate::shader_defines::{TILE_WORDS, WG_2D};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
+use std::cell::Cell;
 use std::sync::Arc;
 
 pub const NAME: &str = "ssr.trace";
@@ -31,6 +33,8 @@ struct ClassifyPush {
     min_confidence: f32,
     reflective_min: f32,
     trace_min_weight: f32,
+    tile_rate: u32,
+    tile_history: u32,
 }
 
 /// Push constants of `ssr_trace.comp`.
@@ -64,6 +68,9 @@ pub struct SsrOutputs {
     /// The reflected rays' mean distance to their hits (`HIT_FAR` where SSR did not
     /// answer; `rt.reflect` writes its pixels'), for `reflect.denoise`'s footprint.
     pub hit_distance: Image,
+    /// The adaptive hybrid's tiles (`TILE_WORDS` words each: state, marched, answered),
+    /// two buffers in turn: a frame reads the last one's and writes the other.
+    pub tiles: [Buffer; 2],
 }
 
 impl SsrOutputs {
@@ -76,8 +83,26 @@ impl SsrOutputs {
             glossy_list: Buffer::device_list(ctx, "ssr.glossy_list", extent.width as u64 * extent.height as u64 * 4)?,
             glossy_args: Buffer::device_list(ctx, "ssr.glossy_args", 16)?,
             hit_distance: Image::storage(ctx, "ssr.hit_distance", extent, HIT_DISTANCE_FORMAT)?,
+            tiles: [
+                Buffer::device_list(ctx, "ssr.tiles.0", tile_count(extent) * TILE_WORDS as u64 * 4)?,
+                Buffer::device_list(ctx, "ssr.tiles.1", tile_count(extent) * TILE_WORDS as u64 * 4)?,
+            ],
         })
     }
+}
+
+/// Tiles of `extent` (`ssr.classify`'s workgroups).
+pub fn tile_count(extent: vk::Extent2D) -> u64 {
+    extent.width.div_ceil(WG_2D) as u64 * extent.height.div_ceil(WG_2D) as u64
+}
+
+/// Where the tiles' turns stand: how many classifications have written them since
+/// they were made or reset (0: the next has no last frame to read), and which of the
+/// two buffers the last one wrote.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TileSequence {
+    pub frames: u32,
+    pub written: usize,
 }
 
 /// What the march reads besides its own outputs.
@@ -101,6 +126,7 @@ pub struct SsrPass {
     trace_linear: Pipeline,
     sampler: Sampler,
     pub out: SsrOutputs,
+    tile_sequence: Cell<TileSequence>,
 }
 
 impl SsrPass {
@@ -119,12 +145,35 @@ impl SsrPass {
             )?,
             sampler: Sampler::nearest_clamp(ctx, "ssr.sampler")?,
             out: SsrOutputs::new(ctx, extent)?,
+            tile_sequence: Cell::default(),
         })
     }
 
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
         self.out = SsrOutputs::new(&self.ctx, extent)?;
+        self.reset_tiles();
         Ok(())
+    }
+
+    /// Where the tiles' turns stand (`restore_tiles` returns to it: a frame measured
+    /// again reads the same last frame).
+    pub fn tile_sequence(&self) -> TileSequence {
+        self.tile_sequence.get()
+    }
+
+    pub fn restore_tiles(&self, s: TileSequence) {
+        self.tile_sequence.set(s);
+    }
+
+    /// Forgets the tiles' history: the next classification starts every tile unknown
+    /// (SSR-first), as the first frame does.
+    pub fn reset_tiles(&self) {
+        self.tile_sequence.set(TileSequence::default());
+    }
+
+    /// The tile buffer the last classification wrote (state and this frame's counts).
+    pub fn tiles_written(&self) -> &Buffer {
+        &self.out.tiles[self.tile_sequence.get().written]
     }
 
     /// Records the classification: the fail mask and SSR colour of every pixel not to
@@ -160,6 +209,16 @@ impl SsrPass {
         let s = &self.sampler;
         let pipeline = if mask_only { &self.mask_only } else { &self.classify };
         let e = out.color.extent;
+        // The tiles: read the last frame's, write the other (not in the rt mode, whose
+        // classification leaves them).
+        let seq = self.tile_sequence.get();
+        let (tiles_in, tiles_out) = (&out.tiles[seq.written], &out.tiles[1 - seq.written]);
+        if !mask_only {
+            self.tile_sequence.set(TileSequence {
+                frames: seq.frames.saturating_add(1),
+                written: 1 - seq.written,
+            });
+        }
         pipeline.dispatch(
             cmd,
             &[
@@ -176,11 +235,15 @@ impl SsrPass {
                 Resource::Buffer(&out.glossy_list),
                 Resource::Buffer(&out.glossy_args),
                 Resource::StorageImage(&out.hit_distance),
+                Resource::Buffer(tiles_in),
+                Resource::Buffer(tiles_out),
             ],
             &ClassifyPush {
                 min_confidence: params.min_confidence,
                 reflective_min: params.reflective_min,
                 trace_min_weight: params.trace_min_weight,
+                tile_rate: params.tile_rate,
+                tile_history: (seq.frames > 0) as u32,
             },
             Groups::Cover([e.width, e.height, 1]),
         );
@@ -225,6 +288,7 @@ impl SsrPass {
                 Resource::Sampled(&gbuffer.motion, s),
                 Resource::Buffer(&hiz.buffer),
                 Resource::StorageImage(&out.hit_distance),
+                Resource::Buffer(self.tiles_written()),
             ],
             &MarchPush {
                 max_steps: params.max_steps,

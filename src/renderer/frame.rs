@@ -19,8 +19,8 @@ use crate::passes::{
     gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_skin, sim_transform, ssr_compact, SceneGeometry,
 };
 use crate::passes::{TraceScene, Traceable, Tracing};
-use crate::settings::Mode;
 use crate::settings::SsrParams;
+use crate::settings::{HybridPolicy, Mode};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, GpuTimer};
 use ash::vk;
@@ -253,9 +253,10 @@ impl Renderer {
             builder,
             slots,
             fail_mask_view,
+            exchange,
             ..
         } = self;
-        let FrameSlot { timer, sim_ms } = &mut slots[slot];
+        let FrameSlot { timer, sim_ms, counts } = &mut slots[slot];
         let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.out);
         let mut f = FrameRecorder::begin(timer, cmd);
         // This frame's uniforms: the view's, and where the glossy rays' sequence is.
@@ -347,7 +348,15 @@ impl Renderer {
             traced: shadows.traces(),
         };
         f.row(Row::LightDirect, || light.record(cmd, ubo, g, sun));
-        let params = SsrParams::from_settings(st);
+        let mut params = SsrParams::from_settings(st);
+        let adaptive = mode.marches() && mode.traces() && st.hybrid_policy == HybridPolicy::Adaptive;
+        if adaptive && st.exchange_rate == 0.0 {
+            params.tile_rate = exchange.applied;
+        }
+        // Only a hybrid frame may skip marches (the ssr mode has no ray to send to).
+        if !adaptive {
+            params.tile_rate = 0;
+        }
         if mode.marches() && params.hiz {
             f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
         }
@@ -376,6 +385,10 @@ impl Renderer {
                 hit_distance: &ssr.out.hit_distance,
             };
             f.row(Row::RtReflect, || rt.record(cmd, &inputs, st.max_bounces, shadows));
+            // A hybrid frame's counts price the march in rays (`exchange`).
+            if mode.marches() {
+                counts.record(d, cmd, &ssr.out.march_args, &compact.out.indirect);
+            }
         }
         if mode.reflects() {
             // Seams exist only where both sources do.

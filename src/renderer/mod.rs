@@ -16,6 +16,7 @@
 //! The screen-sized images are shared by all slots: each pass's entry barriers order
 //! a frame after the one submitted before it on the queue.
 
+pub mod exchange;
 mod frame;
 mod gpu_scene;
 mod readback;
@@ -47,6 +48,7 @@ use crate::scene::{Camera, Scene};
 use crate::settings::{Applies, Mode, Settings, Tracer};
 use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
 use ash::vk;
+use exchange::{ExchangeRate, FrameCounts};
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
 use std::sync::Arc;
@@ -56,6 +58,8 @@ struct FrameSlot {
     timer: GpuTimer,
     /// Wall-clock milliseconds of the `sim.rigid` step recorded into this slot's frame.
     sim_ms: Option<f64>,
+    /// A hybrid frame's marched pixels and traced rays, for the exchange rate.
+    counts: FrameCounts,
 }
 
 impl FrameSlot {
@@ -63,6 +67,7 @@ impl FrameSlot {
         Ok(Self {
             timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
             sim_ms: None,
+            counts: FrameCounts::new(ctx)?,
         })
     }
 }
@@ -124,6 +129,8 @@ pub struct Renderer {
     /// Hold a dynamic scene still (`set_paused`); `step_once` advances one frame.
     paused: bool,
     step_once: bool,
+    /// The adaptive hybrid's exchange rate, measured from the hybrid frames.
+    exchange: ExchangeRate,
     cmd: vk::CommandBuffer,
 }
 
@@ -236,6 +243,7 @@ impl Renderer {
             slots: vec![FrameSlot::new(ctx)?],
             fail_mask_view: false,
             paused: false,
+            exchange: ExchangeRate::default(),
             step_once: false,
             cmd: ctx.allocate_command_buffer()?,
         })
@@ -415,6 +423,11 @@ impl Renderer {
         self.dynamic.as_ref().and_then(|d| d.animation_time())
     }
 
+    /// The adaptive hybrid's measured exchange rate and the one in use.
+    pub fn exchange_rate(&self) -> ExchangeRate {
+        self.exchange
+    }
+
     /// Triangles of the dynamic geometry (0 for a static scene).
     pub fn dynamic_triangles(&self) -> u32 {
         self.dynamic.as_ref().map_or(0, |d| d.bvh.bvh.tri_count)
@@ -454,10 +467,11 @@ impl Renderer {
         if let Some(k) = &mut self.khr {
             k.reset();
         }
-        // The glossy rays' sequence and the denoiser's history start over with it, so
-        // frame k is the same image whatever came before.
+        // The glossy rays' sequence, the denoiser's history and the adaptive hybrid's
+        // tiles start over with it, so frame k is the same image whatever came before.
         self.frame_index = 0;
         self.denoise.reset_history();
+        self.ssr.reset_tiles();
         Ok(())
     }
 
@@ -487,10 +501,11 @@ impl Renderer {
         if self.is_dynamic() {
             return Ok((self.render_frame()?, 0));
         }
-        let (index, history) = (self.frame_index, self.denoise.sequence());
+        let (index, history, tiles) = (self.frame_index, self.denoise.sequence(), self.ssr.tile_sequence());
         crate::vk::remeasure_readout(|| {
             self.frame_index = index;
             self.denoise.restore(history);
+            self.ssr.restore_tiles(tiles);
             self.render_frame()
         })
     }
@@ -530,6 +545,12 @@ impl Renderer {
         let mut times = s.timer.read(wall)?;
         if let Some(ms) = s.sim_ms.take() {
             times.scopes.push((SIM_RIGID, ms));
+        }
+        // A hybrid frame whose timings passed their self-check prices a march in rays.
+        if let Some((marched, rays)) = s.counts.take().filter(|_| times.problem.is_none()) {
+            let ms = |name| times.get(name).unwrap_or(0.0);
+            let ssr = (ms(crate::passes::ssr_trace::NAME), marched);
+            self.exchange.add(ssr, (ms(crate::passes::rt_reflect::NAME), rays));
         }
         Ok(times)
     }

@@ -71,6 +71,23 @@ impl Renderer {
         Ok(self.reflection_maps()?.stats())
     }
 
+    /// The adaptive hybrid's tiles after the last hybrid frame: [SSR-first, rays-only,
+    /// unknown] (no pixel marched there yet: nothing to reflect, or only just seen;
+    /// they march first).
+    pub fn tile_classes(&self) -> Result<[u64; 3]> {
+        use crate::shader_defines::{TILE_KNOWN, TILE_RAYS_ONLY, TILE_WORDS};
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ssr.tiles_written().read()?);
+        let mut classes = [0u64; 3];
+        for &s in words.iter().step_by(TILE_WORDS as usize) {
+            classes[match (s & TILE_KNOWN != 0, s & TILE_RAYS_ONLY != 0) {
+                (true, false) => 0,
+                (_, true) => 1,
+                (false, false) => 2,
+            }] += 1;
+        }
+        Ok(classes)
+    }
+
     /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).
     pub fn read_output(&self) -> Result<Vec<u8>> {
         self.compose.out.read(vk::ImageLayout::GENERAL)

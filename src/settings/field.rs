@@ -2,7 +2,7 @@
 //! HUD shows it, how a change applies, and its value as one type for generic code
 //! (validation, the HUD, the README's list).
 
-use super::{Mode, Settings, Shadows, Tracer};
+use super::{HybridPolicy, Mode, Settings, Shadows, Tracer};
 
 /// One setting: everything the struct, validation, the renderer, the HUD, the CLI and
 /// the README need to know of it.
@@ -94,6 +94,7 @@ pub enum Value {
     Mode(Mode),
     Shadows(Shadows),
     Tracer(Tracer),
+    HybridPolicy(HybridPolicy),
 }
 
 /// The field's type back from a `Value` (`Field::set`); a value of another type is a
@@ -127,6 +128,7 @@ value_of!(bool, Bool);
 value_of!(Mode, Mode);
 value_of!(Shadows, Shadows);
 value_of!(Tracer, Tracer);
+value_of!(HybridPolicy, HybridPolicy);
 
 impl std::fmt::Display for Value {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -137,6 +139,7 @@ impl std::fmt::Display for Value {
             Value::Mode(m) => write!(f, "{}", m.name()),
             Value::Shadows(m) => write!(f, "{}", m.name()),
             Value::Tracer(t) => write!(f, "{}", t.name()),
+            Value::HybridPolicy(p) => write!(f, "{}", p.name()),
         }
     }
 }

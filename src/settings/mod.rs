@@ -8,7 +8,7 @@ pub mod field;
 
 use crate::error::{Error, Result};
 use crate::shader_defines::{
-    BLUR_MAX_EXTENT, MAX_PCF_RADIUS, MAX_REFLECTION_RAYS, SHADOWS_HYBRID, SHADOWS_MAP, SHADOWS_RAYS,
+    BLUR_MAX_EXTENT, MAX_PCF_RADIUS, MAX_REFLECTION_RAYS, SHADOWS_HYBRID, SHADOWS_MAP, SHADOWS_RAYS, TILE_ONE,
 };
 pub use field::{Applies, Field, Hud, Range, Value};
 use serde::{Deserialize, Serialize};
@@ -113,6 +113,37 @@ impl Tracer {
             Tracer::Khr => {
                 "The driver's acceleration structures and a ray-tracing pipeline (VK_KHR_acceleration_structure, VK_KHR_ray_tracing_pipeline)"
             }
+        }
+    }
+}
+
+/// How the `hybrid` mode chooses, tile by tile, between marching a pixel first and
+/// tracing it straight away (`about` says what each is).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HybridPolicy {
+    Adaptive,
+    SsrFirst,
+}
+
+impl HybridPolicy {
+    pub const ALL: [HybridPolicy; 2] = [HybridPolicy::Adaptive, HybridPolicy::SsrFirst];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            HybridPolicy::Adaptive => "adaptive",
+            HybridPolicy::SsrFirst => "ssr_first",
+        }
+    }
+
+    /// What the policy is, in a line (the CLI's help, the HUD).
+    pub fn about(self) -> &'static str {
+        match self {
+            HybridPolicy::Adaptive => {
+                "Each 8x8 tile marches first only while SSR answers more of its pixels than a march costs in rays \
+                 (exchange_rate); otherwise its pixels go straight to the ray tracer"
+            }
+            HybridPolicy::SsrFirst => "Every reflective pixel is marched first; the ray tracer takes what SSR fails",
         }
     }
 }
@@ -339,6 +370,16 @@ settings_table! {
     /// the scene moves, or the driver's acceleration structures through a ray-tracing
     /// pipeline (the ray-tracing hardware where the GPU has it).
     tracer: Tracer = Tracer::Lbvh, Range::Any, Hud::Own, Tracer;
+    /// How `hybrid` splits the work: `ssr_first` marches every reflective pixel and
+    /// traces what SSR fails; `adaptive` sends a tile's pixels straight to the ray
+    /// tracer while SSR answers less of them than a march costs (`exchange_rate`),
+    /// probing a sixteenth of them a frame so the tile can win SSR back.
+    hybrid_policy: HybridPolicy = HybridPolicy::SsrFirst, Range::Any, Hud::Own, NextFrame;
+    /// The adaptive hybrid's exchange rate: a march's cost as a fraction of a traced
+    /// ray's (0: measured every frame from the frame's own timestamps). A tile marches
+    /// first while SSR answers more than this share of its pixels: near 1 on a CPU
+    /// driver (a march costs about a ray), about 0.1 on a GPU.
+    exchange_rate: f32 = 0.0, Range::F32 { min: 0.0, max: 16.0, open_min: false }, slider(0.0, 2.0), NextFrame;
     /// Simulated seconds per rendered frame of a dynamic scene (a fixed step, so frame
     /// k is the same image in every run): smaller is smoother motion and more frames
     /// for the same animation.
@@ -484,6 +525,7 @@ pub fn markdown_table() -> String {
             (Range::Any, Value::Mode(_)) => Mode::ALL.map(Mode::name).join(", "),
             (Range::Any, Value::Shadows(_)) => Shadows::ALL.map(Shadows::name).join(", "),
             (Range::Any, Value::Tracer(_)) => Tracer::ALL.map(Tracer::name).join(", "),
+            (Range::Any, Value::HybridPolicy(_)) => HybridPolicy::ALL.map(HybridPolicy::name).join(", "),
             (Range::Any, Value::Bool(_)) => "true, false".into(),
             (r, _) => r.describe(),
         };
@@ -593,7 +635,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 36);
+        assert_eq!(Settings::field_names().len(), 38);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).
@@ -662,6 +704,9 @@ pub struct SsrParams {
     pub recursion_min: f32,
     /// Failed pixels whose own reflection weighs less are not traced (`FAIL_UNTRACED`).
     pub trace_min_weight: f32,
+    /// The adaptive hybrid's exchange rate in 1/`TILE_ONE` (a march's cost in rays),
+    /// or 0: every tile SSR-first (the SSR-first policy, and the `ssr` mode).
+    pub tile_rate: u32,
 }
 
 impl SsrParams {
@@ -678,6 +723,12 @@ impl SsrParams {
             reflective_min: st.reflective_min,
             recursion_min: st.ssr_recursion_min,
             trace_min_weight: st.trace_min_weight,
+            tile_rate: match st.hybrid_policy {
+                HybridPolicy::SsrFirst => 0,
+                // 0 (measured): the renderer puts in the rate it measures.
+                HybridPolicy::Adaptive if st.exchange_rate == 0.0 => 0,
+                HybridPolicy::Adaptive => (st.exchange_rate * TILE_ONE as f32).round().clamp(1.0, 4096.0) as u32,
+            },
         }
     }
 }

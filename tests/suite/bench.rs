@@ -170,7 +170,9 @@ fn modes_benchmark_is_valid() {
     let (scene, settings) = small_room();
     let r = speculum::bench::modes::run(&ctx, &scene, &settings, 0, 2, &mut || {}).unwrap();
     assert!(r.valid, "{r:?}");
-    assert_eq!(r.modes.len(), speculum::settings::Mode::ALL.len());
+    // Every mode, then hybrid with the other policy.
+    assert_eq!(r.modes.len(), speculum::settings::Mode::ALL.len() + 1);
+    assert_eq!(r.modes.last().unwrap().mode, "hybrid_adaptive");
     let by = |name: &str| r.modes.iter().find(|m| m.mode == name).unwrap();
     assert_eq!(by("rt").ssim_vs_rt, 1.0);
     assert_eq!(by("rt").frame_over_rt.median, 1.0);

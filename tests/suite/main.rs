@@ -6,6 +6,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod adaptive;
 mod animation;
 mod bad_input;
 mod bench;

@@ -144,7 +144,7 @@ fn render_report_follows_the_schema() {
     assert_eq!(r["traced_pixels"], 0, "ssr mode traces nothing");
     assert_eq!(
         r["fail_reasons"].as_object().unwrap().len(),
-        9,
+        10,
         "every reason, zeros included"
     );
     assert_eq!(r["fail_reasons"]["forced"], 0);

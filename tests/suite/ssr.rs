@@ -179,6 +179,120 @@ impl Fixture {
     }
 }
 
+/// The adaptive hybrid's tiles: from random last states and counts and a random
+/// exchange rate, `ssr.classify` writes each tile's state as
+/// `cpu_ref::ssr::tile_update` does (exactly), with its counts zeroed; in rays-only
+/// tiles the pixels the CPU's classification marches are skipped (`FAIL_SKIPPED`, not
+/// listed) but for the frame's probes (`tile_probe`), elsewhere listed as ever; then
+/// `ssr.trace` counts each tile's marched pixels and those SSR answered as the fail
+/// mask says. Pixels on the heading threshold as in the test below.
+#[test]
+fn adaptive_tiles_match_cpu() {
+    use speculum::passes::ssr_trace::{tile_count, TileSequence};
+    use speculum::shader_defines::{FAIL_SKIPPED, TILE_KNOWN, TILE_ONE, TILE_RAYS_ONLY, TILE_WORDS};
+    let ctx = common::context();
+    let f = Fixture::new(&ctx, 91, 157, 83, |_| {});
+    let (w, h) = (f.settings.width as usize, f.settings.height as usize);
+    let extent = vk::Extent2D {
+        width: w as u32,
+        height: h as u32,
+    };
+    let (tiles, tiles_x) = (tile_count(extent) as usize, w.div_ceil(8));
+    let mut rng = common::rng(17);
+    let last: Vec<u32> = (0..tiles)
+        .flat_map(|_| {
+            let state = rng.random_range(0..=TILE_ONE)
+                | if rng.random_bool(0.8) { TILE_KNOWN } else { 0 }
+                | if rng.random_bool(0.5) { TILE_RAYS_ONLY } else { 0 };
+            let marched = rng.random_range(0..=64u32);
+            [state, marched, rng.random_range(0..=marched)]
+        })
+        .collect();
+    let rate = rng.random_range(100..=160u32);
+    let params = SsrParams {
+        tile_rate: rate,
+        ..SsrParams::from_settings(&f.settings)
+    };
+    let out = &f.pass.out;
+    f.poison();
+    out.tiles[0].write(bytemuck::cast_slice(&last)).unwrap();
+    out.tiles[1].write(&vec![0xcdu8; out.tiles[1].size as usize]).unwrap();
+    f.pass.restore_tiles(TileSequence { frames: 1, written: 0 });
+    ctx.one_shot(|cmd| {
+        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, false);
+        f.record_march(cmd, &params);
+        let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
+        barrier::record(&ctx.device, cmd, &[b], &[]);
+    })
+    .unwrap();
+    assert_eq!(f.pass.tile_sequence(), TileSequence { frames: 2, written: 1 });
+    let got: Vec<u32> = bytemuck::pod_collect_to_vec(&out.tiles[1].read().unwrap());
+    let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(vk::ImageLayout::GENERAL).unwrap());
+    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
+    let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
+    let mut listed = vec![false; w * h];
+    for &e in &list[..args[3] as usize] {
+        listed[(e >> 16) as usize * w + (e & 0xffff) as usize] = true;
+    }
+    let words = TILE_WORDS as usize;
+    let mut want_counts = vec![[0u32; 2]; tiles];
+    let (mut skipped, mut probes, mut borderline) = (0, 0, 0);
+    for t in 0..tiles {
+        let want = ssr::tile_update(last[words * t], last[words * t + 1], last[words * t + 2], rate);
+        assert_eq!(got[words * t], want, "tile {t}");
+    }
+    for i in 0..w * h {
+        let p = IVec2::new((i % w) as i32, (i / w) as i32);
+        let t = (i / w / 8) * tiles_x + (i % w) / 8;
+        let texel = (
+            f.g.depth[i],
+            f.g.normal[i],
+            f.g.material[i],
+            f.albedo[4 * i + 3] as f32 / 255.0,
+        );
+        let rays_only = got[words * t] & TILE_RAYS_ONLY != 0;
+        let probe = ssr::tile_probe(p, f.frame.frame_index);
+        let surface = f.inputs(&[]).surface(i);
+        let skip = rays_only && !probe;
+        let (want, [heading, weight]) = ssr::classify_in_tile(&f.frame, p, texel, surface, &params, (false, skip));
+        let got_class = if listed[i] {
+            Class::March
+        } else {
+            Class::Done(mask[i], [0.0; 3])
+        };
+        let same = match (got_class, want) {
+            (Class::Done(a, _), Class::Done(b, _)) => a == b,
+            (a, b) => a == b,
+        };
+        if !same {
+            let on_threshold =
+                (heading - params.min_confidence).abs() < 1e-4 || (weight - params.trace_min_weight).abs() < 1e-4;
+            assert!(
+                on_threshold,
+                "pixel {p}: GPU {got_class:?}, CPU {want:?}, rays-only {rays_only}, probe {probe}"
+            );
+            borderline += 1;
+        }
+        skipped += matches!(want, Class::Done(m, _) if m & FAIL_SKIPPED != 0) as usize;
+        probes += (want == Class::March && rays_only) as usize;
+        if listed[i] {
+            want_counts[t][0] += 1;
+            want_counts[t][1] += (mask[i] == 0) as u32;
+        }
+    }
+    for (t, c) in want_counts.iter().enumerate() {
+        assert_eq!(got[words * t + 1..words * t + 3], c[..], "tile {t}: marched, answered");
+    }
+    assert!(borderline <= w * h / 1000, "{borderline} pixels on the threshold");
+    let rays_only = (0..tiles).filter(|t| got[words * t] & TILE_RAYS_ONLY != 0).count();
+    assert!(
+        rays_only > tiles / 5 && rays_only < tiles * 4 / 5,
+        "{rays_only} of {tiles} tiles rays-only"
+    );
+    assert!(skipped > 1000 && probes > 50, "{skipped} skipped, {probes} probes");
+    assert_eq!(ctx.validation_messages(), 0);
+}
+
 /// Every pixel classifies as the CPU says: not reflective (mask 0), failed on its
 /// heading (FAIL_LOW_CONFIDENCE) or listed for the march, each exactly once; listed
 /// pixels are left to the march (their poison stays); the dispatch arguments cover the

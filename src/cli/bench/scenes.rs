@@ -180,10 +180,16 @@ fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str
         "{} on {device}: {}x{}, median of {rounds} interleaved rounds",
         r.scene, r.resolution[0], r.resolution[1]
     ));
-    let header: String = r.modes.iter().map(|m| format!(" {:>10}", m.mode)).collect();
+    // Each column as wide as its mode's name (at least 10).
+    let width = |m: &speculum::bench::modes::ModeResult| m.mode.len().max(10);
+    let header: String = r
+        .modes
+        .iter()
+        .map(|m| format!(" {:>w$}", m.mode, w = width(m)))
+        .collect();
     text.line(format_args!("  {:<18}{header}", "pass (ms)"));
     let row = |name: &str, f: &dyn Fn(&speculum::bench::modes::ModeResult) -> String| {
-        let cells: String = r.modes.iter().map(|m| format!(" {:>10}", f(m))).collect();
+        let cells: String = r.modes.iter().map(|m| format!(" {:>w$}", f(m), w = width(m))).collect();
         text.line(format_args!("  {name:<18}{cells}"));
     };
     // Passes in frame order; the uniform upload is too small to matter.

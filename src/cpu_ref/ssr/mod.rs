@@ -11,7 +11,8 @@ mod linear;
 use crate::gpu_types::FrameUniforms;
 use crate::settings::SsrParams;
 use crate::shader_defines::{
-    FAIL_BACK_FACE, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LOW_CONFIDENCE, FAIL_UNTRACED, MATERIAL_NONE,
+    FAIL_BACK_FACE, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LOW_CONFIDENCE, FAIL_SKIPPED, FAIL_UNTRACED,
+    MATERIAL_NONE, TILE_HYSTERESIS, TILE_KNOWN, TILE_ONE, TILE_RAYS_ONLY, TILE_SUCCESS,
 };
 use glam::{IVec2, Mat3, Vec2, Vec2Swizzles, Vec3, Vec4, Vec4Swizzles};
 
@@ -101,6 +102,20 @@ pub fn classify(
     params: &SsrParams,
     mask_only: bool,
 ) -> (Class, [f32; 2]) {
+    classify_in_tile(frame, p, gbuffer, own, params, (mask_only, false))
+}
+
+/// `classify` in a tile of the adaptive hybrid: with `skip` (a rays-only tile, not a
+/// probe) a pixel that would be marched fails with `FAIL_SKIPPED` instead, and is left
+/// untraced as a failed one would be.
+pub fn classify_in_tile(
+    frame: &FrameUniforms,
+    p: IVec2,
+    gbuffer: (f32, [f32; 4], u32, f32),
+    own: (Vec3, f32),
+    params: &SsrParams,
+    (mask_only, skip): (bool, bool),
+) -> (Class, [f32; 2]) {
     let (depth, nr, material, roughness) = gbuffer;
     let reflective = material != MATERIAL_NONE && nr[3] > params.reflective_min;
     let none = [f32::NAN; 2];
@@ -113,18 +128,50 @@ pub fn classify(
     let n = Vec3::new(nr[0], nr[1], nr[2]);
     let ray = ssr_ray(frame, p, depth, n, (roughness, 0));
     let h = heading_confidence(ray.vdir);
-    if h >= params.min_confidence {
+    if h >= params.min_confidence && !skip {
         return (Class::March, [h, f32::NAN]);
     }
+    let reason = if h >= params.min_confidence {
+        FAIL_SKIPPED
+    } else {
+        FAIL_LOW_CONFIDENCE
+    };
     if params.trace_min_weight > 0.0 && !traced_for_block(p) {
         let w = view_reflection_weight(frame, &ray, n, own, nr[3]);
         if w < params.trace_min_weight {
             let sky = untraced_sky(frame, &ray).to_array();
-            return (Class::Done(FAIL_LOW_CONFIDENCE | FAIL_UNTRACED, sky), [h, w]);
+            return (Class::Done(reason | FAIL_UNTRACED, sky), [h, w]);
         }
-        return (Class::Done(FAIL_LOW_CONFIDENCE, [0.0; 3]), [h, w]);
+        return (Class::Done(reason, [0.0; 3]), [h, w]);
     }
-    (Class::Done(FAIL_LOW_CONFIDENCE, [0.0; 3]), [h, f32::NAN])
+    (Class::Done(reason, [0.0; 3]), [h, f32::NAN])
+}
+
+/// `tile_update` (`glsl/shared/ssr.glsl`): a tile's state after a frame in which
+/// `marched` of its pixels were marched and `answered` of them answered by SSR, with
+/// the exchange rate `rate` (1/`TILE_ONE`; 0: SSR-first). Integers, as the GPU.
+pub fn tile_update(state: u32, marched: u32, answered: u32, rate: u32) -> u32 {
+    let mut s = state & TILE_SUCCESS;
+    let mut known = state & TILE_KNOWN != 0;
+    let mut rays_only = state & TILE_RAYS_ONLY != 0;
+    if let Some(share) = (answered * TILE_ONE + marched / 2).checked_div(marched) {
+        s = if known { (3 * s + share + 2) / 4 } else { share };
+        known = true;
+    }
+    // SSR-first while unknown or under the SSR-first policy; else across the rate with
+    // the hysteresis either way.
+    rays_only = match rays_only {
+        _ if rate == 0 || !known => false,
+        true => s <= rate + TILE_HYSTERESIS,
+        false => s + TILE_HYSTERESIS < rate,
+    };
+    s | if known { TILE_KNOWN } else { 0 } | if rays_only { TILE_RAYS_ONLY } else { 0 }
+}
+
+/// `tile_probe`: whether pixel `p` of a rays-only tile is marched anyway in frame
+/// `frame` (one pixel of each 4x4 block, cycling through all sixteen in 16 frames).
+pub fn tile_probe(p: IVec2, frame: u32) -> bool {
+    (p.x as u32 & 3) == (frame & 3) && (p.y as u32 & 3) == ((frame >> 2) & 3)
 }
 
 /// The G-buffer and lit image a march reads, row-major at the frame's resolution.

@@ -17,7 +17,8 @@
 // and what ssr.trace counted) by the exchange rate (tile_update), into `tiles_out`
 // with the counts zeroed for this frame's march; in a rays-only tile a pixel that would
 // be marched is not (FAIL_SKIPPED: straight to the ray tracer) unless it is a probe
-// (tile_probe), which keeps measuring the tile's success. Mirrored by
+// (tile_probe), which keeps measuring the tile's success (ssr.trace counts it, then
+// sends it to the ray tracer too). Mirrored by
 // cpu_ref::ssr::tile_update and tile_probe.
 #include "ssr.glsl"
 #include "pixel_list.glsl"

@@ -346,8 +346,9 @@ void judge(Found found, vec3 vdir, vec3 own, ivec2 res, out uint fail, out float
 
 // Adds the marched pixel p, answered or not, to its tile's counts: one atomic pair a
 // subgroup when all its lanes are in one tile (the list is appended a classify
-// subgroup at a time, so runs of entries share a tile), else one a lane.
-void count_in_tile(ivec2 p, bool answered) {
+// subgroup at a time, so runs of entries share a tile), else one a lane. Returns
+// whether the tile is rays-only (the pixel is one of its probes).
+bool count_in_tile(ivec2 p, bool answered) {
     uint groups_x = (frame.resolution.x + WG_2D - 1u) / WG_2D;
     uint t = (uint(p.y) / WG_2D) * groups_x + uint(p.x) / WG_2D;
     uint first = subgroupBroadcastFirst(t);
@@ -364,6 +365,7 @@ void count_in_tile(ivec2 p, bool answered) {
             atomicAdd(tiles[t * TILE_WORDS + 2u], 1u);
         }
     }
+    return (tiles[t * TILE_WORDS] & TILE_RAYS_ONLY) != 0u;
 }
 
 void main() {
@@ -436,7 +438,12 @@ void main() {
             }
         }
     }
-    count_in_tile(p, fail == 0u);
+    // A probe of a rays-only tile measured SSR for the tile; its pixel is traced like
+    // the tile's others, so the tile has one source and no seam inside it.
+    if (count_in_tile(p, fail == 0u)) {
+        fail = FAIL_SKIPPED;
+        color = vec3(0.0);
+    }
     bool kept = fail == 0u || fail == FAIL_BLEND;
     imageStore(ssr_out, p, vec4(color, kept ? confidence : 0.0));
     imageStore(fail_mask, p, uvec4(fail));

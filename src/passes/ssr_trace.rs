@@ -71,6 +71,8 @@ pub struct SsrOutputs {
     /// The adaptive hybrid's tiles (`TILE_WORDS` words each: state, marched, answered),
     /// two buffers in turn: a frame reads the last one's and writes the other.
     pub tiles: [Buffer; 2],
+    /// Word 0: pixels the classification listed in SSR-first tiles (probes aside).
+    pub ssr_first_marches: Buffer,
 }
 
 impl SsrOutputs {
@@ -87,6 +89,7 @@ impl SsrOutputs {
                 Buffer::device_list(ctx, "ssr.tiles.0", tile_count(extent) * TILE_WORDS as u64 * 4)?,
                 Buffer::device_list(ctx, "ssr.tiles.1", tile_count(extent) * TILE_WORDS as u64 * 4)?,
             ],
+            ssr_first_marches: Buffer::device_list(ctx, "ssr.ssr_first_marches", 16)?,
         })
     }
 }
@@ -203,6 +206,7 @@ impl SsrPass {
         unsafe {
             d.cmd_update_buffer(cmd, out.march_args.raw, 0, bytemuck::bytes_of(&args));
             d.cmd_update_buffer(cmd, out.glossy_args.raw, 0, bytemuck::bytes_of(&args));
+            d.cmd_update_buffer(cmd, out.ssr_first_marches.raw, 0, bytemuck::bytes_of(&[0u32; 4]));
         }
         // RAW: the classification's atomics see the reset arguments.
         barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
@@ -237,6 +241,7 @@ impl SsrPass {
                 Resource::StorageImage(&out.hit_distance),
                 Resource::Buffer(tiles_in),
                 Resource::Buffer(tiles_out),
+                Resource::Buffer(&out.ssr_first_marches),
             ],
             &ClassifyPush {
                 min_confidence: params.min_confidence,

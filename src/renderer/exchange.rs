@@ -49,7 +49,8 @@ impl ExchangeRate {
     }
 }
 
-/// One frame slot's counts, read back after its frame: pixels marched, rays traced.
+/// One frame slot's counts, read back after its frame: pixels marched, rays traced,
+/// pixels marched in SSR-first tiles (the rest were probes).
 pub struct FrameCounts {
     buffer: Buffer,
     /// Whether the slot's last frame recorded them (a hybrid frame).
@@ -60,18 +61,24 @@ impl FrameCounts {
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
         let usage = vk::BufferUsageFlags::TRANSFER_DST;
         Ok(Self {
-            buffer: Buffer::new(ctx, "frame.counts", 8, usage, MemoryLocation::GpuToCpu)?,
+            buffer: Buffer::new(ctx, "frame.counts", 12, usage, MemoryLocation::GpuToCpu)?,
             recorded: false,
         })
     }
 
-    /// Records the copies of the march list's length (word 3 of `march_args`) and the
-    /// ray list's (word 3 of `ray_args`), after the passes that wrote them; the words
-    /// end free for the next frame's writers and visible to the host.
-    pub fn record(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, march_args: &Buffer, ray_args: &Buffer) {
+    /// Records the copies of the march list's length (word 3 of `march_args`), the ray
+    /// list's (word 3 of `ray_args`) and the SSR-first tiles' marches (word 0 of
+    /// `ssr_first`), after the passes that wrote them; the words end free for the next
+    /// frame's writers and visible to the host.
+    pub fn record(
+        &mut self,
+        device: &ash::Device,
+        cmd: vk::CommandBuffer,
+        [march_args, ray_args, ssr_first]: [&Buffer; 3],
+    ) {
         barrier::global(device, cmd, access::COMPUTE_WRITE, access::TRANSFER_READ);
-        for (src, at) in [(march_args, 0), (ray_args, 4)] {
-            let region = vk::BufferCopy::default().src_offset(12).dst_offset(at).size(4);
+        for (src, from, at) in [(march_args, 12, 0), (ray_args, 12, 4), (ssr_first, 0, 8)] {
+            let region = vk::BufferCopy::default().src_offset(from).dst_offset(at).size(4);
             // SAFETY: both buffers are live and large enough; the barrier above orders the copy.
             unsafe { device.cmd_copy_buffer(cmd, src.raw, self.buffer.raw, &[region]) };
         }
@@ -87,13 +94,14 @@ impl FrameCounts {
         self.recorded = true;
     }
 
-    /// (marched, rays) of the slot's finished frame, if it recorded them.
-    pub fn take(&mut self) -> Option<(u32, u32)> {
+    /// [marched, rays, marched in SSR-first tiles] of the slot's finished frame, if it
+    /// recorded them.
+    pub fn take(&mut self) -> Option<[u32; 3]> {
         if !std::mem::take(&mut self.recorded) {
             return None;
         }
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.buffer.mapped()?[..8]);
-        Some((words[0], words[1]))
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.buffer.mapped()?[..12]);
+        Some([words[0], words[1], words[2]])
     }
 }
 

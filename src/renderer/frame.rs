@@ -27,6 +27,9 @@ use ash::vk;
 
 /// Timer scope of the whole frame.
 pub const FRAME: &str = "frame";
+/// The adaptive hybrid's probe frames while every tile is rays-only: one frame in 7
+/// (7 and the probes' 16 phases are coprime, so each probe pixel comes in turn).
+pub const PROBE_EVERY: u32 = 7;
 /// Timer scope of the per-frame uniform upload.
 pub const UNIFORMS: &str = "uniforms";
 /// The rigid bodies' time step on the CPU (wall clock, while the frame is recorded).
@@ -254,6 +257,7 @@ impl Renderer {
             slots,
             fail_mask_view,
             exchange,
+            hybrid_idle,
             ..
         } = self;
         let FrameSlot { timer, sim_ms, counts } = &mut slots[slot];
@@ -350,6 +354,10 @@ impl Renderer {
         f.row(Row::LightDirect, || light.record(cmd, ubo, g, sun));
         let mut params = SsrParams::from_settings(st);
         let adaptive = mode.marches() && mode.traces() && st.hybrid_policy == HybridPolicy::Adaptive;
+        // Every tile rays-only at the last probe frame: trace as the rt mode does (no
+        // pyramid, no march, the mask-only classification) until the next one.
+        let idle = adaptive && *hybrid_idle && !uniforms.frame_index.is_multiple_of(PROBE_EVERY);
+        let marches = mode.marches() && !idle;
         if adaptive && st.exchange_rate == 0.0 {
             params.tile_rate = exchange.applied;
         }
@@ -357,14 +365,14 @@ impl Renderer {
         if !adaptive {
             params.tile_rate = 0;
         }
-        if mode.marches() && params.hiz {
+        if marches && params.hiz {
             f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
         }
         if mode.reflects() {
-            let mask_only = !mode.marches();
+            let mask_only = !marches;
             f.row(Row::SsrClassify, || ssr.classify(cmd, (ubo, g), &params, mask_only));
         }
-        if mode.marches() {
+        if marches {
             let inputs = MarchInputs {
                 frame: ubo,
                 gbuffer: g,
@@ -386,8 +394,9 @@ impl Renderer {
             };
             f.row(Row::RtReflect, || rt.record(cmd, &inputs, st.max_bounces, shadows));
             // A hybrid frame's counts price the march in rays (`exchange`).
-            if mode.marches() {
-                counts.record(d, cmd, &ssr.out.march_args, &compact.out.indirect);
+            if marches {
+                let o = &ssr.out;
+                counts.record(d, cmd, [&o.march_args, &compact.out.indirect, &o.ssr_first_marches]);
             }
         }
         if mode.reflects() {

@@ -22,7 +22,7 @@ mod gpu_scene;
 mod readback;
 mod view;
 
-pub use frame::{Row, FRAME, SCOPES, SIM_RIGID, UNIFORMS};
+pub use frame::{Row, FRAME, PROBE_EVERY, SCOPES, SIM_RIGID, UNIFORMS};
 pub use view::{frame_uniforms, render_origin, View};
 
 use crate::error::Result;
@@ -131,6 +131,9 @@ pub struct Renderer {
     step_once: bool,
     /// The adaptive hybrid's exchange rate, measured from the hybrid frames.
     exchange: ExchangeRate,
+    /// The last probe frame of the adaptive hybrid marched no SSR-first tile: until the
+    /// next one (`frame::PROBE_EVERY`), frames skip the march and trace every pixel.
+    hybrid_idle: bool,
     cmd: vk::CommandBuffer,
 }
 
@@ -244,6 +247,7 @@ impl Renderer {
             fail_mask_view: false,
             paused: false,
             exchange: ExchangeRate::default(),
+            hybrid_idle: false,
             step_once: false,
             cmd: ctx.allocate_command_buffer()?,
         })
@@ -472,6 +476,7 @@ impl Renderer {
         self.frame_index = 0;
         self.denoise.reset_history();
         self.ssr.reset_tiles();
+        self.hybrid_idle = false;
         Ok(())
     }
 
@@ -546,11 +551,16 @@ impl Renderer {
         if let Some(ms) = s.sim_ms.take() {
             times.scopes.push((SIM_RIGID, ms));
         }
-        // A hybrid frame whose timings passed their self-check prices a march in rays.
-        if let Some((marched, rays)) = s.counts.take().filter(|_| times.problem.is_none()) {
-            let ms = |name| times.get(name).unwrap_or(0.0);
-            let ssr = (ms(crate::passes::ssr_trace::NAME), marched);
-            self.exchange.add(ssr, (ms(crate::passes::rt_reflect::NAME), rays));
+        if let Some([marched, rays, ssr_first]) = s.counts.take() {
+            // No SSR-first tile marched: the frames until the next probe frame trace
+            // every pixel straight away.
+            self.hybrid_idle = ssr_first == 0;
+            // A frame whose timings passed their self-check prices a march in rays.
+            if times.problem.is_none() {
+                let ms = |name| times.get(name).unwrap_or(0.0);
+                let ssr = (ms(crate::passes::ssr_trace::NAME), marched);
+                self.exchange.add(ssr, (ms(crate::passes::rt_reflect::NAME), rays));
+            }
         }
         Ok(times)
     }

@@ -47,8 +47,8 @@ layout(binding = 12, r32f) uniform writeonly image2D hit_distance;
 // The tiles' state and counts (TILE_WORDS a tile): the last frame's, and this one's.
 layout(binding = 13, std430) readonly buffer TilesIn { uint tiles_in[]; };
 layout(binding = 14, std430) writeonly buffer TilesOut { uint tiles_out[]; };
-// The pixels marched in SSR-first tiles (probes aside); zeroed before. None: the
-// renderer may skip the march until the next probe frame.
+// The pixels marched in known SSR-first tiles; zeroed before. None: the renderer
+// may skip the march until the next probe frame.
 layout(binding = 15, std430) buffer SsrFirst { uint ssr_first_marches; };
 // The rt mode's variant: no SSR, every reflective pixel fails (FAIL_FORCED).
 layout(constant_id = 0) const bool MASK_ONLY = false;
@@ -135,8 +135,11 @@ void main() {
     if (march) {
         march_list[base + subgroupBallotExclusiveBitCount(ballot)] = pack_pixel(uvec2(p));
     }
-    // The SSR-first tiles' marches (not the rays-only tiles' probes).
-    uint first_tile = subgroupBallotBitCount(subgroupBallot(march && !rays_only));
+    // The SSR-first tiles' marches: not the rays-only tiles' probes, nor after the
+    // first frame the marches of tiles not known yet (a glossy pixel's sampled ray
+    // turning marchable, a surface coming into view), which probe frames learn.
+    bool known_first = !MASK_ONLY && !rays_only && ((s_tile & TILE_KNOWN) != 0u || pc.tile_history == 0u);
+    uint first_tile = subgroupBallotBitCount(subgroupBallot(march && known_first));
     if (subgroupElect() && first_tile > 0u) {
         atomicAdd(ssr_first_marches, first_tile);
     }

@@ -39,6 +39,8 @@ pub struct DynamicPoint {
     pub bodies: u32,
     /// Particles per side of the scene's cloths (0: none).
     pub cloth_resolution: u32,
+    /// Joints of the scene's animated model (0: none).
+    pub joints: u32,
     pub dynamic_triangles: u32,
     /// CPU wall clock.
     pub sim_rigid_ms: Stat,
@@ -269,6 +271,7 @@ pub fn run_point(
     Ok(DynamicPoint {
         bodies: scene.bodies.len() as u32,
         cloth_resolution: scene.cloths.first().map_or(0, |c| c.resolution),
+        joints: scene.animated.as_ref().map_or(0, |a| a.joints.len() as u32),
         dynamic_triangles: tris,
         sim_rigid_ms: stat(&sim),
         sim_transform_ms: stat(&transform),

@@ -122,14 +122,12 @@ impl Animated {
     /// Plays `choice` (an index, or a name of `rig.animations`); names what there is
     /// when it is not one.
     pub fn select(&mut self, choice: &Choice) -> Result<(), String> {
+        let animations = &self.rig.animations;
         let found = match choice {
-            Choice::Index(i) => (*i as usize) < self.rig.animations.len(),
-            Choice::Name(name) => {
-                let at = self.rig.animations.iter().position(|a| a.name.as_deref() == Some(name));
-                at.inspect(|&i| self.playing = i).is_some()
-            }
+            Choice::Index(i) => Some(*i as usize).filter(|&i| i < animations.len()),
+            Choice::Name(name) => animations.iter().position(|a| a.name.as_deref() == Some(name)),
         };
-        if !found {
+        let Some(index) = found else {
             let names: Vec<String> = (self.rig.animations.iter().enumerate())
                 .map(|(i, a)| a.name.as_deref().map_or(format!("{i}"), |n| format!("{i} '{n}'")))
                 .collect();
@@ -138,10 +136,8 @@ impl Animated {
                 Choice::Name(n) => format!("animation named '{n}'"),
             };
             return Err(format!("the model has no {what} (it has: {})", names.join(", ")));
-        }
-        if let Choice::Index(i) = choice {
-            self.playing = *i as usize;
-        }
+        };
+        self.playing = index;
         Ok(())
     }
 

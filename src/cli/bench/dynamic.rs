@@ -126,7 +126,7 @@ impl Axis {
         match self {
             Axis::Bodies => (p.bodies, p.sim_transform_ms.median),
             Axis::Cloth => (p.cloth_resolution, p.sim_cloth_ms.median),
-            Axis::Skinned => (16, p.sim_skin_ms.median),
+            Axis::Skinned => (p.joints, p.sim_skin_ms.median),
         }
     }
 }

@@ -162,9 +162,9 @@ pub(super) fn khr_ranges(scene: &Scene) -> (Vec<BodyRange>, Option<(u32, u32)>) 
         first_tri += tris;
     }
     // The animated model's triangles follow the cloths': one deformable range.
-    let cloth_tris: u32 = scene.cloths.iter().map(|c| 2 * (c.resolution - 1).pow(2)).sum::<u32>()
+    let deformable: u32 = scene.cloths.iter().map(|c| 2 * (c.resolution - 1).pow(2)).sum::<u32>()
         + scene.animated.as_ref().map_or(0, |a| a.indices.len() as u32 / 3);
-    (bodies, (cloth_tris > 0).then_some((first_tri, cloth_tris)))
+    (bodies, (deformable > 0).then_some((first_tri, deformable)))
 }
 
 /// The moving geometry of a dynamic scene: its simulation (`sim.rigid` on the host),

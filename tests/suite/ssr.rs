@@ -179,6 +179,21 @@ impl Fixture {
     }
 }
 
+/// The GPU's classification of a pixel (listed to march, or its fail mask), and whether
+/// it is the CPU's `want` (the SSR colour aside).
+fn gpu_class(listed: bool, mask: u32, want: Class) -> (Class, bool) {
+    let got = if listed {
+        Class::March
+    } else {
+        Class::Done(mask, [0.0; 3])
+    };
+    let same = match (got, want) {
+        (Class::Done(a, _), Class::Done(b, _)) => a == b,
+        (a, b) => a == b,
+    };
+    (got, same)
+}
+
 /// The adaptive hybrid's tiles: from random last states and counts and a random
 /// exchange rate, `ssr.classify` writes each tile's state as
 /// `cpu_ref::ssr::tile_update` does (exactly), with its counts zeroed; in rays-only
@@ -256,15 +271,7 @@ fn adaptive_tiles_match_cpu() {
         let surface = f.inputs(&[]).surface(i);
         let skip = rays_only && !probe;
         let (want, [heading, weight]) = ssr::classify_in_tile(&f.frame, p, texel, surface, &params, (false, skip));
-        let got_class = if listed[i] {
-            Class::March
-        } else {
-            Class::Done(mask[i], [0.0; 3])
-        };
-        let same = match (got_class, want) {
-            (Class::Done(a, _), Class::Done(b, _)) => a == b,
-            (a, b) => a == b,
-        };
+        let (got_class, same) = gpu_class(listed[i], mask[i], want);
         if !same {
             let on_threshold =
                 (heading - params.min_confidence).abs() < 1e-4 || (weight - params.trace_min_weight).abs() < 1e-4;
@@ -377,15 +384,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
             );
             let (want, [heading, weight]) =
                 ssr::classify(frame, p, texel, f.inputs(&[]).surface(i), &params, mask_only);
-            let got = if listed[i] {
-                Class::March
-            } else {
-                Class::Done(mask[i], [0.0; 3])
-            };
-            let same = match (got, want) {
-                (Class::Done(a, _), Class::Done(b, _)) => a == b,
-                (a, b) => a == b,
-            };
+            let (got, same) = gpu_class(listed[i], mask[i], want);
             let on_threshold =
                 (heading - params.min_confidence).abs() < 1e-4 || (weight - params.trace_min_weight).abs() < 1e-4;
             if !same && on_threshold {

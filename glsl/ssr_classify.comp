@@ -12,10 +12,8 @@
 // lavapipe pays a full-screen kernel's whole straight-line code on every pixel, taken
 // branch or not. Pixels listed here get their SSR colour and fail mask from ssr.trace;
 // the rest get them here. Mirrored by cpu_ref::ssr::classify.
-// The adaptive hybrid: each workgroup is a tile (TILE_* in shader_defines.rs). Its
-// invocation 0 updates the tile's state from the last frame's (`tiles_in`: the state
-// and what ssr.trace counted) by the exchange rate (tile_update), into `tiles_out`
-// with the counts zeroed for this frame's march; in a rays-only tile a pixel that would
+// The adaptive hybrid: each workgroup is a tile (TILE_* in shader_defines.rs), whose
+// state for this frame ssr_tiles.comp has just written; in a rays-only tile a pixel that would
 // be marched is not (FAIL_SKIPPED: straight to the ray tracer) unless it is a probe
 // (tile_probe), which keeps measuring the tile's success (ssr.trace counts it, then
 // sends it to the ray tracer too). Mirrored by
@@ -44,9 +42,8 @@ layout(binding = 11, std430) buffer GlossyArgs { uvec4 glossy_args; };
 // The reflected rays' distance to what they hit (glossy.glsl's HIT_FAR here, for pixels
 // not marched; ssr.trace and rt.reflect write the rest), for reflect.denoise's footprint.
 layout(binding = 12, r32f) uniform writeonly image2D hit_distance;
-// The tiles' state and counts (TILE_WORDS a tile): the last frame's, and this one's.
-layout(binding = 13, std430) readonly buffer TilesIn { uint tiles_in[]; };
-layout(binding = 14, std430) writeonly buffer TilesOut { uint tiles_out[]; };
+// This frame's tile states (TILE_WORDS a tile, ssr_tiles.comp's; binding 13 unused).
+layout(binding = 14, std430) readonly buffer Tiles { uint tiles[]; };
 // The pixels marched in known SSR-first tiles; zeroed before. None: the renderer
 // may skip the march until the next probe frame.
 layout(binding = 15, std430) buffer SsrFirst { uint ssr_first_marches; };
@@ -57,30 +54,8 @@ layout(push_constant) uniform Push {
     float min_confidence; // below: the pixel fails
     float reflective_min; // reflectivity above which a pixel reflects
     float trace_min_weight; // failed pixels whose own reflection weighs less are not traced
-    uint tile_rate; // the exchange rate in 1/256 (0: every tile SSR-first)
-    uint tile_history; // 0: no last frame (tiles_in is not read)
+    uint tile_history; // 0: no last frame (the first after a reset or resize)
 } pc;
-
-shared uint s_tile;
-
-// This workgroup's tile state for this frame (invocation 0 updates it; all wait).
-uint tile_state() {
-    uint t = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    if (gl_LocalInvocationIndex == 0u) {
-        uint state = 0u, marched = 0u, answered = 0u;
-        if (pc.tile_history != 0u) {
-            state = tiles_in[t * TILE_WORDS];
-            marched = tiles_in[t * TILE_WORDS + 1u];
-            answered = tiles_in[t * TILE_WORDS + 2u];
-        }
-        s_tile = tile_update(state, marched, answered, pc.tile_rate);
-        tiles_out[t * TILE_WORDS] = s_tile;
-        tiles_out[t * TILE_WORDS + 1u] = 0u;
-        tiles_out[t * TILE_WORDS + 2u] = 0u;
-    }
-    barrier();
-    return s_tile;
-}
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -90,7 +65,8 @@ void main() {
     bool march = false;
     bool glossy = false;
     vec3 sky = vec3(0.0);
-    bool rays_only = !MASK_ONLY && (tile_state() & TILE_RAYS_ONLY) != 0u;
+    uint tile = MASK_ONLY ? 0u : tiles[(gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * TILE_WORDS];
+    bool rays_only = (tile & TILE_RAYS_ONLY) != 0u;
     if (inside) {
         uint material = texelFetch(gb_material, p, 0).r;
         vec4 nr = texelFetch(gb_normal, p, 0);
@@ -138,7 +114,7 @@ void main() {
     // The SSR-first tiles' marches: not the rays-only tiles' probes, nor after the
     // first frame the marches of tiles not known yet (a glossy pixel's sampled ray
     // turning marchable, a surface coming into view), which probe frames learn.
-    bool known_first = !MASK_ONLY && !rays_only && ((s_tile & TILE_KNOWN) != 0u || pc.tile_history == 0u);
+    bool known_first = !MASK_ONLY && !rays_only && ((tile & TILE_KNOWN) != 0u || pc.tile_history == 0u);
     uint first_tile = subgroupBallotBitCount(subgroupBallot(march && known_first));
     if (subgroupElect() && first_tile > 0u) {
         atomicAdd(ssr_first_marches, first_tile);

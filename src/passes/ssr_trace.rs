@@ -33,7 +33,6 @@ struct ClassifyPush {
     min_confidence: f32,
     reflective_min: f32,
     trace_min_weight: f32,
-    tile_rate: u32,
     tile_history: u32,
 }
 
@@ -124,6 +123,8 @@ pub struct SsrPass {
     classify: Pipeline,
     /// The `rt` mode's classification (`MASK_ONLY`): every reflective pixel fails.
     mask_only: Pipeline,
+    /// The adaptive hybrid's tile update before the classification (`ssr_tiles.comp`).
+    tiles: Pipeline,
     /// The march through the Hi-Z pyramid, and the linear DDA (`ssr_hiz` off).
     trace_hiz: Pipeline,
     trace_linear: Pipeline,
@@ -139,6 +140,7 @@ impl SsrPass {
             ctx: ctx.clone(),
             classify: Pipeline::compute::<ClassifyPush>(ctx, CLASSIFY_NAME, classify)?,
             mask_only: Pipeline::compute_specialized::<ClassifyPush>(ctx, "ssr.mask_only", classify, &[1])?,
+            tiles: Pipeline::compute::<[u32; 3]>(ctx, "ssr.tiles", shaders::SSR_TILES_COMP)?,
             trace_hiz: Pipeline::compute_specialized::<MarchPush>(ctx, NAME, shaders::SSR_TRACE_COMP, &[1])?,
             trace_linear: Pipeline::compute_specialized::<MarchPush>(
                 ctx,
@@ -222,6 +224,13 @@ impl SsrPass {
                 frames: seq.frames.saturating_add(1),
                 written: 1 - seq.written,
             });
+            // This frame's tile states first (`ssr_tiles.comp`).
+            let tiles = tile_count(e) as u32;
+            let push = [tiles, params.tile_rate, (seq.frames > 0) as u32];
+            let buffers = [Resource::Buffer(tiles_in), Resource::Buffer(tiles_out)];
+            self.tiles.dispatch(cmd, &buffers, &push, Groups::Cover([tiles, 1, 1]));
+            // RAW: the classification reads the states; WAW: the march adds to the counts.
+            barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
         }
         pipeline.dispatch(
             cmd,
@@ -247,7 +256,6 @@ impl SsrPass {
                 min_confidence: params.min_confidence,
                 reflective_min: params.reflective_min,
                 trace_min_weight: params.trace_min_weight,
-                tile_rate: params.tile_rate,
                 tile_history: (seq.frames > 0) as u32,
             },
             Groups::Cover([e.width, e.height, 1]),

@@ -17,7 +17,8 @@
 // be marched is not (FAIL_SKIPPED: straight to the ray tracer) unless it is a probe
 // (tile_probe), which keeps measuring the tile's success (ssr.trace counts it, then
 // sends it to the ray tracer too). Mirrored by
-// cpu_ref::ssr::tile_update and tile_probe.
+// cpu_ref::ssr::tile_update and tile_probe. With skip_all (the adaptive hybrid's idle
+// path) every tile is treated as rays-only with no probe: nothing is listed.
 #include "ssr.glsl"
 #include "pixel_list.glsl"
 
@@ -55,6 +56,7 @@ layout(push_constant) uniform Push {
     float reflective_min; // reflectivity above which a pixel reflects
     float trace_min_weight; // failed pixels whose own reflection weighs less are not traced
     uint tile_history; // 0: no last frame (the first after a reset or resize)
+    uint skip_all; // 1: as if every tile were rays-only without probes (tiles not read)
 } pc;
 
 void main() {
@@ -65,8 +67,9 @@ void main() {
     bool march = false;
     bool glossy = false;
     vec3 sky = vec3(0.0);
-    uint tile = MASK_ONLY ? 0u : tiles[(gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * TILE_WORDS];
-    bool rays_only = (tile & TILE_RAYS_ONLY) != 0u;
+    bool skip_all = pc.skip_all != 0u;
+    uint tile = MASK_ONLY || skip_all ? 0u : tiles[(gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * TILE_WORDS];
+    bool rays_only = skip_all || (tile & TILE_RAYS_ONLY) != 0u;
     if (inside) {
         uint material = texelFetch(gb_material, p, 0).r;
         vec4 nr = texelFetch(gb_normal, p, 0);
@@ -79,7 +82,7 @@ void main() {
             SsrRay r = ssr_ray(p, texelFetch(gb_depth, p, 0).r, nr.xyz, roughness, 0u);
             march = heading_confidence(r.vdir) >= pc.min_confidence;
             fail = march ? 0u : FAIL_LOW_CONFIDENCE;
-            if (march && rays_only && !tile_probe(uvec2(p), frame.frame_index)) {
+            if (march && rays_only && (skip_all || !tile_probe(uvec2(p), frame.frame_index))) {
                 march = false;
                 fail = FAIL_SKIPPED;
             }

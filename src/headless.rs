@@ -87,6 +87,24 @@ pub struct HybridSplit {
     pub ssr_first_tiles: u64,
     pub rays_only_tiles: u64,
     pub unknown_tiles: u64,
+    /// Changes of class since the first frame: over all tiles, and of the tile that
+    /// changed most.
+    pub tile_flips: u64,
+    pub most_tile_flips: u64,
+    /// The path the frames until the next probe frame take (`renderer::exchange::Path`:
+    /// `march`, `skip_march` or `trace_all`), and every path's frames since the first
+    /// frame, with its measured reflection rows (`ssr.hiz` to `reflect.denoise`, ms, a
+    /// running mean) when the paths are priced (a measured exchange rate).
+    pub path: String,
+    pub paths: Vec<PathReport>,
+}
+
+/// One path of the adaptive hybrid in `HybridSplit`.
+#[derive(Clone, Debug, Serialize)]
+pub struct PathReport {
+    pub path: String,
+    pub frames: u64,
+    pub ms: Option<f64>,
 }
 
 /// A finished headless render.
@@ -361,7 +379,9 @@ fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<Option<Hybri
     if !(settings.mode.marches() && settings.mode.traces()) {
         return Ok(None);
     }
-    let [ssr_first_tiles, rays_only_tiles, unknown_tiles] = renderer.tile_classes()?;
+    let tiles = renderer.tile_census()?;
+    let paths = renderer.hybrid_paths();
+    use crate::renderer::exchange::Path;
     let measured = settings.hybrid_policy == crate::settings::HybridPolicy::Adaptive && settings.exchange_rate == 0.0;
     let rate = renderer.exchange_rate();
     let exchange_rate = match settings.hybrid_policy {
@@ -373,8 +393,19 @@ fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<Option<Hybri
         policy: settings.hybrid_policy.name().to_string(),
         exchange_rate,
         exchange_rate_measured: rate.estimate.filter(|_| measured),
-        ssr_first_tiles,
-        rays_only_tiles,
-        unknown_tiles,
+        ssr_first_tiles: tiles.ssr_first,
+        rays_only_tiles: tiles.rays_only,
+        unknown_tiles: tiles.unknown,
+        tile_flips: tiles.flips,
+        most_tile_flips: tiles.most_flips,
+        path: paths.next.name().to_string(),
+        paths: Path::ALL
+            .iter()
+            .map(|&p| PathReport {
+                path: p.name().to_string(),
+                frames: paths.frames[p as usize],
+                ms: paths.price(p).filter(|_| measured),
+            })
+            .collect(),
     }))
 }

@@ -204,11 +204,15 @@ pub const FAIL_SKIPPED: u32 = 512;
 /// The adaptive hybrid's tiles: `WG_2D` x `WG_2D` pixels, `ssr.classify`'s workgroups.
 /// A tile's state word holds its smoothed SSR success (`TILE_SUCCESS`: 0 to
 /// `TILE_ONE`, the share of its marched pixels SSR answered, in 1/256), whether that
-/// is known yet (`TILE_KNOWN`), and its class (`TILE_RAYS_ONLY`; clear: SSR-first).
+/// is known yet (`TILE_KNOWN`), its class (`TILE_RAYS_ONLY`; clear: SSR-first), and
+/// from bit `TILE_FLIPS_SHIFT` up how often its class has changed since the tiles were
+/// reset (saturating at `TILE_FLIPS_MAX`): the measure of the tiles' stability.
 pub const TILE_SUCCESS: u32 = 0x3ff;
 pub const TILE_ONE: u32 = 256;
 pub const TILE_KNOWN: u32 = 1 << 10;
 pub const TILE_RAYS_ONLY: u32 = 1 << 11;
+pub const TILE_FLIPS_SHIFT: u32 = 16;
+pub const TILE_FLIPS_MAX: u32 = 0xffff;
 /// A tile changes class only when its success passes the exchange rate by this much
 /// (in 1/256): noise in a few marched pixels does not flip it every frame.
 pub const TILE_HYSTERESIS: u32 = 16;
@@ -307,6 +311,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("TILE_KNOWN", TILE_KNOWN),
     ("TILE_RAYS_ONLY", TILE_RAYS_ONLY),
     ("TILE_HYSTERESIS", TILE_HYSTERESIS),
+    ("TILE_FLIPS_SHIFT", TILE_FLIPS_SHIFT),
+    ("TILE_FLIPS_MAX", TILE_FLIPS_MAX),
     ("TILE_WORDS", TILE_WORDS),
     ("SOURCE_NONE", SOURCE_NONE),
     ("SOURCE_SSR", SOURCE_SSR),

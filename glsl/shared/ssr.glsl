@@ -68,11 +68,14 @@ vec3 untraced_sky(SsrRay r) {
 // unknown or with `rate` 0 (the SSR-first policy), else it turns rays-only when the
 // success falls TILE_HYSTERESIS below `rate` (the march's cost in rays, 1/256: a tile
 // pays rate + (1 - success) rays a pixel SSR-first against 1 rays-only) and back when
-// it rises that much above. Integers: the CPU matches it exactly.
+// it rises that much above; a change of class adds one to the tile's flips. Integers:
+// the CPU matches it exactly.
 uint tile_update(uint state, uint marched, uint answered, uint rate) {
     uint s = state & TILE_SUCCESS;
     bool known = (state & TILE_KNOWN) != 0u;
-    bool rays_only = (state & TILE_RAYS_ONLY) != 0u;
+    bool was_rays_only = (state & TILE_RAYS_ONLY) != 0u;
+    bool rays_only = was_rays_only;
+    uint flips = state >> TILE_FLIPS_SHIFT;
     if (marched > 0u) {
         uint share = (answered * TILE_ONE + marched / 2u) / marched;
         s = known ? (3u * s + share + 2u) / 4u : share;
@@ -85,7 +88,10 @@ uint tile_update(uint state, uint marched, uint answered, uint rate) {
     } else if (!rays_only && s + TILE_HYSTERESIS < rate) {
         rays_only = true;
     }
-    return s | (known ? TILE_KNOWN : 0u) | (rays_only ? TILE_RAYS_ONLY : 0u);
+    if (rays_only != was_rays_only) {
+        flips = min(flips + 1u, TILE_FLIPS_MAX);
+    }
+    return s | (known ? TILE_KNOWN : 0u) | (rays_only ? TILE_RAYS_ONLY : 0u) | (flips << TILE_FLIPS_SHIFT);
 }
 
 // Whether pixel p of a rays-only tile is marched anyway in frame `frame` (a probe): one

@@ -295,6 +295,23 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
             "  hybrid {}: exchange rate {:.3}{measured}; tiles SSR-first {}, rays-only {}, unknown {}",
             h.policy, h.exchange_rate, h.ssr_first_tiles, h.rays_only_tiles, h.unknown_tiles
         ));
+        if h.policy == "adaptive" {
+            let paths: Vec<String> = h
+                .paths
+                .iter()
+                .map(|p| {
+                    let ms = p.ms.map_or(String::new(), |m| format!(", {m:.2} ms"));
+                    format!("{} {} frames{ms}", p.path, p.frames)
+                })
+                .collect();
+            text.line(format_args!(
+                "    paths: {} (next: {}); tile flips {} (most in one tile {})",
+                paths.join("; "),
+                h.path,
+                h.tile_flips,
+                h.most_tile_flips
+            ));
+        }
     }
     text.line(format_args!(
         "  {} shadows: lit pixels {}, shadow rays {} ({:.1}%)",

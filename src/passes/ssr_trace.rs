@@ -34,6 +34,22 @@ struct ClassifyPush {
     reflective_min: f32,
     trace_min_weight: f32,
     tile_history: u32,
+    skip_all: u32,
+}
+
+/// What `SsrPass::classify` does with the pixels a march could answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Classify {
+    /// Lists them for the march, but in the adaptive hybrid's rays-only tiles only
+    /// their probes (the rest: `FAIL_SKIPPED`); the tiles' states are updated first.
+    Tiles,
+    /// Lists none: every such pixel is skipped (`FAIL_SKIPPED`), as in a rays-only
+    /// tile without probes; the tiles are left as they are (the adaptive hybrid's idle
+    /// path).
+    SkipAll,
+    /// The `rt` mode's: every reflective pixel fails (`FAIL_FORCED`), none is left
+    /// untraced; the tiles are left as they are.
+    MaskOnly,
 }
 
 /// Push constants of `ssr_trace.comp`.
@@ -182,13 +198,14 @@ impl SsrPass {
     }
 
     /// Records the classification: the fail mask and SSR colour of every pixel not to
-    /// be marched, the march list and the glossy pixels' list; with `mask_only` (the `rt` mode) every
-    /// reflective pixel fails (`FAIL_FORCED`) and the list stays empty. G-buffer in
+    /// be marched, the march list and the glossy pixels' list (`kind`: which pixels are
+    /// marched; the list stays empty unless `Classify::Tiles`). G-buffer in
     /// `SHADER_READ_ONLY_OPTIMAL`. Ends with the list and its dispatch arguments visible
     /// to `trace`, the mask and colour to `trace` and to the mask's readers
     /// (`ssr.compact`, `reflect.merge`). The G-buffer's metallic weighs the pixels' own
     /// reflection (`trace_min_weight`).
-    pub fn classify(&self, cmd: vk::CommandBuffer, inputs: (&Buffer, &GBuffer), params: &SsrParams, mask_only: bool) {
+    pub fn classify(&self, cmd: vk::CommandBuffer, inputs: (&Buffer, &GBuffer), params: &SsrParams, kind: Classify) {
+        let mask_only = kind == Classify::MaskOnly;
         let (frame, gbuffer) = inputs;
         let d = &self.ctx.device;
         let out = &self.out;
@@ -215,11 +232,10 @@ impl SsrPass {
         let s = &self.sampler;
         let pipeline = if mask_only { &self.mask_only } else { &self.classify };
         let e = out.color.extent;
-        // The tiles: read the last frame's, write the other (not in the rt mode, whose
-        // classification leaves them).
+        // The tiles: read the last frame's, write the other (only when they choose).
         let seq = self.tile_sequence.get();
         let (tiles_in, tiles_out) = (&out.tiles[seq.written], &out.tiles[1 - seq.written]);
-        if !mask_only {
+        if kind == Classify::Tiles {
             self.tile_sequence.set(TileSequence {
                 frames: seq.frames.saturating_add(1),
                 written: 1 - seq.written,
@@ -257,6 +273,7 @@ impl SsrPass {
                 reflective_min: params.reflective_min,
                 trace_min_weight: params.trace_min_weight,
                 tile_history: (seq.frames > 0) as u32,
+                skip_all: (kind == Classify::SkipAll) as u32,
             },
             Groups::Cover([e.width, e.height, 1]),
         );

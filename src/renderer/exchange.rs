@@ -1,12 +1,22 @@
-//! The adaptive hybrid's exchange rate, measured (`exchange_rate = 0`): what a march
-//! costs in traced rays on this device, from the frame's own self-checked timestamps.
-//! Each hybrid frame copies its counts — pixels marched (`ssr.trace`'s list) and rays
-//! traced (`rt.reflect`'s) — into its slot's host-visible buffer; when the frame has
-//! finished and its timings passed their self-check, (`ssr.trace` ms / marched) over
-//! (`rt.reflect` ms / rays) joins a running mean (one part in five). The rate the tiles
-//! use moves in steps of 1/32 and only once the mean has left it by more than 1/16, so
-//! timing noise does not flip tiles from frame to frame.
+//! What the adaptive hybrid measures of this device, from the frame's own self-checked
+//! timestamps (`exchange_rate = 0`).
+//!
+//! The exchange rate: what a march costs in traced rays. Each marching frame copies
+//! its counts — pixels marched (`ssr.trace`'s list) and rays traced (`rt.reflect`'s) —
+//! into its slot's host-visible buffer; when the frame has finished, its timings
+//! passed their self-check and most of its marches were SSR-first tiles' (not probes),
+//! (`ssr.trace` ms / marched) over (`rt.reflect` ms / rays) joins a running mean (one
+//! part in five). The rate the tiles use moves in steps of
+//! 1/32 and only once the mean has left it by more than 1/16, so timing noise does not
+//! flip tiles from frame to frame.
+//!
+//! The paths (`Paths`): the tiles weigh a march against a ray pixel by pixel, but
+//! marching at all has a price of its own — the pyramid, the classification's SSR
+//! work, the seams' blur — that no tile sees. So the frames' reflection rows are timed
+//! on both paths, marching with the tiles and idle (every tile rays-only, without
+//! probes: no pyramid, no march), and the frames take the cheaper.
 
+use super::frame::{Row, PROBE_EVERY};
 use crate::error::Result;
 use crate::shader_defines::TILE_ONE;
 use crate::vk::barrier::{self, access};
@@ -49,12 +59,163 @@ impl ExchangeRate {
     }
 }
 
+/// On the marching path, one frame in this many takes the idle path, so that path's
+/// price stays current (at most 1/64 of the frames on the dearer path).
+pub const RECHECK_EVERY: u32 = 64;
+
+/// The rows whose time the paths are priced by: those that differ between them.
+pub const REFLECTION_ROWS: [Row; 7] = [
+    Row::SsrHiz,
+    Row::SsrClassify,
+    Row::SsrTrace,
+    Row::SsrCompact,
+    Row::RtReflect,
+    Row::ReflectMerge,
+    Row::ReflectDenoise,
+];
+
+/// A path an adaptive hybrid frame takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Path {
+    /// The tiles split the pixels: SSR-first tiles march (`ssr.hiz`, `ssr.trace`),
+    /// rays-only tiles send theirs to the rays but for their probes.
+    March,
+    /// No pyramid, no march: every tile as if rays-only without probes
+    /// (`Classify::SkipAll`); a pixel whose own reflection weighs little is left
+    /// untraced as the hybrid leaves it.
+    SkipMarch,
+    /// No pyramid, no march: the `rt` mode's classification (`Classify::MaskOnly`),
+    /// cheaper than the tiles' but every reflective pixel traced.
+    TraceAll,
+}
+
+impl Path {
+    pub const ALL: [Path; 3] = [Path::March, Path::SkipMarch, Path::TraceAll];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Path::March => "march",
+            Path::SkipMarch => "skip_march",
+            Path::TraceAll => "trace_all",
+        }
+    }
+}
+
+/// Which path the adaptive hybrid's frames take, and what each has cost. On an idle
+/// path (`SkipMarch`, `TraceAll`) frames run it until the next probe frame (one in
+/// `PROBE_EVERY`), which marches with the tiles and chooses anew.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Paths {
+    /// The path of the frames until the next probe frame.
+    pub next: Path,
+    /// Each path's reflection rows, ms, a running mean (one part in four), in
+    /// `Path::ALL` order. The marching path's is over frames at one exchange rate,
+    /// `march_rate` (a new rate splits the tiles anew: its mean starts again).
+    pub ms: [Option<f64>; 3],
+    pub march_rate: u32,
+    /// Frames recorded on each path since the last reset, in `Path::ALL` order.
+    pub frames: [u64; 3],
+}
+
+impl Default for Paths {
+    fn default() -> Self {
+        Self {
+            next: Path::March,
+            ms: [None; 3],
+            march_rate: 0,
+            frames: [0; 3],
+        }
+    }
+}
+
+impl Paths {
+    /// The path of frame `index`; `priced`: chosen by the paths' costs (a measured
+    /// exchange rate), else idle only while no SSR-first tile marches. While marching,
+    /// a priced frame in `RECHECK_EVERY` takes an idle path (each in turn), so their
+    /// prices stay current.
+    pub fn frame_path(&self, index: u32, priced: bool) -> Path {
+        match self.next {
+            Path::March if priced && index % RECHECK_EVERY == RECHECK_EVERY - 1 => {
+                [Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize]
+            }
+            Path::March => Path::March,
+            _ if index.is_multiple_of(PROBE_EVERY) => Path::March,
+            idle => idle,
+        }
+    }
+
+    /// After a marching frame at exchange rate `rate`: the pixels its SSR-first tiles
+    /// marched, and its reflection rows' ms if its timings passed their self-check.
+    /// Not priced: `SkipMarch` when no SSR-first tile marched, else `March`. Priced:
+    /// an idle path not priced yet is tried (until the next probe frame; `TraceAll`
+    /// first), else the cheapest path is taken (an idle one when no SSR-first tile
+    /// marched).
+    pub fn marched(&mut self, ssr_first: u32, ms: Option<f64>, rate: u32, priced: bool) {
+        if let Some(ms) = ms {
+            self.ms[0] = Some(match self.ms[0] {
+                Some(mean) if self.march_rate == rate => 0.75 * mean + 0.25 * ms,
+                _ => ms,
+            });
+            self.march_rate = rate;
+        }
+        let idle_only = ssr_first == 0;
+        self.next = if !priced {
+            if idle_only {
+                Path::SkipMarch
+            } else {
+                Path::March
+            }
+        } else if let Some(unpriced) = [Path::TraceAll, Path::SkipMarch]
+            .into_iter()
+            .find(|&p| self.price(p).is_none())
+        {
+            // The `rt` mode's path first: trying it costs nothing against `rt`.
+            unpriced
+        } else {
+            let candidates = Path::ALL.into_iter().filter(|&p| !(idle_only && p == Path::March));
+            let cost = |p: Path| self.price(p).unwrap_or(f64::INFINITY);
+            candidates
+                .min_by(|&a, &b| cost(a).total_cmp(&cost(b)))
+                .expect("two idle paths")
+        };
+    }
+
+    /// After a frame on idle path `path`: its reflection rows' ms if its timings
+    /// passed their self-check.
+    pub fn idled(&mut self, path: Path, ms: Option<f64>) {
+        if let Some(ms) = ms {
+            let mean = &mut self.ms[path as usize];
+            *mean = Some(mean.map_or(ms, |m| 0.75 * m + 0.25 * ms));
+        }
+    }
+
+    /// What `path` has cost (ms of the reflection rows), if measured.
+    pub fn price(&self, path: Path) -> Option<f64> {
+        self.ms[path as usize]
+    }
+
+    /// Whether the frames until the next probe frame take an idle path.
+    pub fn idle(&self) -> bool {
+        self.next != Path::March
+    }
+}
+
+/// What a frame slot's last frame was, for the adaptive hybrid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Recorded {
+    /// A marching hybrid frame at exchange rate `rate`, `priced` by the paths' costs;
+    /// `counts`: pixels marched, rays traced, pixels marched in SSR-first tiles.
+    March { rate: u32, priced: bool, counts: [u32; 3] },
+    /// A frame of the adaptive hybrid on an idle path.
+    Idle(Path),
+}
+
 /// One frame slot's counts, read back after its frame: pixels marched, rays traced,
 /// pixels marched in SSR-first tiles (the rest were probes).
 pub struct FrameCounts {
     buffer: Buffer,
-    /// Whether the slot's last frame recorded them (a hybrid frame).
-    pub recorded: bool,
+    /// What the slot's last frame recorded (`counts` still to read).
+    recorded: Option<Recorded>,
 }
 
 impl FrameCounts {
@@ -62,8 +223,13 @@ impl FrameCounts {
         let usage = vk::BufferUsageFlags::TRANSFER_DST;
         Ok(Self {
             buffer: Buffer::new(ctx, "frame.counts", 12, usage, MemoryLocation::GpuToCpu)?,
-            recorded: false,
+            recorded: None,
         })
+    }
+
+    /// Notes a frame on idle path `path` (nothing to copy).
+    pub fn record_idle(&mut self, path: Path) {
+        self.recorded = Some(Recorded::Idle(path));
     }
 
     /// Records the copies of the march list's length (word 3 of `march_args`), the ray
@@ -72,9 +238,9 @@ impl FrameCounts {
     /// frame's writers and visible to the host.
     pub fn record(
         &mut self,
-        device: &ash::Device,
-        cmd: vk::CommandBuffer,
+        (device, cmd): (&ash::Device, vk::CommandBuffer),
         [march_args, ray_args, ssr_first]: [&Buffer; 3],
+        (rate, priced): (u32, bool),
     ) {
         barrier::global(device, cmd, access::COMPUTE_WRITE, access::TRANSFER_READ);
         for (src, from, at) in [(march_args, 12, 0), (ray_args, 12, 4), (ssr_first, 0, 8)] {
@@ -91,23 +257,77 @@ impl FrameCounts {
             ],
             &[],
         );
-        self.recorded = true;
+        self.recorded = Some(Recorded::March {
+            rate,
+            priced,
+            counts: [0; 3],
+        });
     }
 
-    /// [marched, rays, marched in SSR-first tiles] of the slot's finished frame, if it
-    /// recorded them.
-    pub fn take(&mut self) -> Option<[u32; 3]> {
-        if !std::mem::take(&mut self.recorded) {
-            return None;
+    /// What the slot's finished frame recorded, its counts read.
+    pub fn take(&mut self) -> Option<Recorded> {
+        match self.recorded.take()? {
+            Recorded::March { rate, priced, .. } => {
+                let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.buffer.mapped()?[..12]);
+                let counts = [words[0], words[1], words[2]];
+                Some(Recorded::March { rate, priced, counts })
+            }
+            idle => Some(idle),
         }
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.buffer.mapped()?[..12]);
-        Some([words[0], words[1], words[2]])
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Priced, the paths are tried (`TraceAll` first, each until the next probe frame)
+    /// and the cheapest taken; marching, one frame in `RECHECK_EVERY` takes an idle
+    /// path; a new rate starts the march's mean again; without a march to pay for
+    /// (no SSR-first tile) the marching path is not taken however cheap it was.
+    #[test]
+    fn the_paths_are_tried_then_the_cheapest_taken() {
+        let mut p = Paths::default();
+        assert_eq!(p.frame_path(1, true), Path::March);
+        p.marched(500, Some(30.0), 64, true);
+        assert_eq!(p.next, Path::TraceAll, "untried: the rt mode's path first");
+        assert_eq!(
+            (p.frame_path(1, true), p.frame_path(PROBE_EVERY, true)),
+            (Path::TraceAll, Path::March)
+        );
+        p.idled(Path::TraceAll, Some(20.0));
+        p.marched(500, Some(30.0), 64, true);
+        assert_eq!(p.next, Path::SkipMarch);
+        p.idled(Path::SkipMarch, Some(25.0));
+        p.marched(500, Some(30.0), 64, true);
+        assert_eq!((p.next, p.price(Path::March)), (Path::TraceAll, Some(30.0)));
+        // Marching gets cheaper (a running mean): 30 -> 23.75, still dearer than
+        // TraceAll's 20, then 19.06.
+        p.marched(500, Some(5.0), 64, true);
+        assert_eq!(p.next, Path::TraceAll, "{p:?}");
+        p.marched(500, Some(5.0), 64, true);
+        assert_eq!(p.next, Path::March, "{p:?}");
+        let recheck = RECHECK_EVERY - 1;
+        assert_eq!(p.frame_path(recheck - 1, true), Path::March);
+        assert_ne!(p.frame_path(recheck, true), p.frame_path(recheck + RECHECK_EVERY, true));
+        assert!([p.frame_path(recheck, true), p.frame_path(recheck + RECHECK_EVERY, true)].contains(&Path::SkipMarch));
+        assert_eq!(p.frame_path(recheck, false), Path::March, "not priced: no recheck");
+        // No SSR-first tile marched: idle, however cheap marching was.
+        p.marched(0, Some(5.0), 64, true);
+        assert_eq!(p.next, Path::TraceAll);
+        // A new rate: the march's mean starts again from its sample.
+        p.marched(500, Some(40.0), 96, true);
+        assert_eq!(
+            (p.price(Path::March), p.march_rate, p.next),
+            (Some(40.0), 96, Path::TraceAll)
+        );
+        // Not priced: idle only without SSR-first marches, and then without the march.
+        let mut q = Paths::default();
+        q.marched(500, None, 0, false);
+        assert_eq!(q.next, Path::March);
+        q.marched(0, None, 0, false);
+        assert_eq!((q.next, q.frame_path(1, false)), (Path::SkipMarch, Path::SkipMarch));
+    }
 
     /// The rate follows the samples' running mean in steps of 1/32, holds within 1/16
     /// of it, and ignores frames with too little of either.

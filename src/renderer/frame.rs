@@ -4,6 +4,7 @@
 //! `record` places its own barriers (see `passes`); this file only does what spans
 //! passes: the uniform upload, which rows a mode runs, and the scopes.
 
+use super::exchange::Path;
 use super::{FrameSlot, Renderer};
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::{self, ComposeInputs, ComposeMode};
@@ -14,7 +15,7 @@ use crate::passes::reflect_denoise::{self, DenoiseInputs, DenoiseParams};
 use crate::passes::reflect_merge::{self, BlurParams, MergeInputs, MergeParams};
 use crate::passes::rt_reflect::{self, ReflectInputs};
 use crate::passes::ssr_hiz;
-use crate::passes::ssr_trace::{self, MarchInputs};
+use crate::passes::ssr_trace::{self, Classify, MarchInputs};
 use crate::passes::{
     gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_skin, sim_transform, ssr_compact, SceneGeometry,
 };
@@ -257,7 +258,7 @@ impl Renderer {
             slots,
             fail_mask_view,
             exchange,
-            hybrid_idle,
+            paths,
             ..
         } = self;
         let FrameSlot { timer, sim_ms, counts } = &mut slots[slot];
@@ -354,12 +355,23 @@ impl Renderer {
         f.row(Row::LightDirect, || light.record(cmd, ubo, g, sun));
         let mut params = SsrParams::from_settings(st);
         let adaptive = mode.marches() && mode.traces() && st.hybrid_policy == HybridPolicy::Adaptive;
-        // Every tile rays-only at the last probe frame: trace as the rt mode does (no
-        // pyramid, no march, the mask-only classification) until the next one.
-        let idle = adaptive && *hybrid_idle && !uniforms.frame_index.is_multiple_of(PROBE_EVERY);
-        let marches = mode.marches() && !idle;
-        if adaptive && st.exchange_rate == 0.0 {
+        // The idle path (`exchange::Paths`): no pyramid, no march; every pixel a march
+        // could answer goes to the rays as in a rays-only tile without probes.
+        let priced = adaptive && st.exchange_rate == 0.0;
+        let path = if adaptive {
+            paths.frame_path(uniforms.frame_index, priced)
+        } else {
+            Path::March
+        };
+        let (idle, marches) = (path != Path::March, mode.marches() && path == Path::March);
+        if priced {
             params.tile_rate = exchange.applied;
+        }
+        if adaptive {
+            paths.frames[path as usize] += 1;
+        }
+        if idle {
+            counts.record_idle(path);
         }
         // Only a hybrid frame may skip marches (the ssr mode has no ray to send to).
         if !adaptive {
@@ -369,8 +381,12 @@ impl Renderer {
             f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
         }
         if mode.reflects() {
-            let mask_only = !marches;
-            f.row(Row::SsrClassify, || ssr.classify(cmd, (ubo, g), &params, mask_only));
+            let kind = match (marches, path) {
+                (true, _) => Classify::Tiles,
+                (false, Path::SkipMarch) => Classify::SkipAll,
+                (false, _) => Classify::MaskOnly,
+            };
+            f.row(Row::SsrClassify, || ssr.classify(cmd, (ubo, g), &params, kind));
         }
         if marches {
             let inputs = MarchInputs {
@@ -396,7 +412,8 @@ impl Renderer {
             // A hybrid frame's counts price the march in rays (`exchange`).
             if marches {
                 let o = &ssr.out;
-                counts.record(d, cmd, [&o.march_args, &compact.out.indirect, &o.ssr_first_marches]);
+                let lists = [&o.march_args, &compact.out.indirect, &o.ssr_first_marches];
+                counts.record((d, cmd), lists, (params.tile_rate, priced));
             }
         }
         if mode.reflects() {

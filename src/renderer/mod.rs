@@ -48,7 +48,7 @@ use crate::scene::{Camera, Scene};
 use crate::settings::{Applies, Mode, Settings, Tracer};
 use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
 use ash::vk;
-use exchange::{ExchangeRate, FrameCounts};
+use exchange::{ExchangeRate, FrameCounts, Path, Paths, Recorded, REFLECTION_ROWS};
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
 use std::sync::Arc;
@@ -58,7 +58,7 @@ struct FrameSlot {
     timer: GpuTimer,
     /// Wall-clock milliseconds of the `sim.rigid` step recorded into this slot's frame.
     sim_ms: Option<f64>,
-    /// A hybrid frame's marched pixels and traced rays, for the exchange rate.
+    /// A hybrid frame's path and counts, for the exchange rate and the paths' prices.
     counts: FrameCounts,
 }
 
@@ -131,9 +131,9 @@ pub struct Renderer {
     step_once: bool,
     /// The adaptive hybrid's exchange rate, measured from the hybrid frames.
     exchange: ExchangeRate,
-    /// The last probe frame of the adaptive hybrid marched no SSR-first tile: until the
-    /// next one (`frame::PROBE_EVERY`), frames skip the march and trace every pixel.
-    hybrid_idle: bool,
+    /// The adaptive hybrid's paths: marching with the tiles, or idle (tracing every
+    /// pixel) until the next probe frame; and what each has cost.
+    paths: Paths,
     cmd: vk::CommandBuffer,
 }
 
@@ -247,7 +247,7 @@ impl Renderer {
             fail_mask_view: false,
             paused: false,
             exchange: ExchangeRate::default(),
-            hybrid_idle: false,
+            paths: Paths::default(),
             step_once: false,
             cmd: ctx.allocate_command_buffer()?,
         })
@@ -333,6 +333,10 @@ impl Renderer {
         if !old.changed(&settings, Applies::ShadowMap).is_empty() {
             self.ctx.wait_idle()?;
             self.shadow = ShadowMapPass::new(&self.ctx, settings.shadow_map_size, settings.shadow_slope_bias)?;
+        }
+        // Other settings, other costs: the adaptive hybrid prices its paths anew.
+        if settings != self.settings {
+            self.paths = Paths::default();
         }
         self.settings = settings;
         self.uniforms = self.view.uniforms(&self.settings);
@@ -432,6 +436,11 @@ impl Renderer {
         self.exchange
     }
 
+    /// The adaptive hybrid's paths: which one the frames take, and their prices.
+    pub fn hybrid_paths(&self) -> Paths {
+        self.paths
+    }
+
     /// Triangles of the dynamic geometry (0 for a static scene).
     pub fn dynamic_triangles(&self) -> u32 {
         self.dynamic.as_ref().map_or(0, |d| d.bvh.bvh.tri_count)
@@ -476,7 +485,12 @@ impl Renderer {
         self.frame_index = 0;
         self.denoise.reset_history();
         self.ssr.reset_tiles();
-        self.hybrid_idle = false;
+        // The paths' prices are the device's and the view's: kept.
+        self.paths = Paths {
+            next: Path::March,
+            frames: [0; 3],
+            ..self.paths
+        };
         Ok(())
     }
 
@@ -507,8 +521,10 @@ impl Renderer {
             return Ok((self.render_frame()?, 0));
         }
         let (index, history, tiles) = (self.frame_index, self.denoise.sequence(), self.ssr.tile_sequence());
+        let paths = self.paths;
         crate::vk::remeasure_readout(|| {
             self.frame_index = index;
+            self.paths = paths;
             self.denoise.restore(history);
             self.ssr.restore_tiles(tiles);
             self.render_frame()
@@ -551,16 +567,27 @@ impl Renderer {
         if let Some(ms) = s.sim_ms.take() {
             times.scopes.push((SIM_RIGID, ms));
         }
-        if let Some([marched, rays, ssr_first]) = s.counts.take() {
-            // No SSR-first tile marched: the frames until the next probe frame trace
-            // every pixel straight away.
-            self.hybrid_idle = ssr_first == 0;
-            // A frame whose timings passed their self-check prices a march in rays.
-            if times.problem.is_none() {
-                let ms = |name| times.get(name).unwrap_or(0.0);
-                let ssr = (ms(crate::passes::ssr_trace::NAME), marched);
-                self.exchange.add(ssr, (ms(crate::passes::rt_reflect::NAME), rays));
+        // A frame whose timings passed their self-check prices its path; a marching one
+        // whose marches were mostly the SSR-first tiles' prices a march in rays (the
+        // rays-only tiles' probes, a sixteenth of their pixels scattered over the
+        // screen, march dearer than whole tiles do).
+        let checked = times.problem.is_none();
+        let reflection_ms = checked.then(|| {
+            let scopes = REFLECTION_ROWS.iter().flat_map(|r| r.scopes());
+            scopes.filter_map(|s| times.get(s)).sum::<f64>()
+        });
+        match s.counts.take() {
+            Some(Recorded::March { rate, priced, counts }) => {
+                let [marched, rays, ssr_first] = counts;
+                self.paths.marched(ssr_first, reflection_ms, rate, priced);
+                if checked && 2 * ssr_first as u64 >= marched as u64 {
+                    let ms = |name| times.get(name).unwrap_or(0.0);
+                    let ssr = (ms(crate::passes::ssr_trace::NAME), marched);
+                    self.exchange.add(ssr, (ms(crate::passes::rt_reflect::NAME), rays));
+                }
             }
+            Some(Recorded::Idle(path)) => self.paths.idled(path, reflection_ms),
+            None => {}
         }
         Ok(times)
     }

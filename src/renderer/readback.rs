@@ -11,6 +11,21 @@ use crate::vk::Image;
 use ash::vk;
 use glam::Vec3;
 
+/// The adaptive hybrid's tiles (`Renderer::tile_census`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TileCensus {
+    /// Tiles marching first, sending their pixels straight to rays, and not known yet
+    /// (no pixel marched there yet: nothing to reflect, or only just seen; they march
+    /// first).
+    pub ssr_first: u64,
+    pub rays_only: u64,
+    pub unknown: u64,
+    /// Changes of class since the tiles were reset: over all tiles, and of the tile
+    /// that changed most (each tile's count holds at `TILE_FLIPS_MAX`).
+    pub flips: u64,
+    pub most_flips: u64,
+}
+
 impl Renderer {
     /// Per pixel of the last frame: whether it reflects, and its fail-mask bits (0 in
     /// `raster` mode). A readback, for stats, debug images and tests.
@@ -71,21 +86,23 @@ impl Renderer {
         Ok(self.reflection_maps()?.stats())
     }
 
-    /// The adaptive hybrid's tiles after the last hybrid frame: [SSR-first, rays-only,
-    /// unknown] (no pixel marched there yet: nothing to reflect, or only just seen;
-    /// they march first).
-    pub fn tile_classes(&self) -> Result<[u64; 3]> {
-        use crate::shader_defines::{TILE_KNOWN, TILE_RAYS_ONLY, TILE_WORDS};
+    /// The adaptive hybrid's tiles after the last hybrid frame: their classes and how
+    /// often they have changed class since the tiles were reset.
+    pub fn tile_census(&self) -> Result<TileCensus> {
+        use crate::shader_defines::{TILE_FLIPS_SHIFT, TILE_KNOWN, TILE_RAYS_ONLY, TILE_WORDS};
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ssr.tiles_written().read()?);
-        let mut classes = [0u64; 3];
+        let mut c = TileCensus::default();
         for &s in words.iter().step_by(TILE_WORDS as usize) {
-            classes[match (s & TILE_KNOWN != 0, s & TILE_RAYS_ONLY != 0) {
-                (true, false) => 0,
-                (_, true) => 1,
-                (false, false) => 2,
-            }] += 1;
+            *match (s & TILE_KNOWN != 0, s & TILE_RAYS_ONLY != 0) {
+                (true, false) => &mut c.ssr_first,
+                (_, true) => &mut c.rays_only,
+                (false, false) => &mut c.unknown,
+            } += 1;
+            let flips = (s >> TILE_FLIPS_SHIFT) as u64;
+            c.flips += flips;
+            c.most_flips = c.most_flips.max(flips);
         }
-        Ok(classes)
+        Ok(c)
     }
 
     /// The last frame's tonemapped image as tightly packed RGBA8 (sRGB-encoded).

@@ -1,8 +1,9 @@
-//! The adaptive hybrid (`hybrid_policy = adaptive`, issue 42's first steps): tiles whose
-//! SSR answers less than the exchange rate go straight to the ray tracer, the rest march
-//! first; with a GPU-like rate the frame keeps SSR where it answers; with a fixed rate
-//! it is deterministic; a measured rate comes from the frame's own timings; the report
-//! says how the tiles split.
+//! The adaptive hybrid (`hybrid_policy = adaptive`, issue 42): tiles whose SSR answers
+//! less than the exchange rate go straight to the ray tracer, the rest march first;
+//! with a GPU-like rate the frame keeps SSR where it answers; with a fixed rate it is
+//! deterministic; a measured rate comes from the frame's own timings; with it the
+//! frame's paths (marching, or not at all) are priced and the cheapest taken; the
+//! report says how the tiles split.
 
 use crate::common;
 
@@ -219,8 +220,9 @@ fn the_rate_is_measured_and_reported() {
 
 /// A march dearer than any answer pays for (rate 1.5): once every tile is known
 /// rays-only, the frames between probe frames (one in `PROBE_EVERY`) skip the pyramid
-/// and the march and trace every reflective pixel as the `rt` mode does, at its
-/// quality; probe frames march again, so the tiles can come back.
+/// and the march (`Path::SkipMarch`): every reflective pixel is skipped or fails on its
+/// heading, none answered by SSR, at the quality of the `rt` mode; probe frames march
+/// again, so the tiles can come back.
 #[test]
 fn with_no_ssr_first_tile_the_march_stops_between_probe_frames() {
     use speculum::renderer::PROBE_EVERY;
@@ -242,7 +244,20 @@ fn with_no_ssr_first_tile_the_march_stops_between_probe_frames() {
             idle += 1;
             let (a, b) = (r.read_output().unwrap(), rt.read_output().unwrap());
             let c = speculum::metrics::compare_rgba8(&a, &b, W, H).unwrap();
-            assert!(c.ssim >= 0.999, "frame {k}: {c:?}");
+            assert!(c.ssim >= 0.995, "frame {k}: {c:?}");
+            let maps = r.reflection_maps().unwrap();
+            let skipped = FAIL_SKIPPED | speculum::shader_defines::FAIL_LOW_CONFIDENCE;
+            let (reflective, unmarched) = maps
+                .reflective
+                .iter()
+                .zip(&maps.mask)
+                .fold((0, 0), |(n, u), (&rf, &m)| {
+                    (n + rf as usize, u + (rf && m & skipped != 0) as usize)
+                });
+            assert!(
+                reflective > 1000 && unmarched == reflective,
+                "frame {k}: {unmarched} of {reflective}"
+            );
         }
         if k >= 2 && k % PROBE_EVERY == 0 {
             assert!(marched, "frame {k} is a probe frame");
@@ -253,5 +268,50 @@ fn with_no_ssr_first_tile_the_march_stops_between_probe_frames() {
         idle >= 2 * PROBE_EVERY as usize - 2 && probes == 2,
         "{idle} idle frames, {probes} probe frames"
     );
+    assert_eq!(ctx.validation_messages(), 0);
+}
+
+/// With a measured rate the paths are priced: after the first frame the `rt` mode's
+/// path (`TraceAll`, its image) is tried until the next probe frame, then `SkipMarch`
+/// until the one after; every path then has a price, and the frames take the cheapest
+/// (`Paths::marched`'s choice, here on the renderer's own timings).
+#[test]
+fn measured_paths_are_tried_and_the_cheapest_taken() {
+    use speculum::renderer::exchange::Path;
+    use speculum::renderer::PROBE_EVERY;
+    let ctx = common::context();
+    let scene = speculum::scene::builtin::spheres().unwrap();
+    let mut r = Renderer::new(&ctx, &scene, &settings(HybridPolicy::Adaptive, 0.0)).unwrap();
+    let rt_settings = Settings {
+        mode: Mode::Rt,
+        ..settings(HybridPolicy::SsrFirst, 0.0)
+    };
+    let mut rt = Renderer::new(&ctx, &scene, &rt_settings).unwrap();
+    for k in 0..=2 * PROBE_EVERY {
+        let times = r.render_frame().unwrap();
+        rt.render_frame().unwrap();
+        let marched = times.get("ssr.trace").is_some();
+        assert_eq!(
+            marched,
+            k % PROBE_EVERY == 0,
+            "frame {k}: probe frames march, the others not"
+        );
+        if (2..PROBE_EVERY).contains(&k) {
+            let (a, b) = (r.read_output().unwrap(), rt.read_output().unwrap());
+            let c = speculum::metrics::compare_rgba8(&a, &b, W, H).unwrap();
+            assert!(c.ssim >= 0.999, "frame {k}: TraceAll is the rt mode's path: {c:?}");
+        }
+    }
+    let p = r.hybrid_paths();
+    let idle = PROBE_EVERY as u64 - 1;
+    assert_eq!(p.frames, [3, idle, idle], "{p:?}");
+    let prices: Vec<f64> = Path::ALL.iter().map(|&q| p.price(q).expect("priced")).collect();
+    // Marching is a choice only while an SSR-first tile marches.
+    let marching = r.tile_census().unwrap().ssr_first > 0;
+    let cheapest = Path::ALL
+        .into_iter()
+        .filter(|&q| marching || q != Path::March)
+        .min_by(|&a, &b| prices[a as usize].total_cmp(&prices[b as usize]));
+    assert_eq!(Some(p.next), cheapest, "{p:?}");
     assert_eq!(ctx.validation_messages(), 0);
 }

@@ -18,12 +18,12 @@ use glam::IVec2;
 use rand::Rng;
 use speculum::cpu_ref::ssr::{self, Class};
 use speculum::passes::ssr_hiz::{self, HiZPass};
-use speculum::passes::ssr_trace::{MarchInputs, SsrPass};
+use speculum::passes::ssr_trace::{Classify, MarchInputs, SsrPass};
 use speculum::passes::GBuffer;
 use speculum::settings::SsrParams;
 use speculum::shader_defines::{
     FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_HIT_REFLECTIVE, FAIL_LEFT_SCREEN, FAIL_LOW_CONFIDENCE,
-    FAIL_OUT_OF_STEPS, FAIL_UNTRACED, LIST_STRIPES, SSR_LIST_WG,
+    FAIL_OUT_OF_STEPS, FAIL_SKIPPED, FAIL_UNTRACED, LIST_STRIPES, SSR_LIST_WG,
 };
 use speculum::vk::{barrier, Image};
 
@@ -150,7 +150,7 @@ impl Fixture {
         let general = vk::ImageLayout::GENERAL;
         self.poison();
         ctx.one_shot(|cmd| {
-            self.pass.classify(cmd, (&self.ubo, &self.gb), params, false);
+            self.pass.classify(cmd, (&self.ubo, &self.gb), params, Classify::Tiles);
             self.record_march(cmd, params);
         })
         .unwrap();
@@ -205,7 +205,8 @@ fn gpu_class(listed: bool, mask: u32, want: Class) -> (Class, bool) {
 #[test]
 fn adaptive_tiles_match_cpu() {
     use speculum::passes::ssr_trace::{tile_count, TileSequence};
-    use speculum::shader_defines::{FAIL_SKIPPED, TILE_KNOWN, TILE_ONE, TILE_RAYS_ONLY, TILE_WORDS};
+    use speculum::shader_defines::{TILE_FLIPS_MAX, TILE_FLIPS_SHIFT, TILE_KNOWN, TILE_ONE};
+    use speculum::shader_defines::{TILE_RAYS_ONLY, TILE_WORDS};
     let ctx = common::context();
     let f = Fixture::new(&ctx, 91, 157, 83, |_| {});
     let (w, h) = (f.settings.width as usize, f.settings.height as usize);
@@ -219,7 +220,9 @@ fn adaptive_tiles_match_cpu() {
         .flat_map(|_| {
             let state = rng.random_range(0..=TILE_ONE)
                 | if rng.random_bool(0.8) { TILE_KNOWN } else { 0 }
-                | if rng.random_bool(0.5) { TILE_RAYS_ONLY } else { 0 };
+                | if rng.random_bool(0.5) { TILE_RAYS_ONLY } else { 0 }
+                // Flips so far, some at the counter's end (where it holds).
+                | if rng.random_bool(0.2) { TILE_FLIPS_MAX } else { rng.random_range(0..1000) } << TILE_FLIPS_SHIFT;
             let marched = rng.random_range(0..=64u32);
             [state, marched, rng.random_range(0..=marched)]
         })
@@ -235,7 +238,7 @@ fn adaptive_tiles_match_cpu() {
     out.tiles[1].write(&vec![0xcdu8; out.tiles[1].size as usize]).unwrap();
     f.pass.restore_tiles(TileSequence { frames: 1, written: 0 });
     ctx.one_shot(|cmd| {
-        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, false);
+        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, Classify::Tiles);
         f.record_march(cmd, &params);
         let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
         barrier::record(&ctx.device, cmd, &[b], &[]);
@@ -252,11 +255,16 @@ fn adaptive_tiles_match_cpu() {
     }
     let words = TILE_WORDS as usize;
     let mut want_counts = vec![[0u32; 2]; tiles];
-    let (mut skipped, mut probes, mut borderline) = (0, 0, 0);
+    let (mut skipped, mut probes, mut borderline, mut flipped) = (0, 0, 0, 0);
     for t in 0..tiles {
         let want = ssr::tile_update(last[words * t], last[words * t + 1], last[words * t + 2], rate);
         assert_eq!(got[words * t], want, "tile {t}");
+        flipped += ((got[words * t] ^ last[words * t]) & TILE_RAYS_ONLY != 0) as u32;
     }
+    assert!(
+        flipped > 10,
+        "only {flipped} tiles changed class: the flip count is barely tested"
+    );
     for i in 0..w * h {
         let p = IVec2::new((i % w) as i32, (i / w) as i32);
         let t = (i / w / 8) * tiles_x + (i % w) / 8;
@@ -317,7 +325,9 @@ fn adaptive_tiles_match_cpu() {
 /// Every pixel classifies as the CPU says: not reflective (mask 0), failed on its
 /// heading (FAIL_LOW_CONFIDENCE) or listed for the march, each exactly once; listed
 /// pixels are left to the march (their poison stays); the dispatch arguments cover the
-/// list. The `rt` variant fails every reflective pixel and lists none. Then the march
+/// list. The `rt` variant fails every reflective pixel and lists none; the idle path's
+/// (`Classify::SkipAll`) skips every pixel the march would take (`FAIL_SKIPPED`, or
+/// untraced as a failed pixel), lists none and leaves the tiles. Then the march
 /// over the list writes every listed pixel, the list being long enough to span several
 /// stripes of `list_entry` with a remainder (a chunk taken twice or never leaves
 /// poison).
@@ -331,12 +341,16 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
     let general = vk::ImageLayout::GENERAL;
     // The last run also leaves pixels untraced (their own reflection weighing less
     // than 0.3): they keep the sky.
-    for (mask_only, march, trace_min_weight) in [
-        (false, false, 0.0),
-        (true, false, 0.0),
-        (false, true, 0.0),
-        (false, false, 0.3),
+    for (kind, march, trace_min_weight) in [
+        (Classify::Tiles, false, 0.0),
+        (Classify::MaskOnly, false, 0.0),
+        (Classify::Tiles, true, 0.0),
+        (Classify::Tiles, false, 0.3),
+        (Classify::SkipAll, false, 0.0),
+        (Classify::SkipAll, false, 0.3),
     ] {
+        let (mask_only, skip) = (kind == Classify::MaskOnly, kind == Classify::SkipAll);
+        let tiles = pass.tile_sequence();
         let params = SsrParams {
             trace_min_weight,
             ..SsrParams::from_settings(settings)
@@ -348,7 +362,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
             .unwrap();
         out.march_args.write(&[0xcdu8; 16]).unwrap();
         ctx.one_shot(|cmd| {
-            pass.classify(cmd, (ubo, gb), &params, mask_only);
+            pass.classify(cmd, (ubo, gb), &params, kind);
             if march {
                 f.record_march(cmd, &params);
             }
@@ -382,8 +396,8 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
                 g.material[i],
                 f.albedo[4 * i + 3] as f32 / 255.0,
             );
-            let (want, [heading, weight]) =
-                ssr::classify(frame, p, texel, f.inputs(&[]).surface(i), &params, mask_only);
+            let own = f.inputs(&[]).surface(i);
+            let (want, [heading, weight]) = ssr::classify_in_tile(frame, p, texel, own, &params, (mask_only, skip));
             let (got, same) = gpu_class(listed[i], mask[i], want);
             let on_threshold =
                 (heading - params.min_confidence).abs() < 1e-4 || (weight - params.trace_min_weight).abs() < 1e-4;
@@ -391,7 +405,7 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
                 borderline += 1;
                 continue;
             }
-            assert!(same, "pixel {p} (mask only {mask_only}): GPU {got:?}, CPU {want:?}");
+            assert!(same, "pixel {p} ({kind:?}): GPU {got:?}, CPU {want:?}");
             match want {
                 Class::Done(0, _) => counts[0] += 1,
                 Class::Done(m, _) => {
@@ -428,9 +442,16 @@ fn classify_matches_cpu_and_the_march_covers_its_list() {
         assert_eq!(untraced > n / 100, trace_min_weight > 0.0, "{untraced} untraced pixels");
         // Every class occurs (the rt variant lists none and fails every reflective
         // pixel), so each comparison above means something.
-        if mask_only {
+        if kind == Classify::Tiles {
+            assert_eq!(pass.tile_sequence().frames, tiles.frames + 1);
+        } else {
+            assert_eq!(pass.tile_sequence(), tiles, "{kind:?} leaves the tiles");
+        }
+        if mask_only || skip {
             assert!(counts[0] > 0 && counts[1] > 0 && counts[2] == 0, "{counts:?}");
             assert_eq!(len, 0);
+            let skipped = mask.iter().filter(|&&m| m & FAIL_SKIPPED != 0).count();
+            assert_eq!(skipped > n / 50, skip, "{skipped} skipped");
         } else {
             assert!(counts.iter().all(|&c| c > n / 50), "{counts:?}");
             assert!(mask.contains(&FAIL_LOW_CONFIDENCE));
@@ -631,7 +652,7 @@ fn march_matches_cpu_on_a_random_gbuffer() {
                 .unwrap();
         }
         ctx.one_shot(|cmd| {
-            pass.classify(cmd, (ubo, gb), &params, false);
+            pass.classify(cmd, (ubo, gb), &params, Classify::Tiles);
             f.record_march(cmd, &params);
         })
         .unwrap();
@@ -754,7 +775,7 @@ fn a_march_list_beyond_one_row_of_workgroups_is_covered() {
     f.poison();
     let params = SsrParams::from_settings(&f.settings);
     ctx.one_shot(|cmd| {
-        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, false);
+        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, Classify::Tiles);
         f.record_march(cmd, &params);
     })
     .unwrap();
@@ -956,7 +977,7 @@ fn a_ray_passing_just_behind_a_silhouette_is_not_a_hit() {
     assert!(params.hiz && params.thickness > 0.02, "the default march and thickness");
     f.poison();
     ctx.one_shot(|cmd| {
-        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, false);
+        f.pass.classify(cmd, (&f.ubo, &f.gb), &params, Classify::Tiles);
         f.record_march(cmd, &params);
     })
     .unwrap();

@@ -12,7 +12,8 @@ use crate::gpu_types::FrameUniforms;
 use crate::settings::SsrParams;
 use crate::shader_defines::{
     FAIL_BACK_FACE, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LOW_CONFIDENCE, FAIL_SKIPPED, FAIL_UNTRACED,
-    MATERIAL_NONE, TILE_HYSTERESIS, TILE_KNOWN, TILE_ONE, TILE_RAYS_ONLY, TILE_SUCCESS,
+    MATERIAL_NONE, TILE_FLIPS_MAX, TILE_FLIPS_SHIFT, TILE_HYSTERESIS, TILE_KNOWN, TILE_ONE, TILE_RAYS_ONLY,
+    TILE_SUCCESS,
 };
 use glam::{IVec2, Mat3, Vec2, Vec2Swizzles, Vec3, Vec4, Vec4Swizzles};
 
@@ -153,19 +154,23 @@ pub fn classify_in_tile(
 pub fn tile_update(state: u32, marched: u32, answered: u32, rate: u32) -> u32 {
     let mut s = state & TILE_SUCCESS;
     let mut known = state & TILE_KNOWN != 0;
-    let mut rays_only = state & TILE_RAYS_ONLY != 0;
+    let was_rays_only = state & TILE_RAYS_ONLY != 0;
+    let mut flips = state >> TILE_FLIPS_SHIFT;
     if let Some(share) = (answered * TILE_ONE + marched / 2).checked_div(marched) {
         s = if known { (3 * s + share + 2) / 4 } else { share };
         known = true;
     }
     // SSR-first while unknown or under the SSR-first policy; else across the rate with
     // the hysteresis either way.
-    rays_only = match rays_only {
+    let rays_only = match was_rays_only {
         _ if rate == 0 || !known => false,
         true => s <= rate + TILE_HYSTERESIS,
         false => s + TILE_HYSTERESIS < rate,
     };
-    s | if known { TILE_KNOWN } else { 0 } | if rays_only { TILE_RAYS_ONLY } else { 0 }
+    if rays_only != was_rays_only {
+        flips = (flips + 1).min(TILE_FLIPS_MAX);
+    }
+    s | if known { TILE_KNOWN } else { 0 } | if rays_only { TILE_RAYS_ONLY } else { 0 } | flips << TILE_FLIPS_SHIFT
 }
 
 /// `tile_probe`: whether pixel `p` of a rays-only tile is marched anyway in frame
@@ -479,4 +484,33 @@ fn lit_bilinear(lit: &[[f32; 4]], x: Vec2, res: IVec2) -> Vec3 {
     let (c00, c10) = (c(lo), c(IVec2::new(hi.x, lo.y)));
     let (c01, c11) = (c(IVec2::new(lo.x, hi.y)), c(hi));
     mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tile turns rays-only below the rate less the hysteresis and back above it plus
+    /// the hysteresis, each change counted in its flips (which hold at their end).
+    #[test]
+    fn tile_update_turns_with_hysteresis_and_counts_flips() {
+        let rate = 128;
+        let flips = |s: u32| s >> TILE_FLIPS_SHIFT;
+        // Known at 0.5 success: SSR-first; 30 of 64 answered keeps it (within the band).
+        let s = tile_update(0, 64, 32, rate);
+        assert_eq!((s & TILE_RAYS_ONLY, flips(s)), (0, 0));
+        let s = tile_update(s, 64, 30, rate);
+        assert_eq!((s & TILE_RAYS_ONLY, flips(s)), (0, 0), "{s:#x}");
+        // Nothing answered: the success falls below 128 - 16, rays-only, one flip.
+        let s = tile_update(s, 64, 0, rate);
+        assert_eq!((s & TILE_RAYS_ONLY != 0, flips(s)), (true, 1), "{s:#x}");
+        // No probe marched: it keeps its class and count.
+        assert_eq!(tile_update(s, 0, 0, rate), s);
+        // Everything answered twice: back to SSR-first, two flips.
+        let s = tile_update(tile_update(s, 64, 64, rate), 64, 64, rate);
+        assert_eq!((s & TILE_RAYS_ONLY, flips(s)), (0, 2), "{s:#x}");
+        // The count holds at its end.
+        let full = s | TILE_FLIPS_MAX << TILE_FLIPS_SHIFT;
+        assert_eq!(flips(tile_update(full, 64, 0, rate)), TILE_FLIPS_MAX);
+    }
 }

@@ -16,11 +16,10 @@
 //! on both paths, marching with the tiles and idle (every tile rays-only, without
 //! probes: no pyramid, no march), and the frames take the cheaper.
 
-use super::frame::{Row, PROBE_EVERY};
 use crate::error::Result;
 use crate::shader_defines::TILE_ONE;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context};
+use crate::vk::{Buffer, Context, TimerReadout};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
@@ -63,16 +62,36 @@ impl ExchangeRate {
 /// price stays current (at most 1/64 of the frames on the dearer path).
 pub const RECHECK_EVERY: u32 = 64;
 
-/// The rows whose time the paths are priced by: those that differ between them.
-pub const REFLECTION_ROWS: [Row; 7] = [
-    Row::SsrHiz,
-    Row::SsrClassify,
-    Row::SsrTrace,
-    Row::SsrCompact,
-    Row::RtReflect,
-    Row::ReflectMerge,
-    Row::ReflectDenoise,
-];
+/// The adaptive hybrid's probe frames while the frames take an idle path: one frame
+/// in 7 (7 and the probes' 16 phases are coprime, so each probe pixel comes in turn).
+pub const PROBE_EVERY: u32 = 7;
+
+/// Takes a finished frame into the exchange rate and the paths' prices, as `recorded`
+/// says it ran: a frame whose timings passed their self-check prices its path (the sum
+/// of `reflection_scopes`); a marching one whose marches were mostly the SSR-first
+/// tiles' prices a march in rays (the rays-only tiles' probes, a sixteenth of their
+/// pixels scattered over the screen, march dearer than whole tiles do).
+pub fn take_frame<'a>(
+    (exchange, paths): (&mut ExchangeRate, &mut Paths),
+    recorded: Recorded,
+    times: &TimerReadout,
+    reflection_scopes: impl Iterator<Item = &'a str>,
+) {
+    let checked = times.problem.is_none();
+    let reflection_ms = checked.then(|| reflection_scopes.filter_map(|s| times.get(s)).sum::<f64>());
+    match recorded {
+        Recorded::March { rate, priced, counts } => {
+            let [marched, rays, ssr_first] = counts;
+            paths.marched(ssr_first, reflection_ms, rate, priced);
+            if checked && 2 * ssr_first as u64 >= marched as u64 {
+                let ms = |name| times.get(name).unwrap_or(0.0);
+                let ssr = (ms(crate::passes::ssr_trace::NAME), marched);
+                exchange.add(ssr, (ms(crate::passes::rt_reflect::NAME), rays));
+            }
+        }
+        Recorded::Idle(path) => paths.idled(path, reflection_ms),
+    }
+}
 
 /// A path an adaptive hybrid frame takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

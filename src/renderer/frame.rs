@@ -28,13 +28,22 @@ use ash::vk;
 
 /// Timer scope of the whole frame.
 pub const FRAME: &str = "frame";
-/// The adaptive hybrid's probe frames while every tile is rays-only: one frame in 7
-/// (7 and the probes' 16 phases are coprime, so each probe pixel comes in turn).
-pub const PROBE_EVERY: u32 = 7;
 /// Timer scope of the per-frame uniform upload.
 pub const UNIFORMS: &str = "uniforms";
 /// The rigid bodies' time step on the CPU (wall clock, while the frame is recorded).
 pub const SIM_RIGID: &str = "sim.rigid";
+
+/// The rows the adaptive hybrid's paths are priced by (`exchange::Paths`): those that
+/// differ between them.
+pub const REFLECTION_ROWS: [Row; 7] = [
+    Row::SsrHiz,
+    Row::SsrClassify,
+    Row::SsrTrace,
+    Row::SsrCompact,
+    Row::RtReflect,
+    Row::ReflectMerge,
+    Row::ReflectDenoise,
+];
 
 /// One row of the frame table (DESIGN.md), declared in frame order.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]

@@ -22,7 +22,8 @@ mod gpu_scene;
 mod readback;
 mod view;
 
-pub use frame::{Row, FRAME, PROBE_EVERY, SCOPES, SIM_RIGID, UNIFORMS};
+pub use exchange::PROBE_EVERY;
+pub use frame::{Row, FRAME, SCOPES, SIM_RIGID, UNIFORMS};
 pub use view::{frame_uniforms, render_origin, View};
 
 use crate::error::Result;
@@ -48,7 +49,7 @@ use crate::scene::{Camera, Scene};
 use crate::settings::{Applies, Mode, Settings, Tracer};
 use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
 use ash::vk;
-use exchange::{ExchangeRate, FrameCounts, Path, Paths, Recorded, REFLECTION_ROWS};
+use exchange::{ExchangeRate, FrameCounts, Path, Paths};
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
 use std::sync::Arc;
@@ -567,27 +568,9 @@ impl Renderer {
         if let Some(ms) = s.sim_ms.take() {
             times.scopes.push((SIM_RIGID, ms));
         }
-        // A frame whose timings passed their self-check prices its path; a marching one
-        // whose marches were mostly the SSR-first tiles' prices a march in rays (the
-        // rays-only tiles' probes, a sixteenth of their pixels scattered over the
-        // screen, march dearer than whole tiles do).
-        let checked = times.problem.is_none();
-        let reflection_ms = checked.then(|| {
-            let scopes = REFLECTION_ROWS.iter().flat_map(|r| r.scopes());
-            scopes.filter_map(|s| times.get(s)).sum::<f64>()
-        });
-        match s.counts.take() {
-            Some(Recorded::March { rate, priced, counts }) => {
-                let [marched, rays, ssr_first] = counts;
-                self.paths.marched(ssr_first, reflection_ms, rate, priced);
-                if checked && 2 * ssr_first as u64 >= marched as u64 {
-                    let ms = |name| times.get(name).unwrap_or(0.0);
-                    let ssr = (ms(crate::passes::ssr_trace::NAME), marched);
-                    self.exchange.add(ssr, (ms(crate::passes::rt_reflect::NAME), rays));
-                }
-            }
-            Some(Recorded::Idle(path)) => self.paths.idled(path, reflection_ms),
-            None => {}
+        if let Some(recorded) = s.counts.take() {
+            let scopes = frame::REFLECTION_ROWS.iter().flat_map(|r| r.scopes().iter().copied());
+            exchange::take_frame((&mut self.exchange, &mut self.paths), recorded, &times, scopes);
         }
         Ok(times)
     }

@@ -426,9 +426,10 @@ impl Renderer {
             }
         }
         if mode.reflects() {
-            // Seams exist only where both sources do.
+            // Seams exist only where both sources do (not on the adaptive hybrid's idle
+            // paths, where SSR answers nothing).
             let blur = BlurParams {
-                radius: if mode.has_seams() { st.blur_radius } else { 0 },
+                radius: if mode.has_seams() && !idle { st.blur_radius } else { 0 },
                 band: st.blur_band,
             };
             let inputs = MergeInputs {

@@ -180,9 +180,10 @@ fn window_shot_is_the_frame(display: &Display, dir: &Path) {
 }
 
 /// Every mode in turn, a screenshot in each; the hybrid one is what `speculum render`
-/// makes of the same view and settings.
+/// makes of the same view and settings (the SSR-first hybrid: the adaptive one's path
+/// follows each run's timings, and the demo's frame is not render's first).
 fn modes_match_render(display: &Display, dir: &Path) {
-    let mut text = String::from("wait 2\n");
+    let mut text = String::from("set hybrid_policy ssr_first\nwait 2\n");
     for k in 1..=5 {
         text += &format!("key {k}\nwait 2\nscreenshot {}/mode{k}.png\n", dir.display());
     }
@@ -218,10 +219,14 @@ fn modes_match_render(display: &Display, dir: &Path) {
         format!("{},{},{}", a[0], a[1], a[2])
     };
     let out = dir.join("render_hybrid.png");
+    let settings = dir.join("ssr_first.json");
+    std::fs::write(&settings, r#"{"hybrid_policy": "ssr_first"}"#).unwrap();
     let r = common::speculum([
         "render", "--scene", "mirrors", "--mode", "hybrid", "--width", "320", "--height", "180",
     ])
     .args(["--frames", "1", "--warmup", "0", "--quiet"])
+    .arg("--settings")
+    .arg(&settings)
     .arg(format!("--camera-pos={}", v("position")))
     .arg(format!("--camera-target={}", v("target")))
     .arg("--out")
@@ -283,11 +288,12 @@ fn resize_storm(display: &Display, dir: &Path) {
     );
 }
 
-/// The HUD's setting path (`set`): bounces, SSR budget and resolution change the image.
+/// The HUD's setting path (`set`): bounces, SSR budget and resolution change the image
+/// (the SSR-first hybrid, which marches every frame).
 fn settings_change_the_image(display: &Display, dir: &Path) {
     let d = dir.display();
     let text = format!(
-        "wait 2\nscreenshot {d}/base.png\nset max_bounces 1\nwait 2\nscreenshot {d}/bounces.png\n\
+        "set hybrid_policy ssr_first\nwait 2\nscreenshot {d}/base.png\nset max_bounces 1\nwait 2\nscreenshot {d}/bounces.png\n\
          set max_bounces 3\nset ssr_max_steps 4\nwait 2\nscreenshot {d}/steps.png\n\
          set ssr_max_steps 64\nset width 240\nwait 2\nscreenshot {d}/width.png\n\
          save-settings {d}/saved.json\n"
@@ -317,11 +323,13 @@ fn settings_change_the_image(display: &Display, dir: &Path) {
 }
 
 /// A dynamic scene: paused it holds still, `.` steps it once, Backspace restarts it
-/// (glossy reflections off: their samples change every frame, paused or not).
+/// (glossy reflections off: their samples change every frame, paused or not; the
+/// SSR-first hybrid: the adaptive one's probe frames march where its other frames may
+/// not, a change of a few pixels).
 fn animation_controls(display: &Display, dir: &Path) {
     let d = dir.display();
     let text = format!(
-        "set glossy false\nwait 4\nkey space\nwait 2\nscreenshot {d}/a.png\nwait 2\nscreenshot {d}/b.png\nkey .\nwait 2\n\
+        "set glossy false\nset hybrid_policy ssr_first\nwait 4\nkey space\nwait 2\nscreenshot {d}/a.png\nwait 2\nscreenshot {d}/b.png\nkey .\nwait 2\n\
          screenshot {d}/c.png\nkey backspace\nwait 2\nscreenshot {d}/d.png\n"
     );
     scripted(

@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::renderer::Renderer;
 use crate::report::{Header, PassTimes, Stat};
 use crate::scene::Scene;
-use crate::settings::{Mode, Settings};
+use crate::settings::{HybridPolicy, Mode, Settings};
 use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
 use std::sync::Arc;
@@ -83,6 +83,8 @@ pub fn run(
         .iter()
         .map(|&(steps, t)| Settings {
             mode: Mode::Hybrid,
+            // The SSR-first hybrid's split: the adaptive one would move pixels itself.
+            hybrid_policy: HybridPolicy::SsrFirst,
             ssr_max_steps: steps,
             ssr_min_confidence: t,
             // The last point traces every reflective pixel through the hybrid's passes,

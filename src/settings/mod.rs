@@ -374,14 +374,15 @@ settings_table! {
     /// traces what SSR fails; `adaptive` sends a tile's pixels straight to the ray
     /// tracer while SSR answers less of them than a march costs (`exchange_rate`),
     /// probing a sixteenth of them a frame so the tile can win SSR back.
-    hybrid_policy: HybridPolicy = HybridPolicy::SsrFirst, Range::Any, Hud::Own, NextFrame;
+    hybrid_policy: HybridPolicy = HybridPolicy::Adaptive, Range::Any, Hud::Own, NextFrame;
     /// The adaptive hybrid's exchange rate: a march's cost as a fraction of a traced
-    /// ray's (0: measured every frame from the frame's own timestamps). A tile marches
-    /// first while SSR answers more than this share of its pixels: near 1 on a CPU
-    /// driver (a march costs about a ray), about 0.1 on a GPU.
+    /// ray's (0: measured from the frame's own timestamps, and the frame's paths priced
+    /// too, so frames follow this run's timings; a fixed value makes them reproducible).
+    /// A tile marches first while SSR answers more than this share of its pixels: near
+    /// 1 on a CPU driver (a march costs about a ray), about 0.1 on a GPU.
     exchange_rate: f32 = 0.0, Range::F32 { min: 0.0, max: 16.0, open_min: false }, slider(0.0, 2.0), NextFrame;
     /// Simulated seconds per rendered frame of a dynamic scene (a fixed step, so frame
-    /// k is the same image in every run): smaller is smoother motion and more frames
+    /// k is the same scene in every run): smaller is smoother motion and more frames
     /// for the same animation.
     sim_dt: f32 = 1.0 / 60.0, Range::F32 { min: 0.0, max: 1.0, open_min: true }, log_slider(0.001, 0.1), NewRenderer;
     /// Build the static scene's BVH (once, at load) with PLOC instead of the LBVH:

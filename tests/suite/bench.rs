@@ -162,8 +162,9 @@ fn reflection_split_benchmark_is_valid() {
 }
 
 /// The modes benchmark measures every mode in one run and checks itself: same
-/// reflective pixels everywhere, rt traces them all and hybrid fewer, rt's SSIM against
-/// itself is 1, and only the reflecting modes have reflection passes.
+/// reflective pixels everywhere, rt traces them all, the SSR-first hybrid fewer and the
+/// adaptive one (the default) no more, rt's SSIM against itself is 1, and only the
+/// reflecting modes have reflection passes.
 #[test]
 fn modes_benchmark_is_valid() {
     let ctx = common::context();
@@ -172,11 +173,13 @@ fn modes_benchmark_is_valid() {
     assert!(r.valid, "{r:?}");
     // Every mode, then hybrid with the other policy.
     assert_eq!(r.modes.len(), speculum::settings::Mode::ALL.len() + 1);
-    assert_eq!(r.modes.last().unwrap().mode, "hybrid_adaptive");
+    assert_eq!(r.modes.last().unwrap().mode, "hybrid_ssr_first");
     let by = |name: &str| r.modes.iter().find(|m| m.mode == name).unwrap();
     assert_eq!(by("rt").ssim_vs_rt, 1.0);
     assert_eq!(by("rt").frame_over_rt.median, 1.0);
-    assert!(by("hybrid").traced_pixels > 0 && by("hybrid").traced_pixels < by("rt").traced_pixels);
+    let first = by("hybrid_ssr_first");
+    assert!(first.traced_pixels > 0 && first.traced_pixels < by("rt").traced_pixels);
+    assert!(by("hybrid").traced_pixels > 0 && by("hybrid").traced_pixels <= by("rt").traced_pixels);
     assert!(by("hybrid").ssim_vs_rt > 0.9 && by("raster").ssim_vs_rt < by("hybrid").ssim_vs_rt);
     assert!(by("raster").passes_ms.get("ssr.trace").is_none());
     assert!(by("hybrid").passes_ms.get("rt.reflect").is_some() && by("ssr").passes_ms.get("rt.reflect").is_none());

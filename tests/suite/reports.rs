@@ -193,9 +193,13 @@ fn reports_go_to_stdout_with_a_dash() {
 fn bench_reports_follow_the_schema() {
     let dir = tempfile::tempdir().unwrap();
     let small = ["--width", "48", "--height", "32"];
+    // A fixed exchange rate: the adaptive hybrid marches in every measured frame (with
+    // a measured one it may not, and its march scopes may be null).
+    std::fs::write(dir.path().join("s.json"), r#"{"exchange_rate": 0.1}"#).unwrap();
     let modes = speculum(
         &[
             &["bench", "modes", "--rounds", "2", "--warmup", "0", "--json", "r.json"][..],
+            &["--settings", "s.json"],
             &small,
         ]
         .concat(),

@@ -63,10 +63,12 @@ fn frame_scopes_nest_and_fill_the_frame() {
     for name in ["room", "drop"] {
         let scene = speculum::scene::load(name).unwrap();
         for mode in [speculum::settings::Mode::Hybrid, speculum::settings::Mode::Rt] {
+            // The SSR-first hybrid: the adaptive one may not march.
             let settings = Settings {
                 width: 320,
                 height: 180,
                 mode,
+                hybrid_policy: speculum::settings::HybridPolicy::SsrFirst,
                 ..Settings::default()
             };
             let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();

@@ -97,6 +97,8 @@ pub struct HybridSplit {
     /// running mean) when the paths are priced (a measured exchange rate).
     pub path: String,
     pub paths: Vec<PathReport>,
+    /// While idle, one frame in this many is a probe frame (it marches).
+    pub probe_every: u32,
 }
 
 /// One path of the adaptive hybrid in `HybridSplit`.
@@ -375,7 +377,7 @@ pub fn render(
 }
 
 /// The last frame's `HybridSplit`, in the modes that have one (`hybrid`, `provenance`).
-fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<Option<HybridSplit>> {
+pub(crate) fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<Option<HybridSplit>> {
     if !(settings.mode.marches() && settings.mode.traces()) {
         return Ok(None);
     }
@@ -399,6 +401,7 @@ fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<Option<Hybri
         tile_flips: tiles.flips,
         most_tile_flips: tiles.most_flips,
         path: paths.next.name().to_string(),
+        probe_every: paths.probe_every,
         paths: Path::ALL
             .iter()
             .map(|&p| PathReport {

@@ -305,9 +305,10 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
                 })
                 .collect();
             text.line(format_args!(
-                "    paths: {} (next: {}); tile flips {} (most in one tile {})",
+                "    paths: {} (next: {}, probe frames 1 in {}); tile flips {} (most in one tile {})",
                 paths.join("; "),
                 h.path,
+                h.probe_every,
                 h.tile_flips,
                 h.most_tile_flips
             ));

@@ -158,7 +158,8 @@ impl Demo {
         }
         self.drain()?;
         let shadows = self.renderer.shadow_maps()?.stats();
-        self.stats = Some((self.renderer.reflection_stats()?, shadows));
+        let hybrid = crate::headless::hybrid_split(&self.renderer, self.renderer.settings())?;
+        self.stats = Some((self.renderer.reflection_stats()?, shadows, hybrid));
         Ok(())
     }
 

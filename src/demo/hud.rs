@@ -3,10 +3,9 @@
 //! UI pass, through the same paths as keys and scripts.
 
 use super::script::Action;
-use crate::reflection_maps::{ReflectionStats, FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
+use crate::reflection_maps::{FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
 use crate::settings::{Applies, Field, Hud, HybridPolicy, Mode, Settings, Shadows, Tracer, Value, FIELDS};
-use crate::shadow_maps::ShadowStats;
 use crate::vk::swapchain::present_mode_name;
 use ash::vk;
 use egui::{Color32, RichText};
@@ -28,7 +27,7 @@ pub struct HudInfo<'a> {
     pub wall_ms: &'a [f64],
     /// Median ms per pass over the history, in frame order.
     pub passes: &'a [(&'static str, f64)],
-    pub stats: Option<&'a (ReflectionStats, ShadowStats)>,
+    pub stats: Option<&'a super::Stats>,
     pub camera: Camera,
     pub speed: f32,
     pub dynamic: bool,
@@ -268,7 +267,7 @@ fn timings_panel(ui: &mut egui::Ui, info: &HudInfo<'_>) {
 
 fn reflections_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, out: &mut Vec<Request>) {
     match info.stats {
-        Some((st, sh)) => {
+        Some((st, sh, hybrid)) => {
             ui.label(format!(
                 "reflective pixels {} · SSR failed on {} · ray traced {} ({:.1}%)",
                 st.reflective_pixels,
@@ -283,6 +282,18 @@ fn reflections_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, out: &mut Vec<Reques
                 sh.traced_pixels,
                 100.0 * sh.ray_fraction()
             ));
+            if let Some(h) = hybrid {
+                let known = (h.ssr_first_tiles + h.rays_only_tiles).max(1) as f64;
+                ui.label(format!(
+                    "hybrid {}: exchange rate {:.3} · tiles SSR-first {:.0}%, rays-only {:.0}% (of {:.0} known) · path {}",
+                    h.policy,
+                    h.exchange_rate,
+                    100.0 * h.ssr_first_tiles as f64 / known,
+                    100.0 * h.rays_only_tiles as f64 / known,
+                    known,
+                    h.path
+                ));
+            }
         }
         None => {
             ui.label("reflective pixels: measuring…");

@@ -19,6 +19,9 @@ mod shots;
 
 use crate::error::{Error, Result};
 use crate::reflection_maps::ReflectionStats;
+
+/// The demo's last readback of the frame's counts (`refresh_stats`).
+type Stats = (ReflectionStats, ShadowStats, Option<crate::headless::HybridSplit>);
 use crate::scene::Scene;
 use crate::settings::{Mode, Settings};
 use crate::shadow_maps::ShadowStats;
@@ -199,8 +202,9 @@ struct Demo {
     frame: u64,
     last_frame: Instant,
     history: History,
-    /// The last counts of the reflections and the shadows (`refresh_stats`).
-    stats: Option<(ReflectionStats, ShadowStats)>,
+    /// The last counts of the reflections and the shadows, and the hybrid's split
+    /// (`refresh_stats`).
+    stats: Option<Stats>,
     /// A frame was submitted since the renderer's images were last made (the counts
     /// read them).
     rendered_since_change: bool,

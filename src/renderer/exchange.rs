@@ -63,8 +63,26 @@ impl ExchangeRate {
 pub const RECHECK_EVERY: u32 = 64;
 
 /// The adaptive hybrid's probe frames while the frames take an idle path: one frame
-/// in 7 (7 and the probes' 16 phases are coprime, so each probe pixel comes in turn).
+/// in 7 at the most (odd, so coprime with the probes' 16 phases: each probe pixel
+/// comes in turn), and while the paths are priced, fewer: as many frames as keep the
+/// probe frames' extra cost over the idle path within `PROBE_BUDGET` of a frame, up
+/// to one in `PROBE_EVERY_MAX`.
 pub const PROBE_EVERY: u32 = 7;
+pub const PROBE_EVERY_MAX: u32 = 31;
+/// What staying ready to march again may cost while idle: 1% of a frame.
+pub const PROBE_BUDGET: f64 = 0.01;
+
+/// Frames between probe frames (odd, `PROBE_EVERY` to `PROBE_EVERY_MAX`) for a probe
+/// frame costing `extra_ms` more than an idle one, in frames of `frame_ms`.
+pub fn probe_interval(extra_ms: f64, frame_ms: f64) -> u32 {
+    let frames = (extra_ms.max(0.0) / (PROBE_BUDGET * frame_ms)).ceil();
+    let frames = if frames.is_finite() {
+        frames.min(PROBE_EVERY_MAX as f64) as u32
+    } else {
+        PROBE_EVERY_MAX
+    };
+    (frames | 1).clamp(PROBE_EVERY, PROBE_EVERY_MAX)
+}
 
 /// Takes a finished frame into the exchange rate and the paths' prices, as `recorded`
 /// says it ran: a frame whose timings passed their self-check prices its path (the sum
@@ -75,10 +93,13 @@ pub fn take_frame<'a>(
     (exchange, paths): (&mut ExchangeRate, &mut Paths),
     recorded: Recorded,
     times: &TimerReadout,
-    reflection_scopes: impl Iterator<Item = &'a str>,
+    (frame_scope, reflection_scopes): (&str, impl Iterator<Item = &'a str>),
 ) {
     let checked = times.problem.is_none();
     let reflection_ms = checked.then(|| reflection_scopes.filter_map(|s| times.get(s)).sum::<f64>());
+    if let Some(ms) = times.get(frame_scope).filter(|_| checked) {
+        paths.frame_ms = Some(paths.frame_ms.map_or(ms, |m| 0.75 * m + 0.25 * ms));
+    }
     match recorded {
         Recorded::March { rate, priced, counts } => {
             let [marched, rays, ssr_first] = counts;
@@ -122,7 +143,7 @@ impl Path {
 
 /// Which path the adaptive hybrid's frames take, and what each has cost. On an idle
 /// path (`SkipMarch`, `TraceAll`) frames run it until the next probe frame (one in
-/// `PROBE_EVERY`), which marches with the tiles and chooses anew.
+/// `probe_every`), which marches with the tiles and chooses anew.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Paths {
     /// The path of the frames until the next probe frame.
@@ -134,6 +155,10 @@ pub struct Paths {
     pub march_rate: u32,
     /// Frames recorded on each path since the last reset, in `Path::ALL` order.
     pub frames: [u64; 3],
+    /// Frames between probe frames while idle (`probe_interval`), and the whole
+    /// frame's ms, a running mean (one part in four), it is measured against.
+    pub probe_every: u32,
+    pub frame_ms: Option<f64>,
 }
 
 impl Default for Paths {
@@ -143,6 +168,8 @@ impl Default for Paths {
             ms: [None; 3],
             march_rate: 0,
             frames: [0; 3],
+            probe_every: PROBE_EVERY,
+            frame_ms: None,
         }
     }
 }
@@ -158,7 +185,7 @@ impl Paths {
                 [Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize]
             }
             Path::March => Path::March,
-            _ if index.is_multiple_of(PROBE_EVERY) => Path::March,
+            _ if index.is_multiple_of(self.probe_every) => Path::March,
             idle => idle,
         }
     }
@@ -196,6 +223,14 @@ impl Paths {
             candidates
                 .min_by(|&a, &b| cost(a).total_cmp(&cost(b)))
                 .expect("two idle paths")
+        };
+        // Idle and priced: probe frames no more often than their cost allows.
+        self.probe_every = match (self.next, self.price(Path::March), self.frame_ms) {
+            (Path::March, ..) => PROBE_EVERY,
+            (idle, Some(march), Some(frame)) if priced => {
+                probe_interval(march - self.price(idle).unwrap_or(march), frame)
+            }
+            _ => PROBE_EVERY,
         };
     }
 
@@ -299,6 +334,28 @@ impl FrameCounts {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Probe frames come one in 7 at the most, fewer as they cost more against the
+    /// idle path (within 1% of a frame), odd, and one in 31 at the least.
+    #[test]
+    fn probe_frames_thin_out_as_they_cost_more() {
+        assert_eq!(probe_interval(0.0, 100.0), 7);
+        assert_eq!(probe_interval(-3.0, 100.0), 7);
+        assert_eq!(probe_interval(10.0, 100.0), 11, "10 frames, made odd");
+        assert_eq!(probe_interval(14.5, 100.0), 15);
+        assert_eq!(probe_interval(50.0, 100.0), 31);
+        assert_eq!(probe_interval(1.0, 0.0), 31);
+        let mut p = Paths {
+            ms: [Some(60.0), Some(45.0), Some(50.0)],
+            frame_ms: Some(100.0),
+            ..Paths::default()
+        };
+        p.marched(500, None, 0, true);
+        assert_eq!((p.next, p.probe_every), (Path::SkipMarch, 15));
+        assert!(p.frame_path(15, true) == Path::March && p.frame_path(7, true) == Path::SkipMarch);
+        p.marched(500, None, 0, false);
+        assert_eq!((p.next, p.probe_every), (Path::March, PROBE_EVERY));
+    }
 
     /// Priced, the paths are tried (`TraceAll` first, each until the next probe frame)
     /// and the cheapest taken; marching, one frame in `RECHECK_EVERY` takes an idle

@@ -490,6 +490,7 @@ impl Renderer {
         self.paths = Paths {
             next: Path::March,
             frames: [0; 3],
+            probe_every: exchange::PROBE_EVERY,
             ..self.paths
         };
         Ok(())
@@ -570,7 +571,7 @@ impl Renderer {
         }
         if let Some(recorded) = s.counts.take() {
             let scopes = frame::REFLECTION_ROWS.iter().flat_map(|r| r.scopes().iter().copied());
-            exchange::take_frame((&mut self.exchange, &mut self.paths), recorded, &times, scopes);
+            exchange::take_frame((&mut self.exchange, &mut self.paths), recorded, &times, (FRAME, scopes));
         }
         Ok(times)
     }

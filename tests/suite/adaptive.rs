@@ -170,7 +170,6 @@ fn a_fixed_rate_is_deterministic_and_the_first_frame_is_ssr_first() {
 /// split.
 #[test]
 fn the_rate_is_measured_and_reported() {
-    use speculum::renderer::PROBE_EVERY;
     let ctx = common::context();
     let scene = speculum::scene::builtin::room().unwrap();
     let mut r = Renderer::new(&ctx, &scene, &settings(HybridPolicy::Adaptive, 0.0)).unwrap();
@@ -189,7 +188,7 @@ fn the_rate_is_measured_and_reported() {
     // The next marching frame (a probe frame at the latest: the others may take an
     // idle path, which leaves the tiles) updates them with the rate in use before it.
     let mut used = None;
-    for _ in 0..PROBE_EVERY {
+    for _ in 0..speculum::renderer::exchange::PROBE_EVERY_MAX {
         let rate = r.exchange_rate().applied;
         if r.render_frame().unwrap().get("ssr.trace").is_some() {
             used = Some(rate);

@@ -34,16 +34,11 @@ pub const UNIFORMS: &str = "uniforms";
 pub const SIM_RIGID: &str = "sim.rigid";
 
 /// The rows the adaptive hybrid's paths are priced by (`exchange::Paths`): those that
-/// differ between them.
-pub const REFLECTION_ROWS: [Row; 7] = [
-    Row::SsrHiz,
-    Row::SsrClassify,
-    Row::SsrTrace,
-    Row::SsrCompact,
-    Row::RtReflect,
-    Row::ReflectMerge,
-    Row::ReflectDenoise,
-];
+/// differ between them, `ssr.hiz` to `reflect.denoise`.
+pub fn reflection_rows() -> &'static [Row] {
+    let at = |row| Row::ALL.iter().position(|&r| r == row).expect("a row of the table");
+    &Row::ALL[at(Row::SsrHiz)..=at(Row::ReflectDenoise)]
+}
 
 /// One row of the frame table (DESIGN.md), declared in frame order.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]

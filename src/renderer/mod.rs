@@ -570,7 +570,7 @@ impl Renderer {
             times.scopes.push((SIM_RIGID, ms));
         }
         if let Some(recorded) = s.counts.take() {
-            let scopes = frame::REFLECTION_ROWS.iter().flat_map(|r| r.scopes().iter().copied());
+            let scopes = frame::reflection_rows().iter().flat_map(|r| r.scopes().iter().copied());
             exchange::take_frame((&mut self.exchange, &mut self.paths), recorded, &times, (FRAME, scopes));
         }
         Ok(times)

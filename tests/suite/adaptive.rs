@@ -25,6 +25,17 @@ fn settings(policy: HybridPolicy, exchange_rate: f32) -> Settings {
     }
 }
 
+/// `spheres` in the adaptive hybrid at `exchange_rate` and in the `rt` mode.
+fn adaptive_and_rt(ctx: &std::sync::Arc<speculum::vk::Context>, exchange_rate: f32) -> (Renderer, Renderer) {
+    let scene = speculum::scene::builtin::spheres().unwrap();
+    let r = Renderer::new(ctx, &scene, &settings(HybridPolicy::Adaptive, exchange_rate)).unwrap();
+    let rt_settings = Settings {
+        mode: Mode::Rt,
+        ..settings(HybridPolicy::SsrFirst, 0.0)
+    };
+    (r, Renderer::new(ctx, &scene, &rt_settings).unwrap())
+}
+
 /// The tiles' state words after the last frame.
 fn tile_states(r: &Renderer) -> Vec<u32> {
     let words: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.tiles_written().read().unwrap());
@@ -236,13 +247,7 @@ fn the_rate_is_measured_and_reported() {
 fn with_no_ssr_first_tile_the_march_stops_between_probe_frames() {
     use speculum::renderer::PROBE_EVERY;
     let ctx = common::context();
-    let scene = speculum::scene::builtin::spheres().unwrap();
-    let mut r = Renderer::new(&ctx, &scene, &settings(HybridPolicy::Adaptive, 1.5)).unwrap();
-    let rt_settings = Settings {
-        mode: Mode::Rt,
-        ..settings(HybridPolicy::SsrFirst, 0.0)
-    };
-    let mut rt = Renderer::new(&ctx, &scene, &rt_settings).unwrap();
+    let (mut r, mut rt) = adaptive_and_rt(&ctx, 1.5);
     let (mut idle, mut probes) = (0, 0);
     for k in 0..2 * PROBE_EVERY + 3 {
         let times = r.render_frame().unwrap();
@@ -289,13 +294,7 @@ fn measured_paths_are_tried_and_the_cheapest_taken() {
     use speculum::renderer::exchange::Path;
     use speculum::renderer::PROBE_EVERY;
     let ctx = common::context();
-    let scene = speculum::scene::builtin::spheres().unwrap();
-    let mut r = Renderer::new(&ctx, &scene, &settings(HybridPolicy::Adaptive, 0.0)).unwrap();
-    let rt_settings = Settings {
-        mode: Mode::Rt,
-        ..settings(HybridPolicy::SsrFirst, 0.0)
-    };
-    let mut rt = Renderer::new(&ctx, &scene, &rt_settings).unwrap();
+    let (mut r, mut rt) = adaptive_and_rt(&ctx, 0.0);
     for k in 0..=2 * PROBE_EVERY {
         let times = r.render_frame().unwrap();
         rt.render_frame().unwrap();

@@ -43,11 +43,11 @@ layout(binding = 11, std430) buffer GlossyArgs { uvec4 glossy_args; };
 // The reflected rays' distance to what they hit (glossy.glsl's HIT_FAR here, for pixels
 // not marched; ssr.trace and rt.reflect write the rest), for reflect.denoise's footprint.
 layout(binding = 12, r32f) uniform writeonly image2D hit_distance;
-// This frame's tile states (TILE_WORDS a tile, ssr_tiles.comp's; binding 13 unused).
-layout(binding = 14, std430) readonly buffer Tiles { uint tiles[]; };
+// This frame's tile states (TILE_WORDS a tile, ssr_tiles.comp's).
+layout(binding = 13, std430) readonly buffer Tiles { uint tiles[]; };
 // The pixels marched in known SSR-first tiles; zeroed before. None: the renderer
 // may skip the march until the next probe frame.
-layout(binding = 15, std430) buffer SsrFirst { uint ssr_first_marches; };
+layout(binding = 14, std430) buffer SsrFirst { uint ssr_first_marches; };
 // The rt mode's variant: no SSR, every reflective pixel fails (FAIL_FORCED).
 layout(constant_id = 0) const bool MASK_ONLY = false;
 

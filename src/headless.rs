@@ -383,7 +383,6 @@ pub(crate) fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<O
     }
     let tiles = renderer.tile_census()?;
     let paths = renderer.hybrid_paths();
-    use crate::renderer::exchange::Path;
     let measured = settings.hybrid_policy == crate::settings::HybridPolicy::Adaptive && settings.exchange_rate == 0.0;
     let rate = renderer.exchange_rate();
     let exchange_rate = match settings.hybrid_policy {
@@ -402,7 +401,7 @@ pub(crate) fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<O
         most_tile_flips: tiles.most_flips,
         path: paths.next.name().to_string(),
         probe_every: paths.probe_every,
-        paths: Path::ALL
+        paths: crate::renderer::exchange::Path::ALL
             .iter()
             .map(|&p| PathReport {
                 path: p.name().to_string(),

@@ -264,7 +264,6 @@ impl SsrPass {
                 Resource::Buffer(&out.glossy_list),
                 Resource::Buffer(&out.glossy_args),
                 Resource::StorageImage(&out.hit_distance),
-                Resource::Buffer(tiles_in),
                 Resource::Buffer(tiles_out),
                 Resource::Buffer(&out.ssr_first_marches),
             ],

@@ -98,7 +98,7 @@ pub fn take_frame<'a>(
     let checked = times.problem.is_none();
     let reflection_ms = checked.then(|| reflection_scopes.filter_map(|s| times.get(s)).sum::<f64>());
     if let Some(ms) = times.get(frame_scope).filter(|_| checked) {
-        paths.frame_ms = Some(paths.frame_ms.map_or(ms, |m| 0.75 * m + 0.25 * ms));
+        paths.frame_ms = Some(running_mean(paths.frame_ms, ms));
     }
     match recorded {
         Recorded::March { rate, priced, counts } => {
@@ -112,6 +112,12 @@ pub fn take_frame<'a>(
         }
         Recorded::Idle(path) => paths.idled(path, reflection_ms),
     }
+}
+
+/// The paths' running means: `mean` joined by `sample` one part in four (the sample
+/// whole when there is no mean yet).
+fn running_mean(mean: Option<f64>, sample: f64) -> f64 {
+    mean.map_or(sample, |m| 0.75 * m + 0.25 * sample)
 }
 
 /// A path an adaptive hybrid frame takes.
@@ -198,10 +204,8 @@ impl Paths {
     /// marched).
     pub fn marched(&mut self, ssr_first: u32, ms: Option<f64>, rate: u32, priced: bool) {
         if let Some(ms) = ms {
-            self.ms[0] = Some(match self.ms[0] {
-                Some(mean) if self.march_rate == rate => 0.75 * mean + 0.25 * ms,
-                _ => ms,
-            });
+            let mean = self.ms[0].filter(|_| self.march_rate == rate);
+            self.ms[0] = Some(running_mean(mean, ms));
             self.march_rate = rate;
         }
         let idle_only = ssr_first == 0;
@@ -239,18 +243,13 @@ impl Paths {
     pub fn idled(&mut self, path: Path, ms: Option<f64>) {
         if let Some(ms) = ms {
             let mean = &mut self.ms[path as usize];
-            *mean = Some(mean.map_or(ms, |m| 0.75 * m + 0.25 * ms));
+            *mean = Some(running_mean(*mean, ms));
         }
     }
 
     /// What `path` has cost (ms of the reflection rows), if measured.
     pub fn price(&self, path: Path) -> Option<f64> {
         self.ms[path as usize]
-    }
-
-    /// Whether the frames until the next probe frame take an idle path.
-    pub fn idle(&self) -> bool {
-        self.next != Path::March
     }
 }
 

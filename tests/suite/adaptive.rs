@@ -29,11 +29,15 @@ fn settings(policy: HybridPolicy, exchange_rate: f32) -> Settings {
 fn adaptive_and_rt(ctx: &std::sync::Arc<speculum::vk::Context>, exchange_rate: f32) -> (Renderer, Renderer) {
     let scene = speculum::scene::builtin::spheres().unwrap();
     let r = Renderer::new(ctx, &scene, &settings(HybridPolicy::Adaptive, exchange_rate)).unwrap();
-    let rt_settings = Settings {
+    (r, Renderer::new(ctx, &scene, &rt_settings()).unwrap())
+}
+
+/// The `rt` mode at the tests' size.
+fn rt_settings() -> Settings {
+    Settings {
         mode: Mode::Rt,
         ..settings(HybridPolicy::SsrFirst, 0.0)
-    };
-    (r, Renderer::new(ctx, &scene, &rt_settings).unwrap())
+    }
 }
 
 /// The tiles' state words after the last frame.
@@ -75,15 +79,7 @@ fn tiles_follow_the_exchange_rate() {
     let mut first = Renderer::new(&ctx, &scene, &settings(HybridPolicy::SsrFirst, 0.0)).unwrap();
     let mut gpu = Renderer::new(&ctx, &scene, &settings(HybridPolicy::Adaptive, 0.1)).unwrap();
     let mut dear = Renderer::new(&ctx, &scene, &settings(HybridPolicy::Adaptive, 0.9)).unwrap();
-    let mut rt = Renderer::new(
-        &ctx,
-        &scene,
-        &Settings {
-            mode: Mode::Rt,
-            ..settings(HybridPolicy::SsrFirst, 0.0)
-        },
-    )
-    .unwrap();
+    let mut rt = Renderer::new(&ctx, &scene, &rt_settings()).unwrap();
     for _ in 0..12 {
         for r in [&mut first, &mut gpu, &mut dear, &mut rt] {
             r.render_frame().unwrap();

@@ -175,7 +175,7 @@ uint start_leaf(uint j, int root_bit, out Climber c) {
     c.p = 0u;
     c.left = true;
     uint link = pc.n == 1u ? 0u : find_parent(c, root_bit);
-    ttris[j] = TraversalTri(a, prim, b - a, link, v - a, 0u);
+    ttris[j] = TraversalTri(a, prim, b, link, v, 0u);
     if (pc.n == 1u) {
         tnodes[0] = TraversalNode(c.lo, c.ref, c.hi, c.ref, c.lo, BVH_INVALID, c.hi, 0u);
     }

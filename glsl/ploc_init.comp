@@ -33,7 +33,7 @@ void main() {
     vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
     uint leaf = bvh_leaf_ref(j, 1u);
     // The parent link is written by the merge (0 for a single triangle).
-    ttris[j] = TraversalTri(a, prim, b - a, 0u, c - a, 0u);
+    ttris[j] = TraversalTri(a, prim, b, 0u, c, 0u);
     clusters[j] = Cluster(lo, leaf, hi, bvh_area(lo, hi), leaf, j, 1u, 0u);
     if (pc.n == 1u) {
         tnodes[0] = TraversalNode(lo, leaf, hi, leaf, lo, BVH_INVALID, hi, 0u);

@@ -158,17 +158,18 @@ pub struct RigidBody {
     pub tri_count: u32,
 }
 
-/// A triangle of the BVH (std430, 48 bytes), in leaf order: corner `a`, the edges
-/// `b - a` and `c - a` the ray test uses, the scene's triangle id, and the link to its
-/// box's half of the parent node (as `TraversalNode::parent`).
+/// A triangle of the BVH (std430, 48 bytes), in leaf order: its corners `a`, `b`, `c` as
+/// the scene's vertices hold them (the watertight ray test projects each corner on its
+/// own, so triangles sharing an edge see the same edge), the scene's triangle id, and
+/// the link to its box's half of the parent node (as `TraversalNode::parent`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TraversalTri {
     pub a: [f32; 3],
     pub id: u32,
-    pub e1: [f32; 3],
+    pub b: [f32; 3],
     pub parent: u32,
-    pub e2: [f32; 3],
+    pub c: [f32; 3],
     pub _pad0: u32,
 }
 

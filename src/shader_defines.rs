@@ -213,8 +213,10 @@ pub const TILE_KNOWN: u32 = 1 << 10;
 pub const TILE_RAYS_ONLY: u32 = 1 << 11;
 pub const TILE_FLIPS_SHIFT: u32 = 16;
 pub const TILE_FLIPS_MAX: u32 = 0xffff;
-/// A tile changes class only when its success passes the exchange rate by this much
-/// (in 1/256): noise in a few marched pixels does not flip it every frame.
+/// A tile changes class only when its success passes the exchange rate by a quarter of
+/// the rate, at least 1 and at most this (in 1/256): noise in a few marched pixels does
+/// not flip it every frame, and a device whose march costs a few hundredths of a ray (a
+/// GPU's 1/18) still has a band below its rate for tiles to turn rays-only in.
 pub const TILE_HYSTERESIS: u32 = 16;
 /// Words per tile in the tile buffers: the state, then the frame's marched pixels and
 /// those SSR answered (atomics of `ssr.trace`).

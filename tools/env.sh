@@ -9,7 +9,7 @@
 set -euo pipefail
 
 SPECULUM_PACKAGES=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers
-  libshaderc-dev glslang-dev glslang-tools spirv-tools xvfb xauth fonts-dejavu-core
+  libshaderc-dev glslang-dev glslang-tools spirv-tools xvfb xauth
   libembree-dev)
 
 # Cargo features tools/run and tools/test build with (one build serves both): the

@@ -39,9 +39,9 @@ struct TraversalNode {
 struct TraversalTri {
     vec3 a;
     uint id;
-    vec3 e1;
+    vec3 b;
     uint parent;
-    vec3 e2;
+    vec3 c;
     uint _pad0;
 };
 
@@ -99,8 +99,8 @@ bool bvh_collapse(float area, float left_cost, float right_cost, uint count, boo
         uint link_ = ttris[j].parent;                                                     \
         TRIANGLE_CORNERS(vertices, indices, prim_, a_, b_, c_)                            \
         ttris[j].a = a_;                                                                  \
-        ttris[j].e1 = b_ - a_;                                                            \
-        ttris[j].e2 = c_ - a_;                                                            \
+        ttris[j].b = b_;                                                                  \
+        ttris[j].c = c_;                                                                  \
         vec3 lo_ = min(a_, min(b_, c_)), hi_ = max(a_, max(b_, c_));                      \
         STORE_HALF(tnodes, link_ >> 1u, link_ & 1u, lo_, hi_)                             \
         if ((n) == 1u) {                                                                  \

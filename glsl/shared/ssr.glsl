@@ -66,10 +66,16 @@ vec3 untraced_sky(SsrRay r) {
 // cpu_ref::ssr::tile_update): the success share (1/256, rounded) joins the smoothed
 // one, 3:1 (taken whole the first time it is known); then the class: SSR-first while
 // unknown or with `rate` 0 (the SSR-first policy), else it turns rays-only when the
-// success falls TILE_HYSTERESIS below `rate` (the march's cost in rays, 1/256: a tile
+// success falls tile_hysteresis(rate) below `rate` (the march's cost in rays, 1/256: a tile
 // pays rate + (1 - success) rays a pixel SSR-first against 1 rays-only) and back when
 // it rises that much above; a change of class adds one to the tile's flips. Integers:
 // the CPU matches it exactly.
+// How far a tile's success must pass `rate` to change class: a quarter of the rate,
+// within 1..TILE_HYSTERESIS (mirrored by cpu_ref::ssr::tile_hysteresis).
+uint tile_hysteresis(uint rate) {
+    return clamp(rate / 4u, 1u, TILE_HYSTERESIS);
+}
+
 uint tile_update(uint state, uint marched, uint answered, uint rate) {
     uint s = state & TILE_SUCCESS;
     bool known = (state & TILE_KNOWN) != 0u;
@@ -83,9 +89,9 @@ uint tile_update(uint state, uint marched, uint answered, uint rate) {
     }
     if (rate == 0u || !known) {
         rays_only = false;
-    } else if (rays_only && s > rate + TILE_HYSTERESIS) {
+    } else if (rays_only && s > rate + tile_hysteresis(rate)) {
         rays_only = false;
-    } else if (!rays_only && s + TILE_HYSTERESIS < rate) {
+    } else if (!rays_only && s + tile_hysteresis(rate) < rate) {
         rays_only = true;
     }
     if (rays_only != was_rays_only) {

@@ -1,9 +1,9 @@
 // BVH traversal shared by rt.trace and the reflection tracer: closest hit or any hit
 // over two BVHs (static, dynamic), stack-based, nearest child first, a leaf's
 // triangles tested in the step that hits its box (the stack holds internal nodes
-// only). Moller-Trumbore,
-// double-sided. Epsilon policy: a triangle whose determinant is exactly 0 (parallel to
-// the ray or zero area) is never hit; a hit counts when tmin < t < tmax and it is
+// only). The watertight test (tri_hit below), double-sided. Epsilon policy: none; a
+// triangle whose determinant is exactly 0 (parallel to the ray or zero area) is never
+// hit, a ray exactly on an edge or corner hits it; a hit counts when tmin < t < tmax and it is
 // closer than the best so far, equal t going to the smaller (bvh, triangle) id. No
 // offset is applied to the origin: callers set tmin or offset origins. Mirrored by
 // cpu_ref::trace.
@@ -54,20 +54,81 @@ TraversalNode fetch_node(uint bvh, uint i, vec3 g, vec3 st) {
 
 // Triangle `k` (in leaf order) from a triangle buffer seen as texels of uvec4 (3 per
 // TraversalTri).
-void triangle_from_texels(utextureBuffer tris, uint k, out vec3 a, out vec3 e1, out vec3 e2, out uint id) {
+void triangle_from_texels(utextureBuffer tris, uint k, out vec3 a, out vec3 b, out vec3 c, out uint id) {
     uvec4 w0 = texelFetch(tris, int(3u * k));
     a = uintBitsToFloat(w0.xyz);
     id = w0.w;
-    e1 = uintBitsToFloat(texelFetch(tris, int(3u * k + 1u)).xyz);
-    e2 = uintBitsToFloat(texelFetch(tris, int(3u * k + 2u)).xyz);
+    b = uintBitsToFloat(texelFetch(tris, int(3u * k + 1u)).xyz);
+    c = uintBitsToFloat(texelFetch(tris, int(3u * k + 2u)).xyz);
 }
 
-void fetch_triangle(uint bvh, uint k, out vec3 a, out vec3 e1, out vec3 e2, out uint id) {
+void fetch_triangle(uint bvh, uint k, out vec3 a, out vec3 b, out vec3 c, out uint id) {
     if (bvh == 0u) {
-        triangle_from_texels(s_tris, k, a, e1, e2, id);
+        triangle_from_texels(s_tris, k, a, b, c, id);
     } else {
-        triangle_from_texels(d_tris, k, a, e1, e2, id);
+        triangle_from_texels(d_tris, k, a, b, c, id);
     }
+}
+
+// The watertight ray/triangle test (Woop, Benthin & Wald 2013, "Watertight
+// Ray/Triangle Intersection", JCGT 2(1)) without its divisions, mirrored by
+// cpu_ref::trace::intersect. The axes are turned so the ray's largest component is z
+// (kz); each corner p, relative to the origin, projects to two components of cross(p, d)
+// (d.z times Woop's sheared x and y), and the edge functions U, V, W are 2D cross
+// products of the projected corners. All of it is `precise` mul and sub, which Vulkan
+// rounds correctly (no FMA contraction): every device and the CPU get the same U, V, W
+// bit for bit, so whether a ray hits a triangle is exact, and two triangles sharing an
+// edge see that edge's function with opposite signs: a ray through the edge hits at
+// least one. t and the barycentrics are one division each (2.5 ULP in Vulkan).
+// Contract: hit or miss exact on every device (unless an edge function falls in the
+// subnormal range, which a device may flush); t, u, v within a few ULP.
+struct TriRay {
+    vec3 o; // the origin, axes turned
+    vec3 d; // the direction, axes turned: |d.z| is its largest component
+    uint kz; // the axis turned to z
+};
+
+vec3 turn_axes(vec3 v, uint kz) {
+    return kz == 0u ? v.yzx : (kz == 1u ? v.zxy : v);
+}
+
+TriRay tri_ray(vec3 origin, vec3 dir) {
+    vec3 m = abs(dir);
+    uint kz = m.x >= m.y ? (m.x >= m.z ? 0u : 2u) : (m.y >= m.z ? 1u : 2u);
+    return TriRay(turn_axes(origin, kz), turn_axes(dir, kz), kz);
+}
+
+// Corner v relative to the origin, projected: (x, y) across the ray, z along its axis.
+vec3 tri_corner(TriRay r, vec3 v) {
+    precise vec3 p = turn_axes(v, r.kz) - r.o;
+    precise float x = p.y * r.d.z - p.z * r.d.y;
+    precise float y = p.z * r.d.x - p.x * r.d.z;
+    return vec3(x, y, p.z);
+}
+
+// Whether the ray hits triangle (a, b, c): then t along d and the barycentrics u, v of
+// b and c.
+bool tri_hit(TriRay r, vec3 a, vec3 b, vec3 c, out float t, out float u, out float v) {
+    vec3 pa = tri_corner(r, a), pb = tri_corner(r, b), pc = tri_corner(r, c);
+    precise float eu = pc.x * pb.y - pc.y * pb.x;
+    precise float ev = pa.x * pc.y - pa.y * pc.x;
+    precise float ew = pb.x * pa.y - pb.y * pa.x;
+    t = 0.0;
+    u = 0.0;
+    v = 0.0;
+    if ((eu < 0.0 || ev < 0.0 || ew < 0.0) && (eu > 0.0 || ev > 0.0 || ew > 0.0)) {
+        return false;
+    }
+    precise float det = eu + ev + ew;
+    if (det == 0.0) {
+        return false;
+    }
+    precise float depth = eu * pa.z + ev * pb.z + ew * pc.z;
+    precise float scale = det * r.d.z;
+    t = depth / scale;
+    u = ev / det;
+    v = ew / det;
+    return true;
 }
 
 // Entry distance of the ray into the box, or +inf when it misses within [tmin, tmax].
@@ -84,23 +145,13 @@ float box_entry(vec3 lo, vec3 hi, vec3 o, vec3 inv_dir, float tmin, float tmax) 
 
 // Tests triangle k (in leaf order) of `bvh`; true when it is hit within (tmin,
 // best.t), or at best.t with a smaller id, and then `best` is that hit.
-bool hit_triangle(uint bvh, uint k, vec3 origin, vec3 dir, float tmin, inout Hit best) {
-    vec3 a, e1, e2;
+bool hit_triangle(uint bvh, uint k, TriRay r, float tmin, inout Hit best) {
+    vec3 a, b, c;
     uint t;
-    fetch_triangle(bvh, k, a, e1, e2, t);
-    vec3 p = cross(dir, e2);
-    float det = dot(e1, p);
-    if (det == 0.0) {
-        return false;
-    }
-    float inv_det = 1.0 / det;
-    vec3 s = origin - a;
-    float u = dot(s, p) * inv_det;
-    vec3 q = cross(s, e1);
-    float v = dot(dir, q) * inv_det;
-    float th = dot(e2, q) * inv_det;
+    fetch_triangle(bvh, k, a, b, c, t);
+    float th, u, v;
+    bool inside = tri_hit(r, a, b, c, th, u, v);
     uint id = t | (bvh << 31);
-    bool inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
     bool closer = th < best.t || (th == best.t && id < best.prim);
     if (inside && th > tmin && closer) {
         best = Hit(th, id, u, v);
@@ -111,11 +162,11 @@ bool hit_triangle(uint bvh, uint k, vec3 origin, vec3 dir, float tmin, inout Hit
 
 // Tests the triangles of leaf `ref` (hit_triangle); true when `any_hit` and one was
 // hit (the walk can stop).
-bool hit_leaf(uint bvh, uint ref, vec3 origin, vec3 dir, float tmin, bool any_hit, inout Hit best) {
+bool hit_leaf(uint bvh, uint ref, TriRay r, float tmin, bool any_hit, inout Hit best) {
     uint first = bvh_leaf_first(ref);
     uint last = first + bvh_leaf_count(ref);
     for (uint k = first; k < last; ++k) {
-        if (hit_triangle(bvh, k, origin, dir, tmin, best) && any_hit) {
+        if (hit_triangle(bvh, k, r, tmin, best) && any_hit) {
             return true;
         }
     }
@@ -144,7 +195,7 @@ uint trace_stack[TRACE_STACK];
 // `max_steps` steps: a step visits one internal node, and a walk of a valid tree visits
 // each of its N-1 nodes at most once, so a walk past N steps is in a cycle (a
 // corrupted tree) and stops instead of hanging the device.
-void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool any_hit, uint max_steps,
+void walk_bvh(uint bvh, vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, uint max_steps,
               inout Hit best, inout bool failed) {
     uint sp = 0u;
     uint steps = 0u;
@@ -167,11 +218,11 @@ void walk_bvh(uint bvh, vec3 origin, vec3 dir, vec3 inv_dir, float tmin, bool an
         bool hit1 = t1 != 1.0 / 0.0;
         bool found = false;
         if (hit0 && (nd.child0 & BVH_LEAF_BIT) != 0u) {
-            found = hit_leaf(bvh, nd.child0, origin, dir, tmin, any_hit, best);
+            found = hit_leaf(bvh, nd.child0, r, tmin, any_hit, best);
             hit0 = false;
         }
         if (hit1 && !found && (nd.child1 & BVH_LEAF_BIT) != 0u) {
-            found = hit_leaf(bvh, nd.child1, origin, dir, tmin, any_hit, best);
+            found = hit_leaf(bvh, nd.child1, r, tmin, any_hit, best);
             hit1 = false;
         }
         if (found) {
@@ -217,11 +268,12 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
     vec3 inv_dir = 1.0 / safe_dir;
     Hit best = Hit(tmax, BVH_INVALID, 0.0, 0.0);
     bool failed = false;
+    TriRay r = tri_ray(origin, dir);
     if (static_tris != 0u) {
-        walk_bvh(0u, origin, dir, inv_dir, tmin, any_hit, static_tris, best, failed);
+        walk_bvh(0u, origin, r, inv_dir, tmin, any_hit, static_tris, best, failed);
     }
     if (dynamic_tris != 0u && !(any_hit && best.prim != BVH_INVALID)) {
-        walk_bvh(1u, origin, dir, inv_dir, tmin, any_hit, dynamic_tris, best, failed);
+        walk_bvh(1u, origin, r, inv_dir, tmin, any_hit, dynamic_tris, best, failed);
     }
     if (failed) {
         best = Hit(-1.0, BVH_INVALID, 0.0, 0.0); // reported as an error, never silently wrong

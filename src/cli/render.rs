@@ -119,6 +119,12 @@ fn check_before_gpu(args: &RenderArgs) -> Result<(Settings, headless::FramePlan,
         reference: args.reference,
         spp: args.spp.unwrap_or(speculum::settings::GLOSSY_REFERENCE_SPP),
     };
+    if args.spp.is_some() && settings.mode != Mode::Rt && !args.reference {
+        anyhow::bail!(speculum::error::Error::Input(format!(
+            "--spp sets the rays of the rt reference (--reference) or of --mode rt; this {} run has neither",
+            settings.mode.name()
+        )));
+    }
     if let (Some(spp), Mode::Rt) = (args.spp, settings.mode) {
         plan.validate(&settings)?;
         settings = settings.glossy_reference(spp);

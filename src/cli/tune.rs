@@ -133,7 +133,6 @@ fn checked_sweep(args: &TuneArgs) -> Result<Sweep> {
         }
     }
     speculum::metrics::check_size(sweep.base.width, sweep.base.height)?;
-    tune::plot::check_font()?;
     speculum::output::check_dir(&args.out)?;
     Ok(sweep)
 }
@@ -262,7 +261,6 @@ pub fn run(args: TuneArgs) -> Result<()> {
 
 pub fn plot(args: PlotArgs) -> Result<()> {
     speculum::output::check(&args.out, Kind::Png)?;
-    tune::plot::check_font()?;
     let text = speculum::error::read_text(&args.csv, "points CSV", speculum::error::bounds::TABLE)?;
     let (_, results) = tune::from_csv(&text)?;
     speculum::output::write_atomic(&args.out, &tune::plot::pareto_png(&results)?)?;

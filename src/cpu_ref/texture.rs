@@ -46,6 +46,20 @@ impl TextureArray {
         row(y).lerp(row(y + 1), f.y)
     }
 
+    /// The spread (largest less smallest, per channel) of the four texels a bilinear
+    /// lookup at `uv` of level `level` weighs: how far a filter weight's rounding can
+    /// move the result, per unit of weight.
+    pub fn footprint_range(&self, layer: u32, level: usize, uv: Vec2) -> Vec4 {
+        let (layer, edge) = (layer as usize, self.layers[layer as usize][level].width() as f32);
+        let i = (uv * edge - 0.5).floor();
+        let (x, y) = (i.x as i32, i.y as i32);
+        let texels = [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(dx, dy)| self.texel(layer, level, x + dx, y + dy));
+        let (lo, hi) = texels.iter().fold((Vec4::INFINITY, Vec4::NEG_INFINITY), |(lo, hi), t| {
+            (lo.min(*t), hi.max(*t))
+        });
+        hi - lo
+    }
+
     /// `textureLod(textures, vec3(uv, layer), lod)`: the level clamped to the chain,
     /// linear between the two nearest levels.
     pub fn sample_lod(&self, layer: u32, uv: Vec2, lod: f32) -> Vec4 {

@@ -1,4 +1,4 @@
-//! Reference ray tracing: the ray/triangle test of `glsl/rt_trace.comp`, brute force
+//! Reference ray tracing: the watertight ray/triangle test of the GPU walk, brute force
 //! over all triangles, and a binned-SAH BVH built on the CPU (Wald 2007, "On fast
 //! Construction of SAH-based Bounding Volume Hierarchies") that serves both as the
 //! quality yardstick for the LBVH and as a fast reference tracer.
@@ -8,24 +8,73 @@ use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::shader_defines::BVH_INVALID;
 use glam::Vec3;
 
-/// Moller-Trumbore, double-sided, as in `rt_trace.comp`: Some((t, u, v)) when the ray
-/// crosses the triangle (t unbounded here; the caller applies its interval).
+/// The ray as the watertight test sees it (`TriRay` in `glsl/shared/traverse.glsl`):
+/// origin and direction with the axes turned so the direction's largest component is z.
+struct TriRay {
+    o: [f32; 3],
+    d: [f32; 3],
+    kz: usize,
+}
+
+/// `turn_axes`: v.yzx for kz 0, v.zxy for kz 1, v for kz 2.
+fn turn_axes(v: [f32; 3], kz: usize) -> [f32; 3] {
+    [v[(kz + 1) % 3], v[(kz + 2) % 3], v[kz]]
+}
+
+impl TriRay {
+    fn new(ray: &Ray) -> Self {
+        let m = ray.dir.map(f32::abs);
+        let kz = if m[0] >= m[1] {
+            if m[0] >= m[2] {
+                0
+            } else {
+                2
+            }
+        } else if m[1] >= m[2] {
+            1
+        } else {
+            2
+        };
+        Self {
+            o: turn_axes(ray.origin, kz),
+            d: turn_axes(ray.dir, kz),
+            kz,
+        }
+    }
+
+    /// `tri_corner`: corner `v` relative to the origin, projected across the ray (x, y)
+    /// and along its axis (z). Plain f32 mul and sub, each rounded once (Rust never
+    /// fuses them), as the shader's `precise` ones.
+    fn corner(&self, v: Vec3) -> [f32; 3] {
+        let v = turn_axes(v.to_array(), self.kz);
+        let p = [v[0] - self.o[0], v[1] - self.o[1], v[2] - self.o[2]];
+        let d = self.d;
+        [p[1] * d[2] - p[2] * d[1], p[2] * d[0] - p[0] * d[2], p[2]]
+    }
+}
+
+/// The watertight ray/triangle test of `glsl/shared/traverse.glsl` (`tri_hit`: Woop,
+/// Benthin & Wald 2013 without divisions), double-sided: Some((t, u, v)) when the ray
+/// crosses the triangle or one of its edges or corners (t unbounded here; the caller
+/// applies its interval). The edge functions are the GPU's bit for bit, so hit or miss
+/// is exact on every device; t, u and v are one division each (within a few ULP of the
+/// GPU's).
 pub fn intersect(ray: &Ray, tri: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
-    let (o, d) = (Vec3::from(ray.origin), Vec3::from(ray.dir));
-    let e1 = tri[1] - tri[0];
-    let e2 = tri[2] - tri[0];
-    let p = d.cross(e2);
-    let det = e1.dot(p);
+    let r = TriRay::new(ray);
+    let (pa, pb, pc) = (r.corner(tri[0]), r.corner(tri[1]), r.corner(tri[2]));
+    let eu = pc[0] * pb[1] - pc[1] * pb[0];
+    let ev = pa[0] * pc[1] - pa[1] * pc[0];
+    let ew = pb[0] * pa[1] - pb[1] * pa[0];
+    if (eu < 0.0 || ev < 0.0 || ew < 0.0) && (eu > 0.0 || ev > 0.0 || ew > 0.0) {
+        return None;
+    }
+    let det = eu + ev + ew;
     if det == 0.0 {
         return None;
     }
-    let inv = 1.0 / det;
-    let s = o - tri[0];
-    let u = s.dot(p) * inv;
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    let t = e2.dot(q) * inv;
-    (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then_some((t, u, v))
+    let depth = eu * pa[2] + ev * pb[2] + ew * pc[2];
+    let t = depth / (det * r.d[2]);
+    Some((t, ev / det, ew / det))
 }
 
 /// Applies a candidate to the best hit with the kernel's rule: tmin < t, closer, equal t

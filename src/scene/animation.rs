@@ -100,6 +100,24 @@ impl Sampler {
         Ok(())
     }
 
+    /// Why a rotation channel's keys cannot be played, if they cannot: a key whose
+    /// quaternion has no direction (all zero, or too short to normalise), between which
+    /// and its neighbours every pose would be NaN. (A cubic spline's tangents may be zero.)
+    pub fn check_rotations(&self) -> Result<(), String> {
+        let cubic = self.interpolation == Interpolation::CubicSpline;
+        let keys = self.values.len() / if cubic { 3 } else { 1 };
+        for k in 0..keys {
+            let q = self.values[if cubic { 3 * k + 1 } else { k }];
+            if q.try_normalize().is_none() {
+                return Err(format!(
+                    "key {k}'s quaternion ({}, {}, {}, {}) cannot be normalised",
+                    q.x, q.y, q.z, q.w
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The value at time `t` (clamped to the keys' span) for a channel of `path`: step,
     /// linear (rotations slerped along the shorter arc) or the cubic Hermite spline
     /// (rotations normalized after). A checked sampler.
@@ -205,6 +223,12 @@ impl Rig {
             if !(t.translation.is_finite() && t.rotation.is_finite() && t.scale.is_finite()) {
                 return Err(format!("node {i}'s transform is not finite"));
             }
+            if Vec4::from(t.rotation).try_normalize().is_none() {
+                return Err(format!(
+                    "node {i}'s rotation {:?} cannot be normalised",
+                    t.rotation.to_array()
+                ));
+            }
         }
         for i in 0..n {
             let depth = self.depth(i)?;
@@ -233,6 +257,11 @@ impl Rig {
                         ch.sampler,
                         anim.samplers.len()
                     ));
+                }
+                if ch.path == Path::Rotation {
+                    anim.samplers[ch.sampler]
+                        .check_rotations()
+                        .map_err(|e| format!("{name} channel {c} (rotation): {e}"))?;
                 }
             }
         }

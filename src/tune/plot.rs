@@ -1,33 +1,23 @@
 //! `pareto.png`: every point of a sweep, frame/rt against 1 - SSIM (left) and against
 //! mean FLIP (right), the Pareto front drawn through its points, the base settings
 //! (`default`) and the `rt` reference marked. One scene per plot (the first one when
-//! a sweep has several). Text is drawn with DejaVu Sans from `fonts-dejavu-core`.
+//! a sweep has several). Text is drawn with a font the binary holds
+//! (Ubuntu Light), so plots need no system font.
 
 use super::{PointResult, DEFAULT_KEY};
 use crate::error::{Error, Result};
 use plotters::prelude::*;
 
-/// Where Debian's fonts-dejavu-core puts the font the plot's text uses.
-pub const FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
-
-/// Checks the font is there (before a sweep starts, so its plot cannot fail late).
-pub fn check_font() -> Result<()> {
-    if std::path::Path::new(FONT).is_file() {
-        Ok(())
-    } else {
-        Err(Error::Input(format!(
-            "the plot's font {FONT} is missing (apt-get install fonts-dejavu-core)"
-        )))
-    }
-}
+/// The plot's font, in the binary: Ubuntu Light, which egui ships (the
+/// `epaint_default_fonts` crate, Ubuntu Font Licence 1.0), so a plot draws on any
+/// machine, with no system font path to find.
+const FONT: &[u8] = epaint_default_fonts::UBUNTU_LIGHT;
 
 fn register_font() -> Result<()> {
     static ONCE: std::sync::OnceLock<std::result::Result<(), String>> = std::sync::OnceLock::new();
     ONCE.get_or_init(|| {
-        let bytes = std::fs::read(FONT).map_err(|e| format!("{FONT}: {e}"))?;
-        let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
-            .map_err(|_| format!("{FONT}: not a font"))
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+            .map_err(|_| "the plot's embedded font did not load".to_string())
     })
     .clone()
     .map_err(Error::Input)

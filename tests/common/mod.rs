@@ -6,38 +6,96 @@ pub mod figure;
 pub mod showcase;
 
 use speculum::vk::{Context, ContextDesc};
-use std::cell::Cell;
+use std::cell::RefCell;
+use std::rc::{Rc, Weak};
 use std::sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard};
 
-/// The machine the tests share: every GPU context and every run of the binary holds it
-/// shared (`shared`); a test that times things holds it alone (`alone`), so no other
-/// test's threads preempt lavapipe's between two timestamps. (In one test binary the
-/// harness runs tests of every module side by side.)
-static MACHINE: RwLock<()> = RwLock::new(());
+/// A machine tests share: held shared by every GPU context and every run of the binary
+/// (`share`), alone by a test whose assertions read timings (`alone`), so no other test's
+/// threads preempt lavapipe's between two timestamps. (In one test binary the harness
+/// runs tests of every module side by side, each on its own thread.)
+///
+/// A thread's shared holds are one hold: a thread that holds the machine and asks again
+/// (a test holding `context()` that runs the binary) gets the same hold. std's `RwLock`
+/// would take a second read, and a second read waits behind a writer already queued: a
+/// thread holding a read that asks for another while an `alone()` test waits would stall
+/// the two, and with them every test after (the first GPU run's stalled suite).
+pub struct Machine(RwLock<()>);
+
+/// A shared hold; the machine is released when the thread's last one drops.
+pub type Share = Rc<RwLockReadGuard<'static, ()>>;
 
 thread_local! {
-    /// This thread holds `MACHINE` alone: what it starts needs no shared hold.
-    static ALONE: Cell<bool> = const { Cell::new(false) };
+    /// The machines this thread holds alone (by address): what it starts needs no share.
+    static ALONE: RefCell<Vec<usize>> = const { RefCell::new(Vec::new()) };
+    /// This thread's shared hold of each machine it holds shared, while any holder lives.
+    static HELD: RefCell<Vec<(usize, Weak<RwLockReadGuard<'static, ()>>)>> =
+        const { RefCell::new(Vec::new()) };
 }
 
-/// A shared hold on the machine, or none while this thread holds it alone.
-fn shared() -> Option<RwLockReadGuard<'static, ()>> {
-    (!ALONE.get()).then(|| MACHINE.read().unwrap_or_else(|e| e.into_inner()))
+impl Machine {
+    pub const fn new() -> Self {
+        Self(RwLock::new(()))
+    }
+
+    fn key(&'static self) -> usize {
+        self as *const Self as usize
+    }
+
+    /// This thread's shared hold (the one it has, or a new one), or none while this
+    /// thread holds the machine alone.
+    pub fn share(&'static self) -> Option<Share> {
+        let key = self.key();
+        if ALONE.with_borrow(|a| a.contains(&key)) {
+            return None;
+        }
+        HELD.with_borrow_mut(|held| {
+            held.retain(|(_, w)| w.strong_count() > 0);
+            if let Some(hold) = held.iter().find(|(k, _)| *k == key).and_then(|(_, w)| w.upgrade()) {
+                return Some(hold);
+            }
+            let hold = Rc::new(self.0.read().unwrap_or_else(|e| e.into_inner()));
+            held.push((key, Rc::downgrade(&hold)));
+            Some(hold)
+        })
+    }
+
+    /// The machine to this thread alone while the guard lives. Asked while this thread
+    /// holds it shared, it would wait for itself: that is a test's mistake, and fails it.
+    pub fn alone(&'static self) -> Alone {
+        let key = self.key();
+        let sharing = HELD.with_borrow(|h| h.iter().any(|(k, w)| *k == key && w.strong_count() > 0));
+        assert!(
+            !sharing,
+            "alone() asked while this test holds the machine shared (a context or a run)"
+        );
+        let guard = self.0.write().unwrap_or_else(|e| e.into_inner());
+        ALONE.with_borrow_mut(|a| a.push(key));
+        Alone(guard, key)
+    }
 }
+
+/// The machine the tests share.
+static MACHINE: Machine = Machine::new();
+
+/// A shared hold on the machine, or none while this thread holds it alone.
+fn shared() -> Option<Share> {
+    MACHINE.share()
+}
+
+/// A machine to one test alone while the guard lives.
+pub struct Alone(#[allow(dead_code)] RwLockWriteGuard<'static, ()>, usize);
 
 /// The machine to this test alone while the guard lives (no other test's GPU context
 /// or binary run side by side): for tests whose assertions read timings.
-pub struct Alone(#[allow(dead_code)] RwLockWriteGuard<'static, ()>);
-
 pub fn alone() -> Alone {
-    let guard = MACHINE.write().unwrap_or_else(|e| e.into_inner());
-    ALONE.set(true);
-    Alone(guard)
+    MACHINE.alone()
 }
 
 impl Drop for Alone {
     fn drop(&mut self) {
-        ALONE.set(false);
+        let key = self.1;
+        ALONE.with_borrow_mut(|a| a.retain(|k| *k != key));
     }
 }
 
@@ -65,7 +123,7 @@ pub fn context_with(desc: ContextDesc) -> GpuTest {
 /// layer reported anything in the test's life (wgpu's `#[gpu_test]` idea: no test can
 /// forget to check). Locals declared after it are dropped first, so messages from
 /// their destruction count too. Derefs to the context.
-pub struct GpuTest(Arc<Context>, Option<RwLockReadGuard<'static, ()>>);
+pub struct GpuTest(Arc<Context>, Option<Share>);
 
 impl std::ops::Deref for GpuTest {
     type Target = Arc<Context>;

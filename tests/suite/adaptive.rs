@@ -7,8 +7,9 @@
 
 use crate::common;
 
+use speculum::cpu_ref::ssr::tile_hysteresis;
 use speculum::settings::{HybridPolicy, Mode};
-use speculum::shader_defines::{FAIL_SKIPPED, TILE_HYSTERESIS, TILE_KNOWN, TILE_RAYS_ONLY, TILE_SUCCESS, TILE_WORDS};
+use speculum::shader_defines::{FAIL_SKIPPED, TILE_KNOWN, TILE_RAYS_ONLY, TILE_SUCCESS, TILE_WORDS};
 use speculum::{Renderer, Settings};
 
 const W: u32 = 320;
@@ -204,7 +205,7 @@ fn the_rate_is_measured_and_reported() {
     }
     let used = used.expect("a probe frame marches");
     let below: Vec<u32> = (tile_states(&r).into_iter())
-        .filter(|&s| s & TILE_KNOWN != 0 && (s & TILE_SUCCESS) + TILE_HYSTERESIS < used)
+        .filter(|&s| s & TILE_KNOWN != 0 && (s & TILE_SUCCESS) + tile_hysteresis(used) < used)
         .collect();
     assert!(below.len() > 20, "{} tiles below the rate {used}", below.len());
     assert!(below.iter().all(|&s| s & TILE_RAYS_ONLY != 0));

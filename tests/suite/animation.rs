@@ -153,7 +153,7 @@ fn a_skinned_animated_gltf_is_read_into_its_rig() {
 fn bad_animations_and_skins_are_refused_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let cases: [(File, &str); 9] = [
+    let cases: [(File, &str); 10] = [
         (
             File {
                 times: [1.0, 0.5],
@@ -174,6 +174,13 @@ fn bad_animations_and_skins_are_refused_in_one_line() {
                 ..File::default()
             },
             "is not finite",
+        ),
+        (
+            File {
+                rotations: [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]],
+                ..File::default()
+            },
+            "animation 0 ('turn') channel 0 (rotation): key 1's quaternion (0, 0, 0, 0) cannot be normalised",
         ),
         (
             File {

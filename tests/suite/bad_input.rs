@@ -890,3 +890,22 @@ fn bodies_out_of_range_or_without_a_spawn() {
     let (ok, stderr) = run(&["--scene", "stress", "--bodies", "7"], dir.path());
     assert!(ok, "{stderr}");
 }
+
+/// `--spp` counts the rays of the `rt` reference or of an `rt` frame: given to a run
+/// with neither (a hybrid frame without `--reference`) it is refused in one line instead
+/// of being ignored.
+#[test]
+fn spp_without_a_reference_or_rt_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    assert_fails(
+        &["--scene", "glossy", "--spp", "16"],
+        dir.path(),
+        &["--spp", "--reference", "hybrid"],
+    );
+    assert_fails(
+        &["--scene", "glossy", "--spp", "16", "--mode", "ssr"],
+        dir.path(),
+        &["--spp", "ssr"],
+    );
+    assert!(!dir.path().join("out.png").exists());
+}

@@ -99,9 +99,9 @@ fn tracer_layouts_match_glsl() {
             rust_layout!(TraversalTri {
                 a,
                 id,
-                e1,
+                b,
                 parent,
-                e2,
+                c,
                 _pad0
             }),
             size_of::<TraversalTri>(),

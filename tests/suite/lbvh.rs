@@ -353,7 +353,7 @@ fn invariant_checker_rejects_broken_trees() {
         ("a wrong parent link", |b| b.nodes[3].parent ^= 1),
         ("a leaf's wrong parent link", |b| b.tris[7].parent ^= 2),
         ("a node reached twice", |b| b.nodes[0].child1 = b.nodes[0].child0),
-        ("a moved edge", |b| b.tris[2].e1[1] += 1e-3),
+        ("a moved corner", |b| b.tris[2].b[1] += 1e-3),
     ];
     for (what, spoil) in broken {
         let mut b = good.clone();
@@ -434,7 +434,7 @@ fn scheduled_refit_matches_cpu() {
             (nd.lo0, nd.hi0, nd.lo1, nd.hi1) = ([f32::NAN; 3], [f32::NAN; 3], [f32::NAN; 3], [f32::NAN; 3]);
         }
         for t in &mut poisoned.tris {
-            (t.a, t.e1, t.e2) = ([f32::NAN; 3], [f32::NAN; 3], [f32::NAN; 3]);
+            (t.a, t.b, t.c) = ([f32::NAN; 3], [f32::NAN; 3], [f32::NAN; 3]);
         }
         bvh.tnodes.write(bytemuck::cast_slice(&poisoned.nodes)).unwrap();
         bvh.ttris.write(bytemuck::cast_slice(&poisoned.tris)).unwrap();

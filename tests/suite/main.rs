@@ -16,6 +16,7 @@ mod dynamic;
 mod gbuffer;
 mod glossy;
 mod gltf;
+mod harness;
 mod house;
 mod inputs;
 mod kernels;

@@ -157,14 +157,14 @@ fn ext_key(keys: &[u64], i: usize) -> u128 {
     ((keys[i] as u128) << 32) | i as u128
 }
 
-/// Triangle `id` as the BVH holds it (corner, edges, id; parent link 0) and its box.
+/// Triangle `id` as the BVH holds it (corners, id; parent link 0) and its box.
 fn packed_triangle(vertices: &[GpuVertex], indices: &[u32], id: u32) -> (TraversalTri, Aabb) {
     let [a, b, c] = triangle(vertices, indices, id as usize);
     let t = TraversalTri {
         a: a.to_array(),
         id,
-        e1: (b - a).to_array(),
-        e2: (c - a).to_array(),
+        b: b.to_array(),
+        c: c.to_array(),
         ..Default::default()
     };
     (t, Aabb::of_triangle(&[a, b, c]))

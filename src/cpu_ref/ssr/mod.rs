@@ -148,6 +148,12 @@ pub fn classify_in_tile(
     (Class::Done(reason, [0.0; 3]), [h, f32::NAN])
 }
 
+/// `tile_hysteresis` (`glsl/shared/ssr.glsl`): how far a tile's success must pass the
+/// rate `rate` to change its class: a quarter of the rate, within 1..=`TILE_HYSTERESIS`.
+pub fn tile_hysteresis(rate: u32) -> u32 {
+    (rate / 4).clamp(1, TILE_HYSTERESIS)
+}
+
 /// `tile_update` (`glsl/shared/ssr.glsl`): a tile's state after a frame in which
 /// `marched` of its pixels were marched and `answered` of them answered by SSR, with
 /// the exchange rate `rate` (1/`TILE_ONE`; 0: SSR-first). Integers, as the GPU.
@@ -164,8 +170,8 @@ pub fn tile_update(state: u32, marched: u32, answered: u32, rate: u32) -> u32 {
     // the hysteresis either way.
     let rays_only = match was_rays_only {
         _ if rate == 0 || !known => false,
-        true => s <= rate + TILE_HYSTERESIS,
-        false => s + TILE_HYSTERESIS < rate,
+        true => s <= rate + tile_hysteresis(rate),
+        false => s + tile_hysteresis(rate) < rate,
     };
     if rays_only != was_rays_only {
         flips = (flips + 1).min(TILE_FLIPS_MAX);
@@ -224,6 +230,10 @@ pub struct March {
     /// pixel the march looked up: where a step lands on a boundary, rounding may take
     /// the neighbour's depth (a ray grazing a depth edge).
     pub pixel_margin: f32,
+    /// The largest spread (a channel's largest less smallest) of the four lit texels a
+    /// kept hit's colour interpolates: how far the colour moves per pixel that the hit
+    /// position moves (0 where no hit was kept).
+    pub lit_spread: f32,
 }
 
 /// GLSL `mix`: x (1 - a) + y a, in that order of operations.
@@ -302,6 +312,7 @@ struct Margins {
     margin: f32,
     pixel: f32,
     steps: u32,
+    lit_spread: f32,
 }
 
 /// `ssr_trace.comp` for listed pixel `p`: the reflected ray marched over the depth
@@ -318,6 +329,7 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         margin: f32::INFINITY,
         pixel: f32::INFINITY,
         steps: 0,
+        lit_spread: 0.0,
     };
     // Every ray of the pixel: SSR answers it only if it answers each (the mean colour,
     // the least confidence); the first it cannot answer fails the pixel.
@@ -340,6 +352,7 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
             break;
         }
         fail |= f;
+        m.lit_spread = m.lit_spread.max(lit_spread(inputs.lit, found.hit_pos, res));
         confidence = confidence.min(c[3]);
         sum += Vec3::new(c[0], c[1], c[2]);
         hit_pixel = Some(found.hit_pixel);
@@ -376,6 +389,7 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         steps,
         margin: m.margin,
         pixel_margin: m.pixel,
+        lit_spread: m.lit_spread,
     }
 }
 
@@ -470,6 +484,20 @@ fn judge(
     };
     let kept = fail == 0 || fail == FAIL_BLEND;
     (fail, [color.x, color.y, color.z, if kept { confidence } else { 0.0 }])
+}
+
+/// The largest channel spread of the four lit texels `lit_bilinear` weighs at `x`.
+fn lit_spread(lit: &[[f32; 4]], x: Vec2, res: IVec2) -> f32 {
+    let i0 = (x - 0.5).floor().as_ivec2();
+    let c = |d: IVec2| {
+        let q = (i0 + d).clamp(IVec2::ZERO, res - 1);
+        Vec4::from(lit[(q.y * res.x + q.x) as usize]).xyz()
+    };
+    let t = [c(IVec2::ZERO), c(IVec2::X), c(IVec2::Y), c(IVec2::ONE)];
+    let (lo, hi) = t.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(*v), hi.max(*v))
+    });
+    (hi - lo).max_element()
 }
 
 /// The lit colour at sub-pixel position `x` (texel centres at +0.5), bilinear, edges

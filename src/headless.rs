@@ -9,6 +9,7 @@ use crate::scene::Scene;
 use crate::settings::{Settings, Shadows};
 use crate::shader_defines::MAX_REFLECTION_RAYS;
 use crate::shadow_maps::ShadowsVsRays;
+use crate::steady::{WarmUp, WarmUpReport};
 use crate::vk::{Context, TimingCheck, Timings};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -35,7 +36,9 @@ pub struct TimingsReport {
     pub sun_direction: [f32; 3],
     /// Frames measured (warm-up frames excluded).
     pub frames: u32,
-    pub warmup_frames: u32,
+    /// The warm-up: its rule (`frames N`, or `steady`: until the clocks settle), the
+    /// frames and GPU time it took, and whether the clocks settled.
+    pub warmup: WarmUpReport,
     /// Every timer scope in frame order → GPU milliseconds (`null`: not run).
     pub passes_ms: PassTimes,
     /// GPU milliseconds of the whole frame (scope `frame`).
@@ -125,7 +128,8 @@ pub struct Rendered {
 /// Frames to render and measure.
 #[derive(Clone, Copy, Debug)]
 pub struct FramePlan {
-    pub warmup: u32,
+    /// Uncounted frames first: a fixed count, or until the clocks settle (`steady`).
+    pub warmup: WarmUp,
     pub frames: u32,
     /// Also render the frame in `rt` mode and report SSIM/RMSE against it; and, when
     /// the shadows are not `rays`, in its own mode with `rays` shadows and report how
@@ -145,7 +149,7 @@ impl FramePlan {
             (true, Shadows::Rays) => 2,
             (true, _) => 3,
         };
-        (self.warmup as u64 + self.frames as u64) * renderers
+        (self.warmup.min_frames() as u64 + self.frames as u64) * renderers
     }
 
     /// Checks what can be known before any GPU work: frame counts, and an image large
@@ -157,11 +161,10 @@ impl FramePlan {
                 self.frames
             )));
         }
-        if self.warmup > MAX_FRAMES {
-            return Err(Error::Settings(format!(
-                "--warmup {} is outside 0..={MAX_FRAMES}",
-                self.warmup
-            )));
+        if let WarmUp::Frames(n) = self.warmup {
+            if n > MAX_FRAMES {
+                return Err(Error::Settings(format!("--warmup {n} is outside 0..={MAX_FRAMES}")));
+            }
         }
         if self.spp == 0 || self.spp > MAX_REFLECTION_RAYS {
             return Err(Error::Settings(format!(
@@ -183,7 +186,8 @@ pub type Tick<'a> = &'a mut dyn FnMut();
 /// Called with every measured frame; its error ends the render.
 pub type OnFrame<'a> = &'a mut dyn FnMut(FrameRecord<'_>) -> Result<()>;
 
-/// Renders `plan.warmup` uncounted frames, resets a dynamic scene, then renders
+/// Renders the warm-up's uncounted frames (`plan.warmup`: the frames of all its
+/// renderers together count toward its GPU time), resets a dynamic scene, then renders
 /// `plan.frames` measured ones; with a reference, an `rt` renderer runs in lockstep (the
 /// same frame of a dynamic scene), its frame right after each measured one. `tick` is
 /// called after every frame, `on_frame` (when given) with every measured frame.
@@ -197,15 +201,21 @@ pub fn render_frames(
 ) -> Result<Rendered> {
     plan.validate(settings)?;
     let (mut renderer, mut reference, mut rays_reference) = renderers(ctx, scene, settings, plan)?;
-    for _ in 0..plan.warmup {
+    let mut warming = plan.warmup.start();
+    while !warming.done() {
+        let mut ms = 0.0;
         for r in std::iter::once(&mut renderer)
             .chain(reference.as_mut())
             .chain(rays_reference.as_mut())
         {
-            r.render_frame()?;
+            let start = std::time::Instant::now();
+            let t = r.render_frame()?;
+            ms += t.get(FRAME).unwrap_or(start.elapsed().as_secs_f64() * 1e3);
             tick();
         }
+        warming.add(ms);
     }
+    let warmup = warming.report();
     // A dynamic scene starts over after the warm-up: measured frame k is the same
     // image whatever the warm-up (the world after k + 1 time steps).
     for r in std::iter::once(&mut renderer)
@@ -255,7 +265,7 @@ pub fn render_frames(
         reference: reference.as_ref(),
         rays_reference: rays_reference.as_ref(),
     };
-    finish(ctx, scene, settings, plan, runs, [timings, ref_timings])
+    finish(ctx, scene, settings, (plan, warmup), runs, [timings, ref_timings])
 }
 
 /// The renderer of `settings`, and with a reference the `rt` renderer and (unless the
@@ -297,7 +307,7 @@ fn finish(
     ctx: &Arc<Context>,
     scene: &Scene,
     settings: &Settings,
-    plan: FramePlan,
+    (plan, warmup): (FramePlan, WarmUpReport),
     runs: Runs<'_>,
     [timings, ref_timings]: [Timings; 2],
 ) -> Result<Rendered> {
@@ -337,7 +347,7 @@ fn finish(
         camera: scene.camera,
         sun_direction: scene.light.direction.to_array(),
         frames: plan.frames,
-        warmup_frames: plan.warmup,
+        warmup,
         passes_ms: PassTimes::of(&timings),
         frame_ms: frame_stat(&timings),
         reflective_pixels: stats.reflective_pixels,

@@ -26,6 +26,7 @@ pub mod scene;
 pub mod settings;
 pub mod shadow_maps;
 pub mod sim;
+pub mod steady;
 pub mod tune;
 pub mod vk;
 

@@ -18,6 +18,7 @@ use crate::metrics::compare_rgba8;
 use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{HybridPolicy, Mode, Settings, GLOSSY_REFERENCE_SPP};
+use crate::steady::{RoundsCheck, WarmUp, WarmUpReport};
 use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
 use std::sync::Arc;
@@ -54,18 +55,22 @@ pub struct SceneModes {
     pub modes: Vec<ModeResult>,
     /// ssr < hybrid < rt by frame time, judged by the per-round ratios to rt.
     pub ordered: bool,
+    /// How the warm-up went and how the rounds held (`steady`): a run whose rounds kept
+    /// straying is not valid.
+    pub warmup: WarmUpReport,
+    pub rounds_check: RoundsCheck,
     pub valid: bool,
 }
 
 /// The `bench modes` report.
 pub type ModesReport = super::RoundsReport<SceneModes>;
 
-/// Times every mode of `scene` in `rounds` interleaved rounds after `warmup` rounds.
+/// Times every mode of `scene` in `rounds` interleaved rounds after the warm-up.
 pub fn run(
     ctx: &Arc<Context>,
     scene: &Scene,
     base: &Settings,
-    warmup: u32,
+    warmup: WarmUp,
     rounds: u32,
     tick: super::Tick<'_>,
 ) -> Result<SceneModes> {
@@ -83,11 +88,18 @@ pub fn run(
     }]);
     let (renderers, measured) =
         super::interleave_variants(ctx, scene, variants, (warmup, rounds), tick, "bench modes")?;
-    let super::Interleaved { timings, frames } = measured;
+    let super::Interleaved {
+        timings,
+        frames,
+        warmup,
+        rounds_check,
+    } = measured;
+    // Every renderer has rendered as many frames (a dynamic scene: as many steps).
+    let rendered = warmup.frames + rounds + rounds_check.remeasured;
     let rt = Mode::ALL.iter().position(|&m| m == Mode::Rt).expect("rt is a mode");
     let rt_image = renderers[rt].read_output()?;
     let reference = match base.glossy {
-        true => Some(glossy_reference(ctx, scene, base, warmup + rounds)?),
+        true => Some(glossy_reference(ctx, scene, base, rendered)?),
         false => None,
     };
     let mut modes = Vec::new();
@@ -127,7 +139,8 @@ pub fn run(
         && by(Mode::Rt).traced_pixels == reflective
         && by(Mode::Hybrid).traced_pixels <= reflective
         && (by(Mode::Hybrid).traced_pixels == by(Mode::Provenance).traced_pixels || measured)
-        && modes[Mode::ALL.len()].traced_pixels <= reflective;
+        && modes[Mode::ALL.len()].traced_pixels <= reflective
+        && rounds_check.settled();
     // By the per-round ratios to rt, which cancel drift between rounds.
     let ratio = |m: Mode| by(m).frame_over_rt.median;
     let ordered = ratio(Mode::Ssr) < ratio(Mode::Hybrid) && ratio(Mode::Hybrid) < 1.0;
@@ -136,6 +149,8 @@ pub fn run(
         resolution: [base.width, base.height],
         modes,
         ordered,
+        warmup,
+        rounds_check,
         valid,
     })
 }

@@ -16,6 +16,7 @@ use crate::renderer::Renderer;
 use crate::report::{Header, PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{HybridPolicy, Mode, Settings};
+use crate::steady::{RoundsCheck, WarmUp, WarmUpReport};
 use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
 use std::sync::Arc;
@@ -41,9 +42,12 @@ pub struct SplitReport {
     pub header: Header,
     pub scene: String,
     pub resolution: [u32; 2],
-    /// Measured rounds (one frame of every point and of `rt` each), after `warmup_rounds`.
+    /// Measured rounds (one frame of every point and of `rt` each), after the warm-up.
     pub rounds: u32,
-    pub warmup_rounds: u32,
+    /// How the warm-up went and how the rounds held (`steady`): a run whose rounds kept
+    /// straying is not valid.
+    pub warmup: WarmUpReport,
+    pub rounds_check: RoundsCheck,
     pub reflective_pixels: u64,
     /// The `rt` mode frame for comparison.
     pub rt_frame_ms: Stat,
@@ -70,7 +74,7 @@ pub fn run(
     ctx: &Arc<Context>,
     scene: &Scene,
     base: &Settings,
-    warmup: u32,
+    warmup: WarmUp,
     rounds: u32,
     tick: super::Tick<'_>,
 ) -> Result<SplitReport> {
@@ -98,7 +102,12 @@ pub fn run(
         }))
         .map(|settings| Renderer::new(ctx, scene, &settings))
         .collect::<Result<Vec<_>>>()?;
-    let super::Interleaved { timings, frames } = super::interleave(&mut renderers, warmup, rounds, tick)?;
+    let super::Interleaved {
+        timings,
+        frames,
+        warmup,
+        rounds_check,
+    } = super::interleave(&mut renderers, warmup, rounds, tick)?;
     let rt_index = sweep.len();
     let rt_reflective = renderers[rt_index].reflection_stats()?.reflective_pixels;
     let rt_frame_ms = Stat::of(&frames[rt_index]).expect("rounds > 0");
@@ -126,11 +135,12 @@ pub fn run(
         scene: scene.name.clone(),
         resolution: [base.width, base.height],
         rounds,
-        warmup_rounds: warmup,
+        warmup,
         reflective_pixels: rt_reflective,
         rt_frame_ms,
         points,
         timing: crate::vk::Timings::check_all(&timings),
-        valid: same_reflective && monotonic && all_at_end,
+        valid: same_reflective && monotonic && all_at_end && rounds_check.settled(),
+        rounds_check,
     })
 }

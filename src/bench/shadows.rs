@@ -13,6 +13,7 @@ use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Settings, Shadows};
 use crate::shadow_maps::ShadowsVsRays;
+use crate::steady::{RoundsCheck, WarmUp, WarmUpReport};
 use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
 use std::sync::Arc;
@@ -47,19 +48,23 @@ pub struct SceneShadows {
     /// The reflection mode every source was rendered in.
     pub mode: String,
     pub shadows: Vec<ShadowResult>,
+    /// How the warm-up went and how the rounds held (`steady`): a run whose rounds kept
+    /// straying is not valid.
+    pub warmup: WarmUpReport,
+    pub rounds_check: RoundsCheck,
     pub valid: bool,
 }
 
 /// The `bench shadows` report.
 pub type ShadowsReport = super::RoundsReport<SceneShadows>;
 
-/// Times every shadow source of `scene` in `rounds` interleaved rounds after `warmup`
-/// rounds, in `base`'s reflection mode.
+/// Times every shadow source of `scene` in `rounds` interleaved rounds after the
+/// warm-up, in `base`'s reflection mode.
 pub fn run(
     ctx: &Arc<Context>,
     scene: &Scene,
     base: &Settings,
-    warmup: u32,
+    warmup: WarmUp,
     rounds: u32,
     tick: super::Tick<'_>,
 ) -> Result<SceneShadows> {
@@ -69,7 +74,12 @@ pub fn run(
     });
     let (renderers, measured) =
         super::interleave_variants(ctx, scene, variants, (warmup, rounds), tick, "bench shadows")?;
-    let super::Interleaved { timings, frames } = measured;
+    let super::Interleaved {
+        timings,
+        frames,
+        warmup,
+        rounds_check,
+    } = measured;
     let at = |s: Shadows| {
         Shadows::ALL
             .iter()
@@ -120,12 +130,15 @@ pub fn run(
         && results.iter().all(|s| s.lit_pixels == lit)
         && by(Shadows::Rays).traced_pixels == lit
         && by(Shadows::Hybrid).traced_pixels <= lit
-        && by(Shadows::Map).traced_pixels == 0;
+        && by(Shadows::Map).traced_pixels == 0
+        && rounds_check.settled();
     Ok(SceneShadows {
         scene: scene.name.clone(),
         resolution: [base.width, base.height],
         mode: base.mode.name().to_string(),
         shadows: results,
+        warmup,
+        rounds_check,
         valid,
     })
 }

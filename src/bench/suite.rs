@@ -16,8 +16,10 @@
 use super::lbvh::{timed_build, BUILD, STAGES};
 use crate::error::{Error, Result};
 use crate::passes::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
+use crate::renderer::FRAME;
 use crate::report::{Header, Stat};
 use crate::settings::{Mode, Settings};
+use crate::steady::{RoundsCheck, WarmUp, WarmUpReport};
 use crate::vk::{remeasure_readout, Context, GpuTimer, TimingCheck, Timings};
 use crate::Renderer;
 use serde::Serialize;
@@ -101,6 +103,10 @@ pub struct CaseResult {
     pub order: Vec<String>,
     /// The self-check of every measured frame or build (`vk::timing`).
     pub timing: TimingCheck,
+    /// How the case warmed up, and how its measured frames (or builds) held: one beyond
+    /// 2x the median is measured again (`steady`).
+    pub warmup: WarmUpReport,
+    pub rounds_check: RoundsCheck,
 }
 
 /// The `bench suite` report.
@@ -110,7 +116,8 @@ pub struct SuiteReport {
     pub header: Header,
     pub suite_version: u32,
     pub quick: bool,
-    pub warmup: u32,
+    /// The warm-up's rule (`frames N`, or `steady`); each case says how its went.
+    pub warmup: String,
     pub frames: u32,
     pub cases: Vec<CaseResult>,
 }
@@ -134,11 +141,12 @@ fn stats(timings: &Timings, names: &[&str]) -> (BTreeMap<String, Stat>, Vec<Stri
     (map, order)
 }
 
-/// Runs one case: `warmup` frames (or builds), then `frames` measured.
+/// Runs one case: warm-up frames (or builds) until `warmup` is done, then `frames`
+/// measured, the straying ones again (`super::measure_rounds`).
 pub fn run_case(
     ctx: &Arc<Context>,
     case: &Case,
-    warmup: u32,
+    warmup: WarmUp,
     frames: u32,
     tick: super::Tick<'_>,
 ) -> Result<CaseResult> {
@@ -157,17 +165,23 @@ pub fn run_case(
                 ..Settings::default()
             };
             let mut r = Renderer::new(ctx, &scene, &settings)?;
-            let mut timings = Timings::default();
-            for f in 0..warmup + frames {
-                if f == warmup {
-                    // A dynamic scene's measured frames are always its first ones.
-                    r.reset_simulation()?;
-                }
-                let (t, discarded) = r.render_frame_measured()?;
-                if f >= warmup {
-                    timings.add_measured(&t, discarded);
-                }
+            let mut warming = warmup.start();
+            while !warming.done() {
+                let start = std::time::Instant::now();
+                let t = r.render_frame()?;
+                warming.add(t.get(FRAME).unwrap_or(start.elapsed().as_secs_f64() * 1e3));
                 tick();
+            }
+            // A dynamic scene's measured frames are always its first ones.
+            r.reset_simulation()?;
+            let (measured, rounds_check) = super::measure_rounds(frames, FRAME, || {
+                let m = r.render_frame_measured()?;
+                tick();
+                Ok(vec![m])
+            })?;
+            let mut timings = Timings::default();
+            for (t, discarded) in measured.iter().map(|m| &m[0]) {
+                timings.add_measured(t, *discarded);
             }
             let (passes_ms, order) = stats(&timings, &crate::renderer::SCOPES);
             let json = crate::report::to_json(&settings);
@@ -180,6 +194,8 @@ pub fn run_case(
                 passes_ms,
                 order,
                 timing: timings.check().clone(),
+                warmup: warming.report(),
+                rounds_check,
             })
         }
         Case::Lbvh { triangles } => {
@@ -190,13 +206,25 @@ pub fn run_case(
             let builder = LbvhBuilder::new(ctx)?;
             let bvh = Bvh::new(ctx, *triangles, MortonBits::Bits30)?;
             let mut timer = GpuTimer::new(ctx, 8)?;
-            let mut timings = Timings::default();
-            for rep in 0..warmup.max(1) + frames {
-                let (times, discarded) = remeasure_readout(|| timed_build(&mut timer, &builder, geometry, &bvh))?;
-                if rep >= warmup.max(1) {
-                    timings.add_measured(&times, discarded);
-                }
+            // At least one warm-up build (its first builds its pipelines' caches).
+            let mut warming = match warmup {
+                WarmUp::Frames(n) => WarmUp::Frames(n.max(1)),
+                steady => steady,
+            }
+            .start();
+            while !warming.done() {
+                let (times, _) = remeasure_readout(|| timed_build(&mut timer, &builder, geometry, &bvh))?;
+                warming.add(times.get(BUILD).unwrap_or(0.0));
                 tick();
+            }
+            let (measured, rounds_check) = super::measure_rounds(frames, BUILD, || {
+                let m = remeasure_readout(|| timed_build(&mut timer, &builder, geometry, &bvh))?;
+                tick();
+                Ok(vec![m])
+            })?;
+            let mut timings = Timings::default();
+            for (t, discarded) in measured.iter().map(|m| &m[0]) {
+                timings.add_measured(t, *discarded);
             }
             let mut names: Vec<&str> = STAGES.to_vec();
             names.push(BUILD);
@@ -210,6 +238,8 @@ pub fn run_case(
                 passes_ms,
                 order,
                 timing: timings.check().clone(),
+                warmup: warming.report(),
+                rounds_check,
             })
         }
     }
@@ -352,7 +382,7 @@ pub fn compare(new: &Baseline, old: &Baseline, threshold: f64) -> Vec<Comparison
 pub fn markdown(report: &SuiteReport, comparison: Option<&[Comparison]>) -> String {
     let d = report.header.device.as_ref();
     let mut s = format!(
-        "Speculum bench suite v{} ({}) on {} ({}), commit {}, {} measured frames after {} warm-up\n\n",
+        "Speculum bench suite v{} ({}) on {} ({}), commit {}, {} measured frames after warm-up ({})\n\n",
         report.suite_version,
         if report.quick { "quick" } else { "full" },
         d.map_or("?", |d| d.name.as_str()),
@@ -401,11 +431,36 @@ pub fn markdown(report: &SuiteReport, comparison: Option<&[Comparison]>) -> Stri
         s += "\n**Timings that failed their self-check** (not to be trusted):\n";
         s += &invalid.concat();
     }
+    let unsettled: Vec<String> = report
+        .cases
+        .iter()
+        .filter(|c| !c.warmup.settled || !c.rounds_check.settled())
+        .map(|c| format!("- {}: {}\n", c.id, unsettled_note(c)))
+        .collect();
+    let remeasured: u32 = report.cases.iter().map(|c| c.rounds_check.remeasured).sum();
+    if unsettled.is_empty() {
+        s += &format!("Clocks settled in every case ({remeasured} straying frames measured again).\n");
+    } else {
+        s += "\n**Cases whose clocks did not settle** (not to be trusted):\n";
+        s += &unsettled.concat();
+    }
     if let Some(cmp) = comparison {
         s += "\n";
         s += &markdown_comparison(cmp);
     }
     s
+}
+
+/// Why a case's clocks did not settle.
+fn unsettled_note(c: &CaseResult) -> String {
+    let mut why = Vec::new();
+    if !c.warmup.settled {
+        why.push(format!("warm-up of {} frames did not settle", c.warmup.frames));
+    }
+    if !c.rounds_check.settled() {
+        why.push(format!("{} frames still strayed", c.rounds_check.still_straying));
+    }
+    why.join("; ")
 }
 
 /// The comparison as a Markdown table.
@@ -453,6 +508,8 @@ mod tests {
             passes_ms: passes.iter().map(|(n, m)| (n.to_string(), stat(*m, 0.1))).collect(),
             order: passes.iter().map(|(n, _)| n.to_string()).collect(),
             timing: TimingCheck::default(),
+            warmup: WarmUp::Frames(1).start().report(),
+            rounds_check: Default::default(),
         }
     }
 
@@ -506,7 +563,7 @@ mod tests {
                 header: Header::new("bench.suite", None, None),
                 suite_version: SUITE_VERSION,
                 quick: true,
-                warmup: 1,
+                warmup: "frames 1".into(),
                 frames: 3,
                 cases: new,
             },

@@ -308,6 +308,23 @@ pub fn timing_note(check: &speculum::vk::TimingCheck) -> String {
     }
 }
 
+/// How a run warmed up, and how its rounds held when it has rounds (`steady`).
+pub fn steady_note(w: &speculum::steady::WarmUpReport, rounds: Option<&speculum::steady::RoundsCheck>) -> String {
+    let mut s = format!(
+        "warm-up ({}): {} frames, {:.0} ms of GPU work, {:.1} s{}",
+        w.rule,
+        w.frames,
+        w.gpu_ms,
+        w.wall_s,
+        if w.settled { "" } else { ", clocks NOT SETTLED" }
+    );
+    if let Some(note) = rounds.and_then(|r| r.note()) {
+        s += "; ";
+        s += &note;
+    }
+    s
+}
+
 pub fn cell(stat: Option<speculum::report::Stat>) -> String {
     match stat {
         Some(s) => format!("{:.2} ({:.2}–{:.2})", s.median, s.p10, s.p90),

@@ -37,9 +37,11 @@ pub struct RenderArgs {
     /// is rendered so.
     #[arg(long)]
     pub spp: Option<u32>,
-    /// Uncounted warm-up frames (pipeline JIT, caches).
-    #[arg(long, default_value_t = 2)]
-    pub warmup: u32,
+    /// Uncounted warm-up frames (pipeline JIT, caches, a GPU's clocks), exactly
+    /// [default: until the clocks settle: at least 2 frames and 250 ms of GPU work, and
+    /// two windows of 5 frames within 5%, at most 20 s]
+    #[arg(long)]
+    pub warmup: Option<u32>,
     /// Output PNG.
     #[arg(long, default_value = "frame.png")]
     pub out: PathBuf,
@@ -114,7 +116,7 @@ fn check_before_gpu(args: &RenderArgs) -> Result<(Settings, headless::FramePlan,
         settings.mode = mode;
     }
     let plan = headless::FramePlan {
-        warmup: args.warmup,
+        warmup: speculum::steady::WarmUp::from_arg(args.warmup),
         frames: args.frames,
         reference: args.reference,
         spp: args.spp.unwrap_or(speculum::settings::GLOSSY_REFERENCE_SPP),
@@ -344,6 +346,7 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
         ));
     }
     text.line(format_args!("  {}", super::timing_note(&r.timing)));
+    text.line(format_args!("  {}", super::steady_note(&r.warmup, None)));
     if let Some(n) = r.header.validation_messages {
         text.line(format_args!("  validation messages: {n}"));
     }

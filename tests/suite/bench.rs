@@ -6,6 +6,7 @@ use crate::common;
 use speculum::bench::lbvh::{run_case, Options};
 use speculum::passes::lbvh::{BvhKind, MortonBits};
 use speculum::scene::soup::{default_size, random_soup};
+use speculum::steady::WarmUp;
 
 /// The `room` scene at 160x90: small enough for a quick benchmark run.
 fn small_room() -> (speculum::scene::Scene, speculum::Settings) {
@@ -139,7 +140,7 @@ fn lbvh_benchmark_anchors_against_embree() {
 fn reflection_split_benchmark_is_valid() {
     let ctx = common::context();
     let (scene, settings) = small_room();
-    let r = speculum::bench::reflect::run(&ctx, &scene, &settings, 0, 2, &mut || {}).unwrap();
+    let r = speculum::bench::reflect::run(&ctx, &scene, &settings, WarmUp::Frames(0), 2, &mut || {}).unwrap();
     assert!(r.valid, "{r:?}");
     assert_eq!(r.points.len(), speculum::bench::reflect::sweep(&settings).len());
     assert!(r.points[0].rt_pixel_fraction < 0.9 && r.points.last().unwrap().rt_pixel_fraction == 1.0);
@@ -169,7 +170,7 @@ fn reflection_split_benchmark_is_valid() {
 fn modes_benchmark_is_valid() {
     let ctx = common::context();
     let (scene, settings) = small_room();
-    let r = speculum::bench::modes::run(&ctx, &scene, &settings, 0, 2, &mut || {}).unwrap();
+    let r = speculum::bench::modes::run(&ctx, &scene, &settings, WarmUp::Frames(0), 2, &mut || {}).unwrap();
     assert!(r.valid, "{r:?}");
     // Every mode, then hybrid with the other policy.
     assert_eq!(r.modes.len(), speculum::settings::Mode::ALL.len() + 1);
@@ -194,7 +195,7 @@ fn modes_benchmark_is_valid() {
 fn shadows_benchmark_is_valid() {
     let ctx = common::context();
     let (scene, settings) = small_room();
-    let r = speculum::bench::shadows::run(&ctx, &scene, &settings, 0, 2, &mut || {}).unwrap();
+    let r = speculum::bench::shadows::run(&ctx, &scene, &settings, WarmUp::Frames(0), 2, &mut || {}).unwrap();
     assert!(r.valid, "{r:?}");
     let by = |name: &str| r.shadows.iter().find(|s| s.shadows == name).unwrap();
     let (map, hybrid, rays) = (by("map"), by("hybrid"), by("rays"));

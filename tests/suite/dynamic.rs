@@ -46,7 +46,7 @@ fn dynamic_frames_are_deterministic_whatever_the_warmup() {
         };
         let run = |warmup, frames| {
             let plan = FramePlan {
-                warmup,
+                warmup: speculum::steady::WarmUp::Frames(warmup),
                 frames,
                 reference: false,
                 spp: 1,

@@ -18,6 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["limits", "reflection_maps", "shadow_maps"],
     &["renderer"],
     &["report"],
+    &["steady"],
     &["headless"],
     &["bench", "tune"],
     &["demo"],

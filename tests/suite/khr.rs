@@ -131,7 +131,7 @@ fn khr_renders_what_lbvh_renders() {
         return;
     }
     let plan = headless::FramePlan {
-        warmup: 0,
+        warmup: speculum::steady::WarmUp::Frames(0),
         frames: 1,
         reference: false,
         spp: 1,

@@ -164,7 +164,7 @@ fn render_room(change: impl FnOnce(&mut speculum::scene::Scene), w: u32, h: u32)
         ..Default::default()
     };
     let plan = headless::FramePlan {
-        warmup: 0,
+        warmup: speculum::steady::WarmUp::Frames(0),
         frames: 1,
         reference: false,
         spp: 1,
@@ -398,7 +398,7 @@ fn every_kernel_specialization_renders_the_same_frames() {
             speculum::passes::lbvh::sort::SortTile::for_device(ctx.kernels_for)
         );
         let plan = headless::FramePlan {
-            warmup: 0,
+            warmup: speculum::steady::WarmUp::Frames(0),
             frames: 3,
             reference: false,
             spp: 1,

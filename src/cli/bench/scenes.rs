@@ -19,9 +19,10 @@ pub struct ModesArgs {
     /// Measured rounds (one frame of every mode, or shadow source, each).
     #[arg(long, default_value_t = 7)]
     pub rounds: u32,
-    /// Uncounted warm-up rounds.
-    #[arg(long, default_value_t = 1)]
-    pub warmup: u32,
+    /// Uncounted warm-up rounds, exactly [default: until the clocks settle: at least
+    /// 250 ms of GPU work and two windows of 5 rounds within 5%, at most 20 s]
+    #[arg(long)]
+    pub warmup: Option<u32>,
     #[command(flatten)]
     pub frame: SettingsArgs,
     #[command(flatten)]
@@ -35,7 +36,8 @@ pub struct ReflectArgs {
     /// Built-in scene name or .obj path.
     #[arg(long, default_value = "room")]
     pub scene: String,
-    /// Measured rounds: one frame of every point and of rt each (after one warm-up round).
+    /// Measured rounds: one frame of every point and of rt each (after the warm-up, until
+    /// the clocks settle).
     #[arg(long, default_value_t = 3)]
     pub frames: u32,
     #[command(flatten)]
@@ -56,8 +58,13 @@ pub(super) fn reflect(args: ReflectArgs) -> Result<()> {
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
     let renderers = speculum::bench::reflect::sweep(&settings).len() as u64 + 1;
-    let bar = progress(renderers * (args.frames as u64 + 1), "bench reflect", c.quiet);
-    let mut r = speculum::bench::reflect::run(&ctx, &scene, &settings, 1, args.frames, &mut || bar.inc(1))?;
+    let warmup = speculum::steady::WarmUp::steady();
+    let bar = progress(
+        renderers * (args.frames + warmup.min_frames()) as u64,
+        "bench reflect",
+        c.quiet,
+    );
+    let mut r = speculum::bench::reflect::run(&ctx, &scene, &settings, warmup, args.frames, &mut || bar.inc(1))?;
     bar.finish_and_clear();
     r.header.refresh_validation(&ctx);
     text.line(format_args!(
@@ -93,6 +100,10 @@ pub(super) fn reflect(args: ReflectArgs) -> Result<()> {
         ));
     }
     text.line(format_args!("  {}", crate::cli::timing_note(&r.timing)));
+    text.line(format_args!(
+        "  {}",
+        crate::cli::steady_note(&r.warmup, Some(&r.rounds_check))
+    ));
     if let Some(path) = &c.json {
         crate::cli::write_report(path, &r, &text)?;
     }
@@ -121,7 +132,9 @@ fn scene_bench<R, Rep: serde::Serialize>(
     let c = &args.common;
     let settings = args.frame.resolve()?;
     check_count("--rounds", args.rounds, 1)?;
-    check_count("--warmup", args.warmup, 0)?;
+    if let Some(w) = args.warmup {
+        check_count("--warmup", w, 0)?;
+    }
     // SSIM against the reference frame needs an image its window fits in: known
     // before any GPU work.
     speculum::metrics::check_size(settings.width, settings.height)?;
@@ -137,7 +150,8 @@ fn scene_bench<R, Rep: serde::Serialize>(
         .collect::<Result<Vec<_>>>()?;
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
-    let per_scene = renderers * (args.rounds + args.warmup) as u64;
+    let warmup = speculum::steady::WarmUp::from_arg(args.warmup);
+    let per_scene = renderers * (args.rounds + warmup.min_frames()) as u64;
     let bar = progress(per_scene * scenes.len() as u64, &kind.replace('.', " "), c.quiet);
     let mut results = Vec::new();
     for scene in &scenes {
@@ -157,7 +171,7 @@ fn scene_bench<R, Rep: serde::Serialize>(
 
 pub(super) fn modes(args: ModesArgs) -> Result<()> {
     use speculum::bench::modes::{run, ModesReport};
-    let (warmup, rounds) = (args.warmup, args.rounds);
+    let (warmup, rounds) = (speculum::steady::WarmUp::from_arg(args.warmup), args.rounds);
     scene_bench(
         &args,
         "bench.modes",
@@ -168,7 +182,7 @@ pub(super) fn modes(args: ModesArgs) -> Result<()> {
         |header, scenes, valid| ModesReport {
             header,
             rounds,
-            warmup_rounds: warmup,
+            warmup: warmup.rule(),
             scenes,
             valid,
         },
@@ -219,11 +233,15 @@ fn print_modes(text: &Text, r: &speculum::bench::modes::SceneModes, device: &str
     ));
     let timing: speculum::vk::TimingCheck = r.modes.iter().map(|m| &m.timing).collect();
     text.line(format_args!("  {}", crate::cli::timing_note(&timing)));
+    text.line(format_args!(
+        "  {}",
+        crate::cli::steady_note(&r.warmup, Some(&r.rounds_check))
+    ));
 }
 
 pub(super) fn shadows(args: ModesArgs) -> Result<()> {
     use speculum::bench::shadows::{run, ShadowsReport};
-    let (warmup, rounds) = (args.warmup, args.rounds);
+    let (warmup, rounds) = (speculum::steady::WarmUp::from_arg(args.warmup), args.rounds);
     scene_bench(
         &args,
         "bench.shadows",
@@ -234,7 +252,7 @@ pub(super) fn shadows(args: ModesArgs) -> Result<()> {
         |header, scenes, valid| ShadowsReport {
             header,
             rounds,
-            warmup_rounds: warmup,
+            warmup: warmup.rule(),
             scenes,
             valid,
         },
@@ -281,4 +299,8 @@ fn print_shadows(text: &Text, r: &speculum::bench::shadows::SceneShadows, device
     text.line(format_args!("  checks {}", if r.valid { "valid" } else { "INVALID" }));
     let timing: speculum::vk::TimingCheck = r.shadows.iter().map(|s| &s.timing).collect();
     text.line(format_args!("  {}", crate::cli::timing_note(&timing)));
+    text.line(format_args!(
+        "  {}",
+        crate::cli::steady_note(&r.warmup, Some(&r.rounds_check))
+    ));
 }

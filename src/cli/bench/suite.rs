@@ -16,9 +16,10 @@ pub struct SuiteArgs {
     /// Measured frames (builds) per case.
     #[arg(long, default_value_t = 10)]
     pub frames: u32,
-    /// Uncounted warm-up frames per case (a dynamic scene is reset after them).
-    #[arg(long, default_value_t = 2)]
-    pub warmup: u32,
+    /// Uncounted warm-up frames (builds) per case, exactly (a dynamic scene is reset
+    /// after them) [default: until the clocks settle, as `render`]
+    #[arg(long)]
+    pub warmup: Option<u32>,
     /// A suite report to compare with, case by case and pass by pass.
     #[arg(long)]
     pub baseline: Option<PathBuf>,
@@ -76,25 +77,24 @@ pub(super) fn suite(args: SuiteArgs) -> Result<()> {
         return regressions(&cmp, args.fail_on_regression);
     }
     let cases = suite::cases(args.quick);
+    let warmup = speculum::steady::WarmUp::from_arg(args.warmup);
     let text = Text::new(&[c.json.as_deref(), args.markdown.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
     let bar = progress(
-        cases.len() as u64 * (args.warmup + args.frames) as u64,
+        cases.len() as u64 * (warmup.min_frames() + args.frames) as u64,
         "suite",
         c.quiet,
     );
     let mut results = Vec::new();
     for case in &cases {
-        results.push(suite::run_case(&ctx, case, args.warmup, args.frames, &mut || {
-            bar.inc(1)
-        })?);
+        results.push(suite::run_case(&ctx, case, warmup, args.frames, &mut || bar.inc(1))?);
     }
     bar.finish_and_clear();
     let mut report = SuiteReport {
         header: Header::new("bench.suite", Some(&ctx), None),
         suite_version: suite::SUITE_VERSION,
         quick: args.quick,
-        warmup: args.warmup,
+        warmup: warmup.rule(),
         frames: args.frames,
         cases: results,
     };

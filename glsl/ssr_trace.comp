@@ -315,7 +315,27 @@ Found march_hiz(vec4 h0, vec4 h1, ivec2 res) {
 // The hit's fail mask, colour and confidence: back faces, surfaces whose own
 // reflection the screen lacks and faded hits fail; a faded hit above the threshold is
 // kept and traced too (FAIL_BLEND: merge blends the two by confidence).
-void judge(Found found, vec3 vdir, vec3 own, ivec2 res, out uint fail, out float confidence, out vec3 color) {
+// How far (pixels) from the hit position the ray may cross the plane of the hit
+// pixel's surface: a true hit crosses it in that pixel, give or take a sloped or
+// curved surface's departure from its tangent plane across a pixel or two.
+const float SSR_PLANE_PX = 1.0;
+
+// Where (pixels) a ray from `origin` along `vdir` (view space) crosses the plane of the
+// surface at hit pixel q (its depth, its normal n), or far off the screen when it runs
+// along that plane.
+vec2 plane_crossing(vec3 origin, vec3 vdir, ivec2 q, vec3 n) {
+    vec3 hv = (frame.view * vec4(world_from_depth(q, texelFetch(gb_depth, q, 0).r), 1.0)).xyz;
+    vec3 vn = mat3(frame.view) * n; // view is rigid
+    float along = dot(vn, vdir);
+    if (abs(along) < 1e-6) {
+        return vec2(-1e9);
+    }
+    float s = dot(vn, hv - origin) / along;
+    return to_pixel(frame.proj * vec4(origin + vdir * s, 1.0));
+}
+
+void judge(Found found, SsrRay ray, vec3 own, ivec2 res, out uint fail, out float confidence, out vec3 color) {
+    vec3 vdir = ray.vdir;
     fail = found.reason;
     confidence = 0.0;
     color = vec3(0.0);
@@ -330,6 +350,12 @@ void judge(Found found, vec3 vdir, vec3 own, ivec2 res, out uint fail, out float
         fail = FAIL_BACK_FACE;
     } else if (hit_reflection_weight(hit_pixel, hit_nr.w, hit_n, -world_dir, own) > pc.recursion_min) {
         fail = FAIL_HIT_REFLECTIVE;
+    } else if (distance(plane_crossing(ray_origin(ray), vdir, hit_pixel, hit_n), found.hit_pos) > SSR_PLANE_PX) {
+        // The ray reached this pixel's depth without crossing its surface there: it
+        // passed behind a surface thinner than the thickness (under a table top, behind
+        // a thin wall) and crosses the surface's plane elsewhere on the screen, where
+        // the surface is not. What it hits lies behind: the tracer's to find.
+        fail = FAIL_BEHIND;
     } else {
         vec2 hp = vec2(hit_pixel) + 0.5;
         float edge = min(min(hp.x, float(res.x) - hp.x), min(hp.y, float(res.y) - hp.y));
@@ -393,9 +419,8 @@ void main() {
     float distance_sum = 0.0;
     for (uint s = 0u; s < rays; ++s) {
         ray = ssr_ray(p, depth, nr.xyz, roughness, s);
-        vec3 vpos = ray.vpos, vn = ray.vn, vdir = ray.vdir;
-        // Start a little off the surface so the first steps do not hit the pixel itself.
-        vec3 origin = vpos + vn * (1e-3 * abs(vpos.z));
+        vec3 vdir = ray.vdir;
+        vec3 origin = ray_origin(ray);
 
         float near_z = -frame.proj[3][2] / frame.proj[2][2];
         // Lengths relative to the view depth keep SSR's answers the same at any scene scale.
@@ -410,7 +435,7 @@ void main() {
         uint f;
         float c;
         vec3 col;
-        judge(found, vdir, own, res, f, c, col);
+        judge(found, ray, own, res, f, c, col);
         if (f != 0u && f != FAIL_BLEND) {
             fail = f;
             color = vec3(0.0);
@@ -421,7 +446,7 @@ void main() {
         color += col;
         ivec2 hp = found.hit_pixel;
         vec3 hit = (frame.view * vec4(world_from_depth(hp, texelFetch(gb_depth, hp, 0).r), 1.0)).xyz;
-        distance_sum += length(hit - vpos);
+        distance_sum += length(hit - ray.vpos);
     }
     if (fail == 0u || fail == FAIL_BLEND) {
         color /= float(rays);

@@ -11,6 +11,12 @@ struct SsrRay {
     vec3 vdir; // the unit reflected direction
 };
 
+// Where the march starts: a little off the surface, so the first steps do not hit the
+// pixel itself.
+vec3 ray_origin(SsrRay r) {
+    return r.vpos + r.vn * (1e-3 * abs(r.vpos.z));
+}
+
 // Ray `s` of the pixel (glossy.glsl): the mirror direction, or the sampled one of a
 // glossy surface of perceptual `roughness`.
 SsrRay ssr_ray(ivec2 p, float depth, vec3 n_world, float roughness, uint s) {

@@ -44,10 +44,27 @@ pub fn merge(
     }
 }
 
+/// `SEAM_EDGE`, `SEAM_EDGE_GLOSSY` of `reflect_blur.comp`: the relative colour
+/// difference at which a neighbour's weight in the seam blur falls to 1/e, around a
+/// mirror and around a glossy pixel.
+pub const SEAM_EDGE: f32 = 0.3;
+pub const SEAM_EDGE_GLOSSY: f32 = 0.9;
+
+/// `range_weight`: how a neighbour of colour `b` counts beside a pixel of colour `a`.
+pub fn range_weight(a: [f32; 3], b: [f32; 3], edge: f32) -> f32 {
+    let d = (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f32::max);
+    let m = (0..3).map(|c| a[c].max(b[c])).fold(0.0, f32::max);
+    let r = d / (m + 0.05);
+    (-(r * r) / (edge * edge)).exp()
+}
+
 /// One direction of the seam blur over a `width` x `height` row-major image whose alpha
-/// is the source: `axis` (1, 0) or (0, 1); `radius` and `band` in pixels.
+/// is the source: `axis` (1, 0) or (0, 1); `radius` and `band` in pixels. Each
+/// neighbour's Gaussian weight is scaled by its `range_weight` to the pixel, with the
+/// glossy range where the pixel is `glossy`.
 pub fn seam_blur(
     src: &[[f32; 4]],
+    glossy: &[bool],
     width: usize,
     height: usize,
     axis: [i32; 2],
@@ -82,7 +99,12 @@ pub fn seam_blur(
                 if s[3] as u32 == SOURCE_NONE {
                     continue;
                 }
-                let wk = (-((k * k) as f32) / (2.0 * sigma * sigma)).exp();
+                let edge = match glossy[y as usize * width + x as usize] {
+                    true => SEAM_EDGE_GLOSSY,
+                    false => SEAM_EDGE,
+                };
+                let range = range_weight([me[0], me[1], me[2]], [s[0], s[1], s[2]], edge);
+                let wk = (-((k * k) as f32) / (2.0 * sigma * sigma)).exp() * range;
                 for c in 0..3 {
                     sum[c] += s[c] * wk;
                 }

@@ -213,12 +213,12 @@ impl MergePass {
             barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
             return;
         }
-        self.record_blur(cmd, frame, blur);
+        self.record_blur(cmd, (frame, gbuffer), blur);
     }
 
     /// The seam blur over the merged reflection: the tile pass lists the tiles near a
     /// seam, then a horizontal and a vertical pass over those tiles only.
-    fn record_blur(&self, cmd: vk::CommandBuffer, frame: &Buffer, blur: BlurParams) {
+    fn record_blur(&self, cmd: vk::CommandBuffer, (frame, gbuffer): (&Buffer, &GBuffer), blur: BlurParams) {
         let d = &self.ctx.device;
         let t = &self.targets;
         // RAW: the tile pass reads the merge's tile bits, the blur its merged image;
@@ -277,6 +277,7 @@ impl MergePass {
                     Resource::Buffer(&t.tile_active),
                     Resource::Buffer(&t.tile_list),
                     Resource::Buffer(&t.blur_args),
+                    Resource::Sampled(&gbuffer.albedo, &self.sampler),
                 ],
                 &push,
                 Groups::Indirect(&t.blur_args),

@@ -85,6 +85,17 @@ fn merge_and_seam_blur_match_cpu_reference() {
     let general = vk::ImageLayout::GENERAL;
     gb.normal.write(&normal_bytes, ro).unwrap();
     gb.material.write(bytemuck::cast_slice(&material), ro).unwrap();
+    // Roughness in the albedo's alpha: mirror, glossy and rough pixels side by side (the
+    // seam blur's range is wider around glossy ones).
+    let albedo: Vec<u8> = (0..n).flat_map(|_| [128, 128, 128, rng.random::<u8>()]).collect();
+    gb.albedo.write(&albedo, ro).unwrap();
+    let glossy: Vec<bool> = (0..n)
+        .map(|i| cpu_ref::glossy::is_glossy(&frame, albedo[4 * i + 3] as f32 / 255.0))
+        .collect();
+    assert!(
+        glossy.iter().any(|&g| g) && glossy.iter().any(|&g| !g),
+        "both kinds of pixel"
+    );
     let storage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST;
     let image = |name: &str, format: vk::Format, data: &[u8]| {
         let i = Image::new(&ctx, name, extent, format, storage).unwrap();
@@ -144,8 +155,8 @@ fn merge_and_seam_blur_match_cpu_reference() {
         let want = if radius == 0 {
             merged.clone()
         } else {
-            let horizontal = merge::seam_blur(&merged, w, h, [1, 0], r, b);
-            merge::seam_blur(&horizontal, w, h, [0, 1], r, b)
+            let horizontal = merge::seam_blur(&merged, &glossy, w, h, [1, 0], r, b);
+            merge::seam_blur(&horizontal, &glossy, w, h, [0, 1], r, b)
         };
         let mut blurred = 0;
         for i in 0..n {

@@ -11,9 +11,9 @@ mod linear;
 use crate::gpu_types::FrameUniforms;
 use crate::settings::SsrParams;
 use crate::shader_defines::{
-    FAIL_BACK_FACE, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LOW_CONFIDENCE, FAIL_SKIPPED, FAIL_UNTRACED,
-    MATERIAL_NONE, TILE_FLIPS_MAX, TILE_FLIPS_SHIFT, TILE_HYSTERESIS, TILE_KNOWN, TILE_ONE, TILE_RAYS_ONLY,
-    TILE_SUCCESS,
+    FAIL_BACK_FACE, FAIL_BEHIND, FAIL_BLEND, FAIL_FORCED, FAIL_HIT_REFLECTIVE, FAIL_LOW_CONFIDENCE, FAIL_SKIPPED,
+    FAIL_UNTRACED, MATERIAL_NONE, TILE_FLIPS_MAX, TILE_FLIPS_SHIFT, TILE_HYSTERESIS, TILE_KNOWN, TILE_ONE,
+    TILE_RAYS_ONLY, TILE_SUCCESS,
 };
 use glam::{IVec2, Mat3, Vec2, Vec2Swizzles, Vec3, Vec4, Vec4Swizzles};
 
@@ -345,7 +345,7 @@ pub fn march(frame: &FrameUniforms, p: IVec2, inputs: &MarchInputs<'_>, params: 
         let found = march_ray(frame, &ray, inputs, params, &mut m);
         steps += m.steps;
         own = view_reflection(frame, &ray, n, inputs.surface(at(p)), nr[3]);
-        let (f, c) = judge(frame, &found, (ray.vdir, own), inputs, params, &mut m.margin);
+        let (f, c) = judge(frame, &found, (&ray, own), inputs, params, &mut m.margin);
         if f != 0 && f != FAIL_BLEND {
             (fail, sum) = (f, Vec3::ZERO);
             hit_pixel = (found.reason == 0).then_some(found.hit_pixel);
@@ -403,8 +403,8 @@ fn march_ray(
     m: &mut Margins,
 ) -> Found {
     let proj = frame.proj;
-    let (vpos, vn, vdir) = (ray.vpos, ray.vn, ray.vdir);
-    let origin = vpos + vn * (1e-3 * vpos.z.abs());
+    let vdir = ray.vdir;
+    let origin = ray_origin(ray);
     let near_z = -proj.w_axis.z / proj.z_axis.z;
     let max_len = params.max_distance * origin.z.abs();
     let ray_len = if origin.z + vdir.z * max_len > near_z {
@@ -432,15 +432,39 @@ fn to_pixel(frame: &FrameUniforms, h: Vec4) -> Vec2 {
     (h.xy() / h.w * 0.5 + 0.5) * Vec2::new(frame.resolution[0] as f32, frame.resolution[1] as f32)
 }
 
+/// `SSR_PLANE_PX` of `ssr_trace.comp`: how far (pixels) from the hit position a true
+/// hit's ray may cross the plane of the hit pixel's surface.
+pub const SSR_PLANE_PX: f32 = 1.0;
+
+/// `ray_origin`: where the march starts, a little off the surface.
+fn ray_origin(ray: &SsrRay) -> Vec3 {
+    ray.vpos + ray.vn * (1e-3 * ray.vpos.z.abs())
+}
+
+/// `plane_crossing`: where (pixels) the ray from `origin` along `vdir` crosses the
+/// plane of the surface at pixel `q` (its depth, normal `n`); far off the screen when
+/// it runs along it.
+fn plane_crossing(frame: &FrameUniforms, (origin, vdir): (Vec3, Vec3), q: IVec2, depth: f32, n: Vec3) -> Vec2 {
+    let hv = (frame.view * world_from_depth(frame, q, depth).extend(1.0)).xyz();
+    let vn = Mat3::from_mat4(frame.view) * n;
+    let along = vn.dot(vdir);
+    if along.abs() < 1e-6 {
+        return Vec2::splat(-1e9);
+    }
+    let s = vn.dot(hv - origin) / along;
+    to_pixel(frame, frame.proj * (origin + vdir * s).extend(1.0))
+}
+
 /// `judge`: the fail mask and colour (rgb) + confidence (a) of a march's outcome.
 fn judge(
     frame: &FrameUniforms,
     found: &Found,
-    (vdir, own): (Vec3, Vec3),
+    (ray, own): (&SsrRay, Vec3),
     inputs: &MarchInputs<'_>,
     params: &SsrParams,
     margin: &mut f32,
 ) -> (u32, [f32; 4]) {
+    let vdir = ray.vdir;
     let res = IVec2::new(frame.resolution[0] as i32, frame.resolution[1] as i32);
     let at = |q: IVec2| (q.y * res.x + q.x) as usize;
     let (mut confidence, mut color) = (0.0, Vec3::ZERO);
@@ -452,6 +476,19 @@ fn judge(
         let hit_n = Vec3::new(hit_nr[0], hit_nr[1], hit_nr[2]).normalize();
         let world_dir = Mat3::from_mat4(frame.view).transpose() * vdir;
         *margin = margin.min(hit_n.dot(world_dir).abs());
+        // Where the ray crosses the hit surface's plane, against where it found the hit
+        // (decided on a front face SSR may answer; its margin counted on every front face).
+        let crossing = plane_crossing(
+            frame,
+            (ray_origin(ray), vdir),
+            hit_pixel,
+            inputs.depth[at(hit_pixel)],
+            hit_n,
+        )
+        .distance(found.hit_pos);
+        if hit_n.dot(world_dir) <= 0.0 {
+            *margin = margin.min(gap(crossing, SSR_PLANE_PX));
+        }
         // `hit_reflection_weight`: the hit surface's own reflection seen along the ray,
         // as the pixel shows it.
         let mut own_reflection = |q: IVec2, n: Vec3| {
@@ -464,6 +501,8 @@ fn judge(
             FAIL_BACK_FACE
         } else if own_reflection(hit_pixel, hit_n) > params.recursion_min {
             FAIL_HIT_REFLECTIVE
+        } else if crossing > SSR_PLANE_PX {
+            FAIL_BEHIND
         } else {
             let hp = hit_pixel.as_vec2() + 0.5;
             let edge = hp.x.min(res.x as f32 - hp.x).min(hp.y.min(res.y as f32 - hp.y));

@@ -153,6 +153,12 @@ impl Warming {
         self.gpu_ms += ms;
     }
 
+    /// Takes one warm-up frame begun at `start`: its GPU time `ms` where its readout has
+    /// it, else the wall time since `start`.
+    pub fn add_frame(&mut self, ms: Option<f64>, start: Instant) {
+        self.add(ms.unwrap_or(start.elapsed().as_secs_f64() * 1e3));
+    }
+
     /// What the warm-up did.
     pub fn report(&self) -> WarmUpReport {
         let settled = match self.rule {
@@ -284,7 +290,11 @@ mod tests {
         .start();
         let mut k = 0;
         while !w.done() {
-            w.add(if (k / SETTLE_WINDOW) % 2 == 0 { 1.0 } else { 2.0 });
+            w.add(if (k / SETTLE_WINDOW).is_multiple_of(2) {
+                1.0
+            } else {
+                2.0
+            });
             k += 1;
             std::thread::sleep(Duration::from_millis(1));
         }

@@ -79,7 +79,7 @@ pub fn interleave(renderers: &mut [Renderer], warmup: WarmUp, rounds: u32, tick:
         for r in renderers.iter_mut() {
             let start = std::time::Instant::now();
             let t = r.render_frame()?;
-            ms += t.get(FRAME).unwrap_or(start.elapsed().as_secs_f64() * 1e3);
+            ms += t.get(FRAME).unwrap_or(start.elapsed().as_secs_f64() * 1e3); // a round: summed
             tick();
         }
         warming.add(ms);

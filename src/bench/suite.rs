@@ -20,7 +20,7 @@ use crate::renderer::FRAME;
 use crate::report::{Header, Stat};
 use crate::settings::{Mode, Settings};
 use crate::steady::{RoundsCheck, WarmUp, WarmUpReport};
-use crate::vk::{remeasure_readout, Context, GpuTimer, TimingCheck, Timings};
+use crate::vk::{remeasure_readout, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use crate::Renderer;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -156,93 +156,116 @@ pub fn run_case(
             mode,
             width,
             height,
-        } => {
-            let scene = crate::scene::load(scene)?;
-            let settings = Settings {
-                width: *width,
-                height: *height,
-                mode: *mode,
-                ..Settings::default()
-            };
-            let mut r = Renderer::new(ctx, &scene, &settings)?;
-            let mut warming = warmup.start();
-            while !warming.done() {
-                let start = std::time::Instant::now();
-                let t = r.render_frame()?;
-                warming.add(t.get(FRAME).unwrap_or(start.elapsed().as_secs_f64() * 1e3));
-                tick();
-            }
-            // A dynamic scene's measured frames are always its first ones.
-            r.reset_simulation()?;
-            let (measured, rounds_check) = super::measure_rounds(frames, FRAME, || {
-                let m = r.render_frame_measured()?;
-                tick();
-                Ok(vec![m])
-            })?;
-            let mut timings = Timings::default();
-            for (t, discarded) in measured.iter().map(|m| &m[0]) {
-                timings.add_measured(t, *discarded);
-            }
-            let (passes_ms, order) = stats(&timings, &crate::renderer::SCOPES);
-            let json = crate::report::to_json(&settings);
-            Ok(CaseResult {
-                id: case.id(),
-                kind: "frame",
-                settings_hash: Some(format!("{:016x}", fnv1a(json.as_bytes()))),
-                resolution: Some([*width, *height]),
-                triangles: None,
-                passes_ms,
-                order,
-                timing: timings.check().clone(),
-                warmup: warming.report(),
-                rounds_check,
-            })
-        }
-        Case::Lbvh { triangles } => {
-            let n = *triangles as usize;
-            let (v, i) = crate::scene::soup::random_soup(n, 1.0, crate::scene::soup::default_size(n), 42);
-            let uploaded = UploadedTriangles::new(ctx, "suite", &v, &i)?;
-            let geometry = uploaded.geometry();
-            let builder = LbvhBuilder::new(ctx)?;
-            let bvh = Bvh::new(ctx, *triangles, MortonBits::Bits30)?;
-            let mut timer = GpuTimer::new(ctx, 8)?;
-            // At least one warm-up build (its first builds its pipelines' caches).
-            let mut warming = match warmup {
-                WarmUp::Frames(n) => WarmUp::Frames(n.max(1)),
-                steady => steady,
-            }
-            .start();
-            while !warming.done() {
-                let (times, _) = remeasure_readout(|| timed_build(&mut timer, &builder, geometry, &bvh))?;
-                warming.add(times.get(BUILD).unwrap_or(0.0));
-                tick();
-            }
-            let (measured, rounds_check) = super::measure_rounds(frames, BUILD, || {
-                let m = remeasure_readout(|| timed_build(&mut timer, &builder, geometry, &bvh))?;
-                tick();
-                Ok(vec![m])
-            })?;
-            let mut timings = Timings::default();
-            for (t, discarded) in measured.iter().map(|m| &m[0]) {
-                timings.add_measured(t, *discarded);
-            }
-            let mut names: Vec<&str> = STAGES.to_vec();
-            names.push(BUILD);
-            let (passes_ms, order) = stats(&timings, &names);
-            Ok(CaseResult {
-                id: case.id(),
-                kind: "lbvh",
-                settings_hash: None,
-                resolution: None,
-                triangles: Some(*triangles),
-                passes_ms,
-                order,
-                timing: timings.check().clone(),
-                warmup: warming.report(),
-                rounds_check,
-            })
-        }
+        } => frame_case(ctx, case, (scene, *mode, [*width, *height]), (warmup, frames), tick),
+        Case::Lbvh { triangles } => lbvh_case(ctx, case, *triangles, (warmup, frames), tick),
     }
+}
+
+/// `frames` measurements by `measure` (a frame, a build) of which `scope` is the whole,
+/// the straying ones again (`super::measure_rounds`): their timings and how they held.
+fn measure_series(
+    frames: u32,
+    scope: &str,
+    tick: super::Tick<'_>,
+    mut measure: impl FnMut() -> Result<(TimerReadout, u32)>,
+) -> Result<(Timings, RoundsCheck)> {
+    let (measured, check) = super::measure_rounds(frames, scope, || {
+        let m = measure()?;
+        tick();
+        Ok(vec![m])
+    })?;
+    let mut timings = Timings::default();
+    for (t, discarded) in measured.iter().map(|m| &m[0]) {
+        timings.add_measured(t, *discarded);
+    }
+    Ok((timings, check))
+}
+
+/// A frame case: `scene` in `mode` at `size`.
+fn frame_case(
+    ctx: &Arc<Context>,
+    case: &Case,
+    (scene, mode, [width, height]): (&str, Mode, [u32; 2]),
+    (warmup, frames): (WarmUp, u32),
+    tick: super::Tick<'_>,
+) -> Result<CaseResult> {
+    let scene = crate::scene::load(scene)?;
+    let settings = Settings {
+        width,
+        height,
+        mode,
+        ..Settings::default()
+    };
+    let mut r = Renderer::new(ctx, &scene, &settings)?;
+    let mut warming = warmup.start();
+    while !warming.done() {
+        let start = std::time::Instant::now();
+        warming.add_frame(r.render_frame()?.get(FRAME), start);
+        tick();
+    }
+    // A dynamic scene's measured frames are always its first ones.
+    r.reset_simulation()?;
+    let (timings, rounds_check) = measure_series(frames, FRAME, tick, || r.render_frame_measured())?;
+    let (passes_ms, order) = stats(&timings, &crate::renderer::SCOPES);
+    let json = crate::report::to_json(&settings);
+    Ok(CaseResult {
+        id: case.id(),
+        kind: "frame",
+        settings_hash: Some(format!("{:016x}", fnv1a(json.as_bytes()))),
+        resolution: Some([width, height]),
+        triangles: None,
+        passes_ms,
+        order,
+        timing: timings.check().clone(),
+        warmup: warming.report(),
+        rounds_check,
+    })
+}
+
+/// An LBVH case: the build of a random soup of `triangles`.
+fn lbvh_case(
+    ctx: &Arc<Context>,
+    case: &Case,
+    triangles: u32,
+    (warmup, frames): (WarmUp, u32),
+    tick: super::Tick<'_>,
+) -> Result<CaseResult> {
+    let n = triangles as usize;
+    let (v, i) = crate::scene::soup::random_soup(n, 1.0, crate::scene::soup::default_size(n), 42);
+    let uploaded = UploadedTriangles::new(ctx, "suite", &v, &i)?;
+    let geometry = uploaded.geometry();
+    let builder = LbvhBuilder::new(ctx)?;
+    let bvh = Bvh::new(ctx, triangles, MortonBits::Bits30)?;
+    let mut timer = GpuTimer::new(ctx, 8)?;
+    // At least one warm-up build (its first builds its pipelines' caches).
+    let mut warming = match warmup {
+        WarmUp::Frames(n) => WarmUp::Frames(n.max(1)),
+        steady => steady,
+    }
+    .start();
+    while !warming.done() {
+        let (times, _) = remeasure_readout(|| timed_build(&mut timer, &builder, geometry, &bvh))?;
+        warming.add(times.get(BUILD).unwrap_or(0.0));
+        tick();
+    }
+    let (timings, rounds_check) = measure_series(frames, BUILD, tick, || {
+        remeasure_readout(|| timed_build(&mut timer, &builder, geometry, &bvh))
+    })?;
+    let mut names: Vec<&str> = STAGES.to_vec();
+    names.push(BUILD);
+    let (passes_ms, order) = stats(&timings, &names);
+    Ok(CaseResult {
+        id: case.id(),
+        kind: "lbvh",
+        settings_hash: None,
+        resolution: None,
+        triangles: Some(triangles),
+        passes_ms,
+        order,
+        timing: timings.check().clone(),
+        warmup: warming.report(),
+        rounds_check,
+    })
 }
 
 /// A case's pass medians and spreads as a baseline holds them.

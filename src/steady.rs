@@ -14,9 +14,13 @@
 use crate::report::Stat;
 use std::time::{Duration, Instant};
 
-/// Frames a settling window holds: settled when the last window's median and the one
-/// before it agree within `SETTLE_TOLERANCE`.
-pub const SETTLE_WINDOW: usize = 5;
+/// A settling window holds as many frames as take `SETTLE_WINDOW_MS` (by the latest
+/// frames' times), 2 to `SETTLE_WINDOW_MAX`: settled when the last window's median and
+/// the one before it agree within `SETTLE_TOLERANCE`. A GPU's 1.5 ms frames make
+/// windows of 8 (a ramp of clocks moves them apart); lavapipe's 1.4 s rounds, windows of
+/// 2 (a frame that long averages itself, and ten of them took 27 s).
+pub const SETTLE_WINDOW_MS: f64 = 50.0;
+pub const SETTLE_WINDOW_MAX: usize = 8;
 /// How close two windows' medians must be (relative) to call the clocks settled: a
 /// third of the ±15% drift the benchmarks live with between rounds.
 pub const SETTLE_TOLERANCE: f64 = 0.05;
@@ -78,7 +82,7 @@ impl WarmUp {
     pub fn min_frames(&self) -> u32 {
         match *self {
             WarmUp::Frames(n) => n,
-            WarmUp::Steady { min_frames, .. } => min_frames.max(2 * SETTLE_WINDOW as u32),
+            WarmUp::Steady { min_frames, .. } => min_frames.max(4),
         }
     }
 
@@ -116,17 +120,25 @@ pub struct Warming {
     start: Instant,
 }
 
-/// Whether the last two windows of `times` have medians within `SETTLE_TOLERANCE`.
+/// The frames of a settling window after `times`: as many as take `SETTLE_WINDOW_MS`
+/// by the median of the last three, 2 to `SETTLE_WINDOW_MAX`.
+pub fn settle_window(times: &[f64]) -> usize {
+    let recent = Stat::of(&times[times.len().saturating_sub(3)..]).map_or(f64::NAN, |s| s.median);
+    match recent > 0.0 {
+        true => ((SETTLE_WINDOW_MS / recent).ceil() as usize).clamp(2, SETTLE_WINDOW_MAX),
+        false => SETTLE_WINDOW_MAX,
+    }
+}
+
+/// Whether the last two windows (`settle_window`) of `times` have medians within
+/// `SETTLE_TOLERANCE`.
 pub fn settled(times: &[f64]) -> bool {
-    let n = times.len();
-    if n < 2 * SETTLE_WINDOW {
+    let (n, w) = (times.len(), settle_window(times));
+    if n < 2 * w {
         return false;
     }
     let median = |w: &[f64]| Stat::of(w).map_or(f64::NAN, |s| s.median);
-    let (before, last) = (
-        median(&times[n - 2 * SETTLE_WINDOW..n - SETTLE_WINDOW]),
-        median(&times[n - SETTLE_WINDOW..]),
-    );
+    let (before, last) = (median(&times[n - 2 * w..n - w]), median(&times[n - w..]));
     (last - before).abs() <= SETTLE_TOLERANCE * before.max(last)
 }
 
@@ -268,17 +280,21 @@ mod tests {
             "stopped at frame {k}, time {}",
             ramp(k - 1)
         );
-        // Warm already: 100 ms frames reach the floor in 3 and agree after 10.
+        // Warm already: 100 ms frames reach the floor in 3, and two windows of 2 agree
+        // after 4.
         let mut w = WarmUp::steady().start();
         let mut k = 0;
         while !w.done() {
             w.add(if k % 2 == 0 { 100.0 } else { 104.0 });
             k += 1;
         }
-        assert_eq!(k, 2 * SETTLE_WINDOW);
+        assert_eq!(k, 4);
+        // Windows hold what takes 50 ms: 8 frames of 1.5 ms, 2 of 1.4 s, 3 of 20 ms.
+        let windows = [1.5, 1400.0, 20.0].map(|ms| settle_window(&[ms; 9]));
+        assert_eq!(windows, [8, 2, 3]);
     }
 
-    /// Frame times that never settle (alternating windows of 1 and 2 ms) end at the
+    /// Frame times that never settle (each 10% slower than the one before) end at the
     /// wall-clock cap, reported unsettled.
     #[test]
     fn a_warm_up_that_cannot_settle_ends_at_its_cap_unsettled() {
@@ -288,14 +304,10 @@ mod tests {
             max_wall: Duration::from_millis(50),
         }
         .start();
-        let mut k = 0;
+        let mut ms = 1.0;
         while !w.done() {
-            w.add(if (k / SETTLE_WINDOW).is_multiple_of(2) {
-                1.0
-            } else {
-                2.0
-            });
-            k += 1;
+            w.add(ms);
+            ms *= 1.1;
             std::thread::sleep(Duration::from_millis(1));
         }
         let r = w.report();

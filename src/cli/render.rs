@@ -39,7 +39,7 @@ pub struct RenderArgs {
     pub spp: Option<u32>,
     /// Uncounted warm-up frames (pipeline JIT, caches, a GPU's clocks), exactly
     /// [default: until the clocks settle: at least 2 frames and 250 ms of GPU work, and
-    /// two windows of 5 frames within 5%, at most 20 s]
+    /// two windows of 2 to 8 frames (50 ms) within 5%, at most 20 s]
     #[arg(long)]
     pub warmup: Option<u32>,
     /// Output PNG.

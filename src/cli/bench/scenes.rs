@@ -20,7 +20,7 @@ pub struct ModesArgs {
     #[arg(long, default_value_t = 7)]
     pub rounds: u32,
     /// Uncounted warm-up rounds, exactly [default: until the clocks settle: at least
-    /// 250 ms of GPU work and two windows of 5 rounds within 5%, at most 20 s]
+    /// 250 ms of GPU work and two windows of 2 to 8 rounds (50 ms) within 5%, at most 20 s]
     #[arg(long)]
     pub warmup: Option<u32>,
     #[command(flatten)]

@@ -83,6 +83,12 @@ fn shared() -> Option<Share> {
     MACHINE.share()
 }
 
+/// A shared hold on the machine for what a test runs itself (another program that
+/// renders), or none while this thread holds it alone.
+pub fn hold_shared() -> Option<Share> {
+    shared()
+}
+
 /// A machine to one test alone while the guard lives.
 pub struct Alone(#[allow(dead_code)] RwLockWriteGuard<'static, ()>, usize);
 

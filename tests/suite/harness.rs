@@ -78,3 +78,46 @@ fn fails_on_purpose_when_asked() {
     assert!(out.ok(), "{}", out.stderr);
     panic!("failed on purpose (SPECULUM_TEST_FAIL_ON_PURPOSE is set)");
 }
+
+/// `tools/gpu-check`'s smoke step, alone: with a device name that matches nothing it
+/// stops within seconds, exit 1, and its summary says so with the device list and the
+/// loader's own lines; with the test's device it renders a frame and passes.
+#[test]
+fn the_gpu_checks_smoke_step_stops_early_with_the_loaders_reason() {
+    let _share = common::hold_shared();
+    let dir = tempfile::tempdir().unwrap();
+    let smoke = |device: &str| {
+        let out = dir.path().join(device);
+        let start = std::time::Instant::now();
+        let status = std::process::Command::new("timeout")
+            .args([
+                "120",
+                "tools/gpu-check",
+                "smoke",
+                env!("CARGO_BIN_EXE_speculum"),
+                device,
+            ])
+            .arg(&out)
+            .status()
+            .expect("runs tools/gpu-check");
+        let summary = std::fs::read_to_string(out.join("summary.md")).unwrap_or_default();
+        (status.code(), summary, start.elapsed())
+    };
+    let (code, summary, took) = smoke("no-such-gpu-xyz");
+    assert_eq!(code, Some(1), "{summary}");
+    assert!(
+        summary.contains("smoke: FAILED") && summary.contains("VK_LOADER_DEBUG=driver"),
+        "{summary}"
+    );
+    assert!(took < Duration::from_secs(60), "took {took:?}");
+    let device = std::env::var("SPECULUM_TEST_DEVICE").unwrap_or_else(|_| {
+        let list = speculum::vk::list_devices().unwrap();
+        list.into_iter()
+            .find(|d| d.usable.is_ok())
+            .expect("a usable device")
+            .name
+    });
+    let (code, summary, _) = smoke(&device);
+    assert_eq!(code, Some(0), "{summary}");
+    assert!(summary.contains("one frame rendered"), "{summary}");
+}

@@ -25,6 +25,7 @@ use crate::renderer::{FRAME, SIM_RIGID};
 use crate::report::{Header, Stat};
 use crate::scene::Scene;
 use crate::settings::{Settings, Tracer};
+use crate::steady::{WarmUp, WarmUpReport};
 use crate::vk::{remeasure, remeasure_readout, Context, GpuTimer, TimingCheck};
 use crate::Renderer;
 use serde::Serialize;
@@ -36,6 +37,9 @@ const BUILD: [&str; 4] = lbvh::BvhKind::Lbvh.stages();
 /// One body count.
 #[derive(Clone, Debug, Serialize)]
 pub struct DynamicPoint {
+    /// How the warm-up went (`steady`). The measured frames of a moving scene are each
+    /// a different frame, so none is measured again for straying.
+    pub warmup: WarmUpReport,
     pub bodies: u32,
     /// Particles per side of the scene's cloths (0: none).
     pub cloth_resolution: u32,
@@ -98,7 +102,8 @@ pub struct DynamicReport {
     pub scene: String,
     pub resolution: [u32; 2],
     pub frames: u32,
-    pub warmup_frames: u32,
+    /// The warm-up's rule (`frames N`, or `steady`); each point says how its went.
+    pub warmup: String,
     pub points: Vec<DynamicPoint>,
     /// Dynamic BVH rebuild time at the largest body count / at the smallest, and the
     /// same ratio of dynamic triangles: near-linear growth keeps the first near the second.
@@ -200,12 +205,12 @@ fn measure_frames(
     Ok((series, (aged, aged_schedule.expect("frames > 0"))))
 }
 
-/// Measures `scene` (its bodies as given) for `frames` frames after `warmup`.
+/// Measures `scene` (its bodies as given) for `frames` frames after the warm-up.
 pub fn run_point(
     ctx: &Arc<Context>,
     scene: &Scene,
     settings: &Settings,
-    warmup: u32,
+    warmup: WarmUp,
     frames: u32,
     rays: u32,
     tick: super::Tick<'_>,
@@ -217,10 +222,13 @@ pub fn run_point(
         ..settings.clone()
     };
     let mut r = Renderer::new(ctx, scene, &settings)?;
-    for _ in 0..warmup {
-        r.render_frame()?;
+    let mut warming = warmup.start();
+    while !warming.done() {
+        let start = std::time::Instant::now();
+        warming.add_frame(r.render_frame()?.get(FRAME), start);
         tick();
     }
+    let warmup_report = warming.report();
     r.reset_simulation()?;
     let mut timing = TimingCheck::default();
     let tris = r.dynamic_triangles();
@@ -269,6 +277,7 @@ pub fn run_point(
         None => None,
     };
     Ok(DynamicPoint {
+        warmup: warmup_report,
         bodies: scene.bodies.len() as u32,
         cloth_resolution: scene.cloths.first().map_or(0, |c| c.resolution),
         joints: scene.animated.as_ref().map_or(0, |a| a.joints.len() as u32),
@@ -299,7 +308,7 @@ fn khr_point(
     ctx: &Arc<Context>,
     scene: &Scene,
     settings: &Settings,
-    (warmup, frames): (u32, u32),
+    (warmup, frames): (WarmUp, u32),
     lbvh_frame_ms: f64,
     timing: &mut TimingCheck,
     tick: super::Tick<'_>,
@@ -310,8 +319,10 @@ fn khr_point(
         ..settings.clone()
     };
     let mut r = Renderer::new(ctx, scene, &settings)?;
-    for _ in 0..warmup {
-        r.render_frame()?;
+    let mut warming = warmup.start();
+    while !warming.done() {
+        let start = std::time::Instant::now();
+        warming.add_frame(r.render_frame()?.get(FRAME), start);
     }
     r.reset_simulation()?;
     let mut series: [Vec<f64>; 4] = Default::default();

@@ -223,7 +223,8 @@ fn small_dynamic_benchmark_is_valid() {
     for n in [4, 12] {
         let mut scene = speculum::scene::builtin::stress().unwrap();
         scene.set_spawn_count(n).unwrap();
-        let p = speculum::bench::dynamic::run_point(&ctx, &scene, &settings, 1, 4, 3000, &mut || {}).unwrap();
+        let p = speculum::bench::dynamic::run_point(&ctx, &scene, &settings, WarmUp::Frames(1), 4, 3000, &mut || {})
+            .unwrap();
         assert!(p.valid, "{p:?}");
         assert_eq!(p.bodies, n);
         for (what, ms) in [
@@ -269,7 +270,8 @@ fn skinned_dynamic_benchmark_is_valid() {
     let scene = speculum::scene::builtin::skinned_tube(20_000).unwrap();
     assert_eq!(scene.dynamic_triangle_count(), 2 * 256 * 40);
     assert_eq!(scene.animated.as_ref().unwrap().joints.len(), 16);
-    let p = speculum::bench::dynamic::run_point(&ctx, &scene, &settings, 1, 4, 3000, &mut || {}).unwrap();
+    let p =
+        speculum::bench::dynamic::run_point(&ctx, &scene, &settings, WarmUp::Frames(1), 4, 3000, &mut || {}).unwrap();
     assert!(p.valid, "{p:?}");
     assert_eq!(p.joints, 16);
     assert!(p.sim_skin_ms.median > 0.0 && p.refit_ms.median > 0.0 && p.rebuild_ms.median > 0.0);
@@ -281,7 +283,8 @@ fn skinned_dynamic_benchmark_is_valid() {
     );
     let mut stress = speculum::scene::builtin::stress().unwrap();
     stress.set_spawn_count(2).unwrap();
-    let q = speculum::bench::dynamic::run_point(&ctx, &stress, &settings, 0, 1, 100, &mut || {}).unwrap();
+    let q =
+        speculum::bench::dynamic::run_point(&ctx, &stress, &settings, WarmUp::Frames(0), 1, 100, &mut || {}).unwrap();
     assert_eq!(
         (q.skin_refit_over_rebuild, q.sim_skin_ms.median, q.joints),
         (None, 0.0, 0)

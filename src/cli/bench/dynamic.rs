@@ -29,9 +29,10 @@ pub struct DynamicArgs {
     /// Measured frames per body count.
     #[arg(long, default_value_t = 30)]
     pub frames: u32,
-    /// Uncounted warm-up frames (the scene is reset after them).
-    #[arg(long, default_value_t = 2)]
-    pub warmup: u32,
+    /// Uncounted warm-up frames, exactly (the scene is reset after them) [default:
+    /// until the clocks settle, as `render`]
+    #[arg(long)]
+    pub warmup: Option<u32>,
     /// Rays traced through the rebuilt and the refit BVH at the last frame.
     #[arg(long, default_value_t = 65536)]
     pub rays: u32,
@@ -46,7 +47,10 @@ pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
     let c = &args.common;
     let settings = args.frame.resolve()?;
     check_count("--frames", args.frames, 1)?;
-    check_count("--warmup", args.warmup, 0)?;
+    if let Some(w) = args.warmup {
+        check_count("--warmup", w, 0)?;
+    }
+    let warmup = speculum::steady::WarmUp::from_arg(args.warmup);
     check_count("--rays", args.rays, 1)?;
     check_outputs(
         &[("--json", c.json.as_deref(), Kind::Json)],
@@ -56,7 +60,7 @@ pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
     let (scenes, axis) = point_scenes(&args)?;
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
-    let per = (args.frames + args.warmup) as u64;
+    let per = (args.frames + warmup.min_frames()) as u64;
     let bar = progress(per * scenes.len() as u64, "bench dynamic", c.quiet);
     let mut points = Vec::new();
     for scene in &scenes {
@@ -64,7 +68,7 @@ pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
             &ctx,
             scene,
             &settings,
-            args.warmup,
+            warmup,
             args.frames,
             args.rays,
             &mut || bar.inc(1),
@@ -80,7 +84,7 @@ pub(super) fn dynamic(args: DynamicArgs) -> Result<()> {
         },
         resolution: [settings.width, settings.height],
         frames: args.frames,
-        warmup_frames: args.warmup,
+        warmup: warmup.rule(),
         rebuild_growth: last.rebuild_ms.median / first.rebuild_ms.median,
         triangle_growth: last.dynamic_triangles as f64 / first.dynamic_triangles as f64,
         valid: points.iter().all(|p| p.valid),

@@ -74,12 +74,7 @@ pub fn run(
     });
     let (renderers, measured) =
         super::interleave_variants(ctx, scene, variants, (warmup, rounds), tick, "bench shadows")?;
-    let super::Interleaved {
-        timings,
-        frames,
-        warmup,
-        rounds_check,
-    } = measured;
+    let (timings, frames) = (&measured.timings, &measured.frames);
     let at = |s: Shadows| {
         Shadows::ALL
             .iter()
@@ -131,14 +126,14 @@ pub fn run(
         && by(Shadows::Rays).traced_pixels == lit
         && by(Shadows::Hybrid).traced_pixels <= lit
         && by(Shadows::Map).traced_pixels == 0
-        && rounds_check.settled();
+        && measured.rounds_check.settled();
     Ok(SceneShadows {
         scene: scene.name.clone(),
         resolution: [base.width, base.height],
         mode: base.mode.name().to_string(),
         shadows: results,
-        warmup,
-        rounds_check,
+        warmup: measured.warmup,
+        rounds_check: measured.rounds_check,
         valid,
     })
 }

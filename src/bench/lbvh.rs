@@ -64,6 +64,8 @@ pub struct CaseReport {
     /// PLOC rounds a build needed beyond the first submission's (submitted again,
     /// untimed; 0 for the LBVH).
     pub untimed_rounds: u32,
+    /// Builds beyond 2x the median built again (`steady`); unsettled: not valid.
+    pub build_rounds_check: crate::steady::RoundsCheck,
     /// Million triangles built per second (at the median build time).
     pub mtris_per_s: f64,
     /// GPU milliseconds of the frame's refit (`record_refit_scheduled`) of the tree
@@ -214,6 +216,7 @@ struct BuildTimes {
     /// PLOC rounds beyond the first submission's, the most any build needed.
     untimed_rounds: u32,
     timing: TimingCheck,
+    rounds_check: crate::steady::RoundsCheck,
 }
 
 /// One warm-up build (pipeline JIT), then `repeats` timed builds of `geometry` into
@@ -228,32 +231,36 @@ fn time_builds(
     tick: super::Tick<'_>,
 ) -> Result<BuildTimes> {
     let mut timer = GpuTimer::new(ctx, 8)?;
-    let mut stages = Timings::default();
-    let (mut refits, mut compacts) = (Vec::new(), Vec::new());
-    let mut timing = TimingCheck::default();
     let mut untimed_rounds = 0;
-    for rep in 0..=repeats {
+    // One repeat: the build, then the frame's refit, scheduled by height from the tree
+    // just built (the schedule is made once per build, as the frame does, and is not
+    // timed), then the compaction.
+    let mut repeat = || -> Result<super::Round> {
         let (extra, times, discarded) = remeasure(|| match scratch {
             Some(scratch) => timed_ploc_build(&mut timer, builder, geometry, bvh, scratch).map(|(t, e)| (e, t)),
             None => Ok((0, timed_build(&mut timer, builder, geometry, bvh)?)),
         })?;
         untimed_rounds = untimed_rounds.max(extra);
-        // The frame's refit: scheduled by height from the tree just built (the
-        // schedule is made once per build, as the frame does, and is not timed).
         let schedule = RefitSchedule::of(ctx, bvh)?;
-        let (refit, refit_discarded) = remeasure_readout(|| {
+        let refit = remeasure_readout(|| {
             timer.one_shot(|cmd, timer| builder.record_refit_scheduled(cmd, timer, geometry, bvh, &schedule))
         })?;
-        let (compact, compact_discarded) =
-            remeasure_readout(|| timer.one_shot(|cmd, timer| builder.record_compact(cmd, timer, bvh)))?;
-        if rep > 0 {
-            stages.add_measured(&times, discarded);
-            refits.push(refit.first().map_or(f64::NAN, |r| r.1));
-            timing.add_measured(refit.problem.as_deref(), refit_discarded);
-            compacts.push(compact.first().map_or(f64::NAN, |r| r.1));
-            timing.add_measured(compact.problem.as_deref(), compact_discarded);
-        }
+        let compact = remeasure_readout(|| timer.one_shot(|cmd, timer| builder.record_compact(cmd, timer, bvh)))?;
         tick();
+        Ok(vec![(times, discarded), refit, compact])
+    };
+    repeat()?; // untimed: its pipelines' first use
+               // A repeat whose build strays beyond 2x the median is measured again.
+    let (measured, rounds_check) = super::measure_rounds(repeats, BUILD, repeat)?;
+    let mut stages = Timings::default();
+    let (mut refits, mut compacts) = (Vec::new(), Vec::new());
+    let mut timing = TimingCheck::default();
+    for m in &measured {
+        stages.add_measured(&m[0].0, m[0].1);
+        for ((readout, discarded), out) in m[1..].iter().zip([&mut refits, &mut compacts]) {
+            out.push(readout.first().map_or(f64::NAN, |r| r.1));
+            timing.add_measured(readout.problem.as_deref(), *discarded);
+        }
     }
     timing.merge(stages.check());
     Ok(BuildTimes {
@@ -262,6 +269,7 @@ fn time_builds(
         compact_ms: Stat::of(&compacts).expect("repeats > 0"),
         untimed_rounds,
         timing,
+        rounds_check,
     })
 }
 
@@ -361,13 +369,14 @@ pub fn run_case(
     };
 
     let invariants_ok = invariants.is_ok();
-    let sound = |r: &RaySetReport| r.mismatches == 0 && r.failed_walks == 0;
+    let sound = |r: &RaySetReport| r.mismatches == 0 && r.failed_walks == 0 && r.rounds_check.settled();
     let valid = invariants_ok
         && sound(&coherent)
         && sound(&incoherent)
         && file.as_ref().is_none_or(sound)
         && khr.iter().flatten().all(super::khr::KhrReport::sound)
-        && build_ms.median.is_finite();
+        && build_ms.median.is_finite()
+        && built.rounds_check.settled();
     Ok(CaseReport {
         name: name.into(),
         builder: kind,
@@ -376,6 +385,7 @@ pub fn run_case(
         stages_ms,
         build_ms,
         untimed_rounds: built.untimed_rounds,
+        build_rounds_check: built.rounds_check.clone(),
         mtris_per_s: n as f64 / (build_ms.median * 1e3),
         refit_ms: built.refit_ms,
         compact_ms: built.compact_ms,

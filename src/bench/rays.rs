@@ -17,6 +17,8 @@ pub struct RaySetReport {
     pub rays: u32,
     /// GPU milliseconds of `rt.trace` over the repeats.
     pub trace_ms: Stat,
+    /// Repeats beyond 2x the median traced again (`steady`); unsettled: not valid.
+    pub rounds_check: crate::steady::RoundsCheck,
     pub mrays_per_s: f64,
     /// Fraction of rays that hit a triangle.
     pub hit_fraction: f64,
@@ -88,8 +90,8 @@ impl<'a> CpuCheck<'a> {
 }
 
 /// Traces `rays` through `scene` once untimed and `repeats` times timed (each readout
-/// re-measured while it fails its self-check), and checks a sample of the hits
-/// against the CPU.
+/// re-measured while it fails its self-check, a repeat beyond 2x the median traced
+/// again: `super::measure_rounds`), and checks a sample of the hits against the CPU.
 pub fn time_rays(
     tracer: &TracePass,
     scene: crate::passes::Tracing<'_>,
@@ -98,21 +100,24 @@ pub fn time_rays(
     cpu: &CpuCheck<'_>,
     timing: &mut TimingCheck,
 ) -> Result<(RaySetReport, Vec<Hit>)> {
-    let mut times = Vec::new();
-    let mut hits = Vec::new();
-    for rep in 0..=repeats {
+    let name = crate::passes::rt_trace::NAME;
+    let (mut hits, _, _) = remeasure(|| tracer.trace(rays, scene, false))?;
+    let (measured, rounds_check) = super::measure_rounds(repeats, name, || {
         let (h, readout, discarded) = remeasure(|| tracer.trace(rays, scene, false))?;
-        if rep > 0 {
-            times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
-            timing.add_measured(readout.problem.as_deref(), discarded);
-        }
         hits = h;
+        Ok(vec![(readout, discarded)])
+    })?;
+    let mut times = Vec::new();
+    for (readout, discarded) in measured.iter().map(|m| &m[0]) {
+        times.push(readout.get(name).unwrap_or(f64::NAN));
+        timing.add_measured(readout.problem.as_deref(), *discarded);
     }
     let trace_ms = Stat::of(&times).expect("repeats > 0");
     let (mismatches, ties) = check_hits(rays, &hits, &cpu.bvh, cpu.vertices, cpu.indices, cpu.rays);
     let report = RaySetReport {
         rays: rays.len() as u32,
         trace_ms,
+        rounds_check,
         mrays_per_s: rays.len() as f64 / (trace_ms.median * 1e3),
         hit_fraction: hits.iter().filter(|h| h.prim != BVH_INVALID).count() as f64 / rays.len() as f64,
         checked: cpu.rays.min(rays.len() as u32),

@@ -23,6 +23,7 @@ mod kernels;
 mod khr;
 mod layout;
 mod lbvh;
+mod links;
 mod merge;
 mod outputs;
 mod reflections;

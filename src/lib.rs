@@ -5,8 +5,8 @@
 //! against the device before any GPU work; `scene` loads and builds scenes; `cpu_ref`
 //! mirrors every GPU kernel on the CPU for tests; `report` is the JSON schema every
 //! report follows, `output` writes files all-or-none; `headless` and `bench` drive the
-//! renderer for the command line, `demo` drives it in a window. See DESIGN.md in the
-//! shared folder.
+//! renderer for the command line, `demo` drives it in a window. The design:
+//! docs/architecture.md.
 
 pub mod aabb;
 pub mod bench;

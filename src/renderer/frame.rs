@@ -1,4 +1,4 @@
-//! The frame: DESIGN.md's table as data (`Row`, from which `SCOPES` comes) and as the
+//! The frame: docs/architecture.md's table as data (`Row`, from which `SCOPES` comes) and as the
 //! function that records it (`Renderer::record_frame`), every row visible and recorded in
 //! table order (`FrameRecorder` asserts it), each under its timer scope. Every pass's
 //! `record` places its own barriers (see `passes`); this file only does what spans
@@ -40,7 +40,7 @@ pub fn reflection_rows() -> &'static [Row] {
     &Row::ALL[at(Row::SsrHiz)..=at(Row::ReflectDenoise)]
 }
 
-/// One row of the frame table (DESIGN.md), declared in frame order.
+/// One row of the frame table (docs/architecture.md), declared in frame order.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub enum Row {
     Uniforms,
@@ -225,11 +225,11 @@ impl<'a> FrameRecorder<'a> {
 
 impl Renderer {
     /// Records one frame into `cmd` (begun, not ended) with frame slot `slot`'s queries
-    /// and staging: DESIGN.md's frame table, row by row. A dynamic scene advances one
+    /// and staging: docs/architecture.md's frame table, row by row. A dynamic scene advances one
     /// time step unless it is paused. The caller submits it, and must have seen the
     /// slot's previous frame finish (a fence) before; several slots' frames may be in
     /// flight on the queue at once.
-    // Long: it is DESIGN.md's frame table, every row in order; split, rows would hide.
+    // Long: it is docs/architecture.md's frame table, every row in order; split, rows would hide.
     pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
         let advance = !self.paused || std::mem::take(&mut self.step_once);
         let Self {

@@ -5,7 +5,7 @@
 //! glTF 2.0 specification's appendix C defines them) and its skins (joints and inverse
 //! bind matrices). `Rig::world` poses the hierarchy at a time, `Rig::joint_matrices`
 //! gives a skin's matrices from that, and `skin_vertex` is the linear blend skinning of
-//! one vertex: the CPU reference of the skinning pass to come.
+//! one vertex: the CPU reference of the skinning pass (`sim.skin`).
 
 use crate::gpu_types::GpuInfluence;
 use glam::{Mat3, Mat4, Quat, Vec3, Vec4};

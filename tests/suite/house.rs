@@ -1,4 +1,4 @@
-//! The house rules the compiler does not hold (DESIGN.md, "Layout"): every import in
+//! The house rules the compiler does not hold (docs/architecture.md, "Layers"): every import in
 //! `src/` points down the layers, `vk/` has no import cycle, no pass imports another,
 //! and nothing on the frame path uses a CPU reference. Read from the source text:
 //! `crate::name` and `use crate::{...}` paths (`speculum::` in the binary), with
@@ -441,7 +441,7 @@ fn functions(text: &str) -> Vec<(String, usize, usize, bool)> {
 }
 
 /// No function of `src/` runs past `FN_LINES_MAX` lines without its reason in the code
-/// (the frame function is DESIGN.md's frame table; a CPU reference may mirror its
+/// (the frame function is docs/architecture.md's frame table; a CPU reference may mirror its
 /// kernel's one function).
 #[test]
 fn functions_stay_short_or_say_why() {

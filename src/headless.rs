@@ -183,6 +183,24 @@ impl FramePlan {
 /// Called after every frame a long run renders (for a progress bar).
 pub type Tick<'a> = &'a mut dyn FnMut();
 
+/// Renders rounds of one frame of each of `renderers` until `warmup` is done (a round's
+/// GPU time is its frames' together, by their timestamps; the wall time where a readout
+/// lacks the frame), `tick` after every frame: what the warm-up took.
+pub fn warm_up(renderers: &mut [&mut Renderer], warmup: WarmUp, tick: Tick<'_>) -> Result<WarmUpReport> {
+    let mut warming = warmup.start();
+    while !warming.done() {
+        let mut ms = 0.0;
+        for r in renderers.iter_mut() {
+            let start = std::time::Instant::now();
+            let t = r.render_frame()?;
+            ms += t.get(FRAME).unwrap_or(start.elapsed().as_secs_f64() * 1e3);
+            tick();
+        }
+        warming.add(ms);
+    }
+    Ok(warming.report())
+}
+
 /// Called with every measured frame; its error ends the render.
 pub type OnFrame<'a> = &'a mut dyn FnMut(FrameRecord<'_>) -> Result<()>;
 
@@ -201,21 +219,11 @@ pub fn render_frames(
 ) -> Result<Rendered> {
     plan.validate(settings)?;
     let (mut renderer, mut reference, mut rays_reference) = renderers(ctx, scene, settings, plan)?;
-    let mut warming = plan.warmup.start();
-    while !warming.done() {
-        let mut ms = 0.0;
-        for r in std::iter::once(&mut renderer)
-            .chain(reference.as_mut())
-            .chain(rays_reference.as_mut())
-        {
-            let start = std::time::Instant::now();
-            let t = r.render_frame()?;
-            ms += t.get(FRAME).unwrap_or(start.elapsed().as_secs_f64() * 1e3);
-            tick();
-        }
-        warming.add(ms);
-    }
-    let warmup = warming.report();
+    let mut all: Vec<&mut Renderer> = std::iter::once(&mut renderer)
+        .chain(reference.as_mut())
+        .chain(rays_reference.as_mut())
+        .collect();
+    let warmup = warm_up(&mut all, plan.warmup, tick)?;
     // A dynamic scene starts over after the warm-up: measured frame k is the same
     // image whatever the warm-up (the world after k + 1 time steps).
     for r in std::iter::once(&mut renderer)

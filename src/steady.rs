@@ -165,12 +165,6 @@ impl Warming {
         self.gpu_ms += ms;
     }
 
-    /// Takes one warm-up frame begun at `start`: its GPU time `ms` where its readout has
-    /// it, else the wall time since `start`.
-    pub fn add_frame(&mut self, ms: Option<f64>, start: Instant) {
-        self.add(ms.unwrap_or(start.elapsed().as_secs_f64() * 1e3));
-    }
-
     /// What the warm-up did.
     pub fn report(&self) -> WarmUpReport {
         let settled = match self.rule {

@@ -222,13 +222,7 @@ pub fn run_point(
         ..settings.clone()
     };
     let mut r = Renderer::new(ctx, scene, &settings)?;
-    let mut warming = warmup.start();
-    while !warming.done() {
-        let start = std::time::Instant::now();
-        warming.add_frame(r.render_frame()?.get(FRAME), start);
-        tick();
-    }
-    let warmup_report = warming.report();
+    let warmup_report = crate::headless::warm_up(&mut [&mut r], warmup, tick)?;
     r.reset_simulation()?;
     let mut timing = TimingCheck::default();
     let tris = r.dynamic_triangles();
@@ -319,11 +313,7 @@ fn khr_point(
         ..settings.clone()
     };
     let mut r = Renderer::new(ctx, scene, &settings)?;
-    let mut warming = warmup.start();
-    while !warming.done() {
-        let start = std::time::Instant::now();
-        warming.add_frame(r.render_frame()?.get(FRAME), start);
-    }
+    crate::headless::warm_up(&mut [&mut r], warmup, &mut || {})?;
     r.reset_simulation()?;
     let mut series: [Vec<f64>; 4] = Default::default();
     for _ in 0..frames {

@@ -249,8 +249,9 @@ fn time_builds(
         tick();
         Ok(vec![(times, discarded), refit, compact])
     };
-    repeat()?; // untimed: its pipelines' first use
-               // A repeat whose build strays beyond 2x the median is measured again.
+    // Untimed: its pipelines' first use. Then a repeat whose build strays beyond 2x the
+    // median is measured again.
+    repeat()?;
     let (measured, rounds_check) = super::measure_rounds(repeats, BUILD, repeat)?;
     let mut stages = Timings::default();
     let (mut refits, mut compacts) = (Vec::new(), Vec::new());

@@ -73,17 +73,7 @@ pub fn interleave_variants(
 /// again, up to `STRAY_TRIES` times each; `rounds_check` says how many and whether the
 /// run settled.
 pub fn interleave(renderers: &mut [Renderer], warmup: WarmUp, rounds: u32, tick: Tick<'_>) -> Result<Interleaved> {
-    let mut warming = warmup.start();
-    while !warming.done() {
-        let mut ms = 0.0;
-        for r in renderers.iter_mut() {
-            let start = std::time::Instant::now();
-            let t = r.render_frame()?;
-            ms += t.get(FRAME).unwrap_or(start.elapsed().as_secs_f64() * 1e3); // a round: summed
-            tick();
-        }
-        warming.add(ms);
-    }
+    let warmup = crate::headless::warm_up(&mut renderers.iter_mut().collect::<Vec<_>>(), warmup, tick)?;
     let (measured, rounds_check) = measure_rounds(rounds, FRAME, || {
         renderers
             .iter_mut()
@@ -103,7 +93,7 @@ pub fn interleave(renderers: &mut [Renderer], warmup: WarmUp, rounds: u32, tick:
     Ok(Interleaved {
         timings,
         frames: times_of(&measured, FRAME),
-        warmup: warming.report(),
+        warmup,
         rounds_check,
     })
 }

@@ -197,12 +197,7 @@ fn frame_case(
         ..Settings::default()
     };
     let mut r = Renderer::new(ctx, &scene, &settings)?;
-    let mut warming = warmup.start();
-    while !warming.done() {
-        let start = std::time::Instant::now();
-        warming.add_frame(r.render_frame()?.get(FRAME), start);
-        tick();
-    }
+    let warmup = crate::headless::warm_up(&mut [&mut r], warmup, tick)?;
     // A dynamic scene's measured frames are always its first ones.
     r.reset_simulation()?;
     let (timings, rounds_check) = measure_series(frames, FRAME, tick, || r.render_frame_measured())?;
@@ -217,7 +212,7 @@ fn frame_case(
         passes_ms,
         order,
         timing: timings.check().clone(),
-        warmup: warming.report(),
+        warmup,
         rounds_check,
     })
 }

@@ -7,6 +7,8 @@
 
 layout(binding = 2, std430) readonly buffer Materials { Material materials[]; };
 layout(binding = 4) uniform sampler2DArray scene_textures;
+// The same texels as UNORM: data textures (roughness, metallic) with no sRGB decode.
+layout(binding = 6) uniform sampler2DArray data_textures;
 
 layout(location = 0) in vec3 in_world;
 layout(location = 1) in vec3 in_normal;
@@ -40,7 +42,7 @@ void main() {
     }
     float roughness = m.roughness, metallic = m.metallic;
     if (m.roughness_layer != TEXTURE_NONE) { // glTF's layout: green roughness, blue metallic
-        vec4 t = texture(scene_textures, vec3(in_uv, float(m.roughness_layer)));
+        vec4 t = texture(data_textures, vec3(in_uv, float(m.roughness_layer)));
         roughness *= t.g;
         metallic *= t.b;
     }

@@ -1,7 +1,7 @@
 //! Reference of `glsl/shared/surface.glsl` (base colours, ray-cone LOD, bent-normal
-//! clamping) and of Vulkan's trilinear, repeating
-//! lookup in an `R8G8B8A8_SRGB` 2D array texture (texels decoded to linear before
-//! filtering, as the spec orders).
+//! clamping) and of Vulkan's trilinear, repeating lookup in a 2D array texture: colour
+//! layers through its `R8G8B8A8_SRGB` view (texels decoded to linear before filtering,
+//! as the spec orders), data layers through its `R8G8B8A8_UNORM` view (the bytes / 255).
 
 use crate::gpu_types::GpuMaterial;
 use crate::scene::texture::srgb_to_linear;
@@ -9,28 +9,30 @@ use crate::shader_defines::TEXTURE_NONE;
 use glam::{Vec2, Vec3, Vec4};
 
 /// A texture array as the GPU holds it: layers of `size`², each a mip chain of
-/// tightly packed sRGB RGBA8 levels (`scene::texture::layers`).
+/// tightly packed RGBA8 levels (`scene::texture::layers`), and whether each is data
+/// (read as UNORM) rather than sRGB colour.
 pub struct TextureArray {
     pub size: u32,
     pub layers: Vec<Vec<image::RgbaImage>>,
+    pub data: Vec<bool>,
 }
 
 impl TextureArray {
     pub fn new(textures: &[crate::scene::Texture], max: u32) -> Self {
         let (size, layers) = crate::scene::texture::layers(textures, max);
-        Self { size, layers }
+        let data = (0..layers.len())
+            .map(|i| textures.get(i).is_some_and(|t| t.data))
+            .collect();
+        Self { size, layers, data }
     }
 
     fn texel(&self, layer: usize, level: usize, x: i32, y: i32) -> Vec4 {
         let img = &self.layers[layer][level];
         let (w, h) = (img.width() as i32, img.height() as i32);
         let p = img.get_pixel(x.rem_euclid(w) as u32, y.rem_euclid(h) as u32).0;
-        Vec4::new(
-            srgb_to_linear(p[0]),
-            srgb_to_linear(p[1]),
-            srgb_to_linear(p[2]),
-            p[3] as f32 / 255.0,
-        )
+        let unorm = |c: u8| c as f32 / 255.0;
+        let colour = if self.data[layer] { unorm } else { srgb_to_linear };
+        Vec4::new(colour(p[0]), colour(p[1]), colour(p[2]), unorm(p[3]))
     }
 
     fn bilinear(&self, layer: usize, level: usize, uv: Vec2) -> Vec4 {

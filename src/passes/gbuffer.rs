@@ -134,6 +134,7 @@ impl GBufferPass {
                     Resource::Buffer(geometry.uvs),
                     Resource::Sampled(surfaces.textures, surfaces.sampler),
                     Resource::Buffer(geometry.previous),
+                    Resource::SampledData(surfaces.textures, surfaces.sampler),
                 ],
                 &(),
             );

@@ -131,10 +131,11 @@ fn roughness_ramp(scene: &mut Scene, name: &str) {
         image::Rgba([x as u8, x as u8, 255, 255])
     });
     let layer = scene.textures.len() as u32;
-    scene.textures.push(super::texture::data_texture(super::Texture {
+    scene.textures.push(super::Texture {
         name: format!("{name}: roughness ramp"),
         image,
-    }));
+        data: true,
+    });
     let m = scene
         .materials
         .iter_mut()

@@ -460,8 +460,9 @@ impl Walk<'_> {
                 let t = Texture {
                     name: format!("{} image {image}", self.path.display()),
                     image: img,
+                    data,
                 };
-                Some(self.b.texture(if data { super::texture::data_texture(t) } else { t }))
+                Some(self.b.texture(t))
             }
             Some(None) => {
                 self.warnings.push(format!(

@@ -22,8 +22,8 @@ pub struct Material {
     pub metallic: f32,
     /// Base-colour texture (an index into `Scene::textures`), multiplying `albedo`.
     pub texture: Option<u32>,
-    /// Roughness texture (an index into `Scene::textures`, linear data stored as
-    /// `texture::data_texture` makes it) in glTF's `metallicRoughnessTexture` layout:
+    /// Roughness texture (an index into `Scene::textures`, linear data: `Texture::data`,
+    /// read through the texture array's UNORM view) in glTF's `metallicRoughnessTexture` layout:
     /// its green channel multiplies `roughness`, its blue channel `metallic` (a scene
     /// file's roughness texture has its blue set to 1).
     pub roughness_texture: Option<u32>,

@@ -1,11 +1,15 @@
-//! Base-colour textures: loading (PNG, JPEG), the layers of the texture array the GPU
-//! samples, and the sRGB transfer functions.
+//! Textures: loading (PNG, JPEG), the layers of the texture array the GPU samples,
+//! and the sRGB transfer functions.
 //!
 //! Lavapipe has no descriptor indexing, so every texture of a scene is one layer of a
-//! single 2D array texture (`R8G8B8A8_SRGB`, trilinear, repeat): the layer edge is the
-//! power of two at or above the largest texture's longer side (at most `LAYER_MAX`),
-//! and textures of another size are resampled to it in linear light. Each layer has a
-//! full mip chain, made here (2x2 means in linear light), so the GPU and the CPU
+//! single 2D array texture (trilinear, repeat): the layer edge is the power of two at or
+//! above the largest texture's longer side (at most `LAYER_MAX`), and textures of
+//! another size are resampled to it. Colour textures are read through an
+//! `R8G8B8A8_SRGB` view (texels decoded to linear light before filtering); data
+//! textures (roughness and metallic maps) through an `R8G8B8A8_UNORM` view of the same
+//! texels, so their bytes are the data, unencoded, and no sRGB decode (whose place
+//! around the filter a device may get wrong) touches them. Each layer has a full mip
+//! chain, made here (2x2 means in linear light, or of the data), so the GPU and the CPU
 //! references sample the same texels.
 
 use crate::error::{Error, Result};
@@ -18,13 +22,26 @@ pub const FORMATS: &str = "PNG, JPEG";
 /// The largest layer edge: 2048² RGBA8 is 16 MiB a layer (21 MiB with mips).
 pub const LAYER_MAX: u32 = 2048;
 
-/// A base-colour texture.
+/// A texture: a base colour, or data (a roughness and metallic map).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     /// Where it came from, for messages (a file path, or a glTF image).
     pub name: String,
-    /// sRGB-encoded RGBA8 texels, row 0 at v = 0.
+    /// RGBA8 texels, row 0 at v = 0: sRGB-encoded colour, or (`data`) the data's bytes.
     pub image: RgbaImage,
+    /// Linear data, read through the array's UNORM view; else sRGB colour.
+    pub data: bool,
+}
+
+impl Texture {
+    /// A colour texture of sRGB-encoded texels.
+    pub fn colour(name: impl Into<String>, image: RgbaImage) -> Self {
+        Self {
+            name: name.into(),
+            image,
+            data: false,
+        }
+    }
 }
 
 /// Reads and decodes a texture file. A missing or unreadable file is `Error::Io`; one
@@ -49,47 +66,13 @@ pub fn decode(bytes: &[u8], name: &str) -> std::result::Result<Texture, String> 
     if img.width() == 0 || img.height() == 0 {
         return Err("the image has no texels".into());
     }
-    Ok(Texture {
-        name: name.into(),
-        image: img.to_rgba8(),
-    })
+    Ok(Texture::colour(name, img.to_rgba8()))
 }
 
-/// A texture of linear data (a roughness map), stored so that the scene's sRGB texture
-/// array gives the data back: each colour channel sRGB-encoded (`linear_to_srgb` of the
-/// value / 255), which the array's sampling decodes, and mip levels averaged in that
-/// decoded, linear space like every other layer. The data keep 8 bits where the
-/// encoding is finest (near 0) and lose up to about 1/200 near 1.
+/// `t` as linear data (a roughness map): its bytes are the data, read through the
+/// array's UNORM view, and its mip levels average the data.
 pub fn data_texture(t: Texture) -> Texture {
-    let mut image = t.image;
-    for p in image.pixels_mut() {
-        for c in &mut p.0[..3] {
-            *c = linear_to_srgb(*c as f32 / 255.0);
-        }
-    }
-    Texture { name: t.name, image }
-}
-
-#[cfg(test)]
-mod data_tests {
-    use super::*;
-
-    /// Data stored by `data_texture` decode to within 1/200 of what they were.
-    #[test]
-    fn data_textures_decode_to_their_data() {
-        let image = RgbaImage::from_fn(256, 1, |x, _| image::Rgba([x as u8, 255 - x as u8, x as u8, 7]));
-        let t = data_texture(Texture {
-            name: "ramp".into(),
-            image,
-        });
-        for (x, p) in t.image.pixels().enumerate() {
-            for (c, want) in [(0, x as f32 / 255.0), (1, (255 - x) as f32 / 255.0)] {
-                let got = srgb_to_linear(p.0[c]);
-                assert!((got - want).abs() <= 1.0 / 200.0, "{x}: {got} vs {want}");
-            }
-            assert_eq!(p.0[3], 7, "alpha kept");
-        }
-    }
+    Texture { data: true, ..t }
 }
 
 /// The sRGB decoding of an 8-bit value (IEC 61966-2-1), as Vulkan's `_SRGB` formats do.
@@ -120,8 +103,11 @@ pub fn layer_size(sizes: impl IntoIterator<Item = (u32, u32)>, max: u32) -> u32 
     longest.next_power_of_two().min(max).max(1)
 }
 
-fn to_linear(img: &RgbaImage) -> image::Rgba32FImage {
-    let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
+/// The texels as linear values: sRGB decoded, or (`data`) the bytes / 255.
+fn to_linear(img: &RgbaImage, data: bool) -> image::Rgba32FImage {
+    let lut: Vec<f32> = (0..=255u8)
+        .map(|c| if data { c as f32 / 255.0 } else { srgb_to_linear(c) })
+        .collect();
     image::Rgba32FImage::from_fn(img.width(), img.height(), |x, y| {
         let p = img.get_pixel(x, y).0;
         image::Rgba([
@@ -133,15 +119,13 @@ fn to_linear(img: &RgbaImage) -> image::Rgba32FImage {
     })
 }
 
-fn to_srgb(img: &image::Rgba32FImage) -> RgbaImage {
+/// `to_linear`'s inverse, rounded to 8 bits.
+fn to_bytes(img: &image::Rgba32FImage, data: bool) -> RgbaImage {
+    let unorm = |c: f32| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
+    let colour = |c: f32| if data { unorm(c) } else { linear_to_srgb(c) };
     RgbaImage::from_fn(img.width(), img.height(), |x, y| {
         let p = img.get_pixel(x, y).0;
-        image::Rgba([
-            linear_to_srgb(p[0]),
-            linear_to_srgb(p[1]),
-            linear_to_srgb(p[2]),
-            (p[3].clamp(0.0, 1.0) * 255.0).round() as u8,
-        ])
+        image::Rgba([colour(p[0]), colour(p[1]), colour(p[2]), unorm(p[3])])
     })
 }
 
@@ -152,22 +136,26 @@ pub fn layers(textures: &[Texture], max: u32) -> (u32, Vec<Vec<RgbaImage>>) {
         return (1, vec![vec![RgbaImage::from_pixel(1, 1, image::Rgba([255; 4]))]]);
     }
     let size = layer_size(textures.iter().map(|t| t.image.dimensions()), max);
-    (size, textures.iter().map(|t| mip_chain(&t.image, size)).collect())
+    (
+        size,
+        textures.iter().map(|t| mip_chain(&t.image, size, t.data)).collect(),
+    )
 }
 
 /// The mip chain of `image` as a layer of edge `size` (a power of two), largest
 /// first, down to 1x1. Level 0 is the image itself when it is `size`² already, else
 /// the image resampled (triangle filter) in linear light; each further level is the
 /// mean of 2x2 texels of the one before, in linear light (alpha linear throughout).
-pub fn mip_chain(image: &RgbaImage, size: u32) -> Vec<RgbaImage> {
+/// `data`: the bytes are linear data, resampled and averaged as they are.
+pub fn mip_chain(image: &RgbaImage, size: u32, data: bool) -> Vec<RgbaImage> {
     assert!(size.is_power_of_two(), "layer edge {size} is not a power of two");
-    let mut linear = to_linear(image);
+    let mut linear = to_linear(image, data);
     let mut levels = Vec::new();
     if image.dimensions() == (size, size) {
         levels.push(image.clone());
     } else {
         linear = image::imageops::resize(&linear, size, size, image::imageops::FilterType::Triangle);
-        levels.push(to_srgb(&linear));
+        levels.push(to_bytes(&linear, data));
     }
     while linear.width() > 1 {
         let half = linear.width() / 2;
@@ -181,7 +169,7 @@ pub fn mip_chain(image: &RgbaImage, size: u32) -> Vec<RgbaImage> {
             }
             image::Rgba(sum.map(|s| 0.25 * s))
         });
-        levels.push(to_srgb(&linear));
+        levels.push(to_bytes(&linear, data));
     }
     levels
 }
@@ -212,7 +200,7 @@ mod tests {
         let a = image::Rgba([200, 30, 10, 255]);
         let b = image::Rgba([10, 90, 240, 255]);
         let img = RgbaImage::from_fn(4, 4, |x, y| if (x + y) % 2 == 0 { a } else { b });
-        let chain = mip_chain(&img, 4);
+        let chain = mip_chain(&img, 4, false);
         assert_eq!(chain.len(), 3);
         assert_eq!(chain[0], img);
         let mean = |k: usize| linear_to_srgb(0.5 * (srgb_to_linear(a.0[k]) + srgb_to_linear(b.0[k])));
@@ -222,11 +210,27 @@ mod tests {
             }
         }
         let odd = RgbaImage::from_pixel(3, 5, a);
-        let chain = mip_chain(&odd, 8);
+        let chain = mip_chain(&odd, 8, false);
         assert_eq!(chain.iter().map(|l| l.width()).collect::<Vec<_>>(), [8, 4, 2, 1]);
         assert!(chain[0]
             .pixels()
             .all(|p| p.0.iter().zip(a.0).all(|(&c, w)| c.abs_diff(w) <= 1)));
+    }
+
+    /// A data texture's chain: level 0 its bytes, level 1 the plain means of its bytes
+    /// (no sRGB curve), rounded to the nearest byte.
+    #[test]
+    fn data_mip_chains_average_the_data() {
+        let a = image::Rgba([200, 31, 11, 7]);
+        let b = image::Rgba([10, 91, 241, 255]);
+        let img = RgbaImage::from_fn(4, 4, |x, y| if (x + y) % 2 == 0 { a } else { b });
+        let chain = mip_chain(&img, 4, true);
+        assert_eq!(chain[0], img);
+        for level in &chain[1..] {
+            for p in level.pixels() {
+                assert_eq!(p.0, [105, 61, 126, 131]);
+            }
+        }
     }
 
     #[test]

@@ -16,6 +16,9 @@ pub struct Image {
     ctx: Arc<Context>,
     pub raw: vk::Image,
     pub view: vk::ImageView,
+    /// `texture_array`'s second view of the same texels, as `R8G8B8A8_UNORM` (data
+    /// textures: no sRGB decode); null for every other image.
+    pub data_view: vk::ImageView,
     pub format: vk::Format,
     pub extent: vk::Extent2D,
     pub aspect: vk::ImageAspectFlags,
@@ -63,6 +66,20 @@ impl Image {
         (layers, mips): (u32, u32),
         view_type: vk::ImageViewType,
     ) -> Result<Self> {
+        Self::create_with(ctx, name, extent, (format, None), usage, (layers, mips), view_type)
+    }
+
+    /// `create` with a second view of another (compatible) format: the image is made
+    /// with `MUTABLE_FORMAT`, and `data_view` reads it as `data_format`.
+    fn create_with(
+        ctx: &Arc<Context>,
+        name: &str,
+        extent: vk::Extent2D,
+        (format, data_format): (vk::Format, Option<vk::Format>),
+        usage: vk::ImageUsageFlags,
+        (layers, mips): (u32, u32),
+        view_type: vk::ImageViewType,
+    ) -> Result<Self> {
         if extent.width == 0 || extent.height == 0 {
             return Err(Error::Settings(format!(
                 "image '{name}' of {}x{} has no texels",
@@ -88,7 +105,12 @@ impl Image {
         } else {
             vk::ImageAspectFlags::COLOR
         };
+        let flags = match data_format {
+            Some(_) => vk::ImageCreateFlags::MUTABLE_FORMAT,
+            None => vk::ImageCreateFlags::empty(),
+        };
         let info = vk::ImageCreateInfo::default()
+            .flags(flags)
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
             .extent(vk::Extent3D {
@@ -124,6 +146,7 @@ impl Image {
             ctx: ctx.clone(),
             raw,
             view: vk::ImageView::null(),
+            data_view: vk::ImageView::null(),
             format,
             extent,
             aspect,
@@ -133,20 +156,29 @@ impl Image {
         };
         let a = image.allocation.as_ref().expect("just set");
         unsafe { ctx.device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
-        let view_info = vk::ImageViewCreateInfo::default()
-            .image(raw)
+        ctx.set_name(raw, name);
+        image.view = image.make_view(view_type, format, name)?;
+        if let Some(data_format) = data_format {
+            image.data_view = image.make_view(view_type, data_format, &format!("{name}.data"))?;
+        }
+        Ok(image)
+    }
+
+    /// A view of every layer and mip of this image as `format`, named `name`.
+    fn make_view(&self, view_type: vk::ImageViewType, format: vk::Format, name: &str) -> Result<vk::ImageView> {
+        let info = vk::ImageViewCreateInfo::default()
+            .image(self.raw)
             .view_type(view_type)
             .format(format)
             .subresource_range(
                 vk::ImageSubresourceRange::default()
-                    .aspect_mask(aspect)
-                    .level_count(mips)
-                    .layer_count(layers),
+                    .aspect_mask(self.aspect)
+                    .level_count(self.mips)
+                    .layer_count(self.layers),
             );
-        image.view = unsafe { ctx.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
-        ctx.set_name(raw, name);
-        ctx.set_name(image.view, name);
-        Ok(image)
+        let view = unsafe { self.ctx.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
+        self.ctx.set_name(view, name);
+        Ok(view)
     }
 
     /// A device-local storage image that compute passes write and read, tests fill and
@@ -171,8 +203,9 @@ impl Image {
 
     /// A sampled `R8G8B8A8_SRGB` 2D array texture of `size`² layers, each given as its
     /// full mip chain (largest first, tightly packed RGBA8 rows; `scene::texture::
-    /// mip_chain`), uploaded and left in `SHADER_READ_ONLY_OPTIMAL`. The view is a 2D
-    /// array even for one layer, as `sampler2DArray` needs.
+    /// mip_chain`), uploaded and left in `SHADER_READ_ONLY_OPTIMAL`, with a second,
+    /// `R8G8B8A8_UNORM` view (`data_view`) for data textures. The views are 2D arrays
+    /// even for one layer, as `sampler2DArray` needs.
     pub fn texture_array(ctx: &Arc<Context>, name: &str, size: u32, layers: &[Vec<&[u8]>]) -> Result<Self> {
         let mips = size.ilog2() + 1;
         let extent = vk::Extent2D {
@@ -180,12 +213,12 @@ impl Image {
             height: size,
         };
         let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
-        let format = vk::Format::R8G8B8A8_SRGB;
-        let image = Self::create(
+        let formats = (vk::Format::R8G8B8A8_SRGB, Some(vk::Format::R8G8B8A8_UNORM));
+        let image = Self::create_with(
             ctx,
             name,
             extent,
-            format,
+            formats,
             usage,
             (layers.len().max(1) as u32, mips),
             vk::ImageViewType::TYPE_2D_ARRAY,
@@ -393,6 +426,7 @@ impl Drop for Image {
     fn drop(&mut self) {
         unsafe {
             self.ctx.device.destroy_image_view(self.view, None);
+            self.ctx.device.destroy_image_view(self.data_view, None); // null: ignored
             self.ctx.device.destroy_image(self.raw, None);
         }
         if let Some(a) = self.allocation.take() {

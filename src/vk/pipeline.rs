@@ -36,6 +36,8 @@ pub enum Resource<'a> {
     StorageImage(&'a Image),
     /// A combined image sampler in `SHADER_READ_ONLY_OPTIMAL` layout.
     Sampled(&'a Image, &'a Sampler),
+    /// `Sampled` through the image's `data_view` (a texture array's UNORM view).
+    SampledData(&'a Image, &'a Sampler),
     /// A uniform texel buffer (`utextureBuffer`).
     Texels(&'a super::TexelView),
     /// A top-level acceleration structure (`accelerationStructureEXT`).
@@ -361,6 +363,15 @@ impl Pipeline {
                             .sampler(s.raw)
                             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
                     ),
+                    (Resource::SampledData(img, s), vk::DescriptorType::COMBINED_IMAGE_SAMPLER) => {
+                        assert!(img.data_view != vk::ImageView::null(), "binding {b}: no data view");
+                        Info::Image(
+                            vk::DescriptorImageInfo::default()
+                                .image_view(img.data_view)
+                                .sampler(s.raw)
+                                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                        )
+                    }
                     (Resource::Texels(view), vk::DescriptorType::UNIFORM_TEXEL_BUFFER) => Info::Texels(view.raw),
                     (Resource::Accel(a), vk::DescriptorType::ACCELERATION_STRUCTURE_KHR) => Info::Accel(a.raw),
                     _ => panic!("binding {b}: the shader wants {ty:?}, a different kind of resource was given"),

@@ -133,12 +133,14 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
 /// the target's 8-bit sRGB storage (half a step) plus the interpolation of the texture
 /// coordinate across the quad (a 1e-3 texel shift moves a texel step of contrast 1 by
 /// 1e-3); silhouette and texel-edge pixels are not special-cased. Its roughness texture
-/// (another random 16², stored as linear data) likewise: the G-buffer's roughness is the
+/// (another random 16², linear data read through the array's UNORM view, so no sRGB
+/// decode touches it) likewise: the G-buffer's roughness is the
 /// factor times its green channel there, within half an 8-bit step and the same shift,
 /// and its metallic the factor times its blue channel (glTF's layout), within the
 /// half float's rounding and the same shift. Each also within what the filter weights'
 /// precision allows (`subTexelPrecisionBits`, from the device: the spec's bound, not
-/// one driver's error).
+/// one driver's error), and the data within one step of the texture's own 8 bits (a
+/// filtered 8-bit UNORM value may keep 8 bits: lavapipe's fixed-point filter does).
 #[test]
 fn gbuffer_samples_textures_per_texel() {
     use rand::{Rng, SeedableRng};
@@ -146,19 +148,20 @@ fn gbuffer_samples_textures_per_texel() {
     use speculum::scene::Texture;
     let ctx = common::context();
     let mut rng = rand::rngs::StdRng::seed_from_u64(5);
-    let texture = Texture {
-        name: "random 16x16".into(),
-        image: image::RgbaImage::from_fn(16, 16, |_, _| {
+    let texture = Texture::colour(
+        "random 16x16",
+        image::RgbaImage::from_fn(16, 16, |_, _| {
             image::Rgba([rng.random(), rng.random(), rng.random(), 255])
         }),
-    };
+    );
     let rough = Texture {
         name: "random roughness 16x16".into(),
         image: image::RgbaImage::from_fn(16, 16, |_, _| image::Rgba([0, rng.random(), rng.random(), 255])),
+        data: true,
     };
     let mut b = SceneBuilder::new("textured plane");
     let t = b.texture(texture);
-    let tr = b.texture(speculum::scene::texture::data_texture(rough));
+    let tr = b.texture(rough);
     let tint = [0.9, 0.8, 1.0];
     let (roughness, metallic) = (0.8, 0.9);
     let mut m = Material::new("plane", tint, roughness, 0.0).textured(t).metal(metallic);
@@ -222,12 +225,12 @@ fn gbuffer_samples_textures_per_texel() {
             let want_r = roughness * textures.sample_lod(tr, uv, 0.0).y;
             let got_r = albedo[4 * i + 3] as f32 / 255.0;
             assert!(
-                (got_r - want_r).abs() <= 0.5 / 255.0 + 2e-3 + roughness * data_filter.y,
+                (got_r - want_r).abs() <= 0.5 / 255.0 + 2e-3 + roughness * (data_filter.y + 1.0 / 255.0),
                 "pixel {p}: roughness {got_r}, texture says {want_r}"
             );
             let want_m = metallic * textures.sample_lod(tr, uv, 0.0).z;
             assert!(
-                (motion[i][3] - want_m).abs() <= 5e-4 + 2e-3 + metallic * data_filter.z,
+                (motion[i][3] - want_m).abs() <= 5e-4 + 2e-3 + metallic * (data_filter.z + 1.0 / 255.0),
                 "pixel {p}: metallic {}, texture says {want_m}",
                 motion[i][3]
             );

@@ -33,11 +33,11 @@ const DROP_FRAMES: u32 = 40;
 fn textured_scene() -> Scene {
     use rand::{Rng, SeedableRng};
     let mut rng = rand::rngs::StdRng::seed_from_u64(11);
-    let mut random = |w, h| Texture {
-        name: format!("random {w}x{h}"),
-        image: image::RgbaImage::from_fn(w, h, |_, _| {
+    let mut random = |w, h| {
+        let image = image::RgbaImage::from_fn(w, h, |_, _| {
             image::Rgba([rng.random(), rng.random(), rng.random(), 255])
-        }),
+        });
+        Texture::colour(format!("random {w}x{h}"), image)
     };
     let mut b = SceneBuilder::new("textured");
     let (t0, t1) = (b.texture(random(64, 64)), b.texture(random(200, 120)));

@@ -47,7 +47,9 @@ pub struct Anchor {
 
 // Embree devices and committed scenes may be used from any thread (Embree's API
 // documentation: ray queries on a committed scene are thread safe).
+// SAFETY: see above; the device handle is freed once, on drop.
 unsafe impl Send for Anchor {}
+// SAFETY: as for `Send`: Embree's device calls may come from any thread.
 unsafe impl Sync for Anchor {}
 
 impl Anchor {
@@ -56,6 +58,7 @@ impl Anchor {
     pub fn new() -> Result<Self> {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
         let config = CString::new(format!("threads={threads}")).expect("no NUL");
+        // SAFETY: a NUL-terminated configuration string that outlives the call.
         let device = unsafe { rtcNewDevice(config.as_ptr()) };
         if device.is_null() {
             return Err(Error::Bvh("Embree: rtcNewDevice failed".into()));
@@ -64,6 +67,7 @@ impl Anchor {
     }
 
     fn check(&self, what: &str) -> Result<()> {
+        // SAFETY: the device is live (freed only on drop).
         let e = unsafe { rtcGetDeviceError(self.device) };
         if e == RTCError::NONE {
             Ok(())
@@ -76,6 +80,9 @@ impl Anchor {
     /// `rtcCommitScene` took.
     pub fn build(&self, vertices: &[GpuVertex], indices: &[u32], quality: Quality) -> Result<(Scene<'_>, f64)> {
         let tris = indices.len() / 3;
+        // SAFETY: the device is live; the geometry buffers Embree returns are checked
+        // for null and written within the sizes asked for (3 floats a vertex, 3 indices a
+        // triangle); the scene keeps the geometry and borrows the anchor.
         unsafe {
             let geom = rtcNewGeometry(self.device, RTCGeometryType::TRIANGLE);
             let vb = rtcSetNewGeometryBuffer(geom, RTCBufferType::VERTEX, 0, RTCFormat::FLOAT3, 12, vertices.len())
@@ -116,6 +123,7 @@ impl Anchor {
 
 impl Drop for Anchor {
     fn drop(&mut self) {
+        // SAFETY: the device's one release; every scene borrowing it is gone.
         unsafe { rtcReleaseDevice(self.device) };
     }
 }
@@ -126,7 +134,10 @@ pub struct Scene<'a> {
     anchor: &'a Anchor,
 }
 
+// SAFETY: a committed scene's queries are thread safe (as for `Anchor`); it is
+// released once, on drop.
 unsafe impl Send for Scene<'_> {}
+// SAFETY: as for `Send`: queries on a committed scene may run side by side.
 unsafe impl Sync for Scene<'_> {}
 
 impl Scene<'_> {
@@ -186,6 +197,7 @@ impl Scene<'_> {
                 instID: [u32::MAX],
             },
         };
+        // SAFETY: a committed, live scene; `ctx` and `rh` are initialised locals.
         unsafe { rtcIntersect1(self.scene, ctx, &mut rh) };
         if rh.hit.geomID == u32::MAX {
             Hit {
@@ -207,6 +219,7 @@ impl Scene<'_> {
 
 impl Drop for Scene<'_> {
     fn drop(&mut self) {
+        // SAFETY: the scene's one release.
         unsafe { rtcReleaseScene(self.scene) };
     }
 }

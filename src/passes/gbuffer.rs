@@ -122,6 +122,8 @@ impl GBufferPass {
             .layer_count(1)
             .color_attachments(&attachments)
             .depth_attachment(&depth);
+        // SAFETY: `cmd` is recording outside a render pass; the attachments are live and
+        // in their attachment layouts (the transitions above).
         unsafe { device.cmd_begin_rendering(cmd, &info) };
         set_viewport(device, cmd, extent);
         for geometry in geometries {
@@ -138,11 +140,14 @@ impl GBufferPass {
                 ],
                 &(),
             );
+            // SAFETY: inside the rendering begun above, with the pipeline bound; the
+            // index buffer is live and holds `index_count` indices.
             unsafe {
                 device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
                 device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
             }
         }
+        // SAFETY: ends the rendering begun above, on the same command buffer.
         unsafe { device.cmd_end_rendering(cmd) };
         // RAW: the compute passes read the G-buffer written above.
         barrier::transition(

@@ -57,6 +57,8 @@ pub(crate) fn set_viewport(device: &ash::Device, cmd: vk::CommandBuffer, extent:
         offset: vk::Offset2D::default(),
         extent,
     };
+    // SAFETY: `cmd` is recording inside a render pass of a pipeline with dynamic
+    // viewport and scissor.
     unsafe {
         device.cmd_set_viewport(cmd, 0, &[viewport]);
         device.cmd_set_scissor(cmd, 0, &[scissor]);

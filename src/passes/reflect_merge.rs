@@ -187,6 +187,7 @@ impl MergePass {
             ],
             &[],
         );
+        // SAFETY: `cmd` is recording; the buffer is live, the barrier above orders it.
         unsafe { d.cmd_fill_buffer(cmd, t.tile_sources.raw, 0, vk::WHOLE_SIZE, 0) };
         // RAW/WAW: the merge's atomics see the zeroed tile bits.
         barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
@@ -234,6 +235,7 @@ impl MergePass {
             &[],
         );
         let args: [u32; 4] = [0, 1, 1, 0];
+        // SAFETY: `cmd` is recording; the buffer is live and 16 bytes or more.
         unsafe { d.cmd_update_buffer(cmd, t.blur_args.raw, 0, bytemuck::bytes_of(&args)) };
         // RAW: the tile pass's atomics see the zeroed count.
         barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);

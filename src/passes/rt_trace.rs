@@ -117,6 +117,7 @@ impl TracePass {
         let mut timer = GpuTimer::new(ctx, 1)?;
         let readout = timer.one_shot(|cmd, timer| {
             // Poison: a hit the kernel fails to write cannot pass as a result.
+            // SAFETY: `cmd` is recording; the hits buffer was made above and lives on.
             unsafe {
                 ctx.device
                     .cmd_fill_buffer(cmd, hits_buf.raw, 0, vk::WHOLE_SIZE, 0x7fc0_dead)

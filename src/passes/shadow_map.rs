@@ -65,6 +65,8 @@ impl ShadowMapPass {
                 .level_count(1)
                 .layer_count(1);
             let far = vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 };
+            // SAFETY: `cmd` is recording; the map is live and in TRANSFER_DST_OPTIMAL
+            // (the transition above).
             unsafe {
                 ctx.device
                     .cmd_clear_depth_stencil_image(cmd, map.raw, L::TRANSFER_DST_OPTIMAL, &far, &[range])
@@ -114,6 +116,8 @@ impl ShadowMapPass {
             })
             .layer_count(1)
             .depth_attachment(&depth);
+        // SAFETY: `cmd` is recording outside a render pass; the attachment is live and
+        // in DEPTH_ATTACHMENT_OPTIMAL (the transition above).
         unsafe { device.cmd_begin_rendering(cmd, &info) };
         set_viewport(device, cmd, self.out.extent);
         for geometry in geometries {
@@ -122,11 +126,14 @@ impl ShadowMapPass {
                 &[Resource::Buffer(frame), Resource::Buffer(geometry.vertices)],
                 &(),
             );
+            // SAFETY: inside the rendering begun above, with the pipeline bound; the
+            // index buffer is live and holds `index_count` indices.
             unsafe {
                 device.cmd_bind_index_buffer(cmd, geometry.indices.raw, 0, vk::IndexType::UINT32);
                 device.cmd_draw_indexed(cmd, geometry.index_count, 1, 0, 0, 0);
             }
         }
+        // SAFETY: ends the rendering begun above, on the same command buffer.
         unsafe { device.cmd_end_rendering(cmd) };
         // RAW: the compute passes sample the depth written above.
         barrier::transition(

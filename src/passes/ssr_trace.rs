@@ -222,6 +222,8 @@ impl SsrPass {
             &[],
         );
         let args: [u32; 4] = [0, 1, 1, 0];
+        // SAFETY: `cmd` is recording; the three buffers are live and 16 bytes or more;
+        // the barrier above orders the writes after earlier reads.
         unsafe {
             d.cmd_update_buffer(cmd, out.march_args.raw, 0, bytemuck::bytes_of(&args));
             d.cmd_update_buffer(cmd, out.glossy_args.raw, 0, bytemuck::bytes_of(&args));

@@ -481,6 +481,8 @@ impl Renderer {
 fn upload_uniforms(d: &ash::Device, cmd: vk::CommandBuffer, ubo: &Buffer, uniforms: &FrameUniforms) {
     // WAR: the previous frame's shader reads of the uniforms finish before they change.
     barrier::global(d, cmd, access::ANY_SHADER_READ, access::TRANSFER_WRITE);
+    // SAFETY: `cmd` is recording; the uniform buffer is live and holds `FrameUniforms`
+    // (under the 64 KiB `cmd_update_buffer` allows, a multiple of 4 bytes).
     unsafe { d.cmd_update_buffer(cmd, ubo.raw, 0, bytemuck::bytes_of(uniforms)) };
     // RAW: every pass below reads the uniforms just written.
     barrier::global(d, cmd, access::TRANSFER_WRITE, access::ANY_SHADER_READ);

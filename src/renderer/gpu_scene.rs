@@ -331,6 +331,8 @@ impl DynamicGeometry {
         // frame's vertex shaders read it).
         barrier::global(device, cmd, access::ALL_READ_WRITE, access::TRANSFER_WRITE_READ);
         let region = vk::BufferCopy::default().size(self.mesh.vertices.size);
+        // SAFETY: `cmd` is recording; both buffers are this scene's, live and of the
+        // vertices' size; the barrier above orders the copy.
         unsafe { device.cmd_copy_buffer(cmd, self.mesh.vertices.raw, self.previous.raw, &[region]) };
         // RAW: the G-buffer's vertex shader reads the copy. (The step's own leading
         // barrier waits for the copy's reads before it rewrites the vertices.)

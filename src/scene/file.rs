@@ -236,6 +236,12 @@ impl SceneFile {
 
     /// Builds the scene; model paths resolve against `dir`, errors name `path`.
     pub fn build(&self, path: &Path, dir: &Path) -> Result<Scene> {
+        self.build_with(path, dir, &mut Models::default())
+    }
+
+    /// `build`, reading each model file through `models` (once, however many instances
+    /// and bodies name it).
+    fn build_with(&self, path: &Path, dir: &Path, models: &mut Models) -> Result<Scene> {
         let name = self.name.clone().unwrap_or_else(|| {
             path.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -246,6 +252,7 @@ impl SceneFile {
             dir,
             b: SceneBuilder::new(&name),
             ids: Vec::new(),
+            models,
         };
         build.materials(&self.materials)?;
         if self.instances.is_empty() {
@@ -299,12 +306,34 @@ fn bad_file(path: &Path, detail: String) -> Error {
     }
 }
 
-/// A scene file being built: the builder, and the materials by name so far.
+/// The model files a scene file's build has read, by path (as canonical as the file
+/// system makes it, so `t.obj` and `./t.obj` are one file): each is read and parsed
+/// once, however many instances and bodies name it.
+#[derive(Default)]
+struct Models {
+    read: Vec<(std::path::PathBuf, std::rc::Rc<Scene>)>,
+}
+
+impl Models {
+    fn get(&mut self, path: &Path) -> Result<std::rc::Rc<Scene>> {
+        let key = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+        if let Some((_, m)) = self.read.iter().find(|(k, _)| *k == key) {
+            return Ok(m.clone());
+        }
+        let m = std::rc::Rc::new(super::load_model(path)?);
+        self.read.push((key, m.clone()));
+        Ok(m)
+    }
+}
+
+/// A scene file being built: the builder, the materials by name so far, and the model
+/// files read so far.
 struct Build<'a> {
     path: &'a Path,
     dir: &'a Path,
     b: SceneBuilder,
     ids: Vec<(String, u32)>,
+    models: &'a mut Models,
 }
 
 impl Build<'_> {
@@ -362,6 +391,11 @@ impl Build<'_> {
                 i + 1
             )));
         }
+        let loaded = inst
+            .model
+            .as_ref()
+            .map(|m| self.models.get(&self.dir.join(m)))
+            .transpose()?;
         let find = |name: &str| {
             self.id(name).ok_or_else(|| {
                 let known: Vec<&str> = self.ids.iter().map(|(n, _)| n.as_str()).collect();
@@ -374,8 +408,7 @@ impl Build<'_> {
         };
         let transform = inst.transform();
         let plays = inst.animation.is_some() || inst.speed.is_some() || inst.looping.is_some();
-        if let Some(model) = &inst.model {
-            let scene = super::load_model(&self.dir.join(model))?;
+        if let (Some(model), Some(scene)) = (&inst.model, loaded) {
             let material = inst.material.as_deref().map(find).transpose()?;
             match (&scene.animated, &self.b.scene.animated) {
                 (Some(_), Some(_)) => {
@@ -463,7 +496,7 @@ impl Build<'_> {
             Some("mesh") => false,
             Some(other) => return Err(self.bad(format!("body {}: collider '{other}' is neither hull nor mesh", i + 1))),
         };
-        let m = super::load_model(&self.dir.join(model))?;
+        let m = self.models.get(&self.dir.join(model))?;
         if m.animated.is_some() {
             return Err(self.bad(format!(
                 "body {}: '{model}' is animated; an animated model plays as an [[instance]], not as a body",
@@ -605,6 +638,27 @@ mod tests {
         // The first instance brings the OBJ's default material; the second uses "m".
         assert_eq!(s.vertices[3].material, 0, "overridden with 'm'");
         assert_eq!(s.materials[s.vertices[0].material as usize].name, "default");
+    }
+
+    /// Twelve instances and a body of one model (named two ways) read the file once,
+    /// and place twelve copies of its triangles.
+    #[test]
+    fn each_model_file_is_read_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let tetrahedron = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+        std::fs::write(dir.path().join("t.obj"), tetrahedron).unwrap();
+        let mut text = HEAD.to_string();
+        for i in 0..12 {
+            let name = if i % 2 == 0 { "t.obj" } else { "./t.obj" };
+            text += &format!("[[instance]]\nmodel = \"{name}\"\ntranslate = [{i}, 0, 0]\n");
+        }
+        text += "[[body]]\nmodel = \"t.obj\"\nmaterial = \"m\"\ntranslate = [0, 5, 0]\n";
+        let file = SceneFile::parse(Path::new("s.toml"), &text).unwrap();
+        let mut models = Models::default();
+        let s = file.build_with(Path::new("s.toml"), dir.path(), &mut models).unwrap();
+        assert_eq!(models.read.len(), 1, "one file, read once");
+        assert_eq!(s.triangle_count(), 12 * 4, "twelve instances");
+        assert_eq!(s.bodies.len(), 1);
     }
 
     /// Bad files get one line naming the file, the line and the field.

@@ -76,6 +76,7 @@ fn timer_scopes_report_by_name() {
         timer.begin(cmd, "outer");
         timer.begin(cmd, "copy");
         let region = ash::vk::BufferCopy::default().size(data.len() as u64);
+        // SAFETY: `cmd` is recording; both buffers are live and `data.len()` bytes or more.
         unsafe { ctx.device.cmd_copy_buffer(cmd, src.raw, dst.raw, &[region]) };
         timer.end(cmd, "copy");
         timer.end(cmd, "outer");

@@ -503,3 +503,38 @@ fn files_stay_readable() {
         long.join("\n")
     );
 }
+
+/// Every `unsafe` block and impl outside `src/vk/` says why it is sound: clippy's
+/// `undocumented_unsafe_blocks` is denied for the whole package (Cargo.toml's
+/// `[lints.clippy]`, which CI's clippy run applies), and only `src/vk/mod.rs`, the thin
+/// layer of Vulkan calls, allows it.
+#[test]
+fn unsafe_outside_vk_says_why() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let manifest = std::fs::read_to_string(root.join("Cargo.toml")).unwrap();
+    let lints = manifest
+        .split("[lints.clippy]")
+        .nth(1)
+        .expect("Cargo.toml has [lints.clippy]");
+    assert!(
+        lints
+            .lines()
+            .any(|l| l.replace(' ', "") == "undocumented_unsafe_blocks=\"deny\""),
+        "Cargo.toml's [lints.clippy] denies undocumented_unsafe_blocks"
+    );
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    rust_files(&root.join("tests"), &mut files);
+    // (Split, so this file does not name itself.)
+    let needle = ["allow(clippy::", "undocumented_unsafe_blocks)"].concat();
+    let allowed: Vec<String> = files
+        .iter()
+        .filter(|f| std::fs::read_to_string(f).unwrap().contains(&needle))
+        .map(|f| f.strip_prefix(root).unwrap().display().to_string())
+        .collect();
+    assert_eq!(
+        allowed,
+        ["src/vk/mod.rs"],
+        "only vk/ may leave unsafe blocks unexplained"
+    );
+}

@@ -307,6 +307,7 @@ impl LbvhBuilder {
         let d = &self.ctx.device;
         let n = geom.tri_count;
         // Reset the atomic min/max targets: min words to 0xffffffff, max words to 0.
+        // SAFETY: `cmd` is recording; the bounds buffer is live and 48 bytes or more.
         unsafe {
             d.cmd_fill_buffer(cmd, bvh.bounds.raw, 0, 12, u32::MAX);
             d.cmd_fill_buffer(cmd, bvh.bounds.raw, 12, 12, 0);
@@ -440,6 +441,7 @@ impl LbvhBuilder {
     pub fn record_fit(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh) {
         bvh.reshaped();
         let d = &self.ctx.device;
+        // SAFETY: `cmd` is recording; the buffer is the BVH's, live for its recording.
         unsafe { d.cmd_fill_buffer(cmd, bvh.ends.raw, 0, vk::WHOLE_SIZE, BVH_INVALID) };
         // RAW: the fit's swap words start empty; WAR: earlier reads of the nodes
         // (traversal) finish before the fit rewrites them.

@@ -396,18 +396,20 @@ pub fn render(
 
 /// The last frame's `HybridSplit`, in the modes that have one (`hybrid`, `provenance`).
 pub(crate) fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<Option<HybridSplit>> {
+    use crate::settings::Hybrid;
     if !(settings.mode.marches() && settings.mode.traces()) {
         return Ok(None);
     }
     let tiles = renderer.tile_census()?;
     let paths = renderer.hybrid_paths();
-    let measured = settings.hybrid_policy == crate::settings::HybridPolicy::Adaptive && settings.exchange_rate == 0.0;
+    let hybrid = Hybrid::of(settings);
     let rate = renderer.exchange_rate();
-    let exchange_rate = match settings.hybrid_policy {
-        crate::settings::HybridPolicy::SsrFirst => 0.0,
-        _ if measured => rate.fraction(),
-        _ => settings.exchange_rate as f64,
+    let exchange_rate = match hybrid {
+        Hybrid::None => 0.0,
+        Hybrid::Measured => rate.fraction(),
+        Hybrid::Fixed(_) => settings.exchange_rate as f64,
     };
+    let measured = hybrid == Hybrid::Measured;
     Ok(Some(HybridSplit {
         policy: settings.hybrid_policy.name().to_string(),
         exchange_rate,

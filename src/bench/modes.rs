@@ -17,7 +17,7 @@ use crate::error::Result;
 use crate::metrics::compare_rgba8;
 use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
-use crate::settings::{HybridPolicy, Mode, Settings, GLOSSY_REFERENCE_SPP};
+use crate::settings::{Hybrid, HybridPolicy, Mode, Settings, GLOSSY_REFERENCE_SPP};
 use crate::steady::{RoundsCheck, WarmUp, WarmUpReport};
 use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
@@ -130,7 +130,7 @@ pub fn run(
     let by = |m: Mode| &modes[Mode::ALL.iter().position(|&x| x == m).expect("every mode is measured")];
     // Hybrid and provenance trace the same pixels, unless each renderer measures its
     // own exchange rate (the adaptive hybrid's tiles then follow two clocks).
-    let measured = base.hybrid_policy == HybridPolicy::Adaptive && base.exchange_rate == 0.0;
+    let measured = Hybrid::of_policy(base) == Hybrid::Measured;
     let reflective = by(Mode::Rt).reflective_pixels;
     let valid = modes
         .iter()

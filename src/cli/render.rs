@@ -303,7 +303,8 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
             "  hybrid {}: exchange rate {:.3}{measured}; tiles SSR-first {}, rays-only {}, unknown {}",
             h.policy, h.exchange_rate, h.ssr_first_tiles, h.rays_only_tiles, h.unknown_tiles
         ));
-        if h.policy == "adaptive" {
+        let settings = r.header.settings.as_ref();
+        if settings.is_some_and(|s| speculum::settings::Hybrid::of(s).adaptive()) {
             let paths: Vec<String> = h
                 .paths
                 .iter()

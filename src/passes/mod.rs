@@ -14,7 +14,7 @@
 //! documentation names. Storage images stay in `GENERAL` from creation
 //! (`Image::storage`), so compute passes need memory barriers only.
 //! `renderer/frame.rs` records only what spans passes (the uniform upload) and the
-//! timer scopes.
+//! timer scopes, as `renderer/plan.rs` decides.
 
 pub mod compose;
 pub mod gbuffer;

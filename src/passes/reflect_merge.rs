@@ -43,7 +43,7 @@ struct BlurPush {
 }
 
 /// Seam blur settings.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BlurParams {
     /// Blur radius in pixels (0: no blur; where only one source exists, as in the `rt`
     /// and `ssr` modes, there are no seams and the blur would copy every pixel).

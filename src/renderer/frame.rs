@@ -1,168 +1,37 @@
-//! The frame: docs/architecture.md's table as data (`Row`, from which `SCOPES` comes) and as the
-//! function that records it (`Renderer::record_frame`), every row visible and recorded in
-//! table order (`FrameRecorder` asserts it), each under its timer scope. Every pass's
-//! `record` places its own barriers (see `passes`); this file only does what spans
-//! passes: the uniform upload, which rows a mode runs, and the scopes.
+//! The frame as the function that records it (`Renderer::record_frame`): the plan
+//! first (`plan::FramePlan`), then the table's rows (`table::Row`) as the plan says,
+//! each under its timer scope, in table order (`FrameRecorder` holds the frame to the
+//! plan and the order). Every pass's `record` places its own barriers (see `passes`);
+//! this file only does what spans passes: the uniform upload, and which inputs each
+//! row reads.
 
-use super::exchange::Path;
+use super::exchange::{FrameCounts, Path};
+use super::gpu_scene::DynamicGeometry;
+use super::plan::{FramePlan, Motion, Previous};
+use super::table::{Row, FRAME};
 use super::{FrameSlot, Renderer};
 use crate::gpu_types::FrameUniforms;
-use crate::passes::compose::{self, ComposeInputs, ComposeMode};
-use crate::passes::khr;
-use crate::passes::lbvh::dynamic::DynamicBvh;
-use crate::passes::light_direct::Sun;
-use crate::passes::reflect_denoise::{self, DenoiseInputs, DenoiseParams};
-use crate::passes::reflect_merge::{self, BlurParams, MergeInputs, MergeParams};
-use crate::passes::rt_reflect::{self, ReflectInputs};
-use crate::passes::ssr_hiz;
-use crate::passes::ssr_trace::{self, Classify, MarchInputs};
-use crate::passes::{
-    gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_skin, sim_transform, ssr_compact, SceneGeometry,
-};
-use crate::passes::{TraceScene, Traceable, Tracing};
-use crate::settings::SsrParams;
-use crate::settings::{HybridPolicy, Mode};
+use crate::passes::compose::ComposeInputs;
+use crate::passes::gbuffer::GBufferPass;
+use crate::passes::khr::KhrScene;
+use crate::passes::lbvh::LbvhBuilder;
+use crate::passes::light_direct::{LightDirectPass, Sun};
+use crate::passes::reflect_denoise::{DenoiseInputs, DenoiseParams, DenoisePass};
+use crate::passes::reflect_merge::{MergeInputs, MergeParams, MergePass};
+use crate::passes::rt_reflect::{ReflectInputs, RtReflectPass};
+use crate::passes::shadow_map::ShadowMapPass;
+use crate::passes::shadow_trace::ShadowTracePass;
+use crate::passes::sim_cloth::ClothPass;
+use crate::passes::sim_skin::SimSkinPass;
+use crate::passes::sim_transform::SimTransformPass;
+use crate::passes::ssr_compact::CompactPass;
+use crate::passes::ssr_hiz::HiZPass;
+use crate::passes::ssr_trace::{MarchInputs, SsrPass};
+use crate::passes::{SceneGeometry, Surfaces, TraceScene, Traceable, Tracing};
+use crate::settings::{Hybrid, Settings, SsrParams};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, GpuTimer};
 use ash::vk;
-
-/// Timer scope of the whole frame.
-pub const FRAME: &str = "frame";
-/// Timer scope of the per-frame uniform upload.
-pub const UNIFORMS: &str = "uniforms";
-/// The rigid bodies' time step on the CPU (wall clock, while the frame is recorded).
-pub const SIM_RIGID: &str = "sim.rigid";
-
-/// The rows the adaptive hybrid's paths are priced by (`exchange::Paths`): those that
-/// differ between them, `ssr.hiz` to `reflect.denoise`.
-pub fn reflection_rows() -> &'static [Row] {
-    let at = |row| Row::ALL.iter().position(|&r| r == row).expect("a row of the table");
-    &Row::ALL[at(Row::SsrHiz)..=at(Row::ReflectDenoise)]
-}
-
-/// One row of the frame table (docs/architecture.md), declared in frame order.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum Row {
-    Uniforms,
-    SimRigid,
-    SimTransform,
-    SimCloth,
-    SimSkin,
-    /// The dynamic BVH's rebuild or refit (`lbvh.*`; the static BVH is built once).
-    DynamicBvh,
-    /// The vendor tracer's structures of a moving scene (`as.*`; the static ones are
-    /// built once).
-    DynamicAccel,
-    ShadowMap,
-    GBuffer,
-    ShadowClassify,
-    ShadowCompact,
-    ShadowTrace,
-    LightDirect,
-    SsrHiz,
-    SsrClassify,
-    SsrTrace,
-    SsrCompact,
-    RtReflect,
-    ReflectMerge,
-    /// The glossy reflections' spatial and temporal filters (`glossy` on, with a
-    /// `denoise_radius` or a `denoise_history` to apply).
-    ReflectDenoise,
-    Compose,
-}
-
-impl Row {
-    /// Every row, in frame order.
-    pub const ALL: [Row; 21] = [
-        Row::Uniforms,
-        Row::SimRigid,
-        Row::SimTransform,
-        Row::SimCloth,
-        Row::SimSkin,
-        Row::DynamicBvh,
-        Row::DynamicAccel,
-        Row::ShadowMap,
-        Row::GBuffer,
-        Row::ShadowClassify,
-        Row::ShadowCompact,
-        Row::ShadowTrace,
-        Row::LightDirect,
-        Row::SsrHiz,
-        Row::SsrClassify,
-        Row::SsrTrace,
-        Row::SsrCompact,
-        Row::RtReflect,
-        Row::ReflectMerge,
-        Row::ReflectDenoise,
-        Row::Compose,
-    ];
-
-    /// The timer scopes the row reports under (the dynamic BVH's stages each open
-    /// their own).
-    pub const fn scopes(self) -> &'static [&'static str] {
-        match self {
-            Row::Uniforms => &[UNIFORMS],
-            Row::SimRigid => &[SIM_RIGID],
-            Row::SimTransform => &[sim_transform::NAME],
-            Row::SimCloth => &[sim_cloth::NAME],
-            Row::SimSkin => &[sim_skin::NAME],
-            Row::DynamicBvh => &DynamicBvh::SCOPES,
-            Row::DynamicAccel => &khr::SCOPES,
-            Row::ShadowMap => &[shadow_map::NAME],
-            Row::GBuffer => &[gbuffer::NAME],
-            Row::ShadowClassify => &[shadow_trace::CLASSIFY_NAME],
-            Row::ShadowCompact => &[shadow_trace::COMPACT_NAME],
-            Row::ShadowTrace => &[shadow_trace::NAME],
-            Row::LightDirect => &[light_direct::NAME],
-            Row::SsrHiz => &[ssr_hiz::NAME],
-            Row::SsrClassify => &[ssr_trace::CLASSIFY_NAME],
-            Row::SsrTrace => &[ssr_trace::NAME],
-            Row::SsrCompact => &[ssr_compact::NAME],
-            Row::RtReflect => &[rt_reflect::NAME],
-            Row::ReflectMerge => &[reflect_merge::NAME],
-            Row::ReflectDenoise => &[reflect_denoise::NAME],
-            Row::Compose => &[compose::NAME],
-        }
-    }
-
-    /// The row's one scope; rows with stages have none of their own.
-    fn scope(self) -> &'static str {
-        match self.scopes() {
-            [name] => name,
-            _ => panic!("frame row {self:?} has stages, not one scope"),
-        }
-    }
-}
-
-const SCOPE_COUNT: usize = {
-    let (mut n, mut i) = (1, 0);
-    while i < Row::ALL.len() {
-        assert!(Row::ALL[i] as usize == i, "Row::ALL is the declaration order");
-        n += Row::ALL[i].scopes().len();
-        i += 1;
-    }
-    n
-};
-
-/// Every timer scope a frame can have, in frame order (`FRAME` last), from the rows'
-/// scopes: the keys of every report's `passes_ms`, a pass a mode (or a static scene)
-/// does not run reported as `null`. All are GPU time but `sim.rigid`, the CPU's; the
-/// dynamic BVH's stages are `lbvh.*` (the static BVH's, built once, are reported apart).
-pub const SCOPES: [&str; SCOPE_COUNT] = {
-    let mut out = [FRAME; SCOPE_COUNT];
-    let (mut k, mut i) = (0, 0);
-    while i < Row::ALL.len() {
-        let scopes = Row::ALL[i].scopes();
-        let mut j = 0;
-        while j < scopes.len() {
-            out[k] = scopes[j];
-            k += 1;
-            j += 1;
-        }
-        i += 1;
-    }
-    out
-};
 
 /// Holds a frame to the table's order: a row after a later one panics.
 #[derive(Default)]
@@ -182,56 +51,109 @@ impl RowOrder {
 }
 
 /// Records the rows of one frame into a command buffer in table order, each under its
-/// scope.
+/// scope, and holds the frame to its plan: a row the plan does not run, or a planned
+/// row left out, panics.
 struct FrameRecorder<'a> {
     timer: &'a mut GpuTimer,
     cmd: vk::CommandBuffer,
     order: RowOrder,
+    /// The plan's rows, in table order; `recorded` of them so far.
+    planned: Vec<Row>,
+    recorded: usize,
 }
 
 impl<'a> FrameRecorder<'a> {
-    /// Starts the frame: the timer's queries reset, the `frame` scope open.
-    fn begin(timer: &'a mut GpuTimer, cmd: vk::CommandBuffer) -> Self {
+    /// Starts the frame of the `planned` rows: the timer's queries reset, the `frame`
+    /// scope open.
+    fn begin(timer: &'a mut GpuTimer, cmd: vk::CommandBuffer, planned: Vec<Row>) -> Self {
         timer.reset(cmd);
         timer.begin(cmd, FRAME);
         let order = RowOrder::default();
-        Self { timer, cmd, order }
+        Self {
+            timer,
+            cmd,
+            order,
+            planned,
+            recorded: 0,
+        }
+    }
+
+    fn follow(&mut self, row: Row) {
+        self.order.follow(row);
+        assert_eq!(
+            self.planned.get(self.recorded),
+            Some(&row),
+            "frame row {row:?} recorded where the plan has {:?}",
+            self.planned
+        );
+        self.recorded += 1;
     }
 
     /// Records `row` under its scope.
     fn row<R>(&mut self, row: Row, record: impl FnOnce() -> R) -> R {
-        self.order.follow(row);
+        self.follow(row);
         self.timer.scope(self.cmd, row.scope(), record)
     }
 
     /// Records a row whose stages open their own scopes on the timer it is given.
     fn staged_row(&mut self, row: Row, record: impl FnOnce(&mut GpuTimer)) {
-        self.order.follow(row);
+        self.follow(row);
         record(self.timer);
     }
 
     /// Runs a row on the host while the frame is recorded; its wall-clock milliseconds.
     fn host_row(&mut self, row: Row, run: impl FnOnce()) -> f64 {
-        self.order.follow(row);
+        self.follow(row);
         let start = std::time::Instant::now();
         run();
         start.elapsed().as_secs_f64() * 1e3
     }
 
     fn end(self) {
+        assert_eq!(
+            self.recorded,
+            self.planned.len(),
+            "the frame left out planned rows {:?}",
+            &self.planned[self.recorded..]
+        );
         self.timer.end(self.cmd, FRAME);
     }
 }
 
 impl Renderer {
-    /// Records one frame into `cmd` (begun, not ended) with frame slot `slot`'s queries
-    /// and staging: docs/architecture.md's frame table, row by row. A dynamic scene advances one
-    /// time step unless it is paused. The caller submits it, and must have seen the
-    /// slot's previous frame finish (a fence) before; several slots' frames may be in
-    /// flight on the queue at once.
-    // Long: it is docs/architecture.md's frame table, every row in order; split, rows would hide.
-    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
+    /// This frame's plan (`plan::FramePlan`): whether it steps the scene (taking a
+    /// single step asked for), what moves, and the adaptive hybrid's path (counted
+    /// among the paths taken).
+    fn plan_frame(&mut self) -> FramePlan {
         let advance = !self.paused || std::mem::take(&mut self.step_once);
+        let dy = self.dynamic.as_ref();
+        let motion = Motion {
+            dynamic: dy.is_some(),
+            rigid: dy.is_some_and(|dy| dy.rigid.vertex_count > 0),
+            cloth: dy.is_some_and(|dy| !dy.cloths.is_empty()),
+            skin: dy.is_some_and(|dy| dy.animated.is_some()),
+            advance,
+            vendor: self.khr.is_some(),
+        };
+        let hybrid = Hybrid::of(&self.settings);
+        let path = match hybrid.adaptive() {
+            true => self.paths.frame_path(self.frame_index, hybrid.priced()),
+            false => Path::March,
+        };
+        if hybrid.adaptive() {
+            self.paths.frames[path as usize] += 1;
+        }
+        FramePlan::new(&self.settings, motion, path, self.exchange.applied, self.fail_mask_view)
+    }
+
+    /// Records one frame into `cmd` (begun, not ended) with frame slot `slot`'s queries
+    /// and staging: docs/architecture.md's frame table, row by row, as this frame's plan
+    /// says (`FrameRecorder` holds it to the plan and the table's order). A dynamic scene
+    /// advances one time step unless it is paused. The caller submits it, and must have
+    /// seen the slot's previous frame finish (a fence) before; several slots' frames may
+    /// be in flight on the queue at once.
+    pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
+        let plan = self.plan_frame();
         let Self {
             ctx,
             settings: st,
@@ -240,34 +162,15 @@ impl Renderer {
             uniforms,
             frame_index,
             sample_stream,
-            shadow,
-            gbuffer,
-            light,
-            hiz,
-            ssr,
-            compact,
-            shadow_trace,
-            shadow_compact,
-            rt,
-            merge,
-            denoise,
-            compose,
             static_bvh,
             khr,
             dynamic,
-            transform,
-            cloth,
-            skin,
-            builder,
             slots,
-            fail_mask_view,
-            exchange,
-            paths,
             ..
         } = self;
         let FrameSlot { timer, sim_ms, counts } = &mut slots[slot];
-        let (d, mode, g) = (&ctx.device, st.mode, &gbuffer.out);
-        let mut f = FrameRecorder::begin(timer, cmd);
+        let d = &ctx.device;
+        let mut f = FrameRecorder::begin(timer, cmd, plan.rows());
         // This frame's uniforms: the view's, and where the glossy rays' sequence is.
         let uniforms = &FrameUniforms {
             frame_index: *frame_index,
@@ -276,58 +179,17 @@ impl Renderer {
         };
         *frame_index = frame_index.wrapping_add(1);
         f.row(Row::Uniforms, || upload_uniforms(d, cmd, ubo, uniforms));
-        if let Some(dy) = dynamic.as_mut().filter(|_| !advance) {
-            dy.keep_previous(d, cmd, false);
-        }
-        if let Some(dy) = dynamic.as_mut().filter(|_| advance) {
-            *sim_ms = Some(f.host_row(Row::SimRigid, || dy.step(slot)));
-            // The first of the steps keeps the last frame's vertices for the motion.
-            if dy.rigid.vertex_count > 0 {
-                f.row(Row::SimTransform, || {
-                    dy.keep_previous(d, cmd, true);
-                    transform.record_posed(cmd, &dy.rigid, slot, &dy.mesh.vertices)
-                });
-            }
-            if !dy.cloths.is_empty() {
-                f.row(Row::SimCloth, || {
-                    if dy.rigid.vertex_count == 0 {
-                        dy.keep_previous(d, cmd, true);
-                    }
-                    dy.cloths.iter().for_each(|c| cloth.record(cmd, c, &dy.mesh.vertices))
-                });
-            }
-            if dy.animated.is_some() {
-                f.row(Row::SimSkin, || {
-                    if dy.rigid.vertex_count == 0 && dy.cloths.is_empty() {
-                        dy.keep_previous(d, cmd, true);
-                    }
-                    let (model, _) = dy.animated.as_ref().expect("checked");
-                    skin.record_posed(cmd, model, slot, &dy.mesh.vertices)
-                });
-            }
-            match khr {
-                None => f.staged_row(Row::DynamicBvh, |timer| {
-                    dy.bvh
-                        .record(cmd, timer, builder, dy.mesh.triangles(), dy.rigid.poses())
-                }),
-                Some(k) => {
-                    let poses = dy.world.poses();
-                    f.staged_row(Row::DynamicAccel, |timer| {
-                        k.record_frame(cmd, timer, slot, &poses, &dy.mesh.triangles())
-                    })
-                }
-            }
+        if let Some(dy) = dynamic.as_mut() {
+            let steps = Steps {
+                transform: &self.transform,
+                cloth: &self.cloth,
+                skin: &self.skin,
+                builder: &self.builder,
+                khr: khr.as_mut(),
+            };
+            *sim_ms = record_motion(&mut f, &plan, (d, cmd, slot), dy, steps);
         }
         let dynamic = dynamic.as_ref();
-        let geometries: Vec<SceneGeometry<'_>> = std::iter::once(scene.mesh.geometry())
-            .chain(dynamic.map(|dy| dy.geometry()))
-            .collect();
-        let shadows = st.shadows;
-        if shadows.uses_map() {
-            f.row(Row::ShadowMap, || shadow.record(cmd, ubo, &geometries));
-        }
-        let surfaces = scene.surfaces(dynamic);
-        f.row(Row::GBuffer, || gbuffer.record(cmd, ubo, &surfaces, &geometries));
         let trace_scene: Tracing<'_> = match khr {
             Some(k) => k
                 .trace(scene.mesh.triangles(), dynamic.map(|dy| dy.mesh.triangles()))
@@ -341,140 +203,261 @@ impl Renderer {
             }
             .into(),
         };
-        if shadows.traces() {
-            f.row(Row::ShadowClassify, || {
-                shadow_trace.classify(cmd, ubo, g, &shadow.out, shadows)
-            });
-            f.row(Row::ShadowCompact, || {
-                shadow_compact.record(cmd, &shadow_trace.out.mask)
-            });
-            let list = &shadow_compact.out;
-            f.row(Row::ShadowTrace, || shadow_trace.trace(cmd, ubo, g, list, &trace_scene));
-        }
-        let sun = Sun {
-            map: &shadow.out,
-            visibility: &shadow_trace.out.visibility,
-            traced: shadows.traces(),
+        let frame = FrameInputs {
+            ubo,
+            st,
+            uniforms,
+            geometries: std::iter::once(scene.mesh.geometry())
+                .chain(dynamic.map(|dy| dy.geometry()))
+                .collect(),
+            surfaces: scene.surfaces(dynamic),
+            scene: trace_scene,
         };
-        f.row(Row::LightDirect, || light.record(cmd, ubo, g, sun));
-        let mut params = SsrParams::from_settings(st);
-        let adaptive = mode.marches() && mode.traces() && st.hybrid_policy == HybridPolicy::Adaptive;
-        // The idle path (`exchange::Paths`): no pyramid, no march; every pixel a march
-        // could answer goes to the rays as in a rays-only tile without probes.
-        let priced = adaptive && st.exchange_rate == 0.0;
-        let path = if adaptive {
-            paths.frame_path(uniforms.frame_index, priced)
-        } else {
-            Path::March
+        let lighting = Lighting {
+            shadow: &self.shadow,
+            gbuffer: &self.gbuffer,
+            shadow_trace: &self.shadow_trace,
+            shadow_compact: &self.shadow_compact,
+            light: &self.light,
         };
-        let (idle, marches) = (path != Path::March, mode.marches() && path == Path::March);
-        if priced {
-            params.tile_rate = exchange.applied;
+        record_lighting(&mut f, &plan, cmd, &lighting, &frame);
+        if plan.path != Path::March {
+            counts.record_idle(plan.path);
         }
-        if adaptive {
-            paths.frames[path as usize] += 1;
-        }
-        if idle {
-            counts.record_idle(path);
-        }
-        // Only a hybrid frame may skip marches (the ssr mode has no ray to send to).
-        if !adaptive {
-            params.tile_rate = 0;
-        }
-        if marches && params.hiz {
-            f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
-        }
-        if mode.reflects() {
-            let kind = match (marches, path) {
-                (true, _) => Classify::Tiles,
-                (false, Path::SkipMarch) => Classify::SkipAll,
-                (false, _) => Classify::MaskOnly,
-            };
-            f.row(Row::SsrClassify, || ssr.classify(cmd, (ubo, g), &params, kind));
-        }
-        if marches {
-            let inputs = MarchInputs {
-                frame: ubo,
-                gbuffer: g,
-                lit: &light.out,
-                hiz: &hiz.out,
-            };
-            f.row(Row::SsrTrace, || ssr.trace(cmd, &inputs, &params));
-        }
-        if mode.traces() {
-            f.row(Row::SsrCompact, || compact.record(cmd, &ssr.out.mask));
-            let inputs = ReflectInputs {
-                frame: ubo,
-                gbuffer: g,
-                surfaces,
-                shadow_map: &shadow.out,
-                list: &compact.out,
-                scene: trace_scene,
-                hit_distance: &ssr.out.hit_distance,
-            };
-            f.row(Row::RtReflect, || rt.record(cmd, &inputs, st.max_bounces, shadows));
-            // A hybrid frame's counts price the march in rays (`exchange`).
-            if marches {
-                let o = &ssr.out;
-                let lists = [&o.march_args, &compact.out.indirect, &o.ssr_first_marches];
-                counts.record((d, cmd), lists, (params.tile_rate, priced));
-            }
-        }
-        if mode.reflects() {
-            // Seams exist only where both sources do (not on the adaptive hybrid's idle
-            // paths, where SSR answers nothing).
-            let blur = BlurParams {
-                radius: if mode.has_seams() && !idle { st.blur_radius } else { 0 },
-                band: st.blur_band,
-            };
-            let inputs = MergeInputs {
-                frame: ubo,
-                gbuffer: g,
-                fail_mask: &ssr.out.mask,
-                ssr: &ssr.out.color,
-                rt: &rt.out,
-            };
-            let params = MergeParams {
-                rt_enabled: mode.traces(),
-                reflective_min: st.reflective_min,
-                blur,
-            };
-            f.row(Row::ReflectMerge, || merge.record(cmd, &inputs, params));
-        }
-        let denoised = mode.reflects() && st.glossy && (st.denoise_radius > 0 || st.denoise_history > 1);
-        if denoised {
-            let inputs = DenoiseInputs {
-                frame: ubo,
-                gbuffer: g,
-                merged: &merge.out,
-                list: &ssr.out.glossy_list,
-                list_args: &ssr.out.glossy_args,
-                hit_distance: &ssr.out.hit_distance,
-            };
-            let params = DenoiseParams {
-                radius: st.denoise_radius,
-                history: st.denoise_history,
-                reflective_min: st.reflective_min,
-            };
-            f.row(Row::ReflectDenoise, || denoise.record(cmd, &inputs, params, uniforms));
-        }
+        let reflections = Reflections {
+            hiz: &self.hiz,
+            ssr: &self.ssr,
+            compact: &self.compact,
+            rt: &self.rt,
+            merge: &self.merge,
+            denoise: &mut self.denoise,
+        };
+        record_reflections(&mut f, &plan, (d, cmd), &lighting, reflections, &frame, counts);
         let inputs = ComposeInputs {
             frame: ubo,
-            hdr: &light.out,
-            reflection: &merge.out,
-            gbuffer: g,
-            fail_mask: &ssr.out.mask,
+            hdr: &self.light.out,
+            reflection: &self.merge.out,
+            gbuffer: &self.gbuffer.out,
+            fail_mask: &self.ssr.out.mask,
             reflective_min: st.reflective_min,
         };
-        let compose_mode = match mode {
-            Mode::Raster => ComposeMode::Plain,
-            _ if *fail_mask_view => ComposeMode::FailMask,
-            Mode::Provenance => ComposeMode::Provenance,
-            Mode::Ssr | Mode::Hybrid | Mode::Rt => ComposeMode::Reflect,
-        };
-        f.row(Row::Compose, || compose.record(cmd, &inputs, st.exposure, compose_mode));
+        let compose = &self.compose;
+        f.row(Row::Compose, || compose.record(cmd, &inputs, st.exposure, plan.compose));
         f.end();
     }
+}
+
+/// What every row of a frame reads besides its own pass: the uniforms, the settings,
+/// the geometry as the raster draws it and as the tracer walks it, and the surfaces.
+struct FrameInputs<'a> {
+    ubo: &'a Buffer,
+    st: &'a Settings,
+    uniforms: &'a FrameUniforms,
+    geometries: Vec<SceneGeometry<'a>>,
+    surfaces: Surfaces<'a>,
+    scene: Tracing<'a>,
+}
+
+/// The passes from the shadow map to the direct light.
+struct Lighting<'a> {
+    shadow: &'a ShadowMapPass,
+    gbuffer: &'a GBufferPass,
+    shadow_trace: &'a ShadowTracePass,
+    shadow_compact: &'a CompactPass,
+    light: &'a LightDirectPass,
+}
+
+/// The reflection passes, `ssr.hiz` to `reflect.denoise`.
+struct Reflections<'a> {
+    hiz: &'a HiZPass,
+    ssr: &'a SsrPass,
+    compact: &'a CompactPass,
+    rt: &'a RtReflectPass,
+    merge: &'a MergePass,
+    denoise: &'a mut DenoisePass,
+}
+
+/// `shadow.map` to `light.direct`, as `plan` says.
+fn record_lighting(
+    f: &mut FrameRecorder<'_>,
+    plan: &FramePlan,
+    cmd: vk::CommandBuffer,
+    l: &Lighting<'_>,
+    i: &FrameInputs<'_>,
+) {
+    let (ubo, g, shadows) = (i.ubo, &l.gbuffer.out, i.st.shadows);
+    if plan.runs(Row::ShadowMap) {
+        f.row(Row::ShadowMap, || l.shadow.record(cmd, ubo, &i.geometries));
+    }
+    f.row(Row::GBuffer, || l.gbuffer.record(cmd, ubo, &i.surfaces, &i.geometries));
+    if plan.shadow_rays() {
+        f.row(Row::ShadowClassify, || {
+            l.shadow_trace.classify(cmd, ubo, g, &l.shadow.out, shadows)
+        });
+        f.row(Row::ShadowCompact, || {
+            l.shadow_compact.record(cmd, &l.shadow_trace.out.mask)
+        });
+        let list = &l.shadow_compact.out;
+        f.row(Row::ShadowTrace, || l.shadow_trace.trace(cmd, ubo, g, list, &i.scene));
+    }
+    let sun = Sun {
+        map: &l.shadow.out,
+        visibility: &l.shadow_trace.out.visibility,
+        traced: plan.shadow_rays(),
+    };
+    f.row(Row::LightDirect, || l.light.record(cmd, ubo, g, sun));
+}
+
+/// `ssr.hiz` to `reflect.denoise`, as `plan` says; a marching hybrid frame's counts
+/// into `counts` (they price the march in rays: `exchange`).
+fn record_reflections(
+    f: &mut FrameRecorder<'_>,
+    plan: &FramePlan,
+    (d, cmd): (&ash::Device, vk::CommandBuffer),
+    l: &Lighting<'_>,
+    r: Reflections<'_>,
+    i: &FrameInputs<'_>,
+    counts: &mut FrameCounts,
+) {
+    let (ubo, g, st) = (i.ubo, &l.gbuffer.out, i.st);
+    let params = SsrParams {
+        tile_rate: plan.tile_rate,
+        ..SsrParams::from_settings(st)
+    };
+    if plan.runs(Row::SsrHiz) {
+        f.row(Row::SsrHiz, || r.hiz.record(cmd, &g.depth));
+    }
+    if let Some(kind) = plan.classify {
+        f.row(Row::SsrClassify, || r.ssr.classify(cmd, (ubo, g), &params, kind));
+    }
+    if plan.marches {
+        let inputs = MarchInputs {
+            frame: ubo,
+            gbuffer: g,
+            lit: &l.light.out,
+            hiz: &r.hiz.out,
+        };
+        f.row(Row::SsrTrace, || r.ssr.trace(cmd, &inputs, &params));
+    }
+    if plan.runs(Row::RtReflect) {
+        f.row(Row::SsrCompact, || r.compact.record(cmd, &r.ssr.out.mask));
+        let inputs = ReflectInputs {
+            frame: ubo,
+            gbuffer: g,
+            surfaces: i.surfaces,
+            shadow_map: &l.shadow.out,
+            list: &r.compact.out,
+            scene: i.scene,
+            hit_distance: &r.ssr.out.hit_distance,
+        };
+        f.row(Row::RtReflect, || r.rt.record(cmd, &inputs, st.max_bounces, st.shadows));
+    }
+    if plan.counts {
+        let o = &r.ssr.out;
+        let lists = [&o.march_args, &r.compact.out.indirect, &o.ssr_first_marches];
+        counts.record((d, cmd), lists, (plan.tile_rate, plan.hybrid.priced()));
+    }
+    if plan.runs(Row::ReflectMerge) {
+        let inputs = MergeInputs {
+            frame: ubo,
+            gbuffer: g,
+            fail_mask: &r.ssr.out.mask,
+            ssr: &r.ssr.out.color,
+            rt: &r.rt.out,
+        };
+        let params = MergeParams {
+            rt_enabled: plan.runs(Row::RtReflect),
+            reflective_min: st.reflective_min,
+            blur: plan.blur,
+        };
+        f.row(Row::ReflectMerge, || r.merge.record(cmd, &inputs, params));
+    }
+    if plan.denoise {
+        let inputs = DenoiseInputs {
+            frame: ubo,
+            gbuffer: g,
+            merged: &r.merge.out,
+            list: &r.ssr.out.glossy_list,
+            list_args: &r.ssr.out.glossy_args,
+            hit_distance: &r.ssr.out.hit_distance,
+        };
+        let params = DenoiseParams {
+            radius: st.denoise_radius,
+            history: st.denoise_history,
+            reflective_min: st.reflective_min,
+        };
+        f.row(Row::ReflectDenoise, || {
+            r.denoise.record(cmd, &inputs, params, i.uniforms)
+        });
+    }
+}
+
+/// The passes that step what moves, and the moving structures' builders.
+struct Steps<'a> {
+    transform: &'a SimTransformPass,
+    cloth: &'a ClothPass,
+    skin: &'a SimSkinPass,
+    builder: &'a LbvhBuilder,
+    khr: Option<&'a mut KhrScene>,
+}
+
+/// The frame's motion rows (`sim.*`, then the moving BVH or acceleration structures)
+/// as `plan` says, the first step that writes the vertices keeping the last frame's
+/// (or, paused, the copy alone); the rigid step's host milliseconds when it ran.
+fn record_motion(
+    f: &mut FrameRecorder<'_>,
+    plan: &FramePlan,
+    (d, cmd, slot): (&ash::Device, vk::CommandBuffer, usize),
+    dy: &mut DynamicGeometry,
+    steps: Steps<'_>,
+) -> Option<f64> {
+    if plan.previous == Previous::Held {
+        dy.keep_previous(d, cmd, false);
+    }
+    if !plan.runs(Row::SimRigid) {
+        return None;
+    }
+    let sim_ms = f.host_row(Row::SimRigid, || dy.step(slot));
+    let keep = |dy: &mut DynamicGeometry, row| {
+        if plan.keeps_previous(row) {
+            dy.keep_previous(d, cmd, true);
+        }
+    };
+    if plan.runs(Row::SimTransform) {
+        f.row(Row::SimTransform, || {
+            keep(dy, Row::SimTransform);
+            steps.transform.record_posed(cmd, &dy.rigid, slot, &dy.mesh.vertices)
+        });
+    }
+    if plan.runs(Row::SimCloth) {
+        f.row(Row::SimCloth, || {
+            keep(dy, Row::SimCloth);
+            dy.cloths
+                .iter()
+                .for_each(|c| steps.cloth.record(cmd, c, &dy.mesh.vertices))
+        });
+    }
+    if plan.runs(Row::SimSkin) {
+        f.row(Row::SimSkin, || {
+            keep(dy, Row::SimSkin);
+            let (model, _) = dy.animated.as_ref().expect("the plan's skin");
+            steps.skin.record_posed(cmd, model, slot, &dy.mesh.vertices)
+        });
+    }
+    if plan.runs(Row::DynamicBvh) {
+        f.staged_row(Row::DynamicBvh, |timer| {
+            dy.bvh
+                .record(cmd, timer, steps.builder, dy.mesh.triangles(), dy.rigid.poses())
+        });
+    }
+    if plan.runs(Row::DynamicAccel) {
+        let k = steps.khr.expect("the plan's vendor tracer");
+        let poses = dy.world.poses();
+        f.staged_row(Row::DynamicAccel, |timer| {
+            k.record_frame(cmd, timer, slot, &poses, &dy.mesh.triangles())
+        });
+    }
+    Some(sim_ms)
 }
 
 /// Writes this frame's uniforms: spans passes, since every pass reads them.
@@ -491,19 +474,6 @@ fn upload_uniforms(d: &ash::Device, cmd: vk::CommandBuffer, ubo: &Buffer, unifor
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The scopes are the rows' scopes in frame order, each once, `frame` last.
-    #[test]
-    fn scopes_are_the_rows_in_order() {
-        let rows: Vec<&str> = Row::ALL.iter().flat_map(|r| r.scopes().iter().copied()).collect();
-        assert_eq!(SCOPES[..SCOPES.len() - 1], rows[..]);
-        assert_eq!(SCOPES.last(), Some(&FRAME));
-        let mut unique = SCOPES.to_vec();
-        unique.sort();
-        unique.dedup();
-        assert_eq!(unique.len(), SCOPES.len(), "a scope named twice");
-        assert_eq!(SCOPES[..2], [UNIFORMS, SIM_RIGID]);
-    }
 
     /// A frame may skip rows but never go back up the table.
     #[test]

@@ -1,6 +1,7 @@
-//! Owns the passes and the scene on the GPU, and records frames (`frame.rs`: the frame
-//! table as data and the function that records it; `view.rs`: camera, light and origin
-//! maths; `gpu_scene.rs`: the scene's buffers and the moving geometry).
+//! Owns the passes and the scene on the GPU, and records frames (`table.rs`: the frame
+//! table as data; `plan.rs`: each frame's decisions; `frame.rs`: the function that
+//! records the plan's rows; `view.rs`: camera, light and origin maths; `gpu_scene.rs`:
+//! the scene's buffers and the moving geometry).
 //!
 //! Frame: `uniforms` → (a dynamic scene: `sim.rigid` on the CPU, `sim.transform`,
 //! `sim.cloth`, the dynamic BVH's `lbvh.*`) → `shadow.map` (unless the shadows are
@@ -19,11 +20,13 @@
 pub mod exchange;
 mod frame;
 mod gpu_scene;
+pub mod plan;
 mod readback;
+pub mod table;
 mod view;
 
 pub use exchange::PROBE_EVERY;
-pub use frame::{Row, FRAME, SCOPES, SIM_RIGID, UNIFORMS};
+pub use table::{Row, FRAME, SCOPES, SIM_RIGID, UNIFORMS};
 pub use view::{frame_uniforms, render_origin, View};
 
 use crate::error::Result;
@@ -570,7 +573,7 @@ impl Renderer {
             times.scopes.push((SIM_RIGID, ms));
         }
         if let Some(recorded) = s.counts.take() {
-            let scopes = frame::reflection_rows().iter().flat_map(|r| r.scopes().iter().copied());
+            let scopes = table::reflection_rows().iter().flat_map(|r| r.scopes().iter().copied());
             exchange::take_frame((&mut self.exchange, &mut self.paths), recorded, &times, (FRAME, scopes));
         }
         Ok(times)

@@ -690,6 +690,51 @@ mod tests {
     }
 }
 
+/// How the frame's hybrid chooses (the one place that decides it: the frame plan,
+/// the reports and the benchmarks ask here).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hybrid {
+    /// No hybrid choice: a mode that does not both march and trace, or the SSR-first
+    /// policy (every tile marches first).
+    None,
+    /// Adaptive at a fixed exchange rate (`exchange_rate` in `TILE_ONE` units).
+    Fixed(u32),
+    /// Adaptive at the rate the frames measure, its paths chosen by their prices.
+    Measured,
+}
+
+impl Hybrid {
+    /// The hybrid of `st` in its own mode.
+    pub fn of(st: &Settings) -> Self {
+        if st.mode.marches() && st.mode.traces() {
+            Self::of_policy(st)
+        } else {
+            Self::None
+        }
+    }
+
+    /// The hybrid `st`'s policy gives a mode that marches and traces (what `bench
+    /// modes` runs its hybrid modes with, whatever the base settings' mode).
+    pub fn of_policy(st: &Settings) -> Self {
+        match st.hybrid_policy {
+            HybridPolicy::SsrFirst => Self::None,
+            HybridPolicy::Adaptive if st.exchange_rate == 0.0 => Self::Measured,
+            HybridPolicy::Adaptive => {
+                Self::Fixed((st.exchange_rate * TILE_ONE as f32).round().clamp(1.0, 4096.0) as u32)
+            }
+        }
+    }
+
+    pub fn adaptive(self) -> bool {
+        self != Self::None
+    }
+
+    /// Paths chosen by their measured prices (`exchange::Paths`).
+    pub fn priced(self) -> bool {
+        self == Self::Measured
+    }
+}
+
 /// SSR settings (see `Settings` for what each trades).
 #[derive(Clone, Copy, Debug)]
 pub struct SsrParams {
@@ -724,11 +769,10 @@ impl SsrParams {
             reflective_min: st.reflective_min,
             recursion_min: st.ssr_recursion_min,
             trace_min_weight: st.trace_min_weight,
-            tile_rate: match st.hybrid_policy {
-                HybridPolicy::SsrFirst => 0,
-                // 0 (measured): the renderer puts in the rate it measures.
-                HybridPolicy::Adaptive if st.exchange_rate == 0.0 => 0,
-                HybridPolicy::Adaptive => (st.exchange_rate * TILE_ONE as f32).round().clamp(1.0, 4096.0) as u32,
+            // Measured: the frame's plan puts in the rate the frames measure.
+            tile_rate: match Hybrid::of(st) {
+                Hybrid::Fixed(rate) => rate,
+                Hybrid::None | Hybrid::Measured => 0,
             },
         }
     }

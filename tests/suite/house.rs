@@ -538,3 +538,43 @@ fn unsafe_outside_vk_says_why() {
         "only vk/ may leave unsafe blocks unexplained"
     );
 }
+
+/// The settings' words the frame's decisions are made of: only the plan reads them.
+const DECISIONS: &[&str] = &[
+    ".mode",
+    "Mode::",
+    "hybrid_policy",
+    "HybridPolicy",
+    "exchange_rate",
+    "st.glossy",
+    ".uses_map()",
+    ".traces()",
+    ".marches()",
+    ".reflects()",
+    ".has_seams()",
+];
+
+fn decisions_in(code: &str) -> Vec<&'static str> {
+    DECISIONS.iter().copied().filter(|w| code.contains(w)).collect()
+}
+
+/// `record_frame` reads the frame plan as a table: frame.rs decides nothing from the
+/// settings or the mode (renderer/plan.rs does, unit-tested), and holds no function
+/// long enough to need a `// Long:` exemption.
+#[test]
+fn the_frame_reads_its_plan() {
+    let path = src().join("renderer/frame.rs");
+    assert_eq!(
+        decisions_in(&code(&path)),
+        Vec::<&str>::new(),
+        "decided in frame.rs, not in the plan"
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(!text.contains("// Long:"), "frame.rs needs no long function");
+    // The scan sees a decision where one is made.
+    let made = "let adaptive = st.mode.marches() && st.hybrid_policy == HybridPolicy::Adaptive;";
+    assert_eq!(
+        decisions_in(made),
+        [".mode", "hybrid_policy", "HybridPolicy", ".marches()"]
+    );
+}

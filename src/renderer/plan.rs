@@ -1,0 +1,348 @@
+//! The frame's decisions, made once before anything is recorded (`FramePlan`): from
+//! the settings, the mode, the adaptive hybrid's path and measured rate, and the
+//! scene's kinds of motion, which rows of the frame table run and with what — the
+//! classification, the tile rate, the blur, which step keeps the previous vertices.
+//! `Renderer::record_frame` reads it as a table; nothing here touches the GPU, so
+//! every decision is unit-tested on the CPU.
+
+use super::exchange::Path;
+use super::table::Row;
+use crate::passes::compose::ComposeMode;
+use crate::passes::reflect_merge::BlurParams;
+use crate::passes::ssr_trace::Classify;
+use crate::settings::{Hybrid, Settings};
+
+/// What moves in the scene, as the frame steps it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Motion {
+    /// The scene has dynamic geometry (rigid bodies, cloth or an animated model).
+    pub dynamic: bool,
+    /// Rigid bodies with triangles (`sim.transform` poses them).
+    pub rigid: bool,
+    pub cloth: bool,
+    /// An animated model (`sim.skin`).
+    pub skin: bool,
+    /// The frame steps the simulation (not paused, or a single step asked for).
+    pub advance: bool,
+    /// The vendor tracer: its structures (`as.*`) move with the scene, not the BVH's.
+    pub vendor: bool,
+}
+
+/// Who copies the dynamic vertices to their previous-frame buffer (the motion vectors'
+/// origin) before they change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Previous {
+    /// Nothing moves (a static scene).
+    None,
+    /// A paused frame: the copy alone, so the motion is zero.
+    Held,
+    /// The first step that writes the vertices, inside its row.
+    By(Row),
+}
+
+/// The frame's decisions (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FramePlan {
+    pub motion: Motion,
+    pub previous: Previous,
+    pub hybrid: Hybrid,
+    /// The adaptive hybrid's path this frame (`Path::March` for every other frame).
+    pub path: Path,
+    /// SSR marches this frame.
+    pub marches: bool,
+    /// The classification of the pixels a march could answer (`None`: no reflections).
+    pub classify: Option<Classify>,
+    /// The tiles' exchange rate for the classification (0: every tile SSR-first).
+    pub tile_rate: u32,
+    /// The march's and the rays' counts are recorded to price a march in rays.
+    pub counts: bool,
+    pub blur: BlurParams,
+    pub denoise: bool,
+    pub compose: ComposeMode,
+    shadow_map: bool,
+    shadow_rays: bool,
+    hiz: bool,
+    traces: bool,
+}
+
+impl FramePlan {
+    /// The plan of a frame of `st` with the scene's `motion`, the adaptive hybrid's
+    /// `path` (`Path::March` when `Hybrid::of(st)` is not adaptive), the exchange rate
+    /// the frames have measured (`applied`, `TILE_ONE` units), and whether the fail
+    /// mask is shown instead of the reflections.
+    pub fn new(st: &Settings, motion: Motion, path: Path, applied: u32, fail_mask_view: bool) -> Self {
+        let mode = st.mode;
+        let hybrid = Hybrid::of(st);
+        let path = if hybrid.adaptive() { path } else { Path::March };
+        let idle = path != Path::March;
+        let marches = mode.marches() && !idle;
+        let classify = mode.reflects().then_some(match (marches, path) {
+            (true, _) => Classify::Tiles,
+            (false, Path::SkipMarch) => Classify::SkipAll,
+            (false, _) => Classify::MaskOnly,
+        });
+        let tile_rate = match hybrid {
+            Hybrid::None => 0,
+            Hybrid::Fixed(rate) => rate,
+            Hybrid::Measured => applied,
+        };
+        let previous = match motion {
+            Motion { dynamic: false, .. } => Previous::None,
+            Motion { advance: false, .. } => Previous::Held,
+            Motion { rigid: true, .. } => Previous::By(Row::SimTransform),
+            Motion { cloth: true, .. } => Previous::By(Row::SimCloth),
+            Motion { skin: true, .. } => Previous::By(Row::SimSkin),
+            // Bodies without triangles (colliders alone): nothing to copy.
+            _ => Previous::None,
+        };
+        use crate::settings::Mode;
+        Self {
+            motion,
+            previous,
+            hybrid,
+            path,
+            marches,
+            classify,
+            tile_rate,
+            counts: marches && mode.traces(),
+            // Seams exist only where both sources do (not on the adaptive hybrid's idle
+            // paths, where SSR answers nothing).
+            blur: BlurParams {
+                radius: if mode.has_seams() && !idle { st.blur_radius } else { 0 },
+                band: st.blur_band,
+            },
+            denoise: mode.reflects() && st.glossy && (st.denoise_radius > 0 || st.denoise_history > 1),
+            compose: match mode {
+                Mode::Raster => ComposeMode::Plain,
+                _ if fail_mask_view => ComposeMode::FailMask,
+                Mode::Provenance => ComposeMode::Provenance,
+                Mode::Ssr | Mode::Hybrid | Mode::Rt => ComposeMode::Reflect,
+            },
+            shadow_map: st.shadows.uses_map(),
+            shadow_rays: st.shadows.traces(),
+            hiz: marches && st.ssr_hiz,
+            traces: mode.traces(),
+        }
+    }
+
+    /// Whether the frame records `row`.
+    pub fn runs(&self, row: Row) -> bool {
+        let m = self.motion;
+        let steps = m.dynamic && m.advance;
+        match row {
+            Row::Uniforms | Row::GBuffer | Row::LightDirect | Row::Compose => true,
+            Row::SimRigid => steps,
+            Row::SimTransform => steps && m.rigid,
+            Row::SimCloth => steps && m.cloth,
+            Row::SimSkin => steps && m.skin,
+            Row::DynamicBvh => steps && !m.vendor,
+            Row::DynamicAccel => steps && m.vendor,
+            Row::ShadowMap => self.shadow_map,
+            Row::ShadowClassify | Row::ShadowCompact | Row::ShadowTrace => self.shadow_rays,
+            Row::SsrHiz => self.hiz,
+            Row::SsrClassify | Row::ReflectMerge => self.classify.is_some(),
+            Row::SsrTrace => self.marches,
+            Row::SsrCompact | Row::RtReflect => self.traces,
+            Row::ReflectDenoise => self.denoise,
+        }
+    }
+
+    /// The rows the frame records, in table order.
+    pub fn rows(&self) -> Vec<Row> {
+        Row::ALL.iter().copied().filter(|&r| self.runs(r)).collect()
+    }
+
+    /// Whether the shadow rays trace (`light.direct` reads their visibility).
+    pub fn shadow_rays(&self) -> bool {
+        self.shadow_rays
+    }
+
+    /// Whether `row` is the step that keeps the previous vertices.
+    pub fn keeps_previous(&self, row: Row) -> bool {
+        self.previous == Previous::By(row)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::{HybridPolicy, Mode, Shadows};
+    use crate::shader_defines::TILE_ONE;
+    use Row::*;
+
+    fn plan(st: &Settings, motion: Motion, path: Path) -> FramePlan {
+        FramePlan::new(st, motion, path, 37, false)
+    }
+
+    fn settings(mode: Mode) -> Settings {
+        Settings {
+            mode,
+            ..Default::default()
+        }
+    }
+
+    const STILL: Motion = Motion {
+        dynamic: false,
+        rigid: false,
+        cloth: false,
+        skin: false,
+        advance: true,
+        vendor: false,
+    };
+
+    /// Each mode's rows on a static scene with the default (map) shadows.
+    #[test]
+    fn each_mode_runs_its_rows() {
+        let base = [Uniforms, ShadowMap, GBuffer, LightDirect];
+        let want: [(Mode, &[Row]); 5] = [
+            (Mode::Raster, &[]),
+            (Mode::Ssr, &[SsrHiz, SsrClassify, SsrTrace, ReflectMerge]),
+            (
+                Mode::Hybrid,
+                &[SsrHiz, SsrClassify, SsrTrace, SsrCompact, RtReflect, ReflectMerge],
+            ),
+            (Mode::Rt, &[SsrClassify, SsrCompact, RtReflect, ReflectMerge]),
+            (
+                Mode::Provenance,
+                &[SsrHiz, SsrClassify, SsrTrace, SsrCompact, RtReflect, ReflectMerge],
+            ),
+        ];
+        for (mode, rows) in want {
+            let st = Settings {
+                glossy: false,
+                shadows: Shadows::Map,
+                ..settings(mode)
+            };
+            let mut all: Vec<Row> = base.iter().chain(rows).copied().collect();
+            all.push(Compose);
+            all.sort_by_key(|&r| r as usize);
+            assert_eq!(plan(&st, STILL, Path::March).rows(), all, "{mode:?}");
+        }
+    }
+
+    /// The adaptive hybrid's paths: marching classifies tiles; skipping the march
+    /// classifies every pixel as skipped and blurs nothing; tracing all masks every
+    /// pixel. The rate is the measured one, or the fixed one, and 0 where nothing adapts.
+    #[test]
+    fn the_hybrids_paths_and_rates() {
+        let st = settings(Mode::Hybrid);
+        assert_eq!(Hybrid::of(&st), Hybrid::Measured);
+        let march = plan(&st, STILL, Path::March);
+        assert_eq!(
+            (march.classify, march.tile_rate, march.counts),
+            (Some(Classify::Tiles), 37, true)
+        );
+        assert_eq!(march.blur.radius, st.blur_radius);
+        let skip = plan(&st, STILL, Path::SkipMarch);
+        assert_eq!(
+            (skip.classify, skip.marches, skip.counts),
+            (Some(Classify::SkipAll), false, false)
+        );
+        assert_eq!(skip.blur.radius, 0, "no seams on an idle path");
+        assert!(!skip.runs(SsrHiz) && !skip.runs(SsrTrace) && skip.runs(RtReflect));
+        let all = plan(&st, STILL, Path::TraceAll);
+        assert_eq!(all.classify, Some(Classify::MaskOnly));
+        let fixed = Settings {
+            exchange_rate: 0.5,
+            ..st.clone()
+        };
+        assert_eq!(Hybrid::of(&fixed), Hybrid::Fixed(TILE_ONE / 2));
+        assert_eq!(plan(&fixed, STILL, Path::March).tile_rate, TILE_ONE / 2);
+        let first = Settings {
+            hybrid_policy: HybridPolicy::SsrFirst,
+            ..st.clone()
+        };
+        // Not adaptive: the path asked for is ignored, every tile marches first.
+        let p = plan(&first, STILL, Path::SkipMarch);
+        assert_eq!(
+            (p.path, p.tile_rate, p.classify),
+            (Path::March, 0, Some(Classify::Tiles))
+        );
+        for mode in [Mode::Ssr, Mode::Rt, Mode::Raster] {
+            assert_eq!(Hybrid::of(&settings(mode)), Hybrid::None, "{mode:?}");
+            assert_eq!(plan(&settings(mode), STILL, Path::TraceAll).tile_rate, 0);
+        }
+        assert_eq!(Hybrid::of_policy(&settings(Mode::Rt)), Hybrid::Measured);
+    }
+
+    /// The first step that writes the vertices keeps the previous ones; a paused frame
+    /// only copies them; the tracer decides which structure moves.
+    #[test]
+    fn motion_rows_and_who_keeps_the_previous_vertices() {
+        let st = settings(Mode::Hybrid);
+        let moving = Motion {
+            dynamic: true,
+            rigid: true,
+            cloth: true,
+            skin: true,
+            ..STILL
+        };
+        let p = plan(&st, moving, Path::March);
+        assert_eq!(p.previous, Previous::By(SimTransform));
+        assert!(p.keeps_previous(SimTransform) && !p.keeps_previous(SimCloth));
+        let steps: Vec<Row> = p
+            .rows()
+            .into_iter()
+            .filter(|r| (*r as usize) < ShadowMap as usize)
+            .collect();
+        assert_eq!(steps, [Uniforms, SimRigid, SimTransform, SimCloth, SimSkin, DynamicBvh]);
+        let cloth_skin = Motion { rigid: false, ..moving };
+        assert_eq!(plan(&st, cloth_skin, Path::March).previous, Previous::By(SimCloth));
+        let skin = Motion {
+            cloth: false,
+            ..cloth_skin
+        };
+        assert_eq!(plan(&st, skin, Path::March).previous, Previous::By(SimSkin));
+        let colliders = Motion { skin: false, ..skin };
+        assert_eq!(plan(&st, colliders, Path::March).previous, Previous::None);
+        let vendor = plan(&st, Motion { vendor: true, ..moving }, Path::March);
+        assert!(vendor.runs(DynamicAccel) && !vendor.runs(DynamicBvh));
+        let paused = plan(
+            &st,
+            Motion {
+                advance: false,
+                ..moving
+            },
+            Path::March,
+        );
+        assert_eq!(paused.previous, Previous::Held);
+        assert!(!paused.runs(SimRigid) && !paused.runs(SimTransform) && !paused.runs(DynamicBvh));
+        assert_eq!(plan(&st, STILL, Path::March).previous, Previous::None);
+    }
+
+    /// Shadows by rays add their three rows; the glossy filter runs with a radius or a
+    /// history; the fail-mask view replaces the reflections in the composite.
+    #[test]
+    fn shadows_denoise_and_compose() {
+        let rays = Settings {
+            shadows: Shadows::Rays,
+            ..settings(Mode::Rt)
+        };
+        let p = plan(&rays, STILL, Path::March);
+        assert!(p.shadow_rays() && !p.runs(ShadowMap));
+        assert!(p.runs(ShadowClassify) && p.runs(ShadowCompact) && p.runs(ShadowTrace));
+        let glossy = Settings {
+            glossy: true,
+            denoise_radius: 0,
+            denoise_history: 1,
+            ..settings(Mode::Hybrid)
+        };
+        assert!(!plan(&glossy, STILL, Path::March).denoise);
+        let history = Settings {
+            denoise_history: 4,
+            ..glossy.clone()
+        };
+        assert!(plan(&history, STILL, Path::March).runs(ReflectDenoise));
+        assert!(!plan(&settings(Mode::Raster), STILL, Path::March).denoise);
+        assert_eq!(
+            plan(&settings(Mode::Raster), STILL, Path::March).compose,
+            ComposeMode::Plain
+        );
+        let view = FramePlan::new(&settings(Mode::Hybrid), STILL, Path::March, 0, true);
+        assert_eq!(view.compose, ComposeMode::FailMask);
+        assert_eq!(
+            plan(&settings(Mode::Provenance), STILL, Path::March).compose,
+            ComposeMode::Provenance
+        );
+    }
+}

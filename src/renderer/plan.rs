@@ -10,7 +10,7 @@ use super::table::Row;
 use crate::passes::compose::ComposeMode;
 use crate::passes::reflect_merge::BlurParams;
 use crate::passes::ssr_trace::Classify;
-use crate::settings::{Hybrid, Settings};
+use crate::settings::{Hybrid, Mode, Settings};
 
 /// What moves in the scene, as the frame steps it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -95,7 +95,6 @@ impl FramePlan {
             // Bodies without triangles (colliders alone): nothing to copy.
             _ => Previous::None,
         };
-        use crate::settings::Mode;
         Self {
             motion,
             previous,
@@ -166,7 +165,7 @@ impl FramePlan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::settings::{HybridPolicy, Mode, Shadows};
+    use crate::settings::{HybridPolicy, Shadows};
     use crate::shader_defines::TILE_ONE;
     use Row::*;
 

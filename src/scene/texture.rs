@@ -193,13 +193,17 @@ mod tests {
         assert_eq!(layer_size([(5000, 10)], 2048), 2048);
     }
 
+    /// A 4x4 checker of `a` and `b`.
+    fn checker(a: image::Rgba<u8>, b: image::Rgba<u8>) -> RgbaImage {
+        RgbaImage::from_fn(4, 4, |x, y| if (x + y) % 2 == 0 { a } else { b })
+    }
+
     /// A 4x4 checker of two colours: level 0 is the texels themselves, level 1 the 2x2
     /// means in linear light, the chain ends at 1x1; a 3x5 image is resampled to 8x8.
     #[test]
     fn mip_chains_average_in_linear_light() {
-        let a = image::Rgba([200, 30, 10, 255]);
-        let b = image::Rgba([10, 90, 240, 255]);
-        let img = RgbaImage::from_fn(4, 4, |x, y| if (x + y) % 2 == 0 { a } else { b });
+        let (a, b) = (image::Rgba([200, 30, 10, 255]), image::Rgba([10, 90, 240, 255]));
+        let img = checker(a, b);
         let chain = mip_chain(&img, 4, false);
         assert_eq!(chain.len(), 3);
         assert_eq!(chain[0], img);
@@ -221,9 +225,7 @@ mod tests {
     /// (no sRGB curve), rounded to the nearest byte.
     #[test]
     fn data_mip_chains_average_the_data() {
-        let a = image::Rgba([200, 31, 11, 7]);
-        let b = image::Rgba([10, 91, 241, 255]);
-        let img = RgbaImage::from_fn(4, 4, |x, y| if (x + y) % 2 == 0 { a } else { b });
+        let img = checker(image::Rgba([200, 31, 11, 7]), image::Rgba([10, 91, 241, 255]));
         let chain = mip_chain(&img, 4, true);
         assert_eq!(chain[0], img);
         for level in &chain[1..] {

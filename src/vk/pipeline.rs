@@ -357,17 +357,18 @@ impl Pipeline {
                             .image_view(img.view)
                             .image_layout(vk::ImageLayout::GENERAL),
                     ),
-                    (Resource::Sampled(img, s), vk::DescriptorType::COMBINED_IMAGE_SAMPLER) => Info::Image(
-                        vk::DescriptorImageInfo::default()
-                            .image_view(img.view)
-                            .sampler(s.raw)
-                            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                    ),
-                    (Resource::SampledData(img, s), vk::DescriptorType::COMBINED_IMAGE_SAMPLER) => {
-                        assert!(img.data_view != vk::ImageView::null(), "binding {b}: no data view");
+                    (
+                        Resource::Sampled(img, s) | Resource::SampledData(img, s),
+                        vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    ) => {
+                        let view = match resource {
+                            Resource::SampledData(..) => img.data_view,
+                            _ => img.view,
+                        };
+                        assert!(view != vk::ImageView::null(), "binding {b}: the image has no such view");
                         Info::Image(
                             vk::DescriptorImageInfo::default()
-                                .image_view(img.data_view)
+                                .image_view(view)
                                 .sampler(s.raw)
                                 .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
                         )

@@ -92,6 +92,7 @@ fn main() {
          use crate::vk::Shader;\n",
     );
     let mut failures = Vec::new();
+    let mut all = Vec::new();
     for path in entries {
         let file = path.file_name().unwrap().to_string_lossy().to_string();
         let kind = match path.extension().and_then(|e| e.to_str()) {
@@ -116,6 +117,7 @@ fn main() {
                     spv.display().to_string()
                 )
                 .unwrap();
+                all.push(ident);
             }
             Err(e) => failures.push(e.to_string()),
         }
@@ -130,5 +132,11 @@ fn main() {
             failures.join("\n")
         );
     }
+    writeln!(
+        index,
+        "/// Every shader above.\npub const ALL: &[Shader] = &[{}];",
+        all.join(", ")
+    )
+    .unwrap();
     std::fs::write(out.join("shaders.rs"), index).expect("write shaders.rs");
 }

@@ -130,13 +130,16 @@ impl GBufferPass {
             self.pipeline.bind(
                 cmd,
                 &[
-                    Resource::Buffer(frame),
-                    Resource::Buffer(geometry.vertices),
-                    Resource::Buffer(surfaces.materials),
-                    Resource::Buffer(geometry.uvs),
-                    Resource::Sampled(surfaces.textures, surfaces.sampler),
-                    Resource::Buffer(geometry.previous),
-                    Resource::SampledData(surfaces.textures, surfaces.sampler),
+                    ("frame", Resource::Buffer(frame)),
+                    ("vertices", Resource::Buffer(geometry.vertices)),
+                    ("materials", Resource::Buffer(surfaces.materials)),
+                    ("uvs", Resource::Buffer(geometry.uvs)),
+                    ("scene_textures", Resource::Sampled(surfaces.textures, surfaces.sampler)),
+                    ("previous", Resource::Buffer(geometry.previous)),
+                    (
+                        "data_textures",
+                        Resource::SampledData(surfaces.textures, surfaces.sampler),
+                    ),
                 ],
                 &(),
             );

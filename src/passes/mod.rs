@@ -37,7 +37,7 @@ pub mod tracer;
 
 pub use tracer::{with_trace, KhrTrace, TraceKernel, Tracing};
 
-use crate::vk::{Buffer, Image, Resource};
+use crate::vk::{Bind, Buffer, Image, Resource};
 use ash::vk;
 use lbvh::Bvh;
 /// A mesh's triangles on the GPU (what the builders and both tracers read).
@@ -151,12 +151,12 @@ pub struct TraceScene<'a> {
 }
 
 impl<'a> TraceScene<'a> {
-    /// The eight traversal bindings of `glsl/shared/traverse.glsl` (static compact
-    /// nodes, vertices, indices, then dynamic nodes, vertices, indices, then the static
-    /// and dynamic triangles in leaf order) and the two triangle counts. A missing BVH
+    /// The traversal bindings of `glsl/shared/traverse.glsl` (the static and dynamic
+    /// compact nodes, vertices, indices and triangles in leaf order) and the two
+    /// triangle counts. A missing BVH
     /// is bound to the other's buffers with a triangle count of 0. Panics when the
     /// static BVH has no compact nodes, or older ones than its last build or refit.
-    pub fn bindings(&self) -> ([Resource<'a>; 8], u32, u32) {
+    pub fn bindings(&self) -> (Vec<Bind<'a>>, u32, u32) {
         let any = self.static_bvh.or(self.dynamic_bvh).expect("tracing needs a BVH");
         if let Some(s) = self.static_bvh {
             assert!(
@@ -168,15 +168,15 @@ impl<'a> TraceScene<'a> {
         let d = self.dynamic_bvh.unwrap_or(any);
         // Without a static BVH its slot is never read: any texel view fills it.
         let s_nodes = s.bvh.compact.as_ref().map_or(&s.bvh.node_texels, |c| &c.texels);
-        let resources = [
-            Resource::Texels(s_nodes),
-            Resource::Buffer(s.geometry.vertices),
-            Resource::Buffer(s.geometry.indices),
-            Resource::Texels(&d.bvh.node_texels),
-            Resource::Buffer(d.geometry.vertices),
-            Resource::Buffer(d.geometry.indices),
-            Resource::Texels(&s.bvh.tri_texels),
-            Resource::Texels(&d.bvh.tri_texels),
+        let resources = vec![
+            ("s_nodes", Resource::Texels(s_nodes)),
+            ("static_vertices", Resource::Buffer(s.geometry.vertices)),
+            ("static_indices", Resource::Buffer(s.geometry.indices)),
+            ("d_nodes", Resource::Texels(&d.bvh.node_texels)),
+            ("dynamic_vertices", Resource::Buffer(d.geometry.vertices)),
+            ("dynamic_indices", Resource::Buffer(d.geometry.indices)),
+            ("s_tris", Resource::Texels(&s.bvh.tri_texels)),
+            ("d_tris", Resource::Texels(&d.bvh.tri_texels)),
         ];
         let count = |b: Option<Traceable<'_>>| b.map_or(0, |b| b.geometry.tri_count);
         (resources, count(self.static_bvh), count(self.dynamic_bvh))

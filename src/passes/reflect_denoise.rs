@@ -170,22 +170,21 @@ impl DenoisePass {
             radius: params.radius,
             reflective_min: params.reflective_min,
         };
-        let list = [Resource::Buffer(inputs.list), Resource::Buffer(inputs.list_args)];
-        let gbuffer = [
-            Resource::Sampled(&g.depth, s),
-            Resource::Sampled(&g.normal, s),
-            Resource::Sampled(&g.albedo, s),
+        // What both steps read.
+        let shared = [
+            ("frame", Resource::Buffer(inputs.frame)),
+            ("gb_depth", Resource::Sampled(&g.depth, s)),
+            ("gb_normal", Resource::Sampled(&g.normal, s)),
+            ("gb_albedo", Resource::Sampled(&g.albedo, s)),
+            ("glossy_list", Resource::Buffer(inputs.list)),
+            ("glossy_args", Resource::Buffer(inputs.list_args)),
         ];
-        let frame_ubo = [Resource::Buffer(inputs.frame)];
-        let resources = [
-            &frame_ubo[..],
-            &[Resource::StorageImage(inputs.merged)],
-            &gbuffer,
-            &[Resource::StorageImage(&self.out)],
-            &list,
-            &[Resource::StorageImage(inputs.hit_distance)],
-        ]
-        .concat();
+        let own = [
+            ("merged", Resource::StorageImage(inputs.merged)),
+            ("denoised", Resource::StorageImage(&self.out)),
+            ("hit_distance", Resource::StorageImage(inputs.hit_distance)),
+        ];
+        let resources = [&shared[..], &own].concat();
         self.pipeline
             .dispatch(cmd, &resources, &push, Groups::Indirect(inputs.list_args));
         // RAW: the temporal step reads the filtered reflection.
@@ -206,21 +205,16 @@ impl DenoisePass {
             max_frames: params.history.max(1),
         };
         let (old, new) = (self.parity, 1 - self.parity);
-        let resources = [
-            &frame_ubo[..],
-            &[Resource::StorageImage(&self.out)],
-            &gbuffer,
-            &[
-                Resource::StorageImage(&self.history[old]),
-                Resource::StorageImage(&self.meta[old]),
-                Resource::StorageImage(&self.history[new]),
-                Resource::StorageImage(&self.meta[new]),
-                Resource::StorageImage(inputs.merged),
-            ],
-            &list,
-            &[Resource::Sampled(&g.motion, s)],
-        ]
-        .concat();
+        let own = [
+            ("current", Resource::StorageImage(&self.out)),
+            ("history_in", Resource::StorageImage(&self.history[old])),
+            ("meta_in", Resource::StorageImage(&self.meta[old])),
+            ("history_out", Resource::StorageImage(&self.history[new])),
+            ("meta_out", Resource::StorageImage(&self.meta[new])),
+            ("merged", Resource::StorageImage(inputs.merged)),
+            ("gb_motion", Resource::Sampled(&g.motion, s)),
+        ];
+        let resources = [&shared[..], &own].concat();
         self.temporal
             .dispatch(cmd, &resources, &push, Groups::Indirect(inputs.list_args));
         // RAW: compose reads the merged reflection (and the next frame the history).

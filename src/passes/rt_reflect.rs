@@ -81,24 +81,25 @@ impl RtReflectPass {
         };
         let s = &self.sampler;
         let d = &self.ctx.device;
-        let before = [
-            Resource::Buffer(inputs.frame),
-            Resource::Sampled(&inputs.gbuffer.depth, s),
-            Resource::Sampled(&inputs.gbuffer.normal, s),
-            Resource::Buffer(inputs.surfaces.materials),
-            Resource::Sampled(inputs.shadow_map, s),
-            Resource::Buffer(&inputs.list.pixels),
-            Resource::Buffer(&inputs.list.indirect),
-            Resource::StorageImage(&self.out),
+        let own = [
+            ("frame", Resource::Buffer(inputs.frame)),
+            ("gb_depth", Resource::Sampled(&inputs.gbuffer.depth, s)),
+            ("gb_normal", Resource::Sampled(&inputs.gbuffer.normal, s)),
+            ("materials", Resource::Buffer(inputs.surfaces.materials)),
+            ("shadow_map", Resource::Sampled(inputs.shadow_map, s)),
+            ("pixels", Resource::Buffer(&inputs.list.pixels)),
+            ("indirect", Resource::Buffer(&inputs.list.indirect)),
+            ("rt_out", Resource::StorageImage(&self.out)),
+            ("static_uvs", Resource::Buffer(inputs.surfaces.uvs[0])),
+            ("dynamic_uvs", Resource::Buffer(inputs.surfaces.uvs[1])),
+            (
+                "scene_textures",
+                Resource::Sampled(inputs.surfaces.textures, inputs.surfaces.sampler),
+            ),
+            ("gb_albedo", Resource::Sampled(&inputs.gbuffer.albedo, s)),
+            ("hit_distance", Resource::StorageImage(inputs.hit_distance)),
         ];
-        let after = [
-            Resource::Buffer(inputs.surfaces.uvs[0]),
-            Resource::Buffer(inputs.surfaces.uvs[1]),
-            Resource::Sampled(inputs.surfaces.textures, inputs.surfaces.sampler),
-            Resource::Sampled(&inputs.gbuffer.albedo, s),
-            Resource::StorageImage(inputs.hit_distance),
-        ];
-        let resources = with_trace(&before, trace, &after);
+        let resources = with_trace(&own, &trace);
         // WAR/WAW: the previous frame's merge reads and tracer writes of the colour are
         // done (and, for the vendor tracer, the compute passes' list, arguments and
         // images before its ray-tracing shaders read them).

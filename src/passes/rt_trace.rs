@@ -77,8 +77,11 @@ impl TracePass {
             dynamic_tris,
             any_hit: batch.any_hit as u32,
         };
-        let lists = [Resource::Buffer(batch.rays), Resource::Buffer(batch.hits)];
-        let resources = with_trace(&lists, trace, &[]);
+        let lists = [
+            ("rays", Resource::Buffer(batch.rays)),
+            ("hits", Resource::Buffer(batch.hits)),
+        ];
+        let resources = with_trace(&lists, &trace);
         self.kernel
             .over_count(NAME, cmd, &resources, &push, batch.count, &scene);
     }

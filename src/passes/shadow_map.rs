@@ -123,7 +123,10 @@ impl ShadowMapPass {
         for geometry in geometries {
             self.pipeline.bind(
                 cmd,
-                &[Resource::Buffer(frame), Resource::Buffer(geometry.vertices)],
+                &[
+                    ("frame", Resource::Buffer(frame)),
+                    ("vertices", Resource::Buffer(geometry.vertices)),
+                ],
                 &(),
             );
             // SAFETY: inside the rendering begun above, with the pipeline bound; the

@@ -106,13 +106,13 @@ impl ShadowTracePass {
         self.classify.dispatch(
             cmd,
             &[
-                Resource::Buffer(frame),
-                Resource::Sampled(&gbuffer.depth, s),
-                Resource::Sampled(&gbuffer.normal, s),
-                Resource::Sampled(&gbuffer.material, s),
-                Resource::Sampled(shadow_map, s),
-                Resource::StorageImage(&self.out.mask),
-                Resource::StorageImage(&self.out.visibility),
+                ("frame", Resource::Buffer(frame)),
+                ("gb_depth", Resource::Sampled(&gbuffer.depth, s)),
+                ("gb_normal", Resource::Sampled(&gbuffer.normal, s)),
+                ("gb_material", Resource::Sampled(&gbuffer.material, s)),
+                ("shadow_map", Resource::Sampled(shadow_map, s)),
+                ("mask", Resource::StorageImage(&self.out.mask)),
+                ("visibility", Resource::StorageImage(&self.out.visibility)),
             ],
             &ClassifyPush { shadows: shadows.gpu() },
             Groups::Cover([e.width, e.height, 1]),
@@ -135,15 +135,15 @@ impl ShadowTracePass {
         let (trace, static_tris, dynamic_tris) = scene.bindings();
         let d = &self.ctx.device;
         let s = &self.sampler;
-        let before = [
-            Resource::Buffer(frame),
-            Resource::Sampled(&gbuffer.depth, s),
-            Resource::Sampled(&gbuffer.normal, s),
-            Resource::Buffer(&list.pixels),
-            Resource::Buffer(&list.indirect),
-            Resource::StorageImage(&self.out.visibility),
+        let own = [
+            ("frame", Resource::Buffer(frame)),
+            ("gb_depth", Resource::Sampled(&gbuffer.depth, s)),
+            ("gb_normal", Resource::Sampled(&gbuffer.normal, s)),
+            ("pixels", Resource::Buffer(&list.pixels)),
+            ("indirect", Resource::Buffer(&list.indirect)),
+            ("visibility", Resource::StorageImage(&self.out.visibility)),
         ];
-        let resources = with_trace(&before, trace, &[]);
+        let resources = with_trace(&own, &trace);
         let push = TracePush {
             static_tris,
             dynamic_tris,

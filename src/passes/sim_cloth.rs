@@ -97,7 +97,7 @@ impl ClothPass {
         // WAR: the previous frame's reads of the particles and vertices are done.
         barrier::global(d, cmd, access::ALL_READ_WRITE, access::COMPUTE_READ_WRITE);
         self.integrate
-            .dispatch(cmd, &[Resource::Buffer(a)], &cloth.push, groups);
+            .dispatch(cmd, &[("particles", Resource::Buffer(a))], &cloth.push, groups);
         for _ in 0..cloth.passes / 2 {
             for (src, dst) in [(a, b), (b, a)] {
                 // RAW: this iteration reads the last one's positions; WAR: ... and
@@ -106,9 +106,9 @@ impl ClothPass {
                 self.relax.dispatch(
                     cmd,
                     &[
-                        Resource::Buffer(src),
-                        Resource::Buffer(dst),
-                        Resource::Buffer(&cloth.spheres),
+                        ("src", Resource::Buffer(src)),
+                        ("dst", Resource::Buffer(dst)),
+                        ("spheres", Resource::Buffer(&cloth.spheres)),
                     ],
                     &cloth.push,
                     groups,
@@ -119,7 +119,7 @@ impl ClothPass {
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
         self.vertices.dispatch(
             cmd,
-            &[Resource::Buffer(a), Resource::Buffer(world)],
+            &[("particles", Resource::Buffer(a)), ("world", Resource::Buffer(world))],
             &cloth.push,
             groups,
         );

@@ -106,10 +106,10 @@ impl SimSkinPass {
         self.pipeline.dispatch(
             cmd,
             &[
-                Resource::Buffer(objects),
-                Resource::Buffer(influences),
-                Resource::Buffer(joints),
-                Resource::Buffer(world),
+                ("objects", Resource::Buffer(objects)),
+                ("influences", Resource::Buffer(influences)),
+                ("joints", Resource::Buffer(joints)),
+                ("world", Resource::Buffer(world)),
             ],
             &[count, first],
             Groups::Cover([count, 1, 1]),

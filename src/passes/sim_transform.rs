@@ -111,9 +111,9 @@ impl SimTransformPass {
         self.pipeline.dispatch(
             cmd,
             &[
-                Resource::Buffer(objects),
-                Resource::Buffer(poses),
-                Resource::Buffer(world),
+                ("objects", Resource::Buffer(objects)),
+                ("poses", Resource::Buffer(poses)),
+                ("world", Resource::Buffer(world)),
             ],
             &count,
             Groups::Cover([count, 1, 1]),

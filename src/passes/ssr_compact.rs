@@ -113,19 +113,22 @@ impl CompactPass {
         let out = &self.out;
         // WAR: the previous frame's readers of the list and arguments are done.
         barrier::global(d, cmd, access::ALL_READ_WRITE, rw);
-        let counts = Resource::Buffer(&out.tile_counts);
+        let counts = ("tile_counts", Resource::Buffer(&out.tile_counts));
         self.count
-            .dispatch(cmd, &[Resource::StorageImage(mask), counts], &push, tiles);
+            .dispatch(cmd, &[("mask", Resource::StorageImage(mask)), counts], &push, tiles);
         // RAW: the scan reads the tile counts.
         barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
-        let scan = [Resource::Buffer(&out.tile_counts), Resource::Buffer(&out.indirect)];
+        let scan = [
+            ("tile_counts", Resource::Buffer(&out.tile_counts)),
+            ("indirect", Resource::Buffer(&out.indirect)),
+        ];
         self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
         // RAW: the scatter reads the tile offsets.
         barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
         let scatter = [
-            Resource::StorageImage(mask),
-            Resource::Buffer(&out.tile_counts),
-            Resource::Buffer(&out.pixels),
+            ("mask", Resource::StorageImage(mask)),
+            ("tile_offsets", Resource::Buffer(&out.tile_counts)),
+            ("pixels", Resource::Buffer(&out.pixels)),
         ];
         self.scatter.dispatch(cmd, &scatter, &push, tiles);
         // RAW: the ray-tracing pass reads the list and dispatches from the arguments.

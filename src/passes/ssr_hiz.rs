@@ -123,8 +123,8 @@ impl HiZPass {
             self.pipeline.dispatch(
                 cmd,
                 &[
-                    Resource::Sampled(depth, &self.sampler),
-                    Resource::Buffer(&self.out.buffer),
+                    ("gb_depth", Resource::Sampled(depth, &self.sampler)),
+                    ("pyramid", Resource::Buffer(&self.out.buffer)),
                 ],
                 &push,
                 Groups::Cover(cover),

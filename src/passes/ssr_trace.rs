@@ -245,7 +245,10 @@ impl SsrPass {
             // This frame's tile states first (`ssr_tiles.comp`).
             let tiles = tile_count(e) as u32;
             let push = [tiles, params.tile_rate, (seq.frames > 0) as u32];
-            let buffers = [Resource::Buffer(tiles_in), Resource::Buffer(tiles_out)];
+            let buffers = [
+                ("tiles_in", Resource::Buffer(tiles_in)),
+                ("tiles_out", Resource::Buffer(tiles_out)),
+            ];
             self.tiles.dispatch(cmd, &buffers, &push, Groups::Cover([tiles, 1, 1]));
             // RAW: the classification reads the states; WAW: the march adds to the counts.
             barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_WRITE);
@@ -253,21 +256,21 @@ impl SsrPass {
         pipeline.dispatch(
             cmd,
             &[
-                Resource::Buffer(frame),
-                Resource::Sampled(&gbuffer.depth, s),
-                Resource::Sampled(&gbuffer.normal, s),
-                Resource::Sampled(&gbuffer.material, s),
-                Resource::StorageImage(&out.color),
-                Resource::StorageImage(&out.mask),
-                Resource::Buffer(&out.march_list),
-                Resource::Buffer(&out.march_args),
-                Resource::Sampled(&gbuffer.albedo, s),
-                Resource::Sampled(&gbuffer.motion, s),
-                Resource::Buffer(&out.glossy_list),
-                Resource::Buffer(&out.glossy_args),
-                Resource::StorageImage(&out.hit_distance),
-                Resource::Buffer(tiles_out),
-                Resource::Buffer(&out.ssr_first_marches),
+                ("frame", Resource::Buffer(frame)),
+                ("gb_depth", Resource::Sampled(&gbuffer.depth, s)),
+                ("gb_normal", Resource::Sampled(&gbuffer.normal, s)),
+                ("gb_material", Resource::Sampled(&gbuffer.material, s)),
+                ("ssr_out", Resource::StorageImage(&out.color)),
+                ("fail_mask", Resource::StorageImage(&out.mask)),
+                ("march_list", Resource::Buffer(&out.march_list)),
+                ("march_args", Resource::Buffer(&out.march_args)),
+                ("gb_albedo", Resource::Sampled(&gbuffer.albedo, s)),
+                ("gb_motion", Resource::Sampled(&gbuffer.motion, s)),
+                ("glossy_list", Resource::Buffer(&out.glossy_list)),
+                ("glossy_args", Resource::Buffer(&out.glossy_args)),
+                ("hit_distance", Resource::StorageImage(&out.hit_distance)),
+                ("tiles", Resource::Buffer(tiles_out)),
+                ("ssr_first", Resource::Buffer(&out.ssr_first_marches)),
             ],
             &ClassifyPush {
                 min_confidence: params.min_confidence,
@@ -307,19 +310,19 @@ impl SsrPass {
         pipeline.dispatch(
             cmd,
             &[
-                Resource::Buffer(frame),
-                Resource::Sampled(&gbuffer.depth, s),
-                Resource::Sampled(&gbuffer.normal, s),
-                Resource::StorageImage(lit),
-                Resource::StorageImage(&out.color),
-                Resource::StorageImage(&out.mask),
-                Resource::Buffer(&out.march_list),
-                Resource::Buffer(&out.march_args),
-                Resource::Sampled(&gbuffer.albedo, s),
-                Resource::Sampled(&gbuffer.motion, s),
-                Resource::Buffer(&hiz.buffer),
-                Resource::StorageImage(&out.hit_distance),
-                Resource::Buffer(self.tiles_written()),
+                ("frame", Resource::Buffer(frame)),
+                ("gb_depth", Resource::Sampled(&gbuffer.depth, s)),
+                ("gb_normal", Resource::Sampled(&gbuffer.normal, s)),
+                ("lit", Resource::StorageImage(lit)),
+                ("ssr_out", Resource::StorageImage(&out.color)),
+                ("fail_mask", Resource::StorageImage(&out.mask)),
+                ("march_list", Resource::Buffer(&out.march_list)),
+                ("march_args", Resource::Buffer(&out.march_args)),
+                ("gb_albedo", Resource::Sampled(&gbuffer.albedo, s)),
+                ("gb_motion", Resource::Sampled(&gbuffer.motion, s)),
+                ("pyramid", Resource::Buffer(&hiz.buffer)),
+                ("hit_distance", Resource::StorageImage(&out.hit_distance)),
+                ("tiles", Resource::Buffer(self.tiles_written())),
             ],
             &MarchPush {
                 max_steps: params.max_steps,

@@ -11,7 +11,7 @@ use crate::settings::Tracer;
 use crate::shaders;
 use crate::vk::barrier::{access, Scope};
 use crate::vk::rt_pipeline::{Launch, RtPipeline, RtShaders};
-use crate::vk::{Groups, Pipeline, Resource, Shader};
+use crate::vk::{Bind, Groups, Pipeline, Resource, Shader};
 use ash::vk;
 use bytemuck::Pod;
 use std::sync::Arc;
@@ -48,11 +48,10 @@ impl<'a> From<KhrTrace<'a>> for Tracing<'a> {
 }
 
 impl<'a> Tracing<'a> {
-    /// The eight traversal bindings and the two triangle counts: `TraceScene::bindings`,
-    /// or for the vendor tracer those of `glsl/shared/trace_khr.glsl` (the top level,
-    /// the static vertices, indices and permutation, the dynamic vertices and indices;
-    /// the slots it leaves unused repeat a buffer, never bound).
-    pub fn bindings(&self) -> ([Resource<'a>; 8], u32, u32) {
+    /// The traversal bindings and the two triangle counts: `TraceScene::bindings`, or
+    /// for the vendor tracer those of `glsl/shared/trace_khr.glsl` (the top level, the
+    /// static vertices, indices and permutation, the dynamic vertices and indices).
+    pub fn bindings(&self) -> (Vec<Bind<'a>>, u32, u32) {
         match self {
             Tracing::Lbvh(s) => s.bindings(),
             Tracing::Khr(k) => {
@@ -62,15 +61,13 @@ impl<'a> Tracing<'a> {
                     .expect("tracing needs geometry");
                 let s = k.static_geometry.unwrap_or(any);
                 let d = k.dynamic_geometry.unwrap_or(any);
-                let resources = [
-                    Resource::Accel(k.tlas),
-                    Resource::Buffer(s.vertices),
-                    Resource::Buffer(s.indices),
-                    Resource::Buffer(k.static_perm),
-                    Resource::Buffer(d.vertices),
-                    Resource::Buffer(d.indices),
-                    Resource::Buffer(s.vertices),
-                    Resource::Buffer(s.vertices),
+                let resources = vec![
+                    ("scene_tlas", Resource::Accel(k.tlas)),
+                    ("static_vertices", Resource::Buffer(s.vertices)),
+                    ("static_indices", Resource::Buffer(s.indices)),
+                    ("static_perm", Resource::Buffer(k.static_perm)),
+                    ("dynamic_vertices", Resource::Buffer(d.vertices)),
+                    ("dynamic_indices", Resource::Buffer(d.indices)),
                 ];
                 let count = |g: Option<Geometry<'_>>| g.map_or(0, |g| g.tri_count);
                 (resources, count(k.static_geometry), count(k.dynamic_geometry))
@@ -87,15 +84,9 @@ impl<'a> Tracing<'a> {
     }
 }
 
-/// A tracing kernel's resources in binding order: `before`, then the eight trace
-/// bindings (`Tracing::bindings`), then `after`.
-pub fn with_trace<'r>(before: &[Resource<'r>], trace: [Resource<'r>; 8], after: &[Resource<'r>]) -> Vec<Resource<'r>> {
-    before
-        .iter()
-        .copied()
-        .chain(trace)
-        .chain(after.iter().copied())
-        .collect()
+/// A tracing kernel's resources: its own and the trace's (`Tracing::bindings`).
+pub fn with_trace<'r>(own: &[Bind<'r>], trace: &[Bind<'r>]) -> Vec<Bind<'r>> {
+    [own, trace].concat()
 }
 
 /// A tracing pass's kernel, for one tracer.
@@ -151,7 +142,7 @@ impl TraceKernel {
         &self,
         name: &str,
         cmd: vk::CommandBuffer,
-        resources: &[Resource<'_>],
+        resources: &[Bind<'_>],
         push: &P,
         list: &CompactOutputs,
         scene: &Tracing<'_>,
@@ -172,7 +163,7 @@ impl TraceKernel {
         &self,
         name: &str,
         cmd: vk::CommandBuffer,
-        resources: &[Resource<'_>],
+        resources: &[Bind<'_>],
         push: &P,
         count: u32,
         scene: &Tracing<'_>,

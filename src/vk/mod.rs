@@ -24,6 +24,6 @@ pub use context::{list_devices, Context, ContextDesc, Surface, WindowHandles};
 pub use device::DeviceInfo;
 pub use frame_sync::{Acquired, FrameSync};
 pub use image::{Image, Sampler};
-pub use pipeline::{GraphicsDesc, Groups, Pipeline, Resource, Shader};
+pub use pipeline::{Bind, GraphicsDesc, Groups, Pipeline, Resource, Shader};
 pub use swapchain::Swapchain;
 pub use timing::{remeasure, remeasure_readout, GpuTimer, TimerReadout, TimingCheck, Timings, Wall};

@@ -1,6 +1,8 @@
 //! Compute and graphics pipelines with push descriptors; the set layout is reflected
-//! from SPIR-V (niagara-style): a resource's binding is its position in the array
-//! passed to `bind`, and its kind is checked against the shader. A pipeline is typed by
+//! from SPIR-V (niagara-style). Resources are bound by name (`Bind`): each binding of
+//! the shader takes the resource given under its name (`spirv::Binding`), whatever the
+//! order they are given in, and its kind is checked against the shader; a binding left
+//! without its resource fails the bind. A pipeline is typed by
 //! its push-constant struct `P`: the block size reflected from SPIR-V must equal
 //! `size_of::<P>()` when it is created, and `dispatch`/`bind` accept only a `P`.
 //! `dispatch` is the one entry point of a compute pass: bind, push, dispatch.
@@ -8,7 +10,7 @@
 use super::buffer::Buffer;
 use super::context::Context;
 use super::image::{Image, Sampler};
-use super::spirv::{self, Reflection};
+use super::spirv::{self, Binding, Reflection};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use bytemuck::Pod;
@@ -27,7 +29,11 @@ pub enum Groups<'a> {
     Indirect(&'a Buffer),
 }
 
-/// One resource to bind, in binding order.
+/// A resource and the name of the shader binding it is for: the GLSL variable's name,
+/// or an anonymous block's name in snake_case (`spirv::Binding`).
+pub type Bind<'a> = (&'static str, Resource<'a>);
+
+/// One resource to bind.
 #[derive(Clone, Copy)]
 pub enum Resource<'a> {
     /// A storage or uniform buffer (the shader decides which).
@@ -42,6 +48,14 @@ pub enum Resource<'a> {
     Texels(&'a super::TexelView),
     /// A top-level acceleration structure (`accelerationStructureEXT`).
     Accel(&'a super::accel::Accel),
+}
+
+/// A descriptor as `vkCmdPushDescriptorSetKHR` takes it.
+enum Info {
+    Buffer(vk::DescriptorBufferInfo),
+    Image(vk::DescriptorImageInfo),
+    Texels(vk::BufferView),
+    Accel(vk::AccelerationStructureKHR),
 }
 
 /// A shader given by name (for errors) and SPIR-V bytes.
@@ -62,10 +76,11 @@ pub struct GraphicsDesc<'a> {
 /// A pipeline, its layout and its push-descriptor set layout; freed on drop.
 pub struct Pipeline {
     ctx: Arc<Context>,
+    name: &'static str,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
-    bindings: Vec<(u32, vk::DescriptorType)>,
+    bindings: Vec<Binding>,
     bind_point: vk::PipelineBindPoint,
     stages: vk::ShaderStageFlags,
     /// The push-constant struct the pipeline was created for.
@@ -88,27 +103,29 @@ pub(super) fn module(ctx: &Context, (name, bytes): Shader) -> Result<Module> {
     Ok(Module { raw, reflection })
 }
 
-/// Merges the bindings of several stages; the same binding must agree on its kind.
+/// Merges the bindings of several stages: a slot must have the same kind and name in
+/// every stage that uses it, and a name one slot only.
 pub(super) fn merge(
     name: &str,
     stages: &[(vk::ShaderStageFlags, &Reflection)],
-) -> Result<Vec<(u32, vk::DescriptorType, vk::ShaderStageFlags)>> {
-    let mut all: Vec<(u32, vk::DescriptorType, vk::ShaderStageFlags)> = Vec::new();
+) -> Result<Vec<(Binding, vk::ShaderStageFlags)>> {
+    let mut all: Vec<(Binding, vk::ShaderStageFlags)> = Vec::new();
     for (stage, r) in stages {
-        for &(b, ty) in &r.bindings {
-            match all.iter_mut().find(|e| e.0 == b) {
-                Some(e) if e.1 == ty => e.2 |= *stage,
+        for b in &r.bindings {
+            match all.iter_mut().find(|e| e.0.slot == b.slot || e.0.name == b.name) {
+                Some(e) if e.0 == *b => e.1 |= *stage,
                 Some(e) => {
+                    let (a, b) = (&e.0, b);
                     return Err(Error::Pipeline(format!(
-                        "pipeline {name}: binding {b} is {:?} in one stage and {ty:?} in another",
-                        e.1
-                    )))
+                        "pipeline {name}: binding {} is {:?} `{}` in one stage and binding {} {:?} `{}` in another",
+                        a.slot, a.kind, a.name, b.slot, b.kind, b.name
+                    )));
                 }
-                None => all.push((b, ty, *stage)),
+                None => all.push((b.clone(), *stage)),
             }
         }
     }
-    all.sort_by_key(|e| e.0);
+    all.sort_by_key(|e| e.0.slot);
     Ok(all)
 }
 
@@ -137,20 +154,21 @@ impl Pipeline {
     /// owns them from here.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn from_parts<P: Pod>(
-        ctx: &Arc<Context>,
+        (ctx, name): (&Arc<Context>, &'static str),
         raw: vk::Pipeline,
         (set_layout, layout): (vk::DescriptorSetLayout, vk::PipelineLayout),
-        bindings: &[(u32, vk::DescriptorType, vk::ShaderStageFlags)],
+        bindings: &[(Binding, vk::ShaderStageFlags)],
         bind_point: vk::PipelineBindPoint,
         stages: vk::ShaderStageFlags,
         push_size: u32,
     ) -> Self {
         Self {
             ctx: ctx.clone(),
+            name,
             raw,
             layout,
             set_layout,
-            bindings: bindings.iter().map(|b| (b.0, b.1)).collect(),
+            bindings: bindings.iter().map(|b| b.0.clone()).collect(),
             bind_point,
             stages,
             push_type: TypeId::of::<P>(),
@@ -166,18 +184,18 @@ impl Pipeline {
     pub(super) fn layouts(
         ctx: &Context,
         name: &str,
-        bindings: &[(u32, vk::DescriptorType, vk::ShaderStageFlags)],
+        bindings: &[(Binding, vk::ShaderStageFlags)],
         push_stages: vk::ShaderStageFlags,
         push_size: u32,
     ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
         let vk_bindings: Vec<_> = bindings
             .iter()
-            .map(|&(b, ty, st)| {
+            .map(|(b, st)| {
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(b)
-                    .descriptor_type(ty)
+                    .binding(b.slot)
+                    .descriptor_type(b.kind)
                     .descriptor_count(1)
-                    .stage_flags(st)
+                    .stage_flags(*st)
             })
             .collect();
         let info = vk::DescriptorSetLayoutCreateInfo::default()
@@ -253,10 +271,11 @@ impl Pipeline {
             ctx.set_name(raw, name);
             Ok(Self {
                 ctx: ctx.clone(),
+                name,
                 raw,
                 layout,
                 set_layout,
-                bindings: bindings.iter().map(|b| (b.0, b.1)).collect(),
+                bindings: bindings.iter().map(|b| b.0.clone()).collect(),
                 bind_point: vk::PipelineBindPoint::COMPUTE,
                 stages: stage,
                 push_type: TypeId::of::<P>(),
@@ -303,10 +322,11 @@ impl Pipeline {
             ctx.set_name(raw, name);
             Ok(Self {
                 ctx: ctx.clone(),
+                name,
                 raw,
                 layout,
                 set_layout,
-                bindings: bindings.iter().map(|b| (b.0, b.1)).collect(),
+                bindings: bindings.iter().map(|b| b.0.clone()).collect(),
                 bind_point: vk::PipelineBindPoint::GRAPHICS,
                 stages: push_stages,
                 push_type: TypeId::of::<P>(),
@@ -323,10 +343,13 @@ impl Pipeline {
         result
     }
 
-    /// Binds the pipeline, pushes its descriptors (`resources[i]` is binding `i`;
-    /// bindings the compiler removed as unused are skipped) and its push constants `P`
-    /// (the type the pipeline was created with). Graphics passes draw after it.
-    pub fn bind<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Resource<'_>], push: &P) {
+    /// Binds the pipeline, pushes its descriptors (each binding the resource named for
+    /// it in `resources`, in any order; a resource for a binding the compiler removed as
+    /// unused is passed over) and its push constants `P` (the type the pipeline was
+    /// created with). Graphics passes draw after it. Panics, naming the pipeline and
+    /// the binding, when a binding has no resource or one of another kind, or when two
+    /// resources are given one name.
+    pub fn bind<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Bind<'_>], push: &P) {
         assert!(
             TypeId::of::<P>() == self.push_type,
             "pipeline created for other push constants than {}",
@@ -334,52 +357,7 @@ impl Pipeline {
         );
         let push = bytemuck::bytes_of(push);
         debug_assert_eq!(push.len() as u32, self.push_size);
-        enum Info {
-            Buffer(vk::DescriptorBufferInfo),
-            Image(vk::DescriptorImageInfo),
-            Texels(vk::BufferView),
-            Accel(vk::AccelerationStructureKHR),
-        }
-        let infos: Vec<(u32, vk::DescriptorType, Info)> = self
-            .bindings
-            .iter()
-            .map(|&(b, ty)| {
-                let resource = resources
-                    .get(b as usize)
-                    .unwrap_or_else(|| panic!("binding {b} ({ty:?}) has no resource: {} given", resources.len()));
-                let info = match (resource, ty) {
-                    (
-                        Resource::Buffer(buf),
-                        vk::DescriptorType::STORAGE_BUFFER | vk::DescriptorType::UNIFORM_BUFFER,
-                    ) => Info::Buffer(buf.info()),
-                    (Resource::StorageImage(img), vk::DescriptorType::STORAGE_IMAGE) => Info::Image(
-                        vk::DescriptorImageInfo::default()
-                            .image_view(img.view)
-                            .image_layout(vk::ImageLayout::GENERAL),
-                    ),
-                    (
-                        Resource::Sampled(img, s) | Resource::SampledData(img, s),
-                        vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    ) => {
-                        let view = match resource {
-                            Resource::SampledData(..) => img.data_view,
-                            _ => img.view,
-                        };
-                        assert!(view != vk::ImageView::null(), "binding {b}: the image has no such view");
-                        Info::Image(
-                            vk::DescriptorImageInfo::default()
-                                .image_view(view)
-                                .sampler(s.raw)
-                                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                        )
-                    }
-                    (Resource::Texels(view), vk::DescriptorType::UNIFORM_TEXEL_BUFFER) => Info::Texels(view.raw),
-                    (Resource::Accel(a), vk::DescriptorType::ACCELERATION_STRUCTURE_KHR) => Info::Accel(a.raw),
-                    _ => panic!("binding {b}: the shader wants {ty:?}, a different kind of resource was given"),
-                };
-                (b, ty, info)
-            })
-            .collect();
+        let infos = self.descriptor_infos(resources);
         // An acceleration structure is written through a struct chained to its write.
         let mut accels: Vec<vk::WriteDescriptorSetAccelerationStructureKHR<'_>> = infos
             .iter()
@@ -422,6 +400,67 @@ impl Pipeline {
         }
     }
 
+    /// Each binding's descriptor: the resource named for it (see `bind`).
+    fn descriptor_infos(&self, resources: &[Bind<'_>]) -> Vec<(u32, vk::DescriptorType, Info)> {
+        let pipeline = self.name;
+        for (i, (n, _)) in resources.iter().enumerate() {
+            assert!(
+                resources[..i].iter().all(|(m, _)| m != n),
+                "pipeline {pipeline}: two resources given for `{n}`"
+            );
+        }
+        self.bindings
+            .iter()
+            .map(|binding| {
+                let (b, ty, name) = (binding.slot, binding.kind, binding.name.as_str());
+                let resource = &resources
+                    .iter()
+                    .find(|(n, _)| *n == name)
+                    .unwrap_or_else(|| {
+                        let given: Vec<_> = resources.iter().map(|r| r.0).collect();
+                        panic!("pipeline {pipeline}: binding {b} `{name}` ({ty:?}) has no resource; given {given:?}")
+                    })
+                    .1;
+                let info = match (resource, ty) {
+                    (
+                        Resource::Buffer(buf),
+                        vk::DescriptorType::STORAGE_BUFFER | vk::DescriptorType::UNIFORM_BUFFER,
+                    ) => Info::Buffer(buf.info()),
+                    (Resource::StorageImage(img), vk::DescriptorType::STORAGE_IMAGE) => Info::Image(
+                        vk::DescriptorImageInfo::default()
+                            .image_view(img.view)
+                            .image_layout(vk::ImageLayout::GENERAL),
+                    ),
+                    (
+                        Resource::Sampled(img, s) | Resource::SampledData(img, s),
+                        vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    ) => {
+                        let view = match resource {
+                            Resource::SampledData(..) => img.data_view,
+                            _ => img.view,
+                        };
+                        assert!(
+                            view != vk::ImageView::null(),
+                            "pipeline {pipeline}: binding {b} `{name}`: the image has no such view"
+                        );
+                        Info::Image(
+                            vk::DescriptorImageInfo::default()
+                                .image_view(view)
+                                .sampler(s.raw)
+                                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                        )
+                    }
+                    (Resource::Texels(view), vk::DescriptorType::UNIFORM_TEXEL_BUFFER) => Info::Texels(view.raw),
+                    (Resource::Accel(a), vk::DescriptorType::ACCELERATION_STRUCTURE_KHR) => Info::Accel(a.raw),
+                    _ => panic!(
+                        "pipeline {pipeline}: binding {b} `{name}` wants {ty:?}, a different kind of resource was given"
+                    ),
+                };
+                (b, ty, info)
+            })
+            .collect()
+    }
+
     /// Workgroups that cover `size` invocations per axis.
     pub fn groups_covering(&self, size: [u32; 3]) -> [u32; 3] {
         [0, 1, 2].map(|i| size[i].div_ceil(self.local_size[i]))
@@ -430,7 +469,7 @@ impl Pipeline {
     /// Binds, pushes and dispatches: the one way a compute pass runs a kernel. Direct
     /// counts must be within the device's `maxComputeWorkGroupCount` (the renderer
     /// checks its sizes against it when it is created).
-    pub fn dispatch<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Resource<'_>], push: &P, groups: Groups<'_>) {
+    pub fn dispatch<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Bind<'_>], push: &P, groups: Groups<'_>) {
         self.bind(cmd, resources, push);
         let device = &self.ctx.device;
         let direct = match groups {

@@ -5,7 +5,7 @@
 
 use super::buffer::Buffer;
 use super::context::Context;
-use super::pipeline::{merge, module, push_size, Pipeline, Resource, Shader};
+use super::pipeline::{merge, module, push_size, Bind, Pipeline, Shader};
 use crate::error::{Result, VkContext};
 use ash::vk;
 use bytemuck::Pod;
@@ -133,7 +133,7 @@ impl RtPipeline {
         };
         ctx.set_name(raw, name);
         let pipeline = Pipeline::from_parts::<P>(
-            ctx,
+            (ctx, name),
             raw,
             layouts,
             &bindings,
@@ -147,7 +147,7 @@ impl RtPipeline {
 
     /// Binds, pushes and launches the rays: one per entry, `gl_LaunchIDEXT.x` (the
     /// launch's width; height and depth 1).
-    pub fn trace<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Resource<'_>], push: &P, launch: Launch<'_>) {
+    pub fn trace<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Bind<'_>], push: &P, launch: Launch<'_>) {
         self.pipeline.bind(cmd, resources, push);
         let rt = self.pipeline.ctx().ray_tracing.as_ref().expect("made with ray tracing");
         let [raygen, miss, hit] = &self.regions;

@@ -43,8 +43,8 @@ const SC_STORAGE_BUFFER: u32 = 12;
 /// What a module declares.
 #[derive(Debug, Default, Clone)]
 pub struct Reflection {
-    /// (binding, type) of every descriptor in set 0, sorted by binding.
-    pub bindings: Vec<(u32, vk::DescriptorType)>,
+    /// Every descriptor of set 0 the module uses, sorted by slot.
+    pub bindings: Vec<Binding>,
     /// Bytes of the push-constant block (0: the module uses none): the end of its last
     /// member.
     pub push_size: u32,
@@ -54,6 +54,32 @@ pub struct Reflection {
     pub structs: HashMap<String, Vec<(String, u32)>>,
     /// Struct name → array stride of any (runtime) array whose element is that struct.
     pub array_strides: HashMap<String, u32>,
+}
+
+/// One descriptor a module declares: its slot, its kind and its name (the variable's,
+/// or for an anonymous block its block's, in snake_case: `buffer TileCosts { .. };` is
+/// `tile_costs`). Resources are bound by this name (`vk::Bind`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Binding {
+    pub slot: u32,
+    pub kind: vk::DescriptorType,
+    pub name: String,
+}
+
+/// `CamelCase` as `snake_case` (a block's type name as a binding name).
+pub fn snake_case(name: &str) -> String {
+    let mut out = String::with_capacity(name.len() + 4);
+    for (i, c) in name.chars().enumerate() {
+        if c.is_ascii_uppercase() {
+            if i > 0 {
+                out.push('_');
+            }
+            out.push(c.to_ascii_lowercase());
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 /// Words of a SPIR-V module given as bytes (as `include_bytes!` yields them).
@@ -188,6 +214,25 @@ impl Module {
         Ok(size)
     }
 
+    /// The name resources are bound by of variable `id` (a pointer `ptr`) at `binding`:
+    /// its own, or its anonymous block's in snake_case.
+    fn binding_name(&self, name: &'static str, (id, ptr): (u32, u32), binding: u32) -> Result<String> {
+        if let Some(n) = self.names.get(&id).filter(|n| !n.is_empty()) {
+            return Ok(n.clone());
+        }
+        let block = match self.types.get(&ptr) {
+            Some((OP_TYPE_POINTER, ops)) if ops.len() >= 2 => self.element(ops[1]),
+            _ => return Err(Error::Spirv(name, format!("variable {id} is not a pointer"))),
+        };
+        match self.names.get(&block).filter(|n| !n.is_empty()) {
+            Some(n) => Ok(snake_case(n)),
+            None => Err(Error::Spirv(
+                name,
+                format!("binding {binding} has no name to bind it by"),
+            )),
+        }
+    }
+
     /// The descriptor type of variable `id` (a pointer `ptr` of storage class `class`)
     /// at `binding`.
     fn descriptor_type(
@@ -253,10 +298,20 @@ pub fn reflect(name: &'static str, words: &[u32]) -> Result<Reflection> {
         if module.decorations.get(&(id, DEC_SET)).copied().unwrap_or(0) != 0 {
             return Err(Error::Spirv(name, "only descriptor set 0 is supported".into()));
         }
-        out.bindings
-            .push((binding, module.descriptor_type(name, (id, ptr, class), binding)?));
+        let kind = module.descriptor_type(name, (id, ptr, class), binding)?;
+        out.bindings.push(Binding {
+            slot: binding,
+            kind,
+            name: module.binding_name(name, (id, ptr), binding)?,
+        });
     }
-    out.bindings.sort_by_key(|b| b.0);
+    out.bindings.sort_by_key(|b| b.slot);
+    for (i, b) in out.bindings.iter().enumerate() {
+        if let Some(other) = out.bindings[..i].iter().find(|o| o.name == b.name) {
+            let both = format!("bindings {} and {} are both named {}", other.slot, b.slot, b.name);
+            return Err(Error::Spirv(name, both));
+        }
+    }
     // The named structs' member offsets and the arrays' strides, for layout checks.
     for (&id, (op, ops)) in &module.types {
         if *op == OP_TYPE_STRUCT {

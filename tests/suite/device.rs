@@ -106,6 +106,70 @@ fn pipeline_push_type_must_match_the_shader() {
     assert!(Pipeline::compute::<u32>(&ctx, "test.light", speculum::shaders::LIGHT_DIRECT_COMP).is_ok());
 }
 
+/// Resources are bound by the shader's names, not by their place in the list: a
+/// binding left without its resource (a misspelt name), a resource of another kind, or
+/// two resources under one name fail the bind with a message naming the pipeline and
+/// the binding, before anything is recorded. glossy.rs binds this kernel in shuffled
+/// order and checks its output.
+#[test]
+fn bindings_go_by_name() {
+    use speculum::vk::{Buffer, Pipeline, Resource};
+    let ctx = common::context();
+    let shader = speculum::shaders::GLOSSY_SAMPLE_COMP;
+    let pipeline = Pipeline::compute::<u32>(&ctx, "test.by_name", shader).unwrap();
+    let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::UNIFORM_BUFFER;
+    let [a, b, c] = ["a", "b", "c"].map(|n| Buffer::with_data(&ctx, n, usage, &[7u8; 1024]).unwrap());
+    let image = speculum::vk::Image::storage(
+        &ctx,
+        "test.image",
+        ash::vk::Extent2D { width: 4, height: 4 },
+        ash::vk::Format::R32_UINT,
+    )
+    .unwrap();
+    let cases: [(&[speculum::vk::Bind<'_>], &str); 3] = [
+        (
+            &[
+                ("frame", Resource::Buffer(&a)),
+                ("case", Resource::Buffer(&b)),
+                ("directions", Resource::Buffer(&c)),
+            ],
+            "binding 1 `cases` (STORAGE_BUFFER) has no resource",
+        ),
+        (
+            &[
+                ("frame", Resource::Buffer(&a)),
+                ("cases", Resource::StorageImage(&image)),
+                ("directions", Resource::Buffer(&c)),
+            ],
+            "binding 1 `cases` wants STORAGE_BUFFER",
+        ),
+        (
+            &[
+                ("frame", Resource::Buffer(&a)),
+                ("cases", Resource::Buffer(&b)),
+                ("cases", Resource::Buffer(&c)),
+            ],
+            "two resources given for `cases`",
+        ),
+    ];
+    let mut messages = Vec::new();
+    ctx.one_shot(|cmd| {
+        for (resources, _) in &cases {
+            let bound = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| pipeline.bind(cmd, resources, &1u32)));
+            let err = bound.expect_err("the bind must fail");
+            let msg = err.downcast_ref::<String>().cloned().unwrap_or_default();
+            messages.push(msg);
+        }
+    })
+    .unwrap();
+    for (msg, (_, want)) in messages.iter().zip(&cases) {
+        assert!(
+            msg.contains("test.by_name") && msg.contains(want),
+            "{msg:?} should say {want:?}"
+        );
+    }
+}
+
 /// The device limits the renderer checks against, printed for the record.
 #[test]
 fn device_limits_are_reported() {

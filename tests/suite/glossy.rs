@@ -75,7 +75,12 @@ fn glossy_directions_match_cpu_reference() {
         let pipeline =
             Pipeline::compute::<u32>(&ctx, "test.glossy_sample", speculum::shaders::GLOSSY_SAMPLE_COMP).unwrap();
         ctx.one_shot(|cmd| {
-            let res = [Resource::Buffer(&ubo), Resource::Buffer(&input), Resource::Buffer(&out)];
+            // Bound by name, in another order than the shader's slots.
+            let res = [
+                ("directions", Resource::Buffer(&out)),
+                ("frame", Resource::Buffer(&ubo)),
+                ("cases", Resource::Buffer(&input)),
+            ];
             pipeline.dispatch(cmd, &res, &(n_cases as u32), Groups::Cover([n_cases as u32, 1, 1]));
         })
         .unwrap();

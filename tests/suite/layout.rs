@@ -217,24 +217,25 @@ fn layout_check_detects_a_mismatch() {
     assert!(result.is_err());
 }
 
-/// Descriptor reflection sees light.direct's bindings in order with their kinds.
+/// Descriptor reflection sees light.direct's bindings in order with their kinds and
+/// the names they are bound by.
 #[test]
 fn light_direct_bindings_are_reflected() {
     use ash::vk::DescriptorType as D;
     let r = reflected(shaders::LIGHT_DIRECT_COMP);
-    let kinds: Vec<_> = r.bindings.iter().map(|b| b.1).collect();
+    let got: Vec<_> = r.bindings.iter().map(|b| (b.slot, b.kind, b.name.as_str())).collect();
     assert_eq!(
-        kinds,
+        got,
         [
-            D::UNIFORM_BUFFER,
-            D::COMBINED_IMAGE_SAMPLER,
-            D::COMBINED_IMAGE_SAMPLER,
-            D::COMBINED_IMAGE_SAMPLER,
-            D::COMBINED_IMAGE_SAMPLER,
-            D::COMBINED_IMAGE_SAMPLER,
-            D::STORAGE_IMAGE,
-            D::COMBINED_IMAGE_SAMPLER,
-            D::STORAGE_IMAGE
+            (0, D::UNIFORM_BUFFER, "frame"),
+            (1, D::COMBINED_IMAGE_SAMPLER, "gb_depth"),
+            (2, D::COMBINED_IMAGE_SAMPLER, "gb_normal"),
+            (3, D::COMBINED_IMAGE_SAMPLER, "gb_albedo"),
+            (4, D::COMBINED_IMAGE_SAMPLER, "gb_material"),
+            (5, D::COMBINED_IMAGE_SAMPLER, "shadow_map"),
+            (6, D::STORAGE_IMAGE, "lit"),
+            (7, D::COMBINED_IMAGE_SAMPLER, "gb_motion"),
+            (8, D::STORAGE_IMAGE, "visibility"),
         ]
     );
     assert_eq!(
@@ -250,15 +251,43 @@ fn rt_trace_reads_the_bvh_as_texel_buffers() {
     use ash::vk::DescriptorType as D;
     let r = reflected(shaders::RT_TRACE_COMP);
     // The vertices and indices (3, 4, 6, 7) serve only hit attributes: unused here.
+    let got: Vec<_> = r.bindings.iter().map(|b| (b.slot, b.kind, b.name.as_str())).collect();
     assert_eq!(
-        r.bindings,
+        got,
         [
-            (0, D::STORAGE_BUFFER), // rays
-            (1, D::STORAGE_BUFFER), // hits
-            (2, D::UNIFORM_TEXEL_BUFFER),
-            (5, D::UNIFORM_TEXEL_BUFFER),
-            (8, D::UNIFORM_TEXEL_BUFFER),
-            (9, D::UNIFORM_TEXEL_BUFFER)
+            (0, D::STORAGE_BUFFER, "rays"),
+            (1, D::STORAGE_BUFFER, "hits"),
+            (2, D::UNIFORM_TEXEL_BUFFER, "s_nodes"),
+            (5, D::UNIFORM_TEXEL_BUFFER, "d_nodes"),
+            (8, D::UNIFORM_TEXEL_BUFFER, "s_tris"),
+            (9, D::UNIFORM_TEXEL_BUFFER, "d_tris")
         ]
     );
+}
+
+/// Every binding of every shader has a name to be bound by, one binding a name (the
+/// reflection refuses a module otherwise); an anonymous block is named by its block in
+/// snake_case.
+#[test]
+fn every_binding_has_a_name() {
+    assert!(shaders::ALL.len() >= 40, "{} shaders", shaders::ALL.len());
+    for &shader in shaders::ALL {
+        let r = reflected(shader);
+        for b in &r.bindings {
+            let ok = !b.name.is_empty()
+                && b.name
+                    .chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+            assert!(ok, "{}: binding {} is named {:?}", shader.0, b.slot, b.name);
+        }
+    }
+    // `buffer TileCounts { .. };` in compact_count.comp.
+    let names: Vec<_> = reflected(shaders::COMPACT_COUNT_COMP)
+        .bindings
+        .into_iter()
+        .map(|b| b.name)
+        .collect();
+    assert_eq!(names, ["mask", "tile_counts"]);
+    assert_eq!(speculum::vk::spirv::snake_case("TileCounts"), "tile_counts");
+    assert_eq!(speculum::vk::spirv::snake_case("lit"), "lit");
 }

@@ -319,9 +319,9 @@ impl LbvhBuilder {
         self.bounds.dispatch(
             cmd,
             &[
-                Resource::Buffer(geom.vertices),
-                Resource::Buffer(geom.indices),
-                Resource::Buffer(&bvh.bounds),
+                ("vertices", Resource::Buffer(geom.vertices)),
+                ("indices", Resource::Buffer(geom.indices)),
+                ("bounds", Resource::Buffer(&bvh.bounds)),
             ],
             &n,
             Groups::Exact([n.div_ceil(LBVH_WG * LBVH_BOUNDS_ITEMS), 1, 1]),
@@ -336,11 +336,11 @@ impl LbvhBuilder {
         self.morton.dispatch(
             cmd,
             &[
-                Resource::Texels(&geom.texels.vertices),
-                Resource::Texels(&geom.texels.indices),
-                Resource::Buffer(&bvh.bounds),
-                Resource::Buffer(&bvh.sort.keys[0]),
-                Resource::Buffer(&bvh.sort.values[0]),
+                ("vertices", Resource::Texels(&geom.texels.vertices)),
+                ("indices", Resource::Texels(&geom.texels.indices)),
+                ("bounds", Resource::Buffer(&bvh.bounds)),
+                ("keys", Resource::Buffer(&bvh.sort.keys[0])),
+                ("values", Resource::Buffer(&bvh.sort.values[0])),
             ],
             &KeyPush {
                 tri_count: n,
@@ -385,10 +385,10 @@ impl LbvhBuilder {
         self.refit_leaves.dispatch(
             cmd,
             &[
-                Resource::Texels(&geom.texels.vertices),
-                Resource::Texels(&geom.texels.indices),
-                Resource::Buffer(&bvh.tnodes),
-                Resource::Buffer(&bvh.ttris),
+                ("vertices", Resource::Texels(&geom.texels.vertices)),
+                ("indices", Resource::Texels(&geom.texels.indices)),
+                ("t_nodes", Resource::Buffer(&bvh.tnodes)),
+                ("t_tris", Resource::Buffer(&bvh.ttris)),
             ],
             &n,
             Groups::Cover([n, 1, 1]),
@@ -401,9 +401,9 @@ impl LbvhBuilder {
             self.refit_level.dispatch(
                 cmd,
                 &[
-                    Resource::Buffer(&bvh.tnodes),
-                    Resource::Buffer(&schedule.order),
-                    Resource::Texels(&bvh.node_texels),
+                    ("t_nodes", Resource::Buffer(&bvh.tnodes)),
+                    ("order", Resource::Buffer(&schedule.order)),
+                    ("node_texels", Resource::Texels(&bvh.node_texels)),
                 ],
                 &RangePush {
                     first: l[0],
@@ -419,9 +419,9 @@ impl LbvhBuilder {
             self.refit_top.dispatch(
                 cmd,
                 &[
-                    Resource::Buffer(&bvh.tnodes),
-                    Resource::Buffer(&schedule.order),
-                    Resource::Buffer(&schedule.levels),
+                    ("t_nodes", Resource::Buffer(&bvh.tnodes)),
+                    ("order", Resource::Buffer(&schedule.order)),
+                    ("levels", Resource::Buffer(&schedule.levels)),
                 ],
                 &RangePush {
                     first: big as u32,
@@ -457,14 +457,14 @@ impl LbvhBuilder {
         self.fit.dispatch(
             cmd,
             &[
-                Resource::Texels(&geom.texels.vertices),
-                Resource::Texels(&geom.texels.indices),
-                Resource::Buffer(&bvh.sort.keys[0]),
-                Resource::Buffer(&bvh.sort.values[0]),
-                Resource::Buffer(&bvh.ends),
-                Resource::Buffer(&bvh.tnodes),
-                Resource::Buffer(&bvh.ttris),
-                Resource::Buffer(&bvh.costs),
+                ("vertices", Resource::Texels(&geom.texels.vertices)),
+                ("indices", Resource::Texels(&geom.texels.indices)),
+                ("keys", Resource::Buffer(&bvh.sort.keys[0])),
+                ("values", Resource::Buffer(&bvh.sort.values[0])),
+                ("ends", Resource::Buffer(&bvh.ends)),
+                ("t_nodes", Resource::Buffer(&bvh.tnodes)),
+                ("t_tris", Resource::Buffer(&bvh.ttris)),
+                ("costs", Resource::Buffer(&bvh.costs)),
             ],
             &KeyPush {
                 tri_count: geom.tri_count,
@@ -493,7 +493,10 @@ impl LbvhBuilder {
         timer.begin(cmd, COMPACT);
         self.compact.dispatch(
             cmd,
-            &[Resource::Texels(&bvh.node_texels), Resource::Buffer(&compact.buffer)],
+            &[
+                ("nodes", Resource::Texels(&bvh.node_texels)),
+                ("compact", Resource::Buffer(&compact.buffer)),
+            ],
             &nodes,
             Groups::Cover([nodes, 1, 1]),
         );

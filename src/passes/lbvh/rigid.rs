@@ -254,10 +254,10 @@ impl RigidKeys {
         self.body_keys_kernel.dispatch(
             cmd,
             &[
-                Resource::Buffer(&self.bodies),
-                Resource::Buffer(poses),
-                Resource::Buffer(&self.body_keys),
-                Resource::Buffer(&self.scale),
+                ("bodies", Resource::Buffer(&self.bodies)),
+                ("poses", Resource::Buffer(poses)),
+                ("body_keys", Resource::Buffer(&self.body_keys)),
+                ("scale", Resource::Buffer(&self.scale)),
             ],
             &bodies,
             Groups::Exact([1, 1, 1]),
@@ -269,9 +269,9 @@ impl RigidKeys {
         self.ranks_kernel.dispatch(
             cmd,
             &[
-                Resource::Texels(&self.count_texels),
-                Resource::Texels(&self.key_texels),
-                Resource::Buffer(&self.places),
+                ("counts", Resource::Texels(&self.count_texels)),
+                ("body_keys", Resource::Texels(&self.key_texels)),
+                ("places", Resource::Buffer(&self.places)),
             ],
             &bodies,
             Groups::Cover([self.body_count, 1, 1]),
@@ -283,10 +283,10 @@ impl RigidKeys {
         self.keys_kernel.dispatch(
             cmd,
             &[
-                Resource::Texels(&self.tri_info_texels),
-                Resource::Texels(&self.place_texels),
-                Resource::Buffer(&bvh.sort.keys[0]),
-                Resource::Buffer(&bvh.sort.values[0]),
+                ("tri_info", Resource::Texels(&self.tri_info_texels)),
+                ("places", Resource::Texels(&self.place_texels)),
+                ("keys", Resource::Buffer(&bvh.sort.keys[0])),
+                ("values", Resource::Buffer(&bvh.sort.values[0])),
             ],
             &KeysPush {
                 tri_count: self.tri_count,

@@ -183,21 +183,24 @@ impl RadixSort {
             // One tile ranks its keys without global offsets (radix_scatter.comp): a
             // small sort (a few bodies, `room`) is one dispatch per pass, not three.
             if num_tiles > 1 {
-                let count = [Resource::Texels(&b.key_texels[i]), Resource::Buffer(&b.counts)];
+                let count = [
+                    ("keys", Resource::Texels(&b.key_texels[i])),
+                    ("counts", Resource::Buffer(&b.counts)),
+                ];
                 self.count.dispatch(cmd, &count, &push, tiles);
                 // RAW: the scan reads the histograms just written.
                 barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
-                let scan = [Resource::Buffer(&b.counts)];
+                let scan = [("counts", Resource::Buffer(&b.counts))];
                 self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
                 // RAW: the scatter reads the scanned offsets.
                 barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
             }
             let scatter = [
-                Resource::Texels(&b.key_texels[i]),
-                Resource::Texels(&b.value_texels[i]),
-                Resource::Buffer(&b.keys[o]),
-                Resource::Buffer(&b.values[o]),
-                Resource::Buffer(&b.counts),
+                ("keys_in", Resource::Texels(&b.key_texels[i])),
+                ("values_in", Resource::Texels(&b.value_texels[i])),
+                ("keys_out", Resource::Buffer(&b.keys[o])),
+                ("values_out", Resource::Buffer(&b.values[o])),
+                ("offsets", Resource::Buffer(&b.counts)),
             ];
             self.scatter.dispatch(cmd, &scatter, &push, tiles);
             // RAW: the next pass (or the caller) reads the scattered pairs; WAR: the

@@ -1,5 +1,5 @@
 //! Axis-aligned boxes and Morton codes of points in them, shared by the GPU LBVH
-//! (reading back its bounds; the rigid bodies' order, `passes::lbvh::rigid`), the CPU
+//! (reading back its bounds; the rigid bodies' order, `tracers::lbvh::rigid`), the CPU
 //! references and the scene code.
 
 use crate::gpu_types::TraversalNode;

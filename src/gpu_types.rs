@@ -149,7 +149,7 @@ pub struct TraversalNode {
     pub unused: u32,
 }
 
-/// A rigid body of a rigid-body rebuild (`passes::lbvh::rigid`; std430, 16 bytes): the
+/// A rigid body of a rigid-body rebuild (`tracers::lbvh::rigid`; std430, 16 bytes): the
 /// center of its object-space box and how many triangles it has.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

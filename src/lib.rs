@@ -27,6 +27,7 @@ pub mod settings;
 pub mod shadow_maps;
 pub mod sim;
 pub mod steady;
+pub mod tracers;
 pub mod tune;
 pub mod vk;
 

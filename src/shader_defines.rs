@@ -109,7 +109,7 @@ pub const BVH_INVALID: u32 = 0xffff_ffff;
 /// Traversal stack entries per ray. An LBVH over one-word keys (a 30-bit
 /// Morton code and 2 size-class bits) is at most 32 + ceil(log2 N) levels deep (equal
 /// keys split by index), and a walk holds at most one pending child per level: 64 is
-/// enough for every tree the frame builds (`passes::lbvh` asserts it against
+/// enough for every tree the frame builds (`tracers::lbvh` asserts it against
 /// `MAX_TRIANGLES`). Two-word keys (`bench lbvh --bits 63`) can build deeper trees; a
 /// walk that runs out of stack returns t = -1, which the benchmark counts as a
 /// mismatch.

@@ -270,7 +270,7 @@ float ordered_to_float(uint u) {
 }
 
 // The three indices of triangle `t` from an index buffer seen as texels of uvec4
-// (passes/lbvh: TriangleTexels; the buffer holds whole quads). Texels, not a storage
+// (tracers/lbvh: TriangleTexels; the buffer holds whole quads). Texels, not a storage
 // buffer: lavapipe fetches a texel for all lanes without a branch, where it loads a
 // storage buffer one lane and one word at a time, each behind a branch.
 uvec3 triangle_indices(utextureBuffer indices, uint t) {

@@ -7,7 +7,7 @@
 // The includer defines TRAVERSE_BINDING (the first of traverse.glsl's eight bindings)
 // first; here +0 is the scene's top level, +1/+2 the static vertices and indices, +3
 // the static permutation (the bottom level's primitive i is scene triangle s_perm[i]:
-// passes/khr.rs hands the driver the triangles in Morton order), +4/+5 the dynamic
+// tracers/khr.rs hands the driver the triangles in Morton order), +4/+5 the dynamic
 // vertices and indices (+6, +7 unused). Instances carry mask 1 (static) or 2
 // (dynamic), so a trace skips the geometry whose triangle count it is given as 0.
 // Epsilon policy: the driver's watertight test; a hit counts when tmin <= t <= tmax

@@ -17,15 +17,15 @@ use super::lbvh::{check_hits, incoherent_rays};
 use crate::cpu_ref::trace::CpuBvh;
 use crate::error::Result;
 use crate::gpu_types::{Hit, Ray};
-use crate::passes::khr;
-use crate::passes::lbvh::{self, Bvh, LbvhBuilder, MortonBits, RefitSchedule};
 use crate::passes::rt_trace::TracePass;
-use crate::passes::{TraceScene, Traceable};
 use crate::renderer::{FRAME, SIM_RIGID};
 use crate::report::{Header, Stat};
 use crate::scene::Scene;
 use crate::settings::{Settings, Tracer};
 use crate::steady::{WarmUp, WarmUpReport};
+use crate::tracers::khr;
+use crate::tracers::lbvh::{self, Bvh, LbvhBuilder, MortonBits, RefitSchedule};
+use crate::tracers::{Lbvh, TraceScene, Traceable};
 use crate::vk::{remeasure, remeasure_readout, Context, GpuTimer, TimingCheck};
 use crate::Renderer;
 use serde::Serialize;
@@ -120,7 +120,7 @@ fn stat(samples: &[f64]) -> Stat {
 /// dynamic bit, as the CPU BVH numbers them) and the median of three traversals' ms,
 /// each self-checked against its wall clock.
 fn trace_median(
-    tracer: &TracePass,
+    tracer: &TracePass<Lbvh>,
     rays: &[Ray],
     t: Traceable<'_>,
     timing: &mut TimingCheck,
@@ -241,7 +241,7 @@ pub fn run_point(
         (lo.min(p), hi.max(p))
     });
     let ray_set = incoherent_rays(lo, hi, rays, 41);
-    let tracer = TracePass::new(ctx)?;
+    let tracer = TracePass::<Lbvh>::new(ctx)?;
     let mut through = |bvh: &Bvh| {
         let t = Traceable {
             bvh,

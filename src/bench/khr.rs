@@ -1,5 +1,5 @@
 //! The vendor tracer in `bench lbvh`: per case, the driver's bottom level built from
-//! the triangles in file order and in Morton order (`passes::khr::StaticOrder`), each
+//! the triangles in file order and in Morton order (`tracers::khr::StaticOrder`), each
 //! build and its compaction timed, and the case's ray sets (their first `khr_rays`)
 //! traced through a one-instance top level with the ray-tracing pipeline, the hits
 //! checked against the CPU as the LBVH's are.
@@ -7,10 +7,11 @@
 use super::rays::{time_rays, CpuCheck, RaySetReport};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Ray};
-use crate::passes::khr::{KhrScene, StaticInput, StaticOrder};
-use crate::passes::lbvh::UploadedTriangles;
 use crate::passes::rt_trace::TracePass;
 use crate::report::Stat;
+use crate::tracers::khr::{KhrScene, StaticInput, StaticOrder};
+use crate::tracers::lbvh::UploadedTriangles;
+use crate::tracers::{Khr, Lbvh, TraceScene};
 use crate::vk::accel::{self, BUILD_SCOPE, COMPACT_SCOPE};
 use crate::vk::{remeasure_readout, Context, GpuTimer, TimingCheck};
 use serde::Serialize;
@@ -65,7 +66,7 @@ pub(super) fn reports(
     (v, i): (&[GpuVertex], &[u32]),
     sets: [Option<&[Ray]>; 3],
     (repeats, khr_rays, cpu): (u32, u32, &CpuCheck<'_>),
-    lbvh: (&TracePass, crate::passes::Tracing<'_>),
+    lbvh: (&TracePass<Lbvh>, TraceScene<'_>),
 ) -> Result<Option<Vec<KhrReport>>> {
     if ctx.ray_tracing.is_none() || khr_rays == 0 {
         return Ok(None);
@@ -82,14 +83,14 @@ pub(super) fn reports(
         }
     }
     let triangles = UploadedTriangles::new(ctx, "bench.khr", v, i)?;
-    let tracer = TracePass::new_khr(ctx)?;
+    let tracer = TracePass::<Khr>::new(ctx)?;
     let n = (i.len() / 3).max(1) as f64;
     let mut out = Vec::new();
     for order in [StaticOrder::File, StaticOrder::Morton] {
         let input = StaticInput::new(triangles.geometry(), v, i, order);
         let ordered_buf =
-            crate::passes::lbvh::index_buffer(ctx, "bench.khr.ordered", Default::default(), &input.ordered)?;
-        let t = crate::passes::khr::triangles(
+            crate::tracers::lbvh::index_buffer(ctx, "bench.khr.ordered", Default::default(), &input.ordered)?;
+        let t = crate::tracers::khr::triangles(
             triangles.geometry().vertices,
             v.len() as u32,
             &ordered_buf,
@@ -113,7 +114,7 @@ pub(super) fn reports(
             }
         }
         let scene = KhrScene::new_static(ctx, &input)?;
-        let tracing = scene.trace(triangles.geometry(), None).into();
+        let tracing = scene.trace(triangles.geometry(), None);
         let mut agreement = [None; 3];
         let mut set = |k: usize, rays: &[Ray]| {
             let (r, hits) = time_rays(&tracer, tracing, &subset(rays), repeats, cpu, &mut timing)?;

@@ -14,11 +14,11 @@ pub use super::rays::{CpuCheck, RaySetReport};
 use crate::cpu_ref::lbvh::{check_bvh, sah_cost};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
-use crate::passes::lbvh::ploc::{PlocScratch, ROUNDS};
-use crate::passes::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule, UploadedTriangles};
 use crate::passes::rt_trace::TracePass;
-use crate::passes::{TraceScene, Traceable};
 use crate::report::{Header, PassTimes, Stat};
+use crate::tracers::lbvh::ploc::{PlocScratch, ROUNDS};
+use crate::tracers::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule, UploadedTriangles};
+use crate::tracers::{Lbvh, TraceScene, Traceable};
 use crate::vk::{remeasure, remeasure_readout, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
@@ -296,19 +296,13 @@ fn vendor_tracer(
     (opts, kind): (&Options, BvhKind),
     (v, i, [coherent, incoherent]): (&[GpuVertex], &[u32], [&[Ray]; 2]),
     cpu: &CpuCheck<'_>,
-    (tracer, scene): (&TracePass, TraceScene<'_>),
+    (tracer, scene): (&TracePass<Lbvh>, TraceScene<'_>),
 ) -> Result<Option<Vec<super::khr::KhrReport>>> {
     if opts.builders.first() != Some(&kind) {
         return Ok(None);
     }
     let sets = [Some(coherent), Some(incoherent), opts.file_rays.as_deref()];
-    super::khr::reports(
-        ctx,
-        (v, i),
-        sets,
-        (opts.repeats, opts.khr_rays, cpu),
-        (tracer, scene.into()),
-    )
+    super::khr::reports(ctx, (v, i), sets, (opts.repeats, opts.khr_rays, cpu), (tracer, scene))
 }
 
 /// Benchmarks one triangle set with one builder.
@@ -339,13 +333,13 @@ pub fn run_case(
     let (cpu, cpu_sah_build_ms) = CpuCheck::new(v, i, opts.check_rays);
     let sah_cpu = cpu.bvh.sah_cost();
 
-    let tracer = TracePass::new(ctx)?;
+    let tracer = TracePass::<Lbvh>::new(ctx)?;
     let scene = TraceScene {
         static_bvh: Some(Traceable { bvh: &bvh, geometry }),
         dynamic_bvh: None,
     };
     let scene_box = crate::cpu_ref::lbvh::bounds(v, i).1;
-    let mut ray_set = |rays: &[Ray]| time_rays(&tracer, scene.into(), rays, opts.repeats, &cpu, &mut timing);
+    let mut ray_set = |rays: &[Ray]| time_rays(&tracer, scene, rays, opts.repeats, &cpu, &mut timing);
     let coherent_set = coherent_rays(scene_box.lo, scene_box.hi, opts.rays);
     let (coherent, coherent_hits) = ray_set(&coherent_set)?;
     let incoherent_set = incoherent_rays(scene_box.lo, scene_box.hi, opts.rays, 7);

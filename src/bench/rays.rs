@@ -9,6 +9,7 @@ use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::rt_trace::TracePass;
 use crate::report::Stat;
 use crate::shader_defines::BVH_INVALID;
+use crate::tracers::Tracer;
 use crate::vk::{remeasure, TimingCheck};
 use serde::Serialize;
 
@@ -92,9 +93,9 @@ impl<'a> CpuCheck<'a> {
 /// Traces `rays` through `scene` once untimed and `repeats` times timed (each readout
 /// re-measured while it fails its self-check, a repeat beyond 2x the median traced
 /// again: `super::measure_rounds`), and checks a sample of the hits against the CPU.
-pub fn time_rays(
-    tracer: &TracePass,
-    scene: crate::passes::Tracing<'_>,
+pub fn time_rays<T: Tracer>(
+    tracer: &TracePass<T>,
+    scene: T::Scene<'_>,
     rays: &[Ray],
     repeats: u32,
     cpu: &CpuCheck<'_>,

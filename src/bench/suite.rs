@@ -15,11 +15,11 @@
 
 use super::lbvh::{timed_build, BUILD, STAGES};
 use crate::error::{Error, Result};
-use crate::passes::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
 use crate::renderer::FRAME;
 use crate::report::{Header, Stat};
 use crate::settings::{Mode, Settings};
 use crate::steady::{RoundsCheck, WarmUp, WarmUpReport};
+use crate::tracers::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
 use crate::vk::{remeasure_readout, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use crate::Renderer;
 use serde::Serialize;

@@ -1,7 +1,8 @@
 //! One file per pass. A pass owns its pipeline and its output images and records its
 //! own commands; it knows nothing of the other passes beyond the names of its outputs'
 //! readers: what passes hand each other (the G-buffer, the compacted pixel list, the
-//! scene a trace walks, the surfaces and geometry) is defined here, not in a pass.
+//! surfaces and geometry) is defined here, not in a pass; what a trace walks, and the
+//! kernels that walk it, are `tracers`'.
 //!
 //! One shape: `NAME` (its timer scope, the frame table's name for it), `new`,
 //! `record(cmd, inputs, params)` (resources first, an `…Inputs` struct when there are
@@ -18,8 +19,6 @@
 
 pub mod compose;
 pub mod gbuffer;
-pub mod khr;
-pub mod lbvh;
 pub mod light_direct;
 pub mod reflect_denoise;
 pub mod reflect_merge;
@@ -33,15 +32,9 @@ pub mod sim_transform;
 pub mod ssr_compact;
 pub mod ssr_hiz;
 pub mod ssr_trace;
-pub mod tracer;
 
-pub use tracer::{with_trace, KhrTrace, TraceKernel, Tracing};
-
-use crate::vk::{Bind, Buffer, Image, Resource};
+use crate::vk::{Buffer, Image};
 use ash::vk;
-use lbvh::Bvh;
-/// A mesh's triangles on the GPU (what the builders and both tracers read).
-pub use lbvh::Geometry;
 
 /// Sets a full-target viewport and scissor (both are dynamic state).
 pub(crate) fn set_viewport(device: &ash::Device, cmd: vk::CommandBuffer, extent: vk::Extent2D) {
@@ -127,58 +120,8 @@ pub struct CompactOutputs {
     pub pixels: Buffer,
     /// `[groups_x, groups_y, 1, count]`: a `VkDispatchIndirectCommand` for `RT_LIST_WG`-wide
     /// workgroups (`list_groups`), then the number of listed pixels; at byte
-    /// `TRACE_RAYS_ARGS`, `[count, 1, 1, 0]`: a `VkTraceRaysIndirectCommandKHR`.
+    /// `tracers::TRACE_RAYS_ARGS`, `[count, 1, 1, 0]`: a `VkTraceRaysIndirectCommandKHR`.
     pub indirect: Buffer,
     tile_counts: Buffer,
     extent: vk::Extent2D,
-}
-
-/// Byte offset of the trace-rays arguments in `CompactOutputs::indirect`.
-pub const TRACE_RAYS_ARGS: u64 = 16;
-
-/// One BVH and the triangles it was built over.
-#[derive(Clone, Copy)]
-pub struct Traceable<'a> {
-    pub bvh: &'a Bvh,
-    pub geometry: Geometry<'a>,
-}
-
-/// The BVHs a trace walks: the static one, the dynamic one, or both.
-#[derive(Clone, Copy, Default)]
-pub struct TraceScene<'a> {
-    pub static_bvh: Option<Traceable<'a>>,
-    pub dynamic_bvh: Option<Traceable<'a>>,
-}
-
-impl<'a> TraceScene<'a> {
-    /// The traversal bindings of `glsl/shared/traverse.glsl` (the static and dynamic
-    /// compact nodes, vertices, indices and triangles in leaf order) and the two
-    /// triangle counts. A missing BVH
-    /// is bound to the other's buffers with a triangle count of 0. Panics when the
-    /// static BVH has no compact nodes, or older ones than its last build or refit.
-    pub fn bindings(&self) -> (Vec<Bind<'a>>, u32, u32) {
-        let any = self.static_bvh.or(self.dynamic_bvh).expect("tracing needs a BVH");
-        if let Some(s) = self.static_bvh {
-            assert!(
-                s.bvh.compact_current(),
-                "the static BVH needs compact nodes (Bvh::new_static) recorded after its last build or refit"
-            );
-        }
-        let s = self.static_bvh.unwrap_or(any);
-        let d = self.dynamic_bvh.unwrap_or(any);
-        // Without a static BVH its slot is never read: any texel view fills it.
-        let s_nodes = s.bvh.compact.as_ref().map_or(&s.bvh.node_texels, |c| &c.texels);
-        let resources = vec![
-            ("s_nodes", Resource::Texels(s_nodes)),
-            ("static_vertices", Resource::Buffer(s.geometry.vertices)),
-            ("static_indices", Resource::Buffer(s.geometry.indices)),
-            ("d_nodes", Resource::Texels(&d.bvh.node_texels)),
-            ("dynamic_vertices", Resource::Buffer(d.geometry.vertices)),
-            ("dynamic_indices", Resource::Buffer(d.geometry.indices)),
-            ("s_tris", Resource::Texels(&s.bvh.tri_texels)),
-            ("d_tris", Resource::Texels(&d.bvh.tri_texels)),
-        ];
-        let count = |b: Option<Traceable<'_>>| b.map_or(0, |b| b.geometry.tri_count);
-        (resources, count(self.static_bvh), count(self.dynamic_bvh))
-    }
 }

@@ -2,14 +2,17 @@
 //! and dynamic BVHs, shaded, with recursive bounces; an indirect dispatch sized by
 //! `ssr.compact`. With the vendor tracer the same path (`glsl/shared/reflect_path.glsl`)
 //! runs as a ray-generation shader through the scene's acceleration structures, one
-//! launch per entry, sized on the GPU (`TRACE_RAYS_ARGS`).
+//! launch per entry, sized on the GPU (`tracers::TRACE_RAYS_ARGS`). The pass holds
+//! the output; the kernel, made for one tracer, is its own value (`Kernel<T>`), so the
+//! renderer keeps one tracer's kernels together with that tracer's structures.
 //! CPU reference: `cpu_ref::reflect::reflected_radiance` (tests/suite/rt_reflect.rs).
 
 use super::GBuffer;
-use super::{with_trace, CompactOutputs, Surfaces, TraceKernel, Tracing};
+use super::{CompactOutputs, Surfaces};
 use crate::error::Result;
-use crate::settings::{Shadows, Tracer};
+use crate::settings::Shadows;
 use crate::shaders;
+use crate::tracers::{Rays, TraceKernel, Tracer};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Image, Resource, Sampler};
 use ash::vk;
@@ -28,9 +31,19 @@ struct ReflectPush {
     shadows: u32,
 }
 
+/// `rt.reflect`'s kernel for tracer `T`.
+pub struct Kernel<T: Tracer>(TraceKernel<T>);
+
+impl<T: Tracer> Kernel<T> {
+    /// The kernel (the vendor tracer's needs a context with ray tracing).
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        let (comp, rgen) = (shaders::RT_REFLECT_COMP, shaders::RT_REFLECT_RGEN);
+        Ok(Self(TraceKernel::new::<ReflectPush>(ctx, NAME, comp, rgen)?))
+    }
+}
+
 pub struct RtReflectPass {
     ctx: Arc<Context>,
-    kernel: TraceKernel,
     sampler: Sampler,
     /// Reflected radiance of the listed pixels (others are left as they were); always
     /// `GENERAL`.
@@ -38,26 +51,22 @@ pub struct RtReflectPass {
 }
 
 /// What the reflection tracer needs besides the G-buffer.
-pub struct ReflectInputs<'a> {
+pub struct ReflectInputs<'a, T: Tracer> {
     pub frame: &'a Buffer,
     pub gbuffer: &'a GBuffer,
     pub surfaces: Surfaces<'a>,
     pub shadow_map: &'a Image,
     pub list: &'a CompactOutputs,
-    pub scene: Tracing<'a>,
+    pub scene: T::Scene<'a>,
     /// Where the traced pixels' mean first-hit distance goes (`GENERAL`; `ssr.classify`
     /// and `ssr.trace` wrote the rest), for `reflect.denoise`.
     pub hit_distance: &'a Image,
 }
 
 impl RtReflectPass {
-    /// The pass for `tracer` (`khr` needs a context with ray tracing).
-    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D, tracer: Tracer) -> Result<Self> {
-        let (comp, rgen) = (shaders::RT_REFLECT_COMP, shaders::RT_REFLECT_RGEN);
-        let kernel = TraceKernel::new::<ReflectPush>(ctx, NAME, tracer, comp, rgen)?;
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         Ok(Self {
             ctx: ctx.clone(),
-            kernel,
             sampler: Sampler::nearest_clamp(ctx, "rt.sampler")?,
             out: Image::storage(ctx, "rt.color", extent, FORMAT)?,
         })
@@ -68,12 +77,18 @@ impl RtReflectPass {
         Ok(())
     }
 
-    /// Records the indirect dispatch over the list (visible to compute reads and
-    /// indirect dispatch). `color` ends visible to its reader, `reflect.merge`.
-    /// `shadows`: how the hits are shadowed (the `shadows` setting).
-    pub fn record(&self, cmd: vk::CommandBuffer, inputs: &ReflectInputs<'_>, max_bounces: u32, shadows: Shadows) {
-        let (trace, static_tris, dynamic_tris) = inputs.scene.bindings();
-        let push = ReflectPush {
+    /// Records `kernel` over the list (visible to compute reads and indirect
+    /// dispatch). `color` ends visible to its reader, `reflect.merge`. `shadows`: how
+    /// the hits are shadowed (the `shadows` setting).
+    pub fn record<T: Tracer>(
+        &self,
+        cmd: vk::CommandBuffer,
+        kernel: &Kernel<T>,
+        inputs: &ReflectInputs<'_, T>,
+        max_bounces: u32,
+        shadows: Shadows,
+    ) {
+        let push = |static_tris, dynamic_tris| ReflectPush {
             max_bounces,
             static_tris,
             dynamic_tris,
@@ -99,14 +114,13 @@ impl RtReflectPass {
             ("gb_albedo", Resource::Sampled(&inputs.gbuffer.albedo, s)),
             ("hit_distance", Resource::StorageImage(inputs.hit_distance)),
         ];
-        let resources = with_trace(&own, &trace);
         // WAR/WAW: the previous frame's merge reads and tracer writes of the colour are
         // done (and, for the vendor tracer, the compute passes' list, arguments and
         // images before its ray-tracing shaders read them).
-        barrier::global(d, cmd, access::COMPUTE_ANY, self.kernel.runs());
-        let k = &self.kernel;
-        k.over_list(NAME, cmd, &resources, &push, inputs.list, &inputs.scene);
+        barrier::global(d, cmd, access::COMPUTE_ANY, T::RUNS);
+        let rays = Rays::Listed(&inputs.list.indirect);
+        kernel.0.run(cmd, &own, &inputs.scene, push, rays);
         // RAW: the merge reads the ray-traced colour.
-        barrier::global(d, cmd, k.writes(), access::COMPUTE_READ);
+        barrier::global(d, cmd, T::WRITES, access::COMPUTE_READ);
     }
 }

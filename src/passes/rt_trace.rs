@@ -1,17 +1,16 @@
 //! `rt.trace`: closest-hit or any-hit traversal of the static and the dynamic BVH for a
 //! list of rays. Usable on its own (`TracePass::trace`) for tests and benchmarks;
 //! `rt.reflect` walks the same BVHs with the same traversal (`glsl/shared/traverse.glsl`)
-//! from its own kernel, and binds them through `TraceScene::bindings`.
-//! With the vendor tracer (`TracePass::new_khr`) the same rays go through
-//! `glsl/rt_trace.rgen` and the scene's acceleration structures instead.
+//! from its own kernel. `TracePass<Lbvh>` walks the own BVHs (`TraceScene`);
+//! `TracePass<Khr>` sends the same rays through `glsl/rt_trace.rgen` and the scene's
+//! acceleration structures (`KhrTrace`) instead.
 //! CPU reference: `cpu_ref::trace` (`brute_force`, `CpuBvh`; tests/suite/trace.rs,
 //! tests/suite/khr.rs).
 
-use super::{with_trace, TraceKernel, Tracing};
 use crate::error::{Error, Result};
 use crate::gpu_types::{Hit, Ray};
-use crate::settings::Tracer;
 use crate::shaders;
+use crate::tracers::{Rays, TraceKernel, Tracer};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GpuTimer, Resource, TimerReadout};
 use ash::vk;
@@ -40,65 +39,46 @@ pub struct RayBatch<'a> {
     pub any_hit: bool,
 }
 
-pub struct TracePass {
+/// The trace kernel for tracer `T` (`TracePass::<Lbvh>::new`, `TracePass::<Khr>::new`:
+/// the vendor tracer needs a context with ray tracing).
+pub struct TracePass<T: Tracer> {
     ctx: Arc<Context>,
-    kernel: TraceKernel,
+    kernel: TraceKernel<T>,
 }
 
-impl TracePass {
-    /// Through Speculum's own BVHs (`TraceScene`).
+impl<T: Tracer> TracePass<T> {
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
-        Self::for_tracer(ctx, Tracer::Lbvh)
-    }
-
-    /// Through the driver's acceleration structures (`KhrTrace`); the context must have
-    /// ray tracing.
-    pub fn new_khr(ctx: &Arc<Context>) -> Result<Self> {
-        Self::for_tracer(ctx, Tracer::Khr)
-    }
-
-    pub fn for_tracer(ctx: &Arc<Context>, tracer: Tracer) -> Result<Self> {
         let (comp, rgen) = (shaders::RT_TRACE_COMP, shaders::RT_TRACE_RGEN);
         Ok(Self {
             ctx: ctx.clone(),
-            kernel: TraceKernel::new::<TracePush>(ctx, NAME, tracer, comp, rgen)?,
+            kernel: TraceKernel::new::<TracePush>(ctx, NAME, comp, rgen)?,
         })
     }
 
-    /// Records the traversal of a batch of rays through the tracer the pass was made
-    /// for. At least one BVH must be given; rays, nodes and geometry must be visible to
-    /// the kernel's reads (compute, or ray-tracing shaders).
-    pub fn record<'a>(&self, cmd: vk::CommandBuffer, batch: RayBatch<'_>, scene: impl Into<Tracing<'a>>) {
-        let scene = scene.into();
-        let (trace, static_tris, dynamic_tris) = scene.bindings();
-        let push = TracePush {
+    /// Records the traversal of a batch of rays. At least one BVH (or geometry) must be
+    /// given; rays, nodes and geometry must be visible to the kernel's reads
+    /// (`T::RUNS`).
+    pub fn record(&self, cmd: vk::CommandBuffer, batch: RayBatch<'_>, scene: T::Scene<'_>) {
+        let own = [
+            ("rays", Resource::Buffer(batch.rays)),
+            ("hits", Resource::Buffer(batch.hits)),
+        ];
+        let push = |static_tris, dynamic_tris| TracePush {
             ray_count: batch.count,
             static_tris,
             dynamic_tris,
             any_hit: batch.any_hit as u32,
         };
-        let lists = [
-            ("rays", Resource::Buffer(batch.rays)),
-            ("hits", Resource::Buffer(batch.hits)),
-        ];
-        let resources = with_trace(&lists, &trace);
-        self.kernel
-            .over_count(NAME, cmd, &resources, &push, batch.count, &scene);
+        self.kernel.run(cmd, &own, &scene, push, Rays::Count(batch.count));
     }
 
     /// Uploads `rays`, traces them, and returns the hits and the GPU time of the
     /// traversal (scope `NAME`, self-checked).
-    pub fn trace<'a>(
-        &self,
-        rays: &[Ray],
-        scene: impl Into<Tracing<'a>>,
-        any_hit: bool,
-    ) -> Result<(Vec<Hit>, TimerReadout)> {
-        let scene = scene.into();
+    pub fn trace(&self, rays: &[Ray], scene: T::Scene<'_>, any_hit: bool) -> Result<(Vec<Hit>, TimerReadout)> {
         if rays.is_empty() {
             return Ok((Vec::new(), TimerReadout::default()));
         }
-        if scene.is_empty() {
+        if T::is_empty(&scene) {
             return Err(Error::Bvh("tracing needs at least one BVH".into()));
         }
         let ctx = &self.ctx;
@@ -129,7 +109,7 @@ impl TracePass {
             barrier::record(
                 &ctx.device,
                 cmd,
-                &[barrier::memory(access::TRANSFER_WRITE, self.kernel.runs())],
+                &[barrier::memory(access::TRANSFER_WRITE, T::RUNS)],
                 &[],
             );
             timer.begin(cmd, NAME);

@@ -4,13 +4,15 @@
 //! `map` runs none of this). The same classify → compact → indirect-trace shape as the
 //! reflections; between the two, `shadow.compact` is the reflections' compaction
 //! (`ssr_compact::CompactPass`) run over this pass's mask.
-//! `shadow.trace` runs through either tracer (`TraceKernel`).
+//! `shadow.trace` runs through either tracer: its kernel, made for one, is its own
+//! value (`Kernel<T>`), as `rt.reflect`'s is.
 //! CPU reference: `cpu_ref::shadows` (tests/suite/shadows.rs).
 
-use super::{with_trace, CompactOutputs, GBuffer, TraceKernel, Tracing};
+use super::{CompactOutputs, GBuffer};
 use crate::error::Result;
-use crate::settings::{Shadows, Tracer};
+use crate::settings::Shadows;
 use crate::shaders;
+use crate::tracers::{Rays, TraceKernel, Tracer};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Image, Pipeline, Resource, Sampler};
 use ash::vk;
@@ -50,10 +52,20 @@ pub struct ShadowOutputs {
     pub visibility: Image,
 }
 
+/// `shadow.trace`'s kernel for tracer `T`.
+pub struct Kernel<T: Tracer>(TraceKernel<T>);
+
+impl<T: Tracer> Kernel<T> {
+    /// The kernel (the vendor tracer's needs a context with ray tracing).
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        let (comp, rgen) = (shaders::SHADOW_TRACE_COMP, shaders::SHADOW_TRACE_RGEN);
+        Ok(Self(TraceKernel::new::<TracePush>(ctx, NAME, comp, rgen)?))
+    }
+}
+
 pub struct ShadowTracePass {
     ctx: Arc<Context>,
     classify: Pipeline,
-    trace: TraceKernel,
     sampler: Sampler,
     pub out: ShadowOutputs,
 }
@@ -68,14 +80,10 @@ impl ShadowOutputs {
 }
 
 impl ShadowTracePass {
-    /// The pass, its shadow rays through `tracer` (`khr` needs a context with ray
-    /// tracing).
-    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D, tracer: Tracer) -> Result<Self> {
-        let (comp, rgen) = (shaders::SHADOW_TRACE_COMP, shaders::SHADOW_TRACE_RGEN);
+    pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         Ok(Self {
             ctx: ctx.clone(),
             classify: Pipeline::compute::<ClassifyPush>(ctx, CLASSIFY_NAME, shaders::SHADOW_CLASSIFY_COMP)?,
-            trace: TraceKernel::new::<TracePush>(ctx, NAME, tracer, comp, rgen)?,
             sampler: Sampler::nearest_clamp(ctx, "shadow.sampler")?,
             out: ShadowOutputs::new(ctx, extent)?,
         })
@@ -121,18 +129,18 @@ impl ShadowTracePass {
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
     }
 
-    /// Records `shadow.trace` over `list`, the mask's compaction (visible to compute
-    /// reads and indirect dispatch): the listed pixels' visibility, from any-hit rays.
-    /// The visibility ends visible to compute reads (`light.direct`).
-    pub fn trace(
+    /// Records `shadow.trace` (`kernel`) over `list`, the mask's compaction (visible
+    /// to compute reads and indirect dispatch): the listed pixels' visibility, from
+    /// any-hit rays through `scene`. The visibility ends visible to compute reads
+    /// (`light.direct`).
+    pub fn trace<T: Tracer>(
         &self,
         cmd: vk::CommandBuffer,
+        (kernel, scene): (&Kernel<T>, &T::Scene<'_>),
         frame: &Buffer,
         gbuffer: &GBuffer,
         list: &CompactOutputs,
-        scene: &Tracing<'_>,
     ) {
-        let (trace, static_tris, dynamic_tris) = scene.bindings();
         let d = &self.ctx.device;
         let s = &self.sampler;
         let own = [
@@ -143,20 +151,18 @@ impl ShadowTracePass {
             ("indirect", Resource::Buffer(&list.indirect)),
             ("visibility", Resource::StorageImage(&self.out.visibility)),
         ];
-        let resources = with_trace(&own, &trace);
-        let push = TracePush {
+        let push = |static_tris, dynamic_tris| TracePush {
             static_tris,
             dynamic_tris,
         };
-        let k = &self.trace;
-        if let TraceKernel::Khr(_) = k {
+        if !T::COMPUTE {
             // RAW: the compaction's list and arguments and the G-buffer before the
             // ray-tracing shaders read them (the compute kernel's are made visible to
             // compute reads by the compaction).
-            barrier::global(d, cmd, access::ALL_READ_WRITE, k.runs());
+            barrier::global(d, cmd, access::ALL_READ_WRITE, T::RUNS);
         }
-        k.over_list(NAME, cmd, &resources, &push, list, scene);
+        kernel.0.run(cmd, &own, scene, push, Rays::Listed(&list.indirect));
         // RAW: light.direct reads the visibility.
-        barrier::global(d, cmd, k.writes(), access::COMPUTE_READ);
+        barrier::global(d, cmd, T::WRITES, access::COMPUTE_READ);
     }
 }

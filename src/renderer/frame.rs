@@ -9,12 +9,11 @@ use super::exchange::{FrameCounts, Path};
 use super::gpu_scene::DynamicGeometry;
 use super::plan::{FramePlan, Motion, Previous};
 use super::table::{Row, FRAME};
+use super::tracer::{FrameTracer, Kernels};
 use super::{FrameSlot, Renderer};
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposeInputs;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::khr::KhrScene;
-use crate::passes::lbvh::LbvhBuilder;
 use crate::passes::light_direct::{LightDirectPass, Sun};
 use crate::passes::reflect_denoise::{DenoiseInputs, DenoiseParams, DenoisePass};
 use crate::passes::reflect_merge::{MergeInputs, MergeParams, MergePass};
@@ -27,8 +26,11 @@ use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_compact::CompactPass;
 use crate::passes::ssr_hiz::HiZPass;
 use crate::passes::ssr_trace::{MarchInputs, SsrPass};
-use crate::passes::{SceneGeometry, Surfaces, TraceScene, Traceable, Tracing};
+use crate::passes::{SceneGeometry, Surfaces};
 use crate::settings::{Hybrid, Settings, SsrParams};
+use crate::tracers::khr::KhrScene;
+use crate::tracers::lbvh::LbvhBuilder;
+use crate::tracers::{TraceScene, Traceable, Tracer};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, GpuTimer};
 use ash::vk;
@@ -133,7 +135,7 @@ impl Renderer {
             cloth: dy.is_some_and(|dy| !dy.cloths.is_empty()),
             skin: dy.is_some_and(|dy| dy.animated.is_some()),
             advance,
-            vendor: self.khr.is_some(),
+            vendor: matches!(self.tracer, FrameTracer::Khr(..)),
         };
         let hybrid = Hybrid::of(&self.settings);
         let path = match hybrid.adaptive() {
@@ -163,7 +165,7 @@ impl Renderer {
             frame_index,
             sample_stream,
             static_bvh,
-            khr,
+            tracer,
             dynamic,
             slots,
             ..
@@ -185,24 +187,11 @@ impl Renderer {
                 cloth: &self.cloth,
                 skin: &self.skin,
                 builder: &self.builder,
-                khr: khr.as_mut(),
+                khr: tracer.khr_mut(),
             };
             *sim_ms = record_motion(&mut f, &plan, (d, cmd, slot), dy, steps);
         }
         let dynamic = dynamic.as_ref();
-        let trace_scene: Tracing<'_> = match khr {
-            Some(k) => k
-                .trace(scene.mesh.triangles(), dynamic.map(|dy| dy.mesh.triangles()))
-                .into(),
-            None => TraceScene {
-                static_bvh: Some(Traceable {
-                    bvh: static_bvh,
-                    geometry: scene.mesh.triangles(),
-                }),
-                dynamic_bvh: dynamic.map(|dy| dy.traceable()),
-            }
-            .into(),
-        };
         let frame = FrameInputs {
             ubo,
             st,
@@ -211,7 +200,6 @@ impl Renderer {
                 .chain(dynamic.map(|dy| dy.geometry()))
                 .collect(),
             surfaces: scene.surfaces(dynamic),
-            scene: trace_scene,
         };
         let lighting = Lighting {
             shadow: &self.shadow,
@@ -220,10 +208,6 @@ impl Renderer {
             shadow_compact: &self.shadow_compact,
             light: &self.light,
         };
-        record_lighting(&mut f, &plan, cmd, &lighting, &frame);
-        if plan.path != Path::March {
-            counts.record_idle(plan.path);
-        }
         let reflections = Reflections {
             hiz: &self.hiz,
             ssr: &self.ssr,
@@ -232,7 +216,24 @@ impl Renderer {
             merge: &self.merge,
             denoise: &mut self.denoise,
         };
-        record_reflections(&mut f, &plan, (d, cmd), &lighting, reflections, &frame, counts);
+        let passes = (&lighting, reflections);
+        let at = (&mut f, &plan, d, cmd);
+        match tracer {
+            FrameTracer::Lbvh(kernels) => {
+                let scene = TraceScene {
+                    static_bvh: Some(Traceable {
+                        bvh: static_bvh,
+                        geometry: scene.mesh.triangles(),
+                    }),
+                    dynamic_bvh: dynamic.map(|dy| dy.traceable()),
+                };
+                record_shading(at, passes, &frame, Traced { kernels, scene }, counts)
+            }
+            FrameTracer::Khr(kernels, khr) => {
+                let scene = khr.trace(scene.mesh.triangles(), dynamic.map(|dy| dy.mesh.triangles()));
+                record_shading(at, passes, &frame, Traced { kernels, scene }, counts)
+            }
+        }
         let inputs = ComposeInputs {
             frame: ubo,
             hdr: &self.light.out,
@@ -248,14 +249,35 @@ impl Renderer {
 }
 
 /// What every row of a frame reads besides its own pass: the uniforms, the settings,
-/// the geometry as the raster draws it and as the tracer walks it, and the surfaces.
+/// the geometry as the raster draws it, and the surfaces.
 struct FrameInputs<'a> {
     ubo: &'a Buffer,
     st: &'a Settings,
     uniforms: &'a FrameUniforms,
     geometries: Vec<SceneGeometry<'a>>,
     surfaces: Surfaces<'a>,
-    scene: Tracing<'a>,
+}
+
+/// What the tracing rows trace with: tracer `T`'s kernels and what they walk.
+struct Traced<'a, T: Tracer> {
+    kernels: &'a Kernels<T>,
+    scene: T::Scene<'a>,
+}
+
+/// `shadow.map` to `reflect.denoise` through tracer `T`, as `plan` says (an idle
+/// hybrid frame counted in `counts`).
+fn record_shading<'a, T: Tracer>(
+    (f, plan, d, cmd): (&mut FrameRecorder<'_>, &FramePlan, &ash::Device, vk::CommandBuffer),
+    (lighting, reflections): (&Lighting<'a>, Reflections<'a>),
+    frame: &FrameInputs<'a>,
+    traced: Traced<'a, T>,
+    counts: &mut FrameCounts,
+) {
+    record_lighting(f, plan, cmd, lighting, frame, &traced);
+    if plan.path != Path::March {
+        counts.record_idle(plan.path);
+    }
+    record_reflections(f, plan, (d, cmd), (lighting, reflections), frame, &traced, counts);
 }
 
 /// The passes from the shadow map to the direct light.
@@ -278,12 +300,13 @@ struct Reflections<'a> {
 }
 
 /// `shadow.map` to `light.direct`, as `plan` says.
-fn record_lighting(
+fn record_lighting<T: Tracer>(
     f: &mut FrameRecorder<'_>,
     plan: &FramePlan,
     cmd: vk::CommandBuffer,
     l: &Lighting<'_>,
     i: &FrameInputs<'_>,
+    t: &Traced<'_, T>,
 ) {
     let (ubo, g, shadows) = (i.ubo, &l.gbuffer.out, i.st.shadows);
     if plan.runs(Row::ShadowMap) {
@@ -298,7 +321,8 @@ fn record_lighting(
             l.shadow_compact.record(cmd, &l.shadow_trace.out.mask)
         });
         let list = &l.shadow_compact.out;
-        f.row(Row::ShadowTrace, || l.shadow_trace.trace(cmd, ubo, g, list, &i.scene));
+        let kernel = (&t.kernels.shadow, &t.scene);
+        f.row(Row::ShadowTrace, || l.shadow_trace.trace(cmd, kernel, ubo, g, list));
     }
     let sun = Sun {
         map: &l.shadow.out,
@@ -310,13 +334,13 @@ fn record_lighting(
 
 /// `ssr.hiz` to `reflect.denoise`, as `plan` says; a marching hybrid frame's counts
 /// into `counts` (they price the march in rays: `exchange`).
-fn record_reflections(
+fn record_reflections<'a, T: Tracer>(
     f: &mut FrameRecorder<'_>,
     plan: &FramePlan,
     (d, cmd): (&ash::Device, vk::CommandBuffer),
-    l: &Lighting<'_>,
-    r: Reflections<'_>,
-    i: &FrameInputs<'_>,
+    (l, r): (&Lighting<'a>, Reflections<'a>),
+    i: &FrameInputs<'a>,
+    t: &Traced<'a, T>,
     counts: &mut FrameCounts,
 ) {
     let (ubo, g, st) = (i.ubo, &l.gbuffer.out, i.st);
@@ -347,10 +371,13 @@ fn record_reflections(
             surfaces: i.surfaces,
             shadow_map: &l.shadow.out,
             list: &r.compact.out,
-            scene: i.scene,
+            scene: t.scene,
             hit_distance: &r.ssr.out.hit_distance,
         };
-        f.row(Row::RtReflect, || r.rt.record(cmd, &inputs, st.max_bounces, st.shadows));
+        let kernel = &t.kernels.reflect;
+        f.row(Row::RtReflect, || {
+            r.rt.record(cmd, kernel, &inputs, st.max_bounces, st.shadows)
+        });
     }
     if plan.counts {
         let o = &r.ssr.out;

@@ -5,19 +5,19 @@
 
 use crate::error::Result;
 use crate::gpu_types::{GpuMaterial, GpuVertex};
-use crate::passes::khr::{BodyRange, DynamicLayout};
-use crate::passes::lbvh::dynamic::DynamicBvh;
-use crate::passes::lbvh::rigid::{self, RigidKeys, RigidLayout};
-use crate::passes::lbvh::{self, Geometry, TriangleTexels};
 use crate::passes::sim_cloth::ClothState;
 use crate::passes::sim_skin::{self, Skinned};
 use crate::passes::sim_transform::{self, RigidBodies};
-use crate::passes::Traceable;
 use crate::passes::{SceneGeometry, Surfaces};
 use crate::scene::animated::Animated;
 use crate::scene::{texture, Scene};
 use crate::settings::Settings;
 use crate::sim::rigid::RigidWorld;
+use crate::tracers::khr::{BodyRange, DynamicLayout};
+use crate::tracers::lbvh::dynamic::DynamicBvh;
+use crate::tracers::lbvh::rigid::{self, RigidKeys, RigidLayout};
+use crate::tracers::lbvh::{self, Geometry, TriangleTexels};
+use crate::tracers::Traceable;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Image, Sampler};
 use ash::vk;

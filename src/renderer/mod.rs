@@ -1,7 +1,8 @@
 //! Owns the passes and the scene on the GPU, and records frames (`table.rs`: the frame
 //! table as data; `plan.rs`: each frame's decisions; `frame.rs`: the function that
 //! records the plan's rows; `view.rs`: camera, light and origin maths; `gpu_scene.rs`:
-//! the scene's buffers and the moving geometry).
+//! the scene's buffers and the moving geometry; `tracer.rs`: the tracer's kernels and
+//! structures as one value).
 //!
 //! Frame: `uniforms` → (a dynamic scene: `sim.rigid` on the CPU, `sim.transform`,
 //! `sim.cloth`, the dynamic BVH's `lbvh.*`) → `shadow.map` (unless the shadows are
@@ -23,6 +24,7 @@ mod gpu_scene;
 pub mod plan;
 mod readback;
 pub mod table;
+mod tracer;
 mod view;
 
 pub use exchange::PROBE_EVERY;
@@ -33,8 +35,6 @@ use crate::error::Result;
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposePass;
 use crate::passes::gbuffer::GBufferPass;
-use crate::passes::khr::{KhrScene, StaticInput, StaticOrder};
-use crate::passes::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
 use crate::passes::light_direct::LightDirectPass;
 use crate::passes::reflect_denoise::DenoisePass;
 use crate::passes::reflect_merge::MergePass;
@@ -47,15 +47,17 @@ use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_compact::{self, CompactPass};
 use crate::passes::ssr_hiz::HiZPass;
 use crate::passes::ssr_trace::SsrPass;
-use crate::passes::Traceable;
 use crate::scene::{Camera, Scene};
-use crate::settings::{Applies, Mode, Settings, Tracer};
+use crate::settings::{self, Applies, Mode, Settings};
+use crate::tracers::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
+use crate::tracers::Traceable;
 use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
 use ash::vk;
 use exchange::{ExchangeRate, FrameCounts, Path, Paths};
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
 use std::sync::Arc;
+use tracer::FrameTracer;
 
 /// What one frame in flight owns: its timestamp queries and the host's step time.
 struct FrameSlot {
@@ -117,8 +119,8 @@ pub struct Renderer {
     pub static_bvh: Bvh,
     /// GPU milliseconds per stage of the static BVH build.
     pub static_bvh_build: Vec<(&'static str, f64)>,
-    /// The vendor tracer's acceleration structures (`tracer = khr`).
-    khr: Option<KhrScene>,
+    /// The tracer's kernels and, for the vendor tracer, its acceleration structures.
+    tracer: FrameTracer,
     /// What moves, when the scene has bodies.
     dynamic: Option<DynamicGeometry>,
     transform: SimTransformPass,
@@ -141,43 +143,6 @@ pub struct Renderer {
     cmd: vk::CommandBuffer,
 }
 
-/// Whether the renderer can trace with `settings.tracer`: the vendor tracer needs the
-/// device's ray-tracing extensions (the error names what it lacks). Checked before any
-/// GPU work.
-fn check_tracer(ctx: &Context, settings: &Settings) -> Result<()> {
-    if settings.tracer != Tracer::Khr {
-        return Ok(());
-    }
-    if let Some(missing) = &ctx.ray_tracing_missing {
-        return Err(crate::Error::NoDevice(format!(
-            "tracer khr needs ray tracing, and device '{}' lacks {missing} (tracer lbvh runs anywhere)",
-            ctx.device_name
-        )));
-    }
-    Ok(())
-}
-
-/// The vendor tracer's structures over the scene, when it is the tracer (the bodies
-/// where the simulation has them now; the static triangles, read back, in Morton order).
-fn khr_scene(
-    ctx: &Arc<Context>,
-    scene: &SceneBuffers,
-    dynamic: Option<&DynamicGeometry>,
-    settings: &Settings,
-) -> Result<Option<KhrScene>> {
-    if settings.tracer != Tracer::Khr {
-        return Ok(None);
-    }
-    let geometry = scene.mesh.triangles();
-    let vertices: Vec<crate::gpu_types::GpuVertex> = bytemuck::pod_collect_to_vec(&geometry.vertices.read()?);
-    let mut indices: Vec<u32> = bytemuck::pod_collect_to_vec(&geometry.indices.read()?);
-    indices.truncate(3 * geometry.tri_count as usize);
-    let input = StaticInput::new(geometry, &vertices, &indices, StaticOrder::Morton);
-    let layout = dynamic.map(|d| d.khr_layout());
-    let poses = dynamic.map(|d| d.world.poses()).unwrap_or_default();
-    Ok(Some(KhrScene::new(ctx, &input, layout.as_ref(), &poses)?))
-}
-
 /// The builder of the static scene's BVH.
 fn static_kind(settings: &Settings) -> BvhKind {
     if settings.static_ploc {
@@ -193,7 +158,7 @@ impl Renderer {
         settings.validate()?;
         scene.validate()?;
         crate::limits::check_frame(ctx, settings)?;
-        check_tracer(ctx, settings)?;
+        tracer::check(ctx, settings)?;
         // Every pass works relative to `origin` (see `render_origin`).
         let origin = render_origin(scene);
         let scene_buffers = SceneBuffers::upload(ctx, scene, origin)?;
@@ -214,7 +179,7 @@ impl Renderer {
         } else {
             None
         };
-        let khr = khr_scene(ctx, &scene_buffers, dynamic.as_ref(), settings)?;
+        let tracer = FrameTracer::new(ctx, &scene_buffers, dynamic.as_ref(), settings, 1)?;
         let extent = extent(settings);
         let view = View::of(scene).relative_to(origin);
         Ok(Self {
@@ -233,15 +198,15 @@ impl Renderer {
             hiz: HiZPass::new(ctx, extent)?,
             ssr: SsrPass::new(ctx, extent)?,
             compact: CompactPass::new(ctx, ssr_compact::PIPELINES, extent)?,
-            shadow_trace: ShadowTracePass::new(ctx, extent, settings.tracer)?,
+            shadow_trace: ShadowTracePass::new(ctx, extent)?,
             shadow_compact: CompactPass::new(ctx, shadow_trace::COMPACT_PIPELINES, extent)?,
-            rt: RtReflectPass::new(ctx, extent, settings.tracer)?,
+            rt: RtReflectPass::new(ctx, extent)?,
             merge: MergePass::new(ctx, extent)?,
             denoise: DenoisePass::new(ctx, extent)?,
             compose: ComposePass::new(ctx, extent)?,
             static_bvh,
             static_bvh_build,
-            khr,
+            tracer,
             dynamic,
             transform: SimTransformPass::new(ctx)?,
             cloth: ClothPass::new(ctx)?,
@@ -297,7 +262,7 @@ impl Renderer {
     pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         settings.validate()?;
         crate::limits::check_frame(&self.ctx, &settings)?;
-        check_tracer(&self.ctx, &settings)?;
+        tracer::check(&self.ctx, &settings)?;
         if self.needs_new_renderer(&settings) {
             let fields = self.settings.changed(&settings, Applies::NewRenderer).join(", ");
             return Err(crate::Error::Settings(format!(
@@ -347,18 +312,17 @@ impl Renderer {
         Ok(())
     }
 
-    /// Makes the tracing passes and structures for `settings.tracer` (the GPU idle).
+    /// Makes the tracing kernels and structures for `settings.tracer` (the GPU idle),
+    /// with as many instance buffers as frames may be in flight.
     fn set_tracer(&mut self, settings: &Settings) -> Result<()> {
-        let e = extent(settings);
-        let rt = RtReflectPass::new(&self.ctx, e, settings.tracer)?;
-        let shadow_trace = ShadowTracePass::new(&self.ctx, e, settings.tracer)?;
-        let mut khr = khr_scene(&self.ctx, &self.scene, self.dynamic.as_ref(), settings)?;
-        if let Some(k) = &mut khr {
-            // As many instance buffers as frames may be in flight.
-            k.set_slots(self.slots.len())?;
-        }
-        (self.rt, self.shadow_trace, self.khr) = (rt, shadow_trace, khr);
+        let (scene, dynamic, slots) = (&self.scene, self.dynamic.as_ref(), self.slots.len());
+        self.tracer = FrameTracer::new(&self.ctx, scene, dynamic, settings, slots)?;
         Ok(())
+    }
+
+    /// The tracer frames trace with (the one `settings.tracer` chose).
+    pub fn tracer(&self) -> settings::Tracer {
+        self.tracer.setting()
     }
 
     /// The `rt` reference of `settings` (`Settings::glossy_reference`: with glossy
@@ -413,7 +377,7 @@ impl Renderer {
         if let Some(d) = &mut self.dynamic {
             d.set_slots(n)?;
         }
-        if let Some(k) = &mut self.khr {
+        if let Some(k) = self.tracer.khr_mut() {
             k.set_slots(n)?;
         }
         Ok(())
@@ -481,7 +445,7 @@ impl Renderer {
             self.ctx.wait_idle()?;
             d.reset()?;
         }
-        if let Some(k) = &mut self.khr {
+        if let Some(k) = self.tracer.khr_mut() {
             k.reset();
         }
         // The glossy rays' sequence, the denoiser's history and the adaptive hybrid's
@@ -564,7 +528,8 @@ impl Renderer {
     fn read_frame(&mut self, slot: usize, wall: Option<Wall>) -> Result<TimerReadout> {
         // The dynamic BVH's refit schedule reads its first build back (the LBVH's only:
         // the vendor tracer's structures keep their own).
-        if let Some(d) = self.dynamic.as_mut().filter(|_| self.khr.is_none()) {
+        let own_tracer = matches!(self.tracer, FrameTracer::Lbvh(_));
+        if let Some(d) = self.dynamic.as_mut().filter(|_| own_tracer) {
             d.bvh.after_frame()?;
         }
         let s = &mut self.slots[slot];

@@ -3,14 +3,14 @@
 //! The plan (`plan`) says which rows a frame runs; `frame` records them.
 
 use crate::passes::compose;
-use crate::passes::khr;
-use crate::passes::lbvh::dynamic::DynamicBvh;
 use crate::passes::reflect_denoise;
 use crate::passes::reflect_merge;
 use crate::passes::rt_reflect;
 use crate::passes::ssr_hiz;
 use crate::passes::ssr_trace;
 use crate::passes::{gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_skin, sim_transform, ssr_compact};
+use crate::tracers::khr;
+use crate::tracers::lbvh::dynamic::DynamicBvh;
 
 /// Timer scope of the whole frame.
 pub const FRAME: &str = "frame";

@@ -4,9 +4,9 @@
 use crate::common;
 
 use speculum::bench::lbvh::{run_case, Options};
-use speculum::passes::lbvh::{BvhKind, MortonBits};
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::steady::WarmUp;
+use speculum::tracers::lbvh::{BvhKind, MortonBits};
 
 /// The `room` scene at 160x90: small enough for a quick benchmark run.
 fn small_room() -> (speculum::scene::Scene, speculum::Settings) {

@@ -14,6 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["aabb", "vk"],
     &["settings", "scene"],
     &["sim"],
+    &["tracers"],
     &["cpu_ref", "passes"],
     &["limits", "reflection_maps", "shadow_maps"],
     &["renderer"],
@@ -258,7 +259,8 @@ fn no_folder_has_an_import_cycle() {
         "bench",
         "cpu_ref",
         "demo",
-        "passes/lbvh",
+        "tracers",
+        "tracers/lbvh",
         "renderer",
         "scene",
         "settings",
@@ -577,4 +579,52 @@ fn the_frame_reads_its_plan() {
         decisions_in(made),
         [".mode", "hybrid_policy", "HybridPolicy", ".marches()"]
     );
+}
+
+/// What a frame's tracer is, is decided once: `renderer/tracer.rs` turns the setting into
+/// one value of one tracer's kernels and structures (`FrameTracer`), and the tracers'
+/// types do the rest (`tracers::Tracer`). No pass, no other renderer file and no tracer
+/// compares or matches the setting.
+#[test]
+fn the_tracer_is_chosen_once() {
+    const CHOICES: &[&str] = &[
+        "Tracer::Khr",
+        "Tracer::Lbvh",
+        ".tracer ==",
+        ".tracer !=",
+        "match settings.tracer",
+        "st.tracer",
+    ];
+    let allowed = ["renderer/tracer.rs", "tracers/mod.rs"];
+    let mut files = Vec::new();
+    for dir in ["passes", "renderer", "tracers"] {
+        rust_files(&src().join(dir), &mut files);
+    }
+    assert!(files.len() > 20, "the scan found only {} files", files.len());
+    let wrong: Vec<String> = files
+        .iter()
+        .filter(|f| !allowed.iter().any(|a| f.ends_with(a)))
+        .flat_map(|f| {
+            let code = code(f);
+            let rel = f.strip_prefix(src()).unwrap().display().to_string();
+            CHOICES
+                .iter()
+                .filter(move |c| chooses(&code, c))
+                .map(move |c| format!("src/{rel}: {c}"))
+        })
+        .collect();
+    assert!(wrong.is_empty(), "the tracer chosen again:\n{}", wrong.join("\n"));
+    // The scan sees a choice where one is made (the old frame's), not in a name that
+    // ends like one (`FrameTracer::Khr`).
+    let old = "if settings.tracer != Tracer::Khr { return Ok(None); }";
+    assert!(CHOICES.iter().any(|c| chooses(old, c)));
+    assert!(!chooses("FrameTracer::Khr(kernels, khr) => {", "Tracer::Khr"));
+}
+
+/// Whether `code` holds `choice` other than as the end of a longer name.
+fn chooses(code: &str, choice: &str) -> bool {
+    code.match_indices(choice).any(|(i, _)| {
+        let before = code[..i].chars().next_back();
+        !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+    })
 }

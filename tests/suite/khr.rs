@@ -10,11 +10,12 @@ use glam::Vec3;
 use speculum::cpu_ref::lbvh::triangle;
 use speculum::cpu_ref::trace::{brute_force, intersect};
 use speculum::gpu_types::{GpuVertex, Hit, Ray};
-use speculum::passes::khr::{KhrScene, StaticInput, StaticOrder};
-use speculum::passes::lbvh::UploadedTriangles;
 use speculum::passes::rt_trace::TracePass;
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::shader_defines::BVH_INVALID;
+use speculum::tracers::khr::{KhrScene, StaticInput, StaticOrder};
+use speculum::tracers::lbvh::UploadedTriangles;
+use speculum::tracers::Khr;
 use speculum::vk::ContextDesc;
 
 /// Relative t tolerance between the driver's intersection test and the CPU's
@@ -39,7 +40,7 @@ fn traced(v: &[GpuVertex], i: &[u32], rays: &[Ray], any_hit: bool) -> Vec<Hit> {
         return rays.iter().map(|r| brute_force(r, v, i)).collect();
     }
     let tris = UploadedTriangles::new(&ctx, "khr", v, i).unwrap();
-    let pass = TracePass::new_khr(&ctx).unwrap();
+    let pass = TracePass::<Khr>::new(&ctx).unwrap();
     let mut out = Vec::new();
     // Either order of the triangles traces the same hits (ids mapped back).
     for order in [StaticOrder::File, StaticOrder::Morton] {
@@ -335,7 +336,7 @@ fn khr_traces_100k_triangles() {
 /// refused in one line before anything is built.
 #[test]
 fn khr_empty_dynamic_set_and_the_index_limit() {
-    use speculum::passes::khr::{BodyRange, DynamicLayout};
+    use speculum::tracers::khr::{BodyRange, DynamicLayout};
     let ctx = common::context();
     if ctx.ray_tracing.is_none() {
         return;
@@ -353,7 +354,7 @@ fn khr_empty_dynamic_set_and_the_index_limit() {
     };
     let scene = KhrScene::new(&ctx, &input, Some(&empty), &[]).unwrap();
     let rays = random_rays(400, &v, &i, 1.0, 72);
-    let pass = TracePass::new_khr(&ctx).unwrap();
+    let pass = TracePass::<Khr>::new(&ctx).unwrap();
     let (hits, _) = pass.trace(&rays, scene.trace(tris.geometry(), None), false).unwrap();
     let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
     assert_eq!(compare(&hits, &cpu, &rays, |p| triangle(&v, &i, p as usize)), 0);

@@ -8,10 +8,10 @@ use glam::Vec3;
 use rand::Rng;
 use speculum::cpu_ref::lbvh as cref;
 use speculum::gpu_types::{GpuVertex, PackedBvh};
-use speculum::passes::lbvh::sort::{RadixSort, SortBuffers, SortTile};
-use speculum::passes::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::shader_defines::{SORT_ITEMS_MAX, SORT_WG_CPU, SORT_WG_GPU};
+use speculum::tracers::lbvh::sort::{RadixSort, SortBuffers, SortTile};
+use speculum::tracers::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
 use speculum::vk::{Context, GpuTimer};
 use std::sync::Arc;
 
@@ -404,7 +404,7 @@ fn refit_matches_cpu_after_moving_vertices() {
 /// schedule orders every node after both its children.
 #[test]
 fn scheduled_refit_matches_cpu() {
-    use speculum::passes::lbvh::{refit_order, RefitSchedule};
+    use speculum::tracers::lbvh::{refit_order, RefitSchedule};
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
     for n in [1usize, 2, 300, 20000] {
@@ -495,8 +495,8 @@ fn size_classes_keep_walls_apart() {
 /// tree; its SAH on `room` stays within 1.05x of binned SAH (1.28x for the LBVH).
 #[test]
 fn ploc_matches_cpu_exactly() {
-    use speculum::passes::lbvh::ploc::{PlocBuilder, PlocScratch, ROUNDS};
     use speculum::shader_defines::PLOC_RADIUS;
+    use speculum::tracers::lbvh::ploc::{PlocBuilder, PlocScratch, ROUNDS};
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
     let p = PlocBuilder::new(&ctx).unwrap();
@@ -549,7 +549,7 @@ fn ploc_matches_cpu_exactly() {
 /// grid steps of it, with the same child.
 #[test]
 fn compact_nodes_match_cpu_and_hold_the_boxes() {
-    use speculum::passes::lbvh::ploc::{PlocScratch, ROUNDS};
+    use speculum::tracers::lbvh::ploc::{PlocScratch, ROUNDS};
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
     let mut rng = common::rng(31);
@@ -659,7 +659,7 @@ fn f32_3(t: [u32; 4]) -> [f32; 3] {
     [f32::from_bits(t[0]), f32::from_bits(t[1]), f32::from_bits(t[2])]
 }
 
-/// A rigid rebuild (`passes::lbvh::rigid`): random bodies (one without triangles, two
+/// A rigid rebuild (`tracers::lbvh::rigid`): random bodies (one without triangles, two
 /// alike in one pose, so their codes tie) under random poses, 1, 2, 9 and 300 of them.
 /// The layout orders each body's triangles by their object-space keys; the kernels'
 /// keys and values equal `cpu_ref::lbvh::rigid_keys` exactly (outputs poisoned), come
@@ -668,7 +668,7 @@ fn f32_3(t: [u32; 4]) -> [f32; 3] {
 #[test]
 fn rigid_keys_match_cpu_and_build_the_cpu_tree() {
     use glam::{Mat4, Quat};
-    use speculum::passes::lbvh::rigid::{RigidKeys, RigidLayout};
+    use speculum::tracers::lbvh::rigid::{RigidKeys, RigidLayout};
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
     let mut rng = common::rng(23);

@@ -392,10 +392,10 @@ fn every_kernel_specialization_renders_the_same_frames() {
     let render = |desc: speculum::vk::ContextDesc| -> Vec<Vec<u8>> {
         let ctx = common::context_with(desc);
         // The sort the renderer's builder makes takes the chosen tile, not the device's.
-        let tile = speculum::passes::lbvh::sort::RadixSort::new(&ctx).unwrap().tile();
+        let tile = speculum::tracers::lbvh::sort::RadixSort::new(&ctx).unwrap().tile();
         assert_eq!(
             tile,
-            speculum::passes::lbvh::sort::SortTile::for_device(ctx.kernels_for)
+            speculum::tracers::lbvh::sort::SortTile::for_device(ctx.kernels_for)
         );
         let plan = headless::FramePlan {
             warmup: speculum::steady::WarmUp::Frames(0),

@@ -6,7 +6,7 @@
 use crate::common;
 
 use serde_json::Value;
-use speculum::passes::lbvh::BvhKind;
+use speculum::tracers::lbvh::BvhKind;
 use std::path::Path;
 
 fn speculum(args: &[&str], dir: &Path) -> Value {

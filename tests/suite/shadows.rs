@@ -55,7 +55,7 @@ fn shadow_classify_matches_cpu_on_random_gbuffers() {
         size: size as u32,
         depth: &shadow,
     };
-    let pass = ShadowTracePass::new(&ctx, extent, speculum::settings::Tracer::Lbvh).unwrap();
+    let pass = ShadowTracePass::new(&ctx, extent).unwrap();
     let general = vk::ImageLayout::GENERAL;
     for mode in [Shadows::Hybrid, Shadows::Rays] {
         pass.out
@@ -217,7 +217,8 @@ fn shadow_trace_matches_cpu_on_a_random_gbuffer() {
     use speculum::cpu_ref::reflect::PathScene;
     use speculum::cpu_ref::texture::TextureArray;
     use speculum::cpu_ref::trace::CpuBvh;
-    use speculum::passes::TraceScene;
+    use speculum::passes::shadow_trace::Kernel;
+    use speculum::tracers::{Lbvh, TraceScene};
     let ctx = common::context();
     let mut rng = common::rng(25);
     let room = speculum::scene::load("room").unwrap();
@@ -248,11 +249,12 @@ fn shadow_trace_matches_cpu_on_a_random_gbuffer() {
         static_bvh: Some(r.static_traceable()),
         dynamic_bvh: None,
     };
+    let kernel = Kernel::<Lbvh>::new(&ctx).unwrap();
     ctx.one_shot(|cmd| {
         r.shadow_trace.classify(cmd, &ubo, gb, &r.shadow.out, Shadows::Rays);
         r.shadow_compact.record(cmd, &r.shadow_trace.out.mask);
         r.shadow_trace
-            .trace(cmd, &ubo, gb, &r.shadow_compact.out, &scene.into());
+            .trace(cmd, (&kernel, &scene), &ubo, gb, &r.shadow_compact.out);
         let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
         barrier::record(&ctx.device, cmd, &[b], &[]);
     })

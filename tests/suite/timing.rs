@@ -124,11 +124,11 @@ fn one_shot_scopes_pass_their_self_check() {
         }
     }
     let (v, i) = speculum::scene::soup::random_soup(20_000, 1.0, 10.0, 5);
-    let triangles = speculum::passes::lbvh::UploadedTriangles::new(&ctx, "t", &v, &i).unwrap();
+    let triangles = speculum::tracers::lbvh::UploadedTriangles::new(&ctx, "t", &v, &i).unwrap();
     let geometry = triangles.geometry();
-    let builder = speculum::passes::lbvh::LbvhBuilder::new(&ctx).unwrap();
+    let builder = speculum::tracers::lbvh::LbvhBuilder::new(&ctx).unwrap();
     let bvh =
-        speculum::passes::lbvh::Bvh::new_static(&ctx, 20_000, speculum::passes::lbvh::MortonBits::Bits30).unwrap();
+        speculum::tracers::lbvh::Bvh::new_static(&ctx, 20_000, speculum::tracers::lbvh::MortonBits::Bits30).unwrap();
     let mut timer = GpuTimer::new(&ctx, 8).unwrap();
     // As for frames (`checked_frame`): a build refused by its self-check may be a
     // lavapipe thread preempted between two stamps (`remeasure_readout` tries again); one that
@@ -147,9 +147,9 @@ fn one_shot_scopes_pass_their_self_check() {
     timer
         .one_shot(|cmd, timer| builder.record_compact(cmd, timer, &bvh))
         .unwrap();
-    let tracer = speculum::passes::rt_trace::TracePass::new(&ctx).unwrap();
-    let scene = speculum::passes::TraceScene {
-        static_bvh: Some(speculum::passes::Traceable { bvh: &bvh, geometry }),
+    let tracer = speculum::passes::rt_trace::TracePass::<speculum::tracers::Lbvh>::new(&ctx).unwrap();
+    let scene = speculum::tracers::TraceScene {
+        static_bvh: Some(speculum::tracers::Traceable { bvh: &bvh, geometry }),
         dynamic_bvh: None,
     };
     let (_, t) = tracer.trace(&rays, scene, false).unwrap();

@@ -9,11 +9,11 @@ use rand::Rng;
 use speculum::cpu_ref::lbvh::triangle;
 use speculum::cpu_ref::trace::{brute_force, intersect, CpuBvh};
 use speculum::gpu_types::{GpuVertex, Hit, Ray};
-use speculum::passes::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits, UploadedTriangles};
 use speculum::passes::rt_trace::TracePass;
-use speculum::passes::{TraceScene, Traceable};
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::shader_defines::{BVH_INVALID, BVH_LEAF_MAX};
+use speculum::tracers::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits, UploadedTriangles};
+use speculum::tracers::{Lbvh, TraceScene, Traceable};
 use speculum::vk::{Context, GpuTimer};
 use std::sync::Arc;
 
@@ -133,7 +133,7 @@ pub(crate) fn compare_within(
 fn closest_hits_equal_brute_force() {
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
-    let tracer = TracePass::new(&ctx).unwrap();
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     let n = 3000;
     let (v, i) = random_soup(n, 1.0, default_size(n), 21);
     let rays = random_rays(12000, &v, &i, 1.0, 22);
@@ -172,7 +172,7 @@ fn closest_hits_equal_brute_force() {
 fn rays_at_triangle_corners_hit_through_rounded_boxes() {
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
-    let tracer = TracePass::new(&ctx).unwrap();
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     let n = 2000;
     let (v, i) = random_soup(n, 1.0, default_size(n), 61);
     let mut rng = common::rng(62);
@@ -228,7 +228,7 @@ fn rays_at_triangle_corners_hit_through_rounded_boxes() {
 fn static_and_dynamic_bvhs_together() {
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
-    let tracer = TracePass::new(&ctx).unwrap();
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     let (sv, si) = random_soup(2000, 1.0, default_size(4000), 31);
     let (dv, di) = random_soup(2000, 1.0, default_size(4000), 32);
     let st = Built::new(&ctx, &b, &sv, &si, MortonBits::Bits30);
@@ -277,7 +277,7 @@ fn static_and_dynamic_bvhs_together() {
 fn any_hit_agrees_on_occlusion() {
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
-    let tracer = TracePass::new(&ctx).unwrap();
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 41);
     let built = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
     // Finite segments, as shadow rays are.
@@ -310,7 +310,7 @@ fn any_hit_agrees_on_occlusion() {
 fn refit_traces_like_a_fresh_build() {
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
-    let tracer = TracePass::new(&ctx).unwrap();
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     let (v, i) = random_soup(4000, 1.0, default_size(4000), 51);
     let refit = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
     let moved: Vec<GpuVertex> = v
@@ -420,7 +420,7 @@ pub(crate) fn dynamic_bvh_matches_brute_force(
             }
         })
         .collect();
-    let tracer = TracePass::new(ctx).unwrap();
+    let tracer = TracePass::<Lbvh>::new(ctx).unwrap();
     let scene_bvhs = TraceScene {
         static_bvh: None,
         dynamic_bvh: r.dynamic_traceable(),
@@ -478,7 +478,7 @@ fn a_tree_deeper_than_the_stack_is_reported() {
         tmax: 100.0,
     };
     let want = brute_force(&ray, &v, &i);
-    let tracer = TracePass::new(&ctx).unwrap();
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     for (bits, overflows) in [(MortonBits::Bits63, true), (MortonBits::Bits30, false)] {
         let built = Built::new(&ctx, &b, &v, &i, bits);
         let scene = TraceScene {
@@ -546,7 +546,7 @@ fn a_planted_cycle_ends_in_a_reported_overrun() {
         dir: [1.0, 0.0, 0.0],
         ..through
     };
-    let tracer = TracePass::new(&ctx).unwrap();
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     for scene in [
         TraceScene {
             static_bvh: Some(built.traceable()),

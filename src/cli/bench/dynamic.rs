@@ -199,7 +199,7 @@ fn print_points(
     // Which rebuild the bodies get (the renderer's rule).
     let rigid = scenes
         .iter()
-        .all(|s| speculum::passes::lbvh::rigid::applies(s, settings.rigid_order));
+        .all(|s| speculum::tracers::lbvh::rigid::applies(s, settings.rigid_order));
     let rebuild = match (axis, rigid) {
         (Axis::Cloth | Axis::Skinned, _) => "",
         (Axis::Bodies, true) => "; bodies rebuilt in their own order, rigid_order",

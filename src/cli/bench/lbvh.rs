@@ -6,8 +6,8 @@ use anyhow::Result;
 use clap::Args;
 use speculum::bench::lbvh::{run_case, Options, Report};
 use speculum::output::Kind;
-use speculum::passes::lbvh::{BvhKind, MortonBits};
 use speculum::report::Header;
+use speculum::tracers::lbvh::{BvhKind, MortonBits};
 use std::path::PathBuf;
 
 #[derive(Args, Clone, Debug)]
@@ -182,10 +182,10 @@ fn lbvh_cases(args: &LbvhArgs) -> Result<Vec<Case>> {
         if n == 0 {
             anyhow::bail!("--tris 0: a BVH needs at least one triangle");
         }
-        if n > speculum::passes::lbvh::MAX_TRIANGLES {
+        if n > speculum::tracers::lbvh::MAX_TRIANGLES {
             anyhow::bail!(
                 "--tris {n}: more than the LBVH's {} triangles",
-                speculum::passes::lbvh::MAX_TRIANGLES
+                speculum::tracers::lbvh::MAX_TRIANGLES
             );
         }
         let size = speculum::scene::soup::default_size(n as usize);

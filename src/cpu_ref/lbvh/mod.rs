@@ -88,7 +88,7 @@ pub fn body_center(pose: &Mat4, center: [f32; 3]) -> Vec3 {
         + pose.w_axis.truncate()
 }
 
-/// A rigid rebuild's keys (`passes::lbvh::rigid`: `lbvh_body_keys`, `lbvh_body_ranks`,
+/// A rigid rebuild's keys (`tracers::lbvh::rigid`: `lbvh_body_keys`, `lbvh_body_ranks`,
 /// `lbvh_rigid_keys`): the sorted (key, triangle) pairs of bodies `bodies` posed by
 /// `poses`, their triangles described by `tri_info` ([body, place in the body's order,
 /// object-space key, 0] per triangle): from the top, `cell_bits` of the body's code,

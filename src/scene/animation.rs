@@ -1,5 +1,6 @@
-//! glTF animations and skins on the CPU (issue 41, first step: read, checked and
-//! evaluated; not yet played by the renderer). A `Rig` is a file's node hierarchy with
+//! glTF animations and skins on the CPU: read, checked and evaluated; the renderer
+//! plays them through `scene::animated` and the skinning pass (`sim.skin`), which this
+//! file's `skin_vertex` is the CPU reference of. A `Rig` is a file's node hierarchy with
 //! each node's rest transform, its animations (keyframed translation, rotation and
 //! scale: step, linear with rotations slerped, and cubic-spline interpolation, as the
 //! glTF 2.0 specification's appendix C defines them) and its skins (joints and inverse

@@ -1,7 +1,7 @@
 //! The built-in scenes: scene files in `assets/scenes/` (the format of `scene::file`),
 //! compiled into the binary so that `--scene room` works from any folder.
 
-use super::file::SceneFile;
+use super::file::{Instance, SceneFile};
 use super::Scene;
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -45,7 +45,7 @@ pub const GALLERY_TRIANGLES: std::ops::RangeInclusive<u32> = 10_000..=8_000_000;
 pub fn file(name: &str) -> Option<Result<SceneFile>> {
     let path = Path::new("assets/scenes").join(format!("{name}.toml"));
     if let Some(detail) = gallery_triangles(name) {
-        return Some(detail.and_then(|n| SceneFile::parse(&path, &gallery_toml(name, n))));
+        return Some(detail.and_then(|n| gallery(&path, name, n)));
     }
     SCENES
         .iter()
@@ -88,23 +88,33 @@ const SCULPTURES: [(f32, f32, f32, &str); 8] = [
     (2.6, 6.0, 0.6, "marble"),
 ];
 
-/// The gallery's scene file with about `triangles` triangles: nearly all in its eight
-/// sculptures (UV spheres of `2r` segments and `r` rings, 4r^2 triangles each), the
-/// hall (mirror floor, glossy far wall, matte side walls, pedestals) a few hundred.
-fn gallery_toml(name: &str, triangles: u32) -> String {
+/// The gallery's scene file with about `triangles` triangles: the hall
+/// (`assets/gallery_hall.toml`: mirror floor, glossy far wall, matte side walls, a few
+/// hundred triangles) with a pedestal and a sculpture at each of `SCULPTURES` (UV
+/// spheres of `2r` segments and `r` rings, 4r^2 triangles each), which hold nearly all
+/// the triangles.
+fn gallery(path: &Path, name: &str, triangles: u32) -> Result<SceneFile> {
     let per = triangles as f64 / SCULPTURES.len() as f64;
     let rings = ((per / 4.0).sqrt().round() as u32).clamp(4, 512);
-    let mut out = format!("name = \"{name}\"\n{}", include_str!("../../assets/gallery_hall.toml"));
+    let mut file = SceneFile::parse(path, include_str!("../../assets/gallery_hall.toml"))?;
+    file.name = Some(name.into());
     for (x, z, r, material) in SCULPTURES {
-        out +=
-            &format!("\n[[instance]]\nbox = [1.2, 1.0, 1.2]\nmaterial = \"pedestal\"\ntranslate = [{x}, 0.5, {z}]\n");
-        out += &format!(
-            "\n[[instance]]\nsphere = {r}\nsegments = {}\nrings = {rings}\nmaterial = \"{material}\"\ntranslate = [{x}, {}, {z}]\n",
-            2 * rings,
-            1.0 + r
-        );
+        file.instances.push(Instance {
+            cuboid: Some([1.2, 1.0, 1.2]),
+            material: Some("pedestal".into()),
+            translate: Some([x, 0.5, z]),
+            ..Default::default()
+        });
+        file.instances.push(Instance {
+            sphere: Some(r),
+            segments: Some(2 * rings),
+            rings: Some(rings),
+            material: Some(material.into()),
+            translate: Some([x, 1.0 + r, z]),
+            ..Default::default()
+        });
     }
-    out
+    Ok(file)
 }
 
 /// The built-in scene called `name`, if there is one.

@@ -6,7 +6,7 @@ use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// What an instance places: exactly one of the shape keys.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Instance {
     /// A rectangle [width, depth] in the xz-plane facing +y.

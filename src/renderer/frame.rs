@@ -10,22 +10,17 @@ use super::gpu_scene::DynamicGeometry;
 use super::plan::{FramePlan, Motion, Previous};
 use super::table::{Row, FRAME};
 use super::tracer::{FrameTracer, Kernels};
-use super::{FrameSlot, Renderer};
+use super::{FrameSlot, Lighting, Reflections, Renderer};
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposeInputs;
-use crate::passes::gbuffer::GBufferPass;
-use crate::passes::light_direct::{LightDirectPass, Sun};
-use crate::passes::reflect_denoise::{DenoiseInputs, DenoiseParams, DenoisePass};
-use crate::passes::reflect_merge::{MergeInputs, MergeParams, MergePass};
-use crate::passes::rt_reflect::{ReflectInputs, RtReflectPass};
-use crate::passes::shadow_map::ShadowMapPass;
-use crate::passes::shadow_trace::ShadowTracePass;
+use crate::passes::light_direct::Sun;
+use crate::passes::reflect_denoise::{DenoiseInputs, DenoiseParams};
+use crate::passes::reflect_merge::{MergeInputs, MergeParams};
+use crate::passes::rt_reflect::ReflectInputs;
 use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
-use crate::passes::ssr_compact::CompactPass;
-use crate::passes::ssr_hiz::HiZPass;
-use crate::passes::ssr_trace::{MarchInputs, SsrPass};
+use crate::passes::ssr_trace::MarchInputs;
 use crate::passes::{SceneGeometry, Surfaces};
 use crate::settings::{Hybrid, Settings, SsrParams};
 use crate::tracers::khr::KhrScene;
@@ -201,22 +196,7 @@ impl Renderer {
                 .collect(),
             surfaces: scene.surfaces(dynamic),
         };
-        let lighting = Lighting {
-            shadow: &self.shadow,
-            gbuffer: &self.gbuffer,
-            shadow_trace: &self.shadow_trace,
-            shadow_compact: &self.shadow_compact,
-            light: &self.light,
-        };
-        let reflections = Reflections {
-            hiz: &self.hiz,
-            ssr: &self.ssr,
-            compact: &self.compact,
-            rt: &self.rt,
-            merge: &self.merge,
-            denoise: &mut self.denoise,
-        };
-        let passes = (&lighting, reflections);
+        let passes = (&self.lighting, &mut self.reflections);
         let at = (&mut f, &plan, d, cmd);
         match tracer {
             FrameTracer::Lbvh(kernels) => {
@@ -236,10 +216,10 @@ impl Renderer {
         }
         let inputs = ComposeInputs {
             frame: ubo,
-            hdr: &self.light.out,
-            reflection: &self.merge.out,
-            gbuffer: &self.gbuffer.out,
-            fail_mask: &self.ssr.out.mask,
+            hdr: &self.lighting.light.out,
+            reflection: &self.reflections.merge.out,
+            gbuffer: &self.lighting.gbuffer.out,
+            fail_mask: &self.reflections.ssr.out.mask,
             reflective_min: st.reflective_min,
         };
         let compose = &self.compose;
@@ -268,7 +248,7 @@ struct Traced<'a, T: Tracer> {
 /// hybrid frame counted in `counts`).
 fn record_shading<'a, T: Tracer>(
     (f, plan, d, cmd): (&mut FrameRecorder<'_>, &FramePlan, &ash::Device, vk::CommandBuffer),
-    (lighting, reflections): (&Lighting<'a>, Reflections<'a>),
+    (lighting, reflections): (&'a Lighting, &'a mut Reflections),
     frame: &FrameInputs<'a>,
     traced: Traced<'a, T>,
     counts: &mut FrameCounts,
@@ -280,31 +260,12 @@ fn record_shading<'a, T: Tracer>(
     record_reflections(f, plan, (d, cmd), (lighting, reflections), frame, &traced, counts);
 }
 
-/// The passes from the shadow map to the direct light.
-struct Lighting<'a> {
-    shadow: &'a ShadowMapPass,
-    gbuffer: &'a GBufferPass,
-    shadow_trace: &'a ShadowTracePass,
-    shadow_compact: &'a CompactPass,
-    light: &'a LightDirectPass,
-}
-
-/// The reflection passes, `ssr.hiz` to `reflect.denoise`.
-struct Reflections<'a> {
-    hiz: &'a HiZPass,
-    ssr: &'a SsrPass,
-    compact: &'a CompactPass,
-    rt: &'a RtReflectPass,
-    merge: &'a MergePass,
-    denoise: &'a mut DenoisePass,
-}
-
 /// `shadow.map` to `light.direct`, as `plan` says.
 fn record_lighting<T: Tracer>(
     f: &mut FrameRecorder<'_>,
     plan: &FramePlan,
     cmd: vk::CommandBuffer,
-    l: &Lighting<'_>,
+    l: &Lighting,
     i: &FrameInputs<'_>,
     t: &Traced<'_, T>,
 ) {
@@ -338,84 +299,93 @@ fn record_reflections<'a, T: Tracer>(
     f: &mut FrameRecorder<'_>,
     plan: &FramePlan,
     (d, cmd): (&ash::Device, vk::CommandBuffer),
-    (l, r): (&Lighting<'a>, Reflections<'a>),
+    (l, r): (&'a Lighting, &'a mut Reflections),
     i: &FrameInputs<'a>,
     t: &Traced<'a, T>,
     counts: &mut FrameCounts,
 ) {
+    // The passes the frame reads for all of 'a (the traced scene's lifetime), and the
+    // one it writes (the glossy filter's history).
+    let Reflections {
+        hiz,
+        ssr,
+        compact,
+        rt,
+        merge,
+        denoise,
+    } = r;
+    let (hiz, ssr, compact, rt, merge) = (&*hiz, &*ssr, &*compact, &*rt, &*merge);
     let (ubo, g, st) = (i.ubo, &l.gbuffer.out, i.st);
     let params = SsrParams {
         tile_rate: plan.tile_rate,
         ..SsrParams::from_settings(st)
     };
     if plan.runs(Row::SsrHiz) {
-        f.row(Row::SsrHiz, || r.hiz.record(cmd, &g.depth));
+        f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
     }
     if let Some(kind) = plan.classify {
-        f.row(Row::SsrClassify, || r.ssr.classify(cmd, (ubo, g), &params, kind));
+        f.row(Row::SsrClassify, || ssr.classify(cmd, (ubo, g), &params, kind));
     }
     if plan.marches {
         let inputs = MarchInputs {
             frame: ubo,
             gbuffer: g,
             lit: &l.light.out,
-            hiz: &r.hiz.out,
+            hiz: &hiz.out,
         };
-        f.row(Row::SsrTrace, || r.ssr.trace(cmd, &inputs, &params));
+        f.row(Row::SsrTrace, || ssr.trace(cmd, &inputs, &params));
     }
     if plan.runs(Row::RtReflect) {
-        f.row(Row::SsrCompact, || r.compact.record(cmd, &r.ssr.out.mask));
+        f.row(Row::SsrCompact, || compact.record(cmd, &ssr.out.mask));
         let inputs = ReflectInputs {
             frame: ubo,
             gbuffer: g,
             surfaces: i.surfaces,
             shadow_map: &l.shadow.out,
-            list: &r.compact.out,
+            list: &compact.out,
             scene: t.scene,
-            hit_distance: &r.ssr.out.hit_distance,
+            hit_distance: &ssr.out.hit_distance,
         };
         let kernel = &t.kernels.reflect;
         f.row(Row::RtReflect, || {
-            r.rt.record(cmd, kernel, &inputs, st.max_bounces, st.shadows)
+            rt.record(cmd, kernel, &inputs, st.max_bounces, st.shadows)
         });
     }
     if plan.counts {
-        let o = &r.ssr.out;
-        let lists = [&o.march_args, &r.compact.out.indirect, &o.ssr_first_marches];
+        let o = &ssr.out;
+        let lists = [&o.march_args, &compact.out.indirect, &o.ssr_first_marches];
         counts.record((d, cmd), lists, (plan.tile_rate, plan.hybrid.priced()));
     }
     if plan.runs(Row::ReflectMerge) {
         let inputs = MergeInputs {
             frame: ubo,
             gbuffer: g,
-            fail_mask: &r.ssr.out.mask,
-            ssr: &r.ssr.out.color,
-            rt: &r.rt.out,
+            fail_mask: &ssr.out.mask,
+            ssr: &ssr.out.color,
+            rt: &rt.out,
         };
         let params = MergeParams {
             rt_enabled: plan.runs(Row::RtReflect),
             reflective_min: st.reflective_min,
             blur: plan.blur,
         };
-        f.row(Row::ReflectMerge, || r.merge.record(cmd, &inputs, params));
+        f.row(Row::ReflectMerge, || merge.record(cmd, &inputs, params));
     }
     if plan.denoise {
         let inputs = DenoiseInputs {
             frame: ubo,
             gbuffer: g,
-            merged: &r.merge.out,
-            list: &r.ssr.out.glossy_list,
-            list_args: &r.ssr.out.glossy_args,
-            hit_distance: &r.ssr.out.hit_distance,
+            merged: &merge.out,
+            list: &ssr.out.glossy_list,
+            list_args: &ssr.out.glossy_args,
+            hit_distance: &ssr.out.hit_distance,
         };
         let params = DenoiseParams {
             radius: st.denoise_radius,
             history: st.denoise_history,
             reflective_min: st.reflective_min,
         };
-        f.row(Row::ReflectDenoise, || {
-            r.denoise.record(cmd, &inputs, params, i.uniforms)
-        });
+        f.row(Row::ReflectDenoise, || denoise.record(cmd, &inputs, params, i.uniforms));
     }
 }
 

@@ -2,7 +2,8 @@
 //! table as data; `plan.rs`: each frame's decisions; `frame.rs`: the function that
 //! records the plan's rows; `view.rs`: camera, light and origin maths; `gpu_scene.rs`:
 //! the scene's buffers and the moving geometry; `tracer.rs`: the tracer's kernels and
-//! structures as one value).
+//! structures as one value; `passes.rs`: the screen passes in two groups, each made and
+//! resized in one place).
 //!
 //! Frame: `uniforms` → (a dynamic scene: `sim.rigid` on the CPU, `sim.transform`,
 //! `sim.cloth`, the dynamic BVH's `lbvh.*`) → `shadow.map` (unless the shadows are
@@ -21,6 +22,7 @@
 pub mod exchange;
 mod frame;
 mod gpu_scene;
+mod passes;
 pub mod plan;
 mod readback;
 pub mod table;
@@ -34,19 +36,9 @@ pub use view::{frame_uniforms, render_origin, View};
 use crate::error::Result;
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposePass;
-use crate::passes::gbuffer::GBufferPass;
-use crate::passes::light_direct::LightDirectPass;
-use crate::passes::reflect_denoise::DenoisePass;
-use crate::passes::reflect_merge::MergePass;
-use crate::passes::rt_reflect::RtReflectPass;
-use crate::passes::shadow_map::ShadowMapPass;
-use crate::passes::shadow_trace::{self, ShadowTracePass};
 use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
-use crate::passes::ssr_compact::{self, CompactPass};
-use crate::passes::ssr_hiz::HiZPass;
-use crate::passes::ssr_trace::SsrPass;
 use crate::scene::{Camera, Scene};
 use crate::settings::{self, Applies, Mode, Settings};
 use crate::tracers::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
@@ -56,6 +48,7 @@ use ash::vk;
 use exchange::{ExchangeRate, FrameCounts, Path, Paths};
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
+pub use passes::{Lighting, Reflections};
 use std::sync::Arc;
 use tracer::FrameTracer;
 
@@ -102,18 +95,10 @@ pub struct Renderer {
     frame_index: u32,
     /// The glossy rays' sample stream: 0, or `REFERENCE_STREAM` (`Renderer::reference`).
     sample_stream: u32,
-    pub shadow: ShadowMapPass,
-    pub gbuffer: GBufferPass,
-    pub light: LightDirectPass,
-    pub hiz: HiZPass,
-    pub ssr: SsrPass,
-    pub compact: CompactPass,
-    pub shadow_trace: ShadowTracePass,
-    /// `shadow.compact`: the shadow mask's compaction into the shadow-ray list.
-    pub shadow_compact: CompactPass,
-    pub rt: RtReflectPass,
-    pub merge: MergePass,
-    pub denoise: DenoisePass,
+    /// `shadow.map` to `light.direct` (`passes.rs`).
+    pub lighting: Lighting,
+    /// `ssr.hiz` to `reflect.denoise` (`passes.rs`).
+    pub reflections: Reflections,
     pub compose: ComposePass,
     /// BVH over the scene's (static) triangles, built at creation.
     pub static_bvh: Bvh,
@@ -192,17 +177,8 @@ impl Renderer {
             uniforms: view.uniforms(settings),
             frame_index: 0,
             sample_stream: 0,
-            shadow: ShadowMapPass::new(ctx, settings.shadow_map_size, settings.shadow_slope_bias)?,
-            gbuffer: GBufferPass::new(ctx, extent)?,
-            light: LightDirectPass::new(ctx, extent)?,
-            hiz: HiZPass::new(ctx, extent)?,
-            ssr: SsrPass::new(ctx, extent)?,
-            compact: CompactPass::new(ctx, ssr_compact::PIPELINES, extent)?,
-            shadow_trace: ShadowTracePass::new(ctx, extent)?,
-            shadow_compact: CompactPass::new(ctx, shadow_trace::COMPACT_PIPELINES, extent)?,
-            rt: RtReflectPass::new(ctx, extent)?,
-            merge: MergePass::new(ctx, extent)?,
-            denoise: DenoisePass::new(ctx, extent)?,
+            lighting: Lighting::new(ctx, settings, extent)?,
+            reflections: Reflections::new(ctx, extent)?,
             compose: ComposePass::new(ctx, extent)?,
             static_bvh,
             static_bvh_build,
@@ -273,16 +249,8 @@ impl Renderer {
         if !old.changed(&settings, Applies::Resize).is_empty() {
             self.ctx.wait_idle()?;
             let e = extent(&settings);
-            self.gbuffer.resize(e)?;
-            self.light.resize(e)?;
-            self.hiz.resize(e)?;
-            self.ssr.resize(e)?;
-            self.compact.resize(e)?;
-            self.shadow_trace.resize(e)?;
-            self.shadow_compact.resize(e)?;
-            self.rt.resize(e)?;
-            self.merge.resize(e)?;
-            self.denoise.resize(e)?;
+            self.lighting.resize(e)?;
+            self.reflections.resize(e)?;
             self.compose.resize(e)?;
             // A new size starts the glossy rays' sequence over, as a fresh renderer's.
             self.frame_index = 0;
@@ -301,7 +269,7 @@ impl Renderer {
         let old = &self.settings;
         if !old.changed(&settings, Applies::ShadowMap).is_empty() {
             self.ctx.wait_idle()?;
-            self.shadow = ShadowMapPass::new(&self.ctx, settings.shadow_map_size, settings.shadow_slope_bias)?;
+            self.lighting.shadow = Lighting::shadow_map(&self.ctx, &settings)?;
         }
         // Other settings, other costs: the adaptive hybrid prices its paths anew.
         if settings != self.settings {
@@ -451,8 +419,8 @@ impl Renderer {
         // The glossy rays' sequence, the denoiser's history and the adaptive hybrid's
         // tiles start over with it, so frame k is the same image whatever came before.
         self.frame_index = 0;
-        self.denoise.reset_history();
-        self.ssr.reset_tiles();
+        self.reflections.denoise.reset_history();
+        self.reflections.ssr.reset_tiles();
         // The paths' prices are the device's and the view's: kept.
         self.paths = Paths {
             next: Path::March,
@@ -489,13 +457,17 @@ impl Renderer {
         if self.is_dynamic() {
             return Ok((self.render_frame()?, 0));
         }
-        let (index, history, tiles) = (self.frame_index, self.denoise.sequence(), self.ssr.tile_sequence());
+        let (index, history, tiles) = (
+            self.frame_index,
+            self.reflections.denoise.sequence(),
+            self.reflections.ssr.tile_sequence(),
+        );
         let paths = self.paths;
         crate::vk::remeasure_readout(|| {
             self.frame_index = index;
             self.paths = paths;
-            self.denoise.restore(history);
-            self.ssr.restore_tiles(tiles);
+            self.reflections.denoise.restore(history);
+            self.reflections.ssr.restore_tiles(tiles);
             self.render_frame()
         })
     }

@@ -40,7 +40,7 @@ impl Renderer {
         let mask = if self.settings.mode == Mode::Raster {
             vec![0; material.len()]
         } else {
-            bytemuck::pod_collect_to_vec(&self.ssr.out.mask.read(vk::ImageLayout::GENERAL)?)
+            bytemuck::pod_collect_to_vec(&self.reflections.ssr.out.mask.read(vk::ImageLayout::GENERAL)?)
         };
         Ok(ReflectionMaps {
             reflective,
@@ -51,8 +51,8 @@ impl Renderer {
 
     /// The last frame's G-buffer normals (xyz; w: reflectivity) and material ids.
     fn read_normals_and_materials(&self) -> Result<(Vec<[f32; 4]>, Vec<u32>)> {
-        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.gbuffer.out.normal)?);
-        let material = bytemuck::pod_collect_to_vec(&self.read_target(&self.gbuffer.out.material)?);
+        let normal = crate::gpu_types::rgba16f_to_f32(&self.read_target(&self.lighting.gbuffer.out.normal)?);
+        let material = bytemuck::pod_collect_to_vec(&self.read_target(&self.lighting.gbuffer.out.material)?);
         Ok((normal, material))
     }
 
@@ -69,14 +69,14 @@ impl Renderer {
             .collect();
         let read = |image: &Image| image.read(vk::ImageLayout::GENERAL);
         let mask = if self.settings.shadows.traces() {
-            bytemuck::pod_collect_to_vec(&read(&self.shadow_trace.out.mask)?)
+            bytemuck::pod_collect_to_vec(&read(&self.lighting.shadow_trace.out.mask)?)
         } else {
             vec![0; material.len()]
         };
         Ok(ShadowMaps {
             lit,
             mask,
-            visibility: bytemuck::pod_collect_to_vec(&read(&self.shadow_trace.out.visibility)?),
+            visibility: bytemuck::pod_collect_to_vec(&read(&self.lighting.shadow_trace.out.visibility)?),
         })
     }
 
@@ -90,7 +90,7 @@ impl Renderer {
     /// often they have changed class since the tiles were reset.
     pub fn tile_census(&self) -> Result<TileCensus> {
         use crate::shader_defines::{TILE_FLIPS_SHIFT, TILE_KNOWN, TILE_RAYS_ONLY, TILE_WORDS};
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.ssr.tiles_written().read()?);
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.reflections.ssr.tiles_written().read()?);
         let mut c = TileCensus::default();
         for &s in words.iter().step_by(TILE_WORDS as usize) {
             *match (s & TILE_KNOWN != 0, s & TILE_RAYS_ONLY != 0) {
@@ -112,7 +112,7 @@ impl Renderer {
 
     /// The last frame's lit HDR image as RGBA f32.
     pub fn read_lit(&self) -> Result<Vec<[f32; 4]>> {
-        let raw = self.light.out.read(vk::ImageLayout::GENERAL)?;
+        let raw = self.lighting.light.out.read(vk::ImageLayout::GENERAL)?;
         debug_assert_eq!(light_direct::FORMAT, vk::Format::R32G32B32A32_SFLOAT);
         Ok(bytemuck::pod_collect_to_vec(&raw))
     }

@@ -43,7 +43,7 @@ fn rt_settings() -> Settings {
 
 /// The tiles' state words after the last frame.
 fn tile_states(r: &Renderer) -> Vec<u32> {
-    let words: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.tiles_written().read().unwrap());
+    let words: Vec<u32> = bytemuck::pod_collect_to_vec(&r.reflections.ssr.tiles_written().read().unwrap());
     words.into_iter().step_by(TILE_WORDS as usize).collect()
 }
 
@@ -146,10 +146,10 @@ fn a_fixed_rate_is_deterministic_and_the_first_frame_is_ssr_first() {
     for _ in 0..5 {
         r.render_frame_measured().unwrap();
     }
-    let seq = r.ssr.tile_sequence();
+    let seq = r.reflections.ssr.tile_sequence();
     r.render_frame().unwrap();
     let once = tile_states(&r);
-    r.ssr.restore_tiles(seq);
+    r.reflections.ssr.restore_tiles(seq);
     r.render_frame().unwrap();
     assert_eq!(tile_states(&r), once, "the frame again read other tiles");
     let mut p = Renderer::new(

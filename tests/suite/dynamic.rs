@@ -90,8 +90,14 @@ fn dynamic_hybrid_matches_rt_on_every_frame() {
             }
             let stats = hybrid.reflection_stats().unwrap();
             assert!(stats.reflective_pixels > 1000, "{name} frame {k}");
-            let merged: Vec<[f32; 4]> =
-                bytemuck::pod_collect_to_vec(&hybrid.merge.out.read(ash::vk::ImageLayout::GENERAL).unwrap());
+            let merged: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(
+                &hybrid
+                    .reflections
+                    .merge
+                    .out
+                    .read(ash::vk::ImageLayout::GENERAL)
+                    .unwrap(),
+            );
             let reflective = hybrid.reflection_maps().unwrap().reflective;
             let holes = (0..merged.len())
                 .filter(|&i| reflective[i] && ![SOURCE_SSR, SOURCE_RT].contains(&(merged[i][3] as u32)))
@@ -221,7 +227,7 @@ fn motion_takes_each_point_back_to_where_it_was() {
         };
         let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
         let motionless = |r: &Renderer| {
-            let m = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.out.motion).unwrap());
+            let m = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.lighting.gbuffer.out.motion).unwrap());
             m.iter().all(|m| m[..3] == [0.0; 3])
         };
         // The first frame has no frame before it, nor the first after a restart.
@@ -242,7 +248,7 @@ fn motion_takes_each_point_back_to_where_it_was() {
         r.render_frame().unwrap();
         let now = r.read_dynamic_vertices().unwrap().unwrap();
         let frame = *r.uniforms();
-        let g = &r.gbuffer.out;
+        let g = &r.lighting.gbuffer.out;
         let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&g.depth).unwrap());
         let motion = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&g.motion).unwrap());
         let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&g.material).unwrap());

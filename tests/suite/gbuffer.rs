@@ -66,7 +66,7 @@ fn gbuffer_matches_analytic_plane_and_sphere() {
     };
     let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
-    let t = &r.gbuffer.out;
+    let t = &r.lighting.gbuffer.out;
     let depth: Vec<f32> = bytemuck::cast_slice(&r.read_target(&t.depth).unwrap()).to_vec();
     let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
     let albedo = r.read_target(&t.albedo).unwrap();
@@ -184,9 +184,9 @@ fn gbuffer_samples_textures_per_texel() {
     };
     let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
-    let albedo = r.read_target(&r.gbuffer.out.albedo).unwrap();
-    let motion = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.out.motion).unwrap());
-    let material: Vec<u32> = bytemuck::cast_slice(&r.read_target(&r.gbuffer.out.material).unwrap()).to_vec();
+    let albedo = r.read_target(&r.lighting.gbuffer.out.albedo).unwrap();
+    let motion = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.lighting.gbuffer.out.motion).unwrap());
+    let material: Vec<u32> = bytemuck::cast_slice(&r.read_target(&r.lighting.gbuffer.out.material).unwrap()).to_vec();
     let frame = *r.uniforms();
     let textures = TextureArray::new(&scene.textures, speculum::scene::texture::LAYER_MAX);
     // Vulkan computes a linear filter's weights with at least the device's
@@ -278,7 +278,7 @@ fn bent_normals_never_mirror_below_the_surface() {
     };
     let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
-    let t = &r.gbuffer.out;
+    let t = &r.lighting.gbuffer.out;
     let depth: Vec<f32> = bytemuck::cast_slice(&r.read_target(&t.depth).unwrap()).to_vec();
     let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
     let frame = *r.uniforms();

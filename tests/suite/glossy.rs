@@ -456,7 +456,7 @@ fn provenance_shows_glossy_pixels() {
         let mut r = speculum::renderer::Renderer::new(&ctx, &scene, &settings).unwrap();
         r.render_frame().unwrap();
         let ldr = r.read_output().unwrap();
-        let albedo = r.read_target(&r.gbuffer.out.albedo).unwrap();
+        let albedo = r.read_target(&r.lighting.gbuffer.out.albedo).unwrap();
         let maps = r.reflection_maps().unwrap();
         let frame = speculum::gpu_types::FrameUniforms {
             glossy: glossy as u32,

@@ -47,7 +47,7 @@ fn showcase_nodes_and_checker_texture_in_the_gbuffer() {
     };
     let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
     r.render_frame().unwrap();
-    let t = &r.gbuffer.out;
+    let t = &r.lighting.gbuffer.out;
     let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.depth).unwrap());
     let albedo = r.read_target(&t.albedo).unwrap();
     let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.material).unwrap());
@@ -111,9 +111,10 @@ fn gold_tints_its_reflection_and_silver_does_not() {
         };
         let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
         r.render_frame().unwrap();
-        let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.out.material).unwrap());
+        let material: Vec<u32> =
+            bytemuck::pod_collect_to_vec(&r.read_target(&r.lighting.gbuffer.out.material).unwrap());
         let reflection: Vec<[f32; 4]> =
-            bytemuck::pod_collect_to_vec(&r.merge.out.read(ash::vk::ImageLayout::GENERAL).unwrap());
+            bytemuck::pod_collect_to_vec(&r.reflections.merge.out.read(ash::vk::ImageLayout::GENERAL).unwrap());
         let out = r.read_output().unwrap();
         let linear = |c: u8| speculum::scene::texture::srgb_to_linear(c);
         // Median over a material's pixels of (frame b/r) / (reflection b/r).

@@ -628,3 +628,47 @@ fn chooses(code: &str, choice: &str) -> bool {
         !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
     })
 }
+
+/// Every screen pass is resized with the screen, in one place: each field of
+/// `renderer/passes.rs`'s groups whose type has a `resize` (a pass of `src/passes/` with
+/// screen-sized outputs) is resized by its group's `resize`, and the renderer resizes the
+/// groups, not their passes.
+#[test]
+fn every_screen_pass_is_resized_by_its_group() {
+    // The pass types with a `resize`: the `impl` that holds it.
+    let mut files = Vec::new();
+    rust_files(&src().join("passes"), &mut files);
+    let mut resized_types = BTreeSet::new();
+    for f in &files {
+        let code = code(f);
+        let Some(at) = code.find("pub fn resize(") else {
+            continue;
+        };
+        let before = &code[..at];
+        let imp = before.rfind("\nimpl ").expect("resize inside an impl");
+        resized_types.insert(ident(before[imp + 6..].trim_start()).to_string());
+    }
+    assert!(resized_types.len() >= 10, "found {resized_types:?}");
+    let groups = code(&src().join("renderer/passes.rs"));
+    let mut fields = 0;
+    for line in groups.lines() {
+        let Some((name, ty)) = line.trim().strip_prefix("pub ").and_then(|l| l.split_once(": ")) else {
+            continue;
+        };
+        let ty = ty.trim_end_matches(',');
+        if resized_types.contains(ty) {
+            fields += 1;
+            assert!(
+                groups.contains(&format!("self.{name}.resize(extent)")),
+                "renderer/passes.rs: `{name}: {ty}` is screen-sized but its group's resize leaves it"
+            );
+        }
+    }
+    assert!(fields >= 9, "the scan found {fields} screen-sized fields in the groups");
+    let renderer = code(&src().join("renderer/mod.rs"));
+    let resizes = renderer.matches(".resize(").count();
+    assert_eq!(
+        resizes, 3,
+        "renderer/mod.rs resizes the two groups and compose, nothing else"
+    );
+}

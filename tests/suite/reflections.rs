@@ -113,7 +113,8 @@ fn ssr_succeeds_when_the_reflected_object_is_on_screen() {
         100.0 * failed
     );
     // The mirror shows the blue wall.
-    let merged: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.merge.out.read(vk::ImageLayout::GENERAL).unwrap());
+    let merged: Vec<[f32; 4]> =
+        bytemuck::pod_collect_to_vec(&r.reflections.merge.out.read(vk::ImageLayout::GENERAL).unwrap());
     let ssr_pixels: Vec<&[f32; 4]> = merged.iter().filter(|m| m[3] as u32 == SOURCE_SSR).collect();
     assert!(ssr_pixels.len() as u64 >= stats.reflective_pixels - stats.ssr_failed_pixels);
     let bluish = ssr_pixels.iter().filter(|m| m[2] > m[0] * 1.5 && m[2] > m[1]).count();
@@ -177,7 +178,7 @@ fn every_reflective_pixel_gets_a_reflection() {
         ] {
             let r = render(&ctx, &scene, mode, 240, 135);
             let merged: Vec<[f32; 4]> =
-                bytemuck::pod_collect_to_vec(&r.merge.out.read(vk::ImageLayout::GENERAL).unwrap());
+                bytemuck::pod_collect_to_vec(&r.reflections.merge.out.read(vk::ImageLayout::GENERAL).unwrap());
             let reflective = r.reflection_maps().unwrap().reflective;
             for i in 0..merged.len() {
                 let source = merged[i][3] as u32;

@@ -116,10 +116,13 @@ fn reflected_paths_match_cpu_reference() {
         let (w, h) = (settings.width as usize, settings.height as usize);
         let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
         let general = vk::ImageLayout::GENERAL;
-        r.rt.out
+        r.reflections
+            .rt
+            .out
             .write(bytemuck::cast_slice(&vec![POISON; w * h]), general)
             .unwrap();
-        r.shadow_trace
+        r.lighting
+            .shadow_trace
             .out
             .visibility
             .write(bytemuck::cast_slice(&vec![POISON[0]; w * h]), general)
@@ -130,13 +133,13 @@ fn reflected_paths_match_cpu_reference() {
         for _ in 0..frames {
             r.render_frame().unwrap();
         }
-        let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.out.depth).unwrap());
-        let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.gbuffer.out.normal).unwrap());
-        let shadow: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.shadow.out).unwrap());
-        let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.rt.out.read(general).unwrap());
+        let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.lighting.gbuffer.out.depth).unwrap());
+        let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&r.lighting.gbuffer.out.normal).unwrap());
+        let shadow: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.lighting.shadow.out).unwrap());
+        let gpu: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.reflections.rt.out.read(general).unwrap());
         let reflective = r.reflection_maps().unwrap().reflective;
-        let albedo = r.read_target(&r.gbuffer.out.albedo).unwrap();
-        let hit: Vec<f32> = bytemuck::pod_collect_to_vec(&r.ssr.out.hit_distance.read(general).unwrap());
+        let albedo = r.read_target(&r.lighting.gbuffer.out.albedo).unwrap();
+        let hit: Vec<f32> = bytemuck::pod_collect_to_vec(&r.reflections.ssr.out.hit_distance.read(general).unwrap());
         // The uniforms of the frame read back (the last: its index).
         let frame = speculum::gpu_types::FrameUniforms {
             frame_index: frames - 1,
@@ -236,7 +239,7 @@ fn reflected_paths_match_cpu_reference() {
 /// triangle's edge and classifications on a threshold's ulp, at most 1 in 500.
 fn check_visibility(name: &str, r: &Renderer, s: &PathScene<'_>, (depth, normal): (&[f32], &[[f32; 4]])) {
     let maps = r.shadow_maps().unwrap();
-    let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.gbuffer.out.material).unwrap());
+    let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&r.lighting.gbuffer.out.material).unwrap());
     let w = s.frame.resolution[0] as usize;
     let (mut lit, mut traced, mut shadowed, mut differ) = (0usize, 0usize, 0usize, 0usize);
     for i in (0..maps.lit.len()).filter(|&i| maps.lit[i]) {

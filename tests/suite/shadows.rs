@@ -234,12 +234,13 @@ fn shadow_trace_matches_cpu_on_a_random_gbuffer() {
     let n = (settings.width * settings.height) as usize;
     let g = common::random_gbuffer(&mut rng, n);
     let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-    let gb = &r.gbuffer.out;
+    let gb = &r.lighting.gbuffer.out;
     gb.depth.write(bytemuck::cast_slice(&g.depth), ro).unwrap();
     gb.normal.write(&g.normal_bytes, ro).unwrap();
     gb.material.write(bytemuck::cast_slice(&g.material), ro).unwrap();
     let general = vk::ImageLayout::GENERAL;
-    r.shadow_trace
+    r.lighting
+        .shadow_trace
         .out
         .visibility
         .write(bytemuck::cast_slice(&vec![-7.0f32; n]), general)
@@ -251,16 +252,19 @@ fn shadow_trace_matches_cpu_on_a_random_gbuffer() {
     };
     let kernel = Kernel::<Lbvh>::new(&ctx).unwrap();
     ctx.one_shot(|cmd| {
-        r.shadow_trace.classify(cmd, &ubo, gb, &r.shadow.out, Shadows::Rays);
-        r.shadow_compact.record(cmd, &r.shadow_trace.out.mask);
-        r.shadow_trace
-            .trace(cmd, (&kernel, &scene), &ubo, gb, &r.shadow_compact.out);
+        r.lighting
+            .shadow_trace
+            .classify(cmd, &ubo, gb, &r.lighting.shadow.out, Shadows::Rays);
+        r.lighting.shadow_compact.record(cmd, &r.lighting.shadow_trace.out.mask);
+        r.lighting
+            .shadow_trace
+            .trace(cmd, (&kernel, &scene), &ubo, gb, &r.lighting.shadow_compact.out);
         let b = barrier::memory(barrier::access::COMPUTE_WRITE, barrier::access::TRANSFER_READ);
         barrier::record(&ctx.device, cmd, &[b], &[]);
     })
     .unwrap();
-    let vis: Vec<f32> = bytemuck::pod_collect_to_vec(&r.shadow_trace.out.visibility.read(general).unwrap());
-    let listed = r.shadow_compact.out.read_count().unwrap() as usize;
+    let vis: Vec<f32> = bytemuck::pod_collect_to_vec(&r.lighting.shadow_trace.out.visibility.read(general).unwrap());
+    let listed = r.lighting.shadow_compact.out.read_count().unwrap() as usize;
 
     let bvh = CpuBvh::build(&room.vertices, &room.indices);
     let materials: Vec<_> = room.materials.iter().map(|m| m.gpu()).collect();

@@ -715,15 +715,15 @@ fn march_matches_cpu_on_room() {
         let mut r = speculum::Renderer::new(&ctx, &scene, &settings).unwrap();
         r.render_frame().unwrap();
         let frame = *r.uniforms();
-        let t = &r.gbuffer.out;
+        let t = &r.lighting.gbuffer.out;
         let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.depth).unwrap());
         let normal = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.normal).unwrap());
         let lit = r.read_lit().unwrap();
         let general = vk::ImageLayout::GENERAL;
-        let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.mask.read(general).unwrap());
-        let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.ssr.out.color.read(general).unwrap());
-        let args: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_args.read().unwrap());
-        let list: Vec<u32> = bytemuck::pod_collect_to_vec(&r.ssr.out.march_list.read().unwrap());
+        let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&r.reflections.ssr.out.mask.read(general).unwrap());
+        let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&r.reflections.ssr.out.color.read(general).unwrap());
+        let args: Vec<u32> = bytemuck::pod_collect_to_vec(&r.reflections.ssr.out.march_args.read().unwrap());
+        let list: Vec<u32> = bytemuck::pod_collect_to_vec(&r.reflections.ssr.out.march_list.read().unwrap());
         let albedo = r.read_target(&t.albedo).unwrap();
         let material: Vec<u32> = bytemuck::pod_collect_to_vec(&r.read_target(&t.material).unwrap());
         let metallic: Vec<f32> = speculum::gpu_types::rgba16f_to_f32(&r.read_target(&t.motion).unwrap())

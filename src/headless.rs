@@ -2,11 +2,11 @@
 //! `render --timings` report (schema: `report`).
 
 use crate::error::{Error, Result};
-use crate::metrics::compare_rgba8;
+use crate::metrics::{compare_rgba8, Comparison};
 use crate::renderer::{Renderer, FRAME};
 use crate::report::{FrameRecord, Header, PassTimes, Stat};
 use crate::scene::Scene;
-use crate::settings::{Settings, Shadows};
+use crate::settings::{Mode, Settings, Shadows};
 use crate::shader_defines::MAX_REFLECTION_RAYS;
 use crate::shadow_maps::ShadowsVsRays;
 use crate::steady::{WarmUp, WarmUpReport};
@@ -69,6 +69,12 @@ pub struct TimingsReport {
     pub ssim_vs_rt: Option<f64>,
     pub rmse_vs_rt: Option<f64>,
     pub rt_frame_ms: Option<Stat>,
+    /// With `--reference` and glossy reflections, in a mode other than `rt`: the last
+    /// frame against the same frame in `rt` mode with the same settings (the same glossy
+    /// rays and filter, where the reference takes `spp` rays unfiltered), so that what
+    /// the mode adds (SSR, the merge, the seam blur) reads apart from the glossy
+    /// estimate's own error; `null` otherwise.
+    pub vs_rt_mode: Option<Comparison>,
     /// A hybrid frame's split of the work (`hybrid_policy`); `null` in other modes.
     pub hybrid: Option<HybridSplit>,
     /// The self-check of every measured frame, the reference's included (`vk::timing`).
@@ -218,31 +224,30 @@ pub fn render_frames(
     mut on_frame: Option<OnFrame<'_>>,
 ) -> Result<Rendered> {
     plan.validate(settings)?;
-    let (mut renderer, mut reference, mut rays_reference) = renderers(ctx, scene, settings, plan)?;
-    let mut all: Vec<&mut Renderer> = std::iter::once(&mut renderer)
-        .chain(reference.as_mut())
-        .chain(rays_reference.as_mut())
-        .collect();
+    let (mut renderer, mut others) = renderers(ctx, scene, settings, plan)?;
+    let mut all: Vec<&mut Renderer> = std::iter::once(&mut renderer).chain(others.all()).collect();
     let warmup = warm_up(&mut all, plan.warmup, tick)?;
     // A dynamic scene starts over after the warm-up: measured frame k is the same
     // image whatever the warm-up (the world after k + 1 time steps).
-    for r in std::iter::once(&mut renderer)
-        .chain(reference.as_mut())
-        .chain(rays_reference.as_mut())
-    {
+    for r in std::iter::once(&mut renderer).chain(others.all()) {
         r.reset_simulation()?;
     }
+    let Others {
+        reference,
+        rays_reference,
+        rt_mode,
+    } = &mut others;
     let (mut timings, mut ref_timings) = (Timings::default(), Timings::default());
     for index in 0..plan.frames {
         let (times, discarded) = renderer.render_frame_measured()?;
         tick();
         timings.add_measured(&times, discarded);
-        if let Some(r) = &mut reference {
+        if let Some(r) = reference {
             let (times, discarded) = r.render_frame_measured()?;
             ref_timings.add_measured(&times, discarded);
             tick();
         }
-        if let Some(r) = &mut rays_reference {
+        for r in rays_reference.iter_mut().chain(rt_mode.iter_mut()) {
             r.render_frame()?;
             tick();
         }
@@ -272,18 +277,34 @@ pub fn render_frames(
         renderer: &renderer,
         reference: reference.as_ref(),
         rays_reference: rays_reference.as_ref(),
+        rt_mode: rt_mode.as_ref(),
     };
     finish(ctx, scene, settings, (plan, warmup), runs, [timings, ref_timings])
 }
 
-/// The renderer of `settings`, and with a reference the `rt` renderer and (unless the
-/// shadows are rays already) the renderer with `rays` shadows, run in lockstep.
-fn renderers(
-    ctx: &Arc<Context>,
-    scene: &Scene,
-    settings: &Settings,
-    plan: FramePlan,
-) -> Result<(Renderer, Option<Renderer>, Option<Renderer>)> {
+/// The renderers that run in lockstep with a run's own, for its comparisons.
+#[derive(Default)]
+struct Others {
+    /// The `rt` reference (`Renderer::reference`).
+    reference: Option<Renderer>,
+    /// The same settings with `rays` shadows.
+    rays_reference: Option<Renderer>,
+    /// The same settings in `rt` mode (`TimingsReport::vs_rt_mode`).
+    rt_mode: Option<Renderer>,
+}
+
+impl Others {
+    fn all(&mut self) -> impl Iterator<Item = &mut Renderer> {
+        (self.reference.iter_mut())
+            .chain(self.rays_reference.iter_mut())
+            .chain(self.rt_mode.iter_mut())
+    }
+}
+
+/// The renderer of `settings`, and with a reference the `rt` renderer, (unless the
+/// shadows are rays already) the renderer with `rays` shadows and (with glossy
+/// reflections, in another mode than `rt`) the `rt` mode's, run in lockstep.
+fn renderers(ctx: &Arc<Context>, scene: &Scene, settings: &Settings, plan: FramePlan) -> Result<(Renderer, Others)> {
     let renderer = Renderer::new(ctx, scene, settings)?;
     let reference = if plan.reference {
         Some(Renderer::reference(ctx, scene, settings, plan.spp)?)
@@ -299,7 +320,21 @@ fn renderers(
     } else {
         None
     };
-    Ok((renderer, reference, rays_reference))
+    let rt_mode = if plan.reference && settings.glossy && settings.mode != Mode::Rt {
+        let rt = Settings {
+            mode: Mode::Rt,
+            ..settings.clone()
+        };
+        Some(Renderer::new(ctx, scene, &rt)?)
+    } else {
+        None
+    };
+    let others = Others {
+        reference,
+        rays_reference,
+        rt_mode,
+    };
+    Ok((renderer, others))
 }
 
 /// The renderers of a run after its last measured frame.
@@ -307,6 +342,7 @@ struct Runs<'a> {
     renderer: &'a Renderer,
     reference: Option<&'a Renderer>,
     rays_reference: Option<&'a Renderer>,
+    rt_mode: Option<&'a Renderer>,
 }
 
 /// The report and images of a run after its last measured frame: the frame and its
@@ -323,6 +359,7 @@ fn finish(
         renderer,
         reference,
         rays_reference,
+        rt_mode,
     } = runs;
     let rgba = renderer.read_output()?;
     let maps = renderer.reflection_maps()?;
@@ -371,6 +408,15 @@ fn finish(
         ssim_vs_rt: ssim,
         rmse_vs_rt: rmse,
         rt_frame_ms,
+        vs_rt_mode: match rt_mode {
+            Some(r) => Some(compare_rgba8(
+                &rgba,
+                &r.read_output()?,
+                settings.width,
+                settings.height,
+            )?),
+            None => None,
+        },
         hybrid: hybrid_split(renderer, settings)?,
         timing: Timings::check_all(&[timings, ref_timings]),
     };

@@ -336,6 +336,12 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
             super::cell(Some(rt))
         ));
     }
+    if let Some(c) = &r.vs_rt_mode {
+        text.line(format_args!(
+            "  vs rt mode (the same glossy rays and filter): SSIM {:.4}, RMSE {:.4}",
+            c.ssim, c.rmse
+        ));
+    }
     if let Some(v) = &r.shadows_vs_rays {
         text.line(format_args!(
             "  vs rays shadows: SSIM {:.4}, RMSE {:.4}; visibility equal on {:.2}% of {} lit pixels, RMSE {:.4}",

@@ -148,7 +148,7 @@ fn render_report_follows_the_schema() {
         "every reason, zeros included"
     );
     assert_eq!(r["fail_reasons"]["forced"], 0);
-    for k in ["ssim_vs_rt", "rmse_vs_rt", "rt_frame_ms"] {
+    for k in ["ssim_vs_rt", "rmse_vs_rt", "rt_frame_ms", "vs_rt_mode"] {
         assert!(
             r.get(k).is_some_and(Value::is_null),
             "{k} is present and null without --reference"
@@ -183,6 +183,13 @@ fn reports_go_to_stdout_with_a_dash() {
     check_passes(&r["passes_ms"], &[]);
     check_stat(&r["rt_frame_ms"], "rt_frame_ms");
     assert!(r["ssim_vs_rt"].as_f64().unwrap() > 0.5);
+    // The default hybrid frame has glossy reflections: it is also compared with the
+    // rt mode's frame of the same settings.
+    let m = &r["vs_rt_mode"];
+    assert!(
+        m["ssim"].as_f64().unwrap() > 0.5 && m["rmse"].as_f64().unwrap() < 0.1,
+        "{m}"
+    );
     let v = &r["shadows_vs_rays"];
     assert!(v["ssim"].as_f64().unwrap() > 0.5, "{v}");
     assert!(v["visibility_agreement"].as_f64().unwrap() > 0.5, "{v}");

@@ -106,14 +106,19 @@ pub const BVH_LEAF_MAX: u32 = 4;
 const _: () = assert!(BVH_LEAF_MAX - 1 < 1 << (31 - BVH_LEAF_COUNT_SHIFT));
 /// "No node / no primitive" (parent of the root, the primitive of a miss).
 pub const BVH_INVALID: u32 = 0xffff_ffff;
+/// Children of a wide node of the static walk (`lbvh.compact`): a binary node's two,
+/// each internal one opened into its own two.
+pub const WIDE: u32 = 4;
+// The static walk orders a wide node's children by a sorting network of four.
+const _: () = assert!(WIDE == 4);
 /// Traversal stack entries per ray. An LBVH over one-word keys (a 30-bit
 /// Morton code and 2 size-class bits) is at most 32 + ceil(log2 N) levels deep (equal
-/// keys split by index), and a walk holds at most one pending child per level: 64 is
-/// enough for every tree the frame builds (`tracers::lbvh` asserts it against
-/// `MAX_TRIANGLES`). Two-word keys (`bench lbvh --bits 63`) can build deeper trees; a
-/// walk that runs out of stack returns t = -1, which the benchmark counts as a
-/// mismatch.
-pub const TRACE_STACK: u32 = 64;
+/// keys split by index); the binary walk holds at most one pending child per level, the
+/// wide walk at most `WIDE - 1` per two levels: 96 is enough for every tree the frame
+/// builds (`tracers::lbvh` asserts it against `MAX_TRIANGLES`). Two-word keys (`bench
+/// lbvh --bits 63`) can build deeper trees; a walk that runs out of stack returns
+/// t = -1, which the benchmark counts as a mismatch.
+pub const TRACE_STACK: u32 = 96;
 
 /// Binary-search steps that refine an SSR hit inside its last stride: log2 of the
 /// largest stride worth refining to one pixel (16 px).
@@ -279,6 +284,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BVH_LEAF_MAX", BVH_LEAF_MAX),
     ("BVH_INVALID", BVH_INVALID),
     ("TRACE_STACK", TRACE_STACK),
+    ("WIDE", WIDE),
     ("SSR_REFINE_STEPS", SSR_REFINE_STEPS),
     ("SSR_LIST_WG", SSR_LIST_WG),
     ("LIST_STRIPES", LIST_STRIPES),

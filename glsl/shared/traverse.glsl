@@ -9,12 +9,13 @@
 // cpu_ref::trace.
 //
 // The includer defines TRAVERSE_BINDING (first of eight consecutive bindings) first.
-// The walk reads the BVH's layout (bvh.glsl): one node per step, whose two children's
+// The walk reads the BVH's layout (bvh.glsl): one node per step, whose children's
 // boxes are tested together, and a leaf's 1..BVH_LEAF_MAX 48-byte triangles in leaf
 // order; the scene's vertices and indices serve only the hit's attributes. The static
-// BVH's nodes are its compact ones (32 bytes, boxes rounded outward to a 16-bit grid:
-// coherent rays 1.03-1.16x, incoherent 1.07-1.35x as fast as on the 64-byte nodes), the dynamic BVH's the 64-byte nodes its
-// refit keeps. A rounded box holds the exact one, so the walk finds the hits it finds
+// BVH is walked through its compact nodes (boxes rounded outward to a 16-bit grid), in
+// the layout their header names: binary (walk_bvh, 32 bytes) or wide (walk_wide, 64
+// bytes: up to WIDE children, a binary node's with each internal one opened); the
+// dynamic BVH through the binary 64-byte nodes its refit keeps (walk_bvh). A rounded box holds the exact one, so the walk finds the hits it finds
 // over the exact boxes, stepping into a few more nodes (tests/trace.rs: both walks).
 // Nodes and triangles are read as uniform texel buffers of uvec4 (2 or 4, and 3 texels):
 // lavapipe fetches a texel for all lanes without a branch, where it loads a storage
@@ -33,8 +34,9 @@ layout(binding = TRAVERSE_BINDING + 5, std430) readonly buffer DynamicIndices { 
 layout(binding = TRAVERSE_BINDING + 6) uniform utextureBuffer s_tris;
 layout(binding = TRAVERSE_BINDING + 7) uniform utextureBuffer d_tris;
 
-// Node i of `bvh`: the static BVH's from its compact nodes on the grid (g, st), its
-// boxes rounded outward; the dynamic BVH's as built or refit (parent and unused are
+
+// Node i of `bvh`: the static BVH's from its binary compact nodes on the grid (g, st),
+// its boxes rounded outward; the dynamic BVH's as built or refit (parent and unused are
 // not read).
 TraversalNode fetch_node(uint bvh, uint i, vec3 g, vec3 st) {
     if (bvh != 0u) {
@@ -189,8 +191,38 @@ Vertex hit_vertex(uint prim, uint k) {
 // about 1.04x, rt.reflect 0.95-0.98x).
 uint trace_stack[TRACE_STACK];
 
-// One ray's walk of BVH `bvh` (0: static, 1: dynamic). Called with a constant `bvh`,
-// so each call compiles to the fetches of its own BVH only. Sets `failed` when a push
+// Pushes `link` on the walk's stack (the top in a register, the rest in trace_stack);
+// sets `failed` instead when the stack is full.
+void push_node(uint link, inout uint sp, inout uint top, inout bool failed) {
+    if (sp < TRACE_STACK) {
+        if (top != BVH_INVALID) {
+            trace_stack[sp - 1u] = top;
+        }
+        top = link;
+        ++sp;
+    } else {
+        failed = true;
+    }
+}
+
+// Pops the walk's next node into `node`; false when the stack is empty.
+bool pop_node(inout uint node, inout uint sp, inout uint top) {
+    if (sp == 0u) {
+        return false;
+    }
+    --sp;
+    if (top != BVH_INVALID) {
+        node = top;
+        top = BVH_INVALID;
+    } else {
+        node = trace_stack[sp];
+    }
+    return true;
+}
+
+// One ray's walk of BVH `bvh` through binary nodes (0: the static BVH's binary compact
+// nodes, 1: the dynamic BVH's). Called with a constant `bvh`, so each call compiles to
+// the fetches of its own BVH only. Sets `failed` when a push
 // would pass TRACE_STACK (the push is dropped), or when the walk would take more than
 // `max_steps` steps: a step visits one internal node, and a walk of a valid tree visits
 // each of its N-1 nodes at most once, so a walk past N steps is in a cycle (a
@@ -231,30 +263,95 @@ void walk_bvh(uint bvh, vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool an
         if (hit0 && hit1) {
             uint near = t0 <= t1 ? nd.child0 : nd.child1;
             uint far = t0 <= t1 ? nd.child1 : nd.child0;
-            if (sp < TRACE_STACK) {
-                if (top != BVH_INVALID) {
-                    trace_stack[sp - 1u] = top;
-                }
-                top = far;
-                ++sp;
-            } else {
-                failed = true;
-            }
+            push_node(far, sp, top, failed);
             node = near;
             continue;
         } else if (hit0 || hit1) {
             node = hit0 ? nd.child0 : nd.child1;
             continue;
         }
-        if (sp == 0u) {
+        if (!pop_node(node, sp, top)) {
             break;
         }
-        --sp;
-        if (top != BVH_INVALID) {
-            node = top;
-            top = BVH_INVALID;
-        } else {
-            node = trace_stack[sp];
+    }
+}
+
+// Orders slots a and b of a wide node's children by entry distance (walk_wide's
+// sorting network orders four: WIDE is 4, shader_defines.rs asserts it).
+#define WIDE_ORDER(a, b)                                                                   \
+    if (t[b] < t[a]) {                                                                     \
+        float tt = t[a];                                                                   \
+        t[a] = t[b];                                                                       \
+        t[b] = tt;                                                                         \
+        uint ll = link[a];                                                                 \
+        link[a] = link[b];                                                                 \
+        link[b] = ll;                                                                      \
+    }
+
+// One ray's walk of the static BVH through its wide nodes (lbvh.compact): a step tests
+// a node's WIDE slots, the leaves among the hit ones at once, and goes on to the
+// nearest internal child, the others pushed far first (so the nearer pops first).
+// Every pushed or visited node is a grandchild of the binary tree: a step descends two
+// levels and pushes at most WIDE - 1, so a tree of depth D needs (WIDE - 1) ceil(D / 2)
+// entries (tracers::lbvh asserts TRACE_STACK holds them). `failed` and `max_steps` as
+// in walk_bvh.
+void walk_wide(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, uint max_steps, inout Hit best,
+               inout bool failed) {
+    uint sp = 0u;
+    uint steps = 0u;
+    uint top = BVH_INVALID; // when set, the top of the sp entries; the array holds the rest
+    uint node = 0u;         // the root's wide node
+    vec3 g = uintBitsToFloat(texelFetch(s_nodes, 0).xyz);
+    vec3 st = uintBitsToFloat(texelFetch(s_nodes, 1).xyz);
+    while (true) {
+        if (++steps > max_steps) {
+            failed = true;
+            break;
+        }
+        // Vectors, not arrays: a vector stays in registers where lavapipe keeps a
+        // private array in memory, read and written lane by lane.
+        vec4 t;
+        uvec4 link;
+        for (uint k = 0u; k < WIDE; ++k) {
+            uvec4 h = texelFetch(s_nodes, int(2u + WIDE * node + k));
+            vec3 lo, hi;
+            compact_box(h, g, st, lo, hi);
+            link[k] = h.w;
+            t[k] = h.w == BVH_INVALID ? 1.0 / 0.0 : box_entry(lo, hi, origin, inv_dir, tmin, best.t);
+        }
+        bool found = false;
+        for (uint k = 0u; k < WIDE; ++k) {
+            if (!found && t[k] != 1.0 / 0.0 && (link[k] & BVH_LEAF_BIT) != 0u) {
+                found = hit_leaf(0u, link[k], r, tmin, any_hit, best);
+                t[k] = 1.0 / 0.0;
+            }
+        }
+        if (found) {
+            break;
+        }
+        for (uint k = 0u; k < WIDE; ++k) {
+            // A child entered beyond the best hit so far (a leaf may have just made it)
+            // holds no closer hit.
+            if (t[k] > best.t) {
+                t[k] = 1.0 / 0.0;
+            }
+        }
+        WIDE_ORDER(0, 1)
+        WIDE_ORDER(2, 3)
+        WIDE_ORDER(0, 2)
+        WIDE_ORDER(1, 3)
+        WIDE_ORDER(1, 2)
+        if (t[0] != 1.0 / 0.0) {
+            for (int k = int(WIDE) - 1; k > 0; --k) {
+                if (t[k] != 1.0 / 0.0) {
+                    push_node(link[k], sp, top, failed);
+                }
+            }
+            node = link[0];
+            continue;
+        }
+        if (!pop_node(node, sp, top)) {
+            break;
         }
     }
 }
@@ -270,7 +367,13 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
     bool failed = false;
     TriRay r = tri_ray(origin, dir);
     if (static_tris != 0u) {
-        walk_bvh(0u, origin, r, inv_dir, tmin, any_hit, static_tris, best, failed);
+        // The static BVH's layout, as its compact nodes' header says (the same for
+        // every ray: a uniform branch).
+        if (texelFetch(s_nodes, 0).w == WIDE) {
+            walk_wide(origin, r, inv_dir, tmin, any_hit, static_tris, best, failed);
+        } else {
+            walk_bvh(0u, origin, r, inv_dir, tmin, any_hit, static_tris, best, failed);
+        }
     }
     if (dynamic_tris != 0u && !(any_hit && best.prim != BVH_INVALID)) {
         walk_bvh(1u, origin, r, inv_dir, tmin, any_hit, dynamic_tris, best, failed);

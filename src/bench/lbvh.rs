@@ -17,7 +17,9 @@ use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::rt_trace::TracePass;
 use crate::report::{Header, PassTimes, Stat};
 use crate::tracers::lbvh::ploc::{PlocScratch, ROUNDS};
-use crate::tracers::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule, UploadedTriangles};
+use crate::tracers::lbvh::{
+    Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule, StaticLayout, UploadedTriangles,
+};
 use crate::tracers::{Lbvh, TraceScene, Traceable};
 use crate::vk::{remeasure, remeasure_readout, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use glam::Vec3;
@@ -37,6 +39,8 @@ pub struct Options {
     pub bits: MortonBits,
     /// The trees built of each case, in this order.
     pub builders: Vec<BvhKind>,
+    /// The static walk's layouts each tree is walked in, in this order.
+    pub layouts: Vec<StaticLayout>,
     /// Rays from a file (`--rays-file`), traced as a third set.
     #[serde(skip)]
     pub file_rays: Option<Vec<Ray>>,
@@ -54,6 +58,8 @@ pub struct CaseReport {
     pub name: String,
     /// How the tree was made from the sorted keys.
     pub builder: BvhKind,
+    /// How the static walk reads it (`lbvh.compact`).
+    pub layout: StaticLayout,
     pub triangles: u32,
     pub morton_bits: u32,
     /// Stage → GPU milliseconds, in build order.
@@ -289,37 +295,38 @@ fn anchor(
     Ok(None)
 }
 
-/// The vendor tracer's figures (`bench::khr`), on the case of the first builder: the
+/// The vendor tracer's figures (`bench::khr`), on the case of the first builder and
+/// layout: the
 /// case's triangles and its coherent and incoherent rays (and the file's).
 fn vendor_tracer(
     ctx: &Arc<Context>,
-    (opts, kind): (&Options, BvhKind),
+    (opts, kind, layout): (&Options, BvhKind, StaticLayout),
     (v, i, [coherent, incoherent]): (&[GpuVertex], &[u32], [&[Ray]; 2]),
     cpu: &CpuCheck<'_>,
     (tracer, scene): (&TracePass<Lbvh>, TraceScene<'_>),
 ) -> Result<Option<Vec<super::khr::KhrReport>>> {
-    if opts.builders.first() != Some(&kind) {
+    if opts.builders.first() != Some(&kind) || opts.layouts.first() != Some(&layout) {
         return Ok(None);
     }
     let sets = [Some(coherent), Some(incoherent), opts.file_rays.as_deref()];
     super::khr::reports(ctx, (v, i), sets, (opts.repeats, opts.khr_rays, cpu), (tracer, scene))
 }
 
-/// Benchmarks one triangle set with one builder.
+/// Benchmarks one triangle set with one builder, walked in one static layout.
 pub fn run_case(
     ctx: &Arc<Context>,
     name: &str,
     v: &[GpuVertex],
     i: &[u32],
     opts: &Options,
-    kind: BvhKind,
+    (kind, layout): (BvhKind, StaticLayout),
     tick: super::Tick<'_>,
 ) -> Result<CaseReport> {
     let n = (i.len() / 3) as u32;
     let triangles = UploadedTriangles::new(ctx, "bench", v, i)?;
     let geometry = triangles.geometry();
     let builder = LbvhBuilder::new(ctx)?;
-    let bvh = Bvh::new_static(ctx, n, opts.bits)?;
+    let bvh = Bvh::new_static_in(ctx, n, opts.bits, layout)?;
     let scratch = (kind == BvhKind::Ploc).then(|| PlocScratch::new(ctx, n)).transpose()?;
     let built = time_builds(ctx, (&builder, geometry, &bvh), scratch.as_ref(), opts.repeats, tick)?;
     let mut timing = built.timing;
@@ -357,7 +364,7 @@ pub fn run_case(
     ];
     let embree = anchor((v, i), &sets, opts.repeats, build_ms.median)?;
     let khr_case = (v, i, [&coherent_set[..], &incoherent_set[..]]);
-    let khr = vendor_tracer(ctx, (opts, kind), khr_case, &cpu, (&tracer, scene))?;
+    let khr = vendor_tracer(ctx, (opts, kind, layout), khr_case, &cpu, (&tracer, scene))?;
     let (file, kept) = match file_set {
         Some(((report, hits), rays)) => (Some(report), opts.keep_hits.then(|| (rays.clone(), hits))),
         None => (None, opts.keep_hits.then_some((incoherent_set, incoherent_hits))),
@@ -375,6 +382,7 @@ pub fn run_case(
     Ok(CaseReport {
         name: name.into(),
         builder: kind,
+        layout,
         triangles: n,
         morton_bits: opts.bits.bits(),
         stages_ms,

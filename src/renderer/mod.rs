@@ -41,7 +41,7 @@ use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::scene::{Camera, Scene};
 use crate::settings::{self, Applies, Mode, Settings};
-use crate::tracers::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits};
+use crate::tracers::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits, StaticLayout};
 use crate::tracers::Traceable;
 use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
 use ash::vk;
@@ -128,6 +128,15 @@ pub struct Renderer {
     cmd: vk::CommandBuffer,
 }
 
+/// How the static walk reads the static scene's BVH.
+fn static_layout(settings: &Settings) -> StaticLayout {
+    if settings.static_wide {
+        StaticLayout::Wide
+    } else {
+        StaticLayout::Binary
+    }
+}
+
 /// The builder of the static scene's BVH.
 fn static_kind(settings: &Settings) -> BvhKind {
     if settings.static_ploc {
@@ -155,7 +164,8 @@ impl Renderer {
             gpu_allocator::MemoryLocation::GpuOnly,
         )?;
         // The static BVH, once: the scene has no dynamic geometry yet.
-        let static_bvh = Bvh::new_static(ctx, scene_buffers.mesh.index_count / 3, MortonBits::Bits30)?;
+        let tris = scene_buffers.mesh.index_count / 3;
+        let static_bvh = Bvh::new_static_in(ctx, tris, MortonBits::Bits30, static_layout(settings))?;
         let builder = LbvhBuilder::new(ctx)?;
         let (static_bvh_build, _) =
             builder.build_now(scene_buffers.mesh.triangles(), &static_bvh, static_kind(settings))?;
@@ -258,6 +268,10 @@ impl Renderer {
         if !old.changed(&settings, Applies::StaticBvh).is_empty() {
             // WAR: frames in flight still walk the old tree.
             self.ctx.wait_idle()?;
+            if settings.static_wide != self.settings.static_wide {
+                let tris = self.scene.mesh.index_count / 3;
+                self.static_bvh = Bvh::new_static_in(&self.ctx, tris, MortonBits::Bits30, static_layout(&settings))?;
+            }
             (self.static_bvh_build, _) =
                 self.builder
                     .build_now(self.scene.mesh.triangles(), &self.static_bvh, static_kind(&settings))?;

@@ -390,6 +390,13 @@ settings_table! {
     /// a slower build (dynamic geometry, rebuilt or refit per frame, always gets the
     /// LBVH).
     static_ploc: bool = true, Range::Any, Hud::Checkbox, StaticBvh;
+    /// Walk the static scene's BVH through wide nodes (up to four children, a binary
+    /// node's with each internal one opened: two levels a step, 64 bytes a node)
+    /// instead of binary ones (32 bytes, one level a step). On lavapipe the wide walk
+    /// is no faster (incoherent rays 0.89-1.07x, frames within noise) and its nodes
+    /// take 2-3x as long to make (docs/experiments.md); a GPU, where a node's four
+    /// texels load together, may favour them.
+    static_wide: bool = false, Range::Any, Hud::Checkbox, StaticBvh;
     /// Rebuild the dynamic BVH of a scene whose only dynamic geometry is cloth every
     /// frame instead of refitting it (refit is cheaper; its tree loosens as the cloth
     /// deforms).
@@ -636,7 +643,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 38);
+        assert_eq!(Settings::field_names().len(), 39);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).

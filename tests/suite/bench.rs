@@ -6,7 +6,7 @@ use crate::common;
 use speculum::bench::lbvh::{run_case, Options};
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::steady::WarmUp;
-use speculum::tracers::lbvh::{BvhKind, MortonBits};
+use speculum::tracers::lbvh::{BvhKind, MortonBits, StaticLayout};
 
 /// The `room` scene at 160x90: small enough for a quick benchmark run.
 fn small_room() -> (speculum::scene::Scene, speculum::Settings) {
@@ -28,16 +28,21 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         check_rays: 500,
         bits: MortonBits::Bits30,
         builders: BvhKind::ALL.to_vec(),
+        layouts: StaticLayout::ALL.to_vec(),
         file_rays: None,
         keep_hits: false,
         khr_rays: 512,
     };
-    for kind in BvhKind::ALL {
-        let c = run_case(&ctx, "soup-5000", &v, &i, &opts, kind, &mut || {}).unwrap();
+    // Each builder in both layouts; the vendor tracer with the first of each.
+    let cases = BvhKind::ALL.into_iter().flat_map(|k| StaticLayout::ALL.map(|l| (k, l)));
+    for (kind, layout) in cases {
+        let c = run_case(&ctx, "soup-5000", &v, &i, &opts, (kind, layout), &mut || {}).unwrap();
         assert!(c.valid, "{c:?}");
+        assert_eq!(c.layout, layout);
         // The vendor tracer on the first builder's case: both orders, every checked hit
         // agreeing with the CPU, its builds timed.
-        match (&c.khr, kind == opts.builders[0] && ctx.ray_tracing.is_some()) {
+        let first = kind == opts.builders[0] && layout == opts.layouts[0];
+        match (&c.khr, first && ctx.ray_tracing.is_some()) {
             (Some(k), true) => {
                 assert_eq!(k.iter().map(|k| k.order).collect::<Vec<_>>(), ["file", "morton"]);
                 for k in k {
@@ -101,6 +106,7 @@ fn lbvh_benchmark_anchors_against_embree() {
         check_rays: 200,
         bits: MortonBits::Bits30,
         builders: BvhKind::ALL.to_vec(),
+        layouts: StaticLayout::ALL.to_vec(),
         file_rays: None,
         keep_hits: false,
         khr_rays: 0,
@@ -108,7 +114,16 @@ fn lbvh_benchmark_anchors_against_embree() {
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);
     let room = speculum::scene::builtin::room().unwrap();
     for (name, v, i) in [("soup-3000", &v, &i), ("room", &room.vertices, &room.indices)] {
-        let c = run_case(&ctx, name, v, i, &opts, BvhKind::Lbvh, &mut || {}).unwrap();
+        let c = run_case(
+            &ctx,
+            name,
+            v,
+            i,
+            &opts,
+            (BvhKind::Lbvh, StaticLayout::Binary),
+            &mut || {},
+        )
+        .unwrap();
         assert!(c.valid, "{name}: {c:?}");
         if !cfg!(feature = "embree") {
             assert!(c.embree.is_none());
@@ -489,6 +504,8 @@ fn lbvh_traces_a_rays_file_and_dumps_its_hits() {
         "200",
         "--builder",
         "lbvh",
+        "--layout",
+        "wide",
         "--rays-file",
         rf.to_str().unwrap(),
         "--dump-rays",

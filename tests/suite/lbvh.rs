@@ -11,7 +11,7 @@ use speculum::gpu_types::{GpuVertex, PackedBvh};
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::shader_defines::{SORT_ITEMS_MAX, SORT_WG_CPU, SORT_WG_GPU};
 use speculum::tracers::lbvh::sort::{RadixSort, SortBuffers, SortTile};
-use speculum::tracers::lbvh::{Bvh, LbvhBuilder, MortonBits, UploadedTriangles};
+use speculum::tracers::lbvh::{Bvh, LbvhBuilder, MortonBits, StaticLayout, UploadedTriangles};
 use speculum::vk::{Context, GpuTimer};
 use std::sync::Arc;
 
@@ -21,7 +21,12 @@ fn upload(ctx: &Arc<Context>, vertices: &[GpuVertex], indices: &[u32]) -> Upload
 }
 
 fn build(ctx: &Arc<Context>, b: &LbvhBuilder, g: &UploadedTriangles, bits: MortonBits) -> Bvh {
-    let bvh = Bvh::new_static(ctx, g.tri_count, bits).unwrap();
+    build_in(ctx, b, g, bits, StaticLayout::Binary)
+}
+
+/// `build`, the static walk's nodes in `layout`.
+fn build_in(ctx: &Arc<Context>, b: &LbvhBuilder, g: &UploadedTriangles, bits: MortonBits, layout: StaticLayout) -> Bvh {
+    let bvh = Bvh::new_static_in(ctx, g.tri_count, bits, layout).unwrap();
     // Poison the nodes and triangles: what the kernels fail to write cannot pass the
     // checks.
     poison_packed(&bvh);
@@ -545,8 +550,9 @@ fn ploc_matches_cpu_exactly() {
 /// `lbvh.compact` writes the CPU's compact nodes exactly (output poisoned), for LBVH and
 /// PLOC trees of random soups, of degenerate inputs (flat, a point, huge and tiny
 /// coordinates, a small scene far from the origin), of a single triangle, and after a
-/// refit moved the root's box; and every rounded half holds its exact box, within two
-/// grid steps of it, with the same child.
+/// refit moved the root's box, in both layouts; and every node holds its binary node's
+/// children (wide: each internal one opened into its two), each rounded box holding its
+/// exact box within two grid steps of it, with the same link, unused slots empty.
 #[test]
 fn compact_nodes_match_cpu_and_hold_the_boxes() {
     use speculum::tracers::lbvh::ploc::{PlocScratch, ROUNDS};
@@ -604,34 +610,57 @@ fn compact_nodes_match_cpu_and_hold_the_boxes() {
         assert!(bvh.compact_current(), "{what}: compact nodes current");
         let got: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&compact.read().unwrap());
         let nodes = bvh.read_packed().unwrap().nodes;
-        let want = cref::compact_nodes(&nodes);
-        assert_eq!(got, want, "{what}: compact nodes");
+        let layout = bvh.compact.as_ref().unwrap().layout;
+        let slots = layout.slots() as usize;
+        let want = cref::compact_nodes(&nodes, slots as u32);
+        assert_eq!(got, want, "{what}, {layout:?}: compact nodes");
         let (g, st) = (Vec3::from_array(f32_3(got[0])), Vec3::from_array(f32_3(got[1])));
+        // Every node holds its binary node's children (wide: each internal one opened):
+        // each rounded box holds its exact box within two grid steps, with its link.
         for (k, nd) in nodes.iter().enumerate() {
-            for side in 0..2 {
-                let half = got[2 + 2 * k + side];
-                let exact = speculum::aabb::Aabb::of_half(nd, side as u32);
+            let mut want = Vec::new();
+            for side in 0..2u32 {
+                let c = [nd.child0, nd.child1][side as usize];
+                match speculum::gpu_types::bvh_leaf(c) {
+                    _ if slots == 2 => want.push((speculum::aabb::Aabb::of_half(nd, side), c)),
+                    Some(_) => want.push((speculum::aabb::Aabb::of_half(nd, side), c)),
+                    None => {
+                        let m = &nodes[c as usize];
+                        want.push((speculum::aabb::Aabb::of_half(m, 0), m.child0));
+                        want.push((speculum::aabb::Aabb::of_half(m, 1), m.child1));
+                    }
+                }
+            }
+            assert!(want.len() <= slots);
+            for slot in 0..slots {
+                let half = got[2 + slots * k + slot];
+                let Some((exact, link)) = want.get(slot) else {
+                    assert_eq!(half, cref::WIDE_EMPTY, "{what}: node {k} slot {slot}: unused");
+                    continue;
+                };
                 let rounded = cref::compact_box(half, g, st);
                 let within = (exact.lo - rounded.lo).cmpge(Vec3::ZERO).all()
                     && (rounded.hi - exact.hi).cmpge(Vec3::ZERO).all()
                     && (exact.lo - rounded.lo).cmple(2.0 * st).all()
                     && (rounded.hi - exact.hi).cmple(2.0 * st).all();
-                assert!(within, "{what}: node {k} side {side}: {exact:?} rounded to {rounded:?}");
-                assert_eq!(
-                    half[3],
-                    [nd.child0, nd.child1][side],
-                    "{what}: node {k} side {side}: child"
-                );
+                assert!(within, "{what}: node {k} slot {slot}: {exact:?} rounded to {rounded:?}");
+                assert_eq!(half[3], *link, "{what}: node {k} slot {slot}: link");
             }
         }
     };
-    for (name, v, i) in &cases {
+    for ((name, v, i), layout) in cases.iter().zip(StaticLayout::ALL.iter().cycle()) {
+        // Both layouts of every case: the cases alternate which comes first.
+        let other = StaticLayout::ALL.into_iter().find(|l| l != layout).unwrap();
         let g = upload(&ctx, v, i);
         let n = (i.len() / 3) as u32;
-        let bvh = build(&ctx, &b, &g, MortonBits::Bits30);
+        let bvh = build_in(&ctx, &b, &g, MortonBits::Bits30, *layout);
         assert!(!bvh.compact_current(), "{name}: stale after the build");
         check(&bvh, &format!("{name}, LBVH"));
-        let ploc = Bvh::new_static(&ctx, n, MortonBits::Bits30).unwrap();
+        check(
+            &build_in(&ctx, &b, &g, MortonBits::Bits30, other),
+            &format!("{name}, LBVH"),
+        );
+        let ploc = Bvh::new_static_in(&ctx, n, MortonBits::Bits30, *layout).unwrap();
         let scratch = PlocScratch::new(&ctx, n).unwrap();
         let mut timer = GpuTimer::new(&ctx, 8).unwrap();
         ctx.one_shot(|cmd| {

@@ -328,6 +328,7 @@ fn live_settings_camera_and_fail_mask_view_match_a_fresh_renderer() {
         ssr_max_steps: 8,
         shadow_slope_bias: 0.5,
         static_ploc: !base.static_ploc,
+        static_wide: !base.static_wide,
         ..base.clone()
     };
     assert!(!r.needs_new_renderer(&changed));
@@ -358,6 +359,12 @@ fn live_settings_camera_and_fail_mask_view_match_a_fresh_renderer() {
     assert!(
         tree(&r) == tree(&fresh) && tree(&r) != first_tree,
         "the static BVH was rebuilt"
+    );
+    let layout = |r: &Renderer| r.static_traceable().bvh.compact.as_ref().unwrap().layout;
+    assert_eq!(
+        layout(&r),
+        layout(&fresh),
+        "the static walk's layout follows the setting"
     );
     // A refused change changes nothing.
     let bad = Settings {

@@ -6,7 +6,7 @@
 use crate::common;
 
 use serde_json::Value;
-use speculum::tracers::lbvh::BvhKind;
+use speculum::tracers::lbvh::{BvhKind, StaticLayout};
 use std::path::Path;
 
 fn speculum(args: &[&str], dir: &Path) -> Value {
@@ -310,9 +310,19 @@ fn bench_reports_follow_the_schema() {
         check_stat(&case[k], k);
     }
     check_stat(&case["coherent"]["trace_ms"], "trace_ms");
-    // One case per builder (both by default), each with its stages in build order.
-    for (case, kind) in lbvh["cases"].as_array().unwrap().iter().zip(BvhKind::ALL) {
-        assert_eq!(case["builder"], kind.name());
+    // One case per builder and layout (all by default), each with its stages in build
+    // order.
+    let cases = lbvh["cases"].as_array().unwrap();
+    let want: Vec<(BvhKind, StaticLayout)> = BvhKind::ALL
+        .into_iter()
+        .flat_map(|k| StaticLayout::ALL.map(|l| (k, l)))
+        .collect();
+    assert_eq!(cases.len(), want.len());
+    for (case, (kind, layout)) in cases.iter().zip(want) {
+        assert_eq!(
+            (&case["builder"], &case["layout"]),
+            (&kind.name().into(), &layout.name().into())
+        );
         let stages: Vec<&String> = case["stages_ms"].as_object().unwrap().keys().collect();
         assert_eq!(stages, kind.stages().map(String::from).iter().collect::<Vec<_>>());
     }

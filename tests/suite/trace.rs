@@ -12,7 +12,7 @@ use speculum::gpu_types::{GpuVertex, Hit, Ray};
 use speculum::passes::rt_trace::TracePass;
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::shader_defines::{BVH_INVALID, BVH_LEAF_MAX};
-use speculum::tracers::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits, UploadedTriangles};
+use speculum::tracers::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits, StaticLayout, UploadedTriangles};
 use speculum::tracers::{Lbvh, TraceScene, Traceable};
 use speculum::vk::{Context, GpuTimer};
 use std::sync::Arc;
@@ -24,8 +24,18 @@ struct Built {
 
 impl Built {
     fn new(ctx: &Arc<Context>, b: &LbvhBuilder, v: &[GpuVertex], i: &[u32], bits: MortonBits) -> Self {
+        Self::new_in(ctx, b, (v, i), bits, StaticLayout::Binary)
+    }
+    /// `new`, the static walk's nodes in `layout`.
+    fn new_in(
+        ctx: &Arc<Context>,
+        b: &LbvhBuilder,
+        (v, i): (&[GpuVertex], &[u32]),
+        bits: MortonBits,
+        layout: StaticLayout,
+    ) -> Self {
         let triangles = UploadedTriangles::new(ctx, "t", v, i).unwrap();
-        let bvh = Bvh::new_static(ctx, (i.len() / 3) as u32, bits).unwrap();
+        let bvh = Bvh::new_static_in(ctx, (i.len() / 3) as u32, bits, layout).unwrap();
         let built = Self { triangles, bvh };
         built.rebuild(ctx, b);
         built
@@ -128,7 +138,8 @@ pub(crate) fn compare_within(
 }
 
 /// 10,000+ random rays against a 3,000-triangle soup: every hit equals brute force, with
-/// both key widths; the CPU SAH BVH (the benchmark's reference) agrees with brute force.
+/// both key widths and both static layouts; the CPU SAH BVH (the benchmark's reference)
+/// agrees with brute force.
 #[test]
 fn closest_hits_equal_brute_force() {
     let ctx = common::context();
@@ -143,8 +154,11 @@ fn closest_hits_equal_brute_force() {
     let sah = CpuBvh::build(&v, &i);
     let via_sah: Vec<Hit> = rays.iter().map(|r| sah.trace(r, &v, &i)).collect();
     assert_eq!(via_sah, cpu, "CPU SAH BVH traversal equals brute force");
-    for bits in [MortonBits::Bits30, MortonBits::Bits63] {
-        let built = Built::new(&ctx, &b, &v, &i, bits);
+    let cases = MortonBits::ALL
+        .into_iter()
+        .flat_map(|b| StaticLayout::ALL.map(|l| (b, l)));
+    for (bits, layout) in cases {
+        let built = Built::new_in(&ctx, &b, (&v, &i), bits, layout);
         let scene = TraceScene {
             static_bvh: Some(built.traceable()),
             dynamic_bvh: None,
@@ -160,7 +174,10 @@ fn closest_hits_equal_brute_force() {
         };
         let (exact, _) = tracer.trace(&rays, as_dynamic, false).unwrap();
         let exact: Vec<Hit> = exact.into_iter().map(Hit::without_bvh_bit).collect();
-        assert_eq!(gpu, exact, "{bits:?}: compact and exact nodes give the same hits");
+        assert_eq!(
+            gpu, exact,
+            "{bits:?}, {layout:?}: compact and exact nodes give the same hits"
+        );
     }
 }
 
@@ -197,27 +214,29 @@ fn rays_at_triangle_corners_hit_through_rounded_boxes() {
         })
         .collect();
     let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
-    let built = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
-    for (walk, scene) in [
-        (
-            "static (compact nodes)",
-            TraceScene {
-                static_bvh: Some(built.traceable()),
-                dynamic_bvh: None,
-            },
-        ),
-        (
-            "dynamic (exact nodes)",
-            TraceScene {
-                static_bvh: None,
-                dynamic_bvh: Some(built.traceable()),
-            },
-        ),
-    ] {
-        let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
-        let gpu: Vec<Hit> = gpu.into_iter().map(Hit::without_bvh_bit).collect();
-        let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
-        assert!(ties <= 10, "{walk}: {ties} ties");
+    for layout in StaticLayout::ALL {
+        let built = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, layout);
+        for (walk, scene) in [
+            (
+                "static (compact nodes)",
+                TraceScene {
+                    static_bvh: Some(built.traceable()),
+                    dynamic_bvh: None,
+                },
+            ),
+            (
+                "dynamic (exact nodes)",
+                TraceScene {
+                    static_bvh: None,
+                    dynamic_bvh: Some(built.traceable()),
+                },
+            ),
+        ] {
+            let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
+            let gpu: Vec<Hit> = gpu.into_iter().map(Hit::without_bvh_bit).collect();
+            let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
+            assert!(ties <= 10, "{walk}, {layout:?}: {ties} ties");
+        }
     }
     assert_eq!(ctx.validation_messages(), 0);
 }
@@ -231,7 +250,8 @@ fn static_and_dynamic_bvhs_together() {
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     let (sv, si) = random_soup(2000, 1.0, default_size(4000), 31);
     let (dv, di) = random_soup(2000, 1.0, default_size(4000), 32);
-    let st = Built::new(&ctx, &b, &sv, &si, MortonBits::Bits30);
+    // The static BVH through its wide nodes (the binary ones are covered above).
+    let st = Built::new_in(&ctx, &b, (&sv, &si), MortonBits::Bits30, StaticLayout::Wide);
     let dy = Built::new(&ctx, &b, &dv, &di, MortonBits::Bits30);
     let mut all_v = sv.clone();
     all_v.extend(&dv);
@@ -431,18 +451,15 @@ pub(crate) fn dynamic_bvh_matches_brute_force(
     assert!(hits > 3000 && ties <= rays.len() / 1000, "{hits} hits, {ties} ties");
 }
 
-/// A tree deeper than the traversal stack is reported, never silently wrong. 65
-/// triangles whose 63-bit keys each set one bit (centroids at (2^b + 1/2) / 2^21 along
-/// one axis, plus 0 and 1), thirty-two copies each (three levels of nodes above eight
-/// leaves of four: leaves hold at most `BVH_LEAF_MAX`, and the walk tests a leaf where
-/// it finds it instead of stacking it), build a chain 67 levels deep. Every box
-/// starts at x = -1, where a ray along x starts, so all entries tie at t = 0 and the
-/// walk takes the first child (the chain) and holds the other at every level: 65
-/// pending subtrees overflow its 64 entries, and `rt.trace` returns t = -1. With 30-bit
-/// keys (the frame's, whose trees the stack always covers) the same ray gets brute
-/// force's answer.
+/// The deepest trees the builders make fit the traversal stack: 65 triangles whose
+/// 63-bit keys each set one bit (centroids at (2^b + 1/2) / 2^21 along one axis, plus
+/// 0 and 1), thirty-two copies each (three levels of nodes above eight leaves of four),
+/// build a chain 67 levels deep. Every box starts at x = -1, where a ray along x
+/// starts, so all entries tie at t = 0 and a walk holds a sibling at every level: 65
+/// pending subtrees for the binary walk, fewer for the wide one, within `TRACE_STACK`;
+/// with 63-bit and 30-bit keys the ray gets brute force's answer.
 #[test]
-fn a_tree_deeper_than_the_stack_is_reported() {
+fn the_deepest_built_tree_fits_the_stack() {
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
     let mut centroids = vec![Vec3::ZERO, Vec3::ONE];
@@ -479,21 +496,135 @@ fn a_tree_deeper_than_the_stack_is_reported() {
     };
     let want = brute_force(&ray, &v, &i);
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
-    for (bits, overflows) in [(MortonBits::Bits63, true), (MortonBits::Bits30, false)] {
-        let built = Built::new(&ctx, &b, &v, &i, bits);
-        let scene = TraceScene {
-            static_bvh: Some(built.traceable()),
-            dynamic_bvh: None,
+    let cases = [MortonBits::Bits63, MortonBits::Bits30]
+        .into_iter()
+        .flat_map(|b| StaticLayout::ALL.map(|l| (b, l)));
+    for (bits, layout) in cases {
+        let built = Built::new_in(&ctx, &b, (&v, &i), bits, layout);
+        let depth = speculum::tracers::lbvh::stack_need(&built.bvh.read_packed().unwrap().nodes);
+        assert!(
+            bits == MortonBits::Bits30 || depth > 64,
+            "{bits:?}: a chain {depth} deep"
+        );
+        for scene in [
+            TraceScene {
+                static_bvh: Some(built.traceable()),
+                dynamic_bvh: None,
+            },
+            TraceScene {
+                static_bvh: None,
+                dynamic_bvh: Some(built.traceable()),
+            },
+        ] {
+            let (hits, _) = tracer.trace(&[ray], scene, false).unwrap();
+            let h = hits[0].without_bvh_bit();
+            assert_eq!((h.t, h.prim), (want.t, want.prim), "{bits:?}, {layout:?}");
+        }
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}
+
+/// A tree deeper than the traversal stack is reported, never silently wrong. A tree is
+/// planted whose every box is the scene's (so a ray through the scene enters every
+/// node, all at one t) in units of six nodes: X with children Y and Z, Y with the next
+/// unit's X and P, Z with Q and R, and P, Q, R each with two one-triangle leaves. The
+/// binary walks (static and dynamic) hold two pending nodes a unit (Z, P), the wide walk
+/// three (P, Q, R: the grandchildren of X but the next X). `units` of them overflow
+/// every walk's stack (t = -1); a third as many do not.
+#[test]
+fn a_tree_deeper_than_the_stack_is_reported() {
+    use speculum::gpu_types::{bvh_leaf_link, TraversalNode};
+    use speculum::shader_defines::TRACE_STACK;
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let units = (TRACE_STACK / 2 + 8) as usize;
+    let (v, i) = random_soup(6 * units + 2, 1.0, default_size(1000), 17);
+    let binary = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
+    let wide = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, StaticLayout::Wide);
+    let nodes: Vec<TraversalNode> = bytemuck::pod_collect_to_vec(&binary.bvh.tnodes.read().unwrap());
+    let (lo, hi) = nodes.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), n| {
+        (
+            lo.min(Vec3::from(n.lo0)).min(Vec3::from(n.lo1)),
+            hi.max(Vec3::from(n.hi0)).max(Vec3::from(n.hi1)),
+        )
+    });
+    let node = |c0: u32, c1: u32| TraversalNode {
+        lo0: lo.to_array(),
+        child0: c0,
+        hi0: hi.to_array(),
+        lo1: lo.to_array(),
+        child1: c1,
+        hi1: hi.to_array(),
+        ..nodes[0]
+    };
+    let plant = |units: usize| -> Vec<TraversalNode> {
+        let mut planted = nodes.clone();
+        let mut leaf = 0u32;
+        let mut leaves = || {
+            leaf += 2;
+            node(bvh_leaf_link(leaf - 2, 1), bvh_leaf_link(leaf - 1, 1))
         };
-        let (hits, _) = tracer.trace(&[ray], scene, false).unwrap();
-        if overflows {
+        for u in 0..units {
+            let x = 6 * u as u32;
+            let next = x + 6;
+            planted[x as usize] = node(x + 1, x + 2);
+            planted[x as usize + 1] = node(next, x + 3);
+            planted[x as usize + 2] = node(x + 4, x + 5);
+            for k in 3..6 {
+                planted[(x + k) as usize] = leaves();
+            }
+        }
+        planted[6 * units] = leaves();
+        planted
+    };
+    let center = 0.5 * (lo + hi);
+    let ray = Ray {
+        origin: (center - 2.0 * (hi - lo)).to_array(),
+        tmin: 0.0,
+        dir: (hi - lo).normalize().to_array(),
+        tmax: f32::MAX,
+    };
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
+    for (count, overflows) in [(units, true), (units / 3, false)] {
+        for built in [&binary, &wide] {
+            built.bvh.tnodes.write(bytemuck::cast_slice(&plant(count))).unwrap();
+            let mut timer = GpuTimer::new(&ctx, 8).unwrap();
+            ctx.one_shot(|cmd| {
+                timer.reset(cmd);
+                b.record_compact(cmd, &mut timer, &built.bvh);
+            })
+            .unwrap();
+        }
+        for (walk, scene) in [
+            (
+                "static binary",
+                TraceScene {
+                    static_bvh: Some(binary.traceable()),
+                    dynamic_bvh: None,
+                },
+            ),
+            (
+                "static wide",
+                TraceScene {
+                    static_bvh: Some(wide.traceable()),
+                    dynamic_bvh: None,
+                },
+            ),
+            (
+                "dynamic",
+                TraceScene {
+                    static_bvh: None,
+                    dynamic_bvh: Some(binary.traceable()),
+                },
+            ),
+        ] {
+            let (hits, _) = tracer.trace(&[ray], scene, false).unwrap();
             assert_eq!(
-                (hits[0].t, hits[0].prim),
-                (-1.0, BVH_INVALID),
-                "{bits:?}: the overflow is reported"
+                hits[0].t == -1.0,
+                overflows,
+                "{count} units, the {walk} walk: {:?}",
+                hits[0]
             );
-        } else {
-            assert_eq!((hits[0].t, hits[0].prim), (want.t, want.prim), "{bits:?}");
         }
     }
     assert_eq!(ctx.validation_messages(), 0);

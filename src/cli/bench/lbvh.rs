@@ -7,7 +7,7 @@ use clap::Args;
 use speculum::bench::lbvh::{run_case, Options, Report};
 use speculum::output::Kind;
 use speculum::report::Header;
-use speculum::tracers::lbvh::{BvhKind, MortonBits};
+use speculum::tracers::lbvh::{BvhKind, MortonBits, StaticLayout};
 use std::path::PathBuf;
 
 #[derive(Args, Clone, Debug)]
@@ -25,6 +25,9 @@ pub struct LbvhArgs {
     /// The trees to build of each case.
     #[arg(long, num_args = 1.., default_values = ["lbvh", "ploc"], value_parser = crate::cli::choice(&BvhKind::ALL, BvhKind::name, BvhKind::about))]
     pub builder: Vec<BvhKind>,
+    /// The static walk's layouts each tree is walked in (`lbvh.compact`).
+    #[arg(long, num_args = 1.., default_values = ["binary", "wide"], value_parser = crate::cli::choice(&StaticLayout::ALL, StaticLayout::name, StaticLayout::about))]
+    pub layout: Vec<StaticLayout>,
     /// Timed repetitions of each build and trace (medians are reported).
     #[arg(long, default_value_t = 5)]
     pub repeats: u32,
@@ -93,6 +96,7 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
         check_rays: args.check_rays,
         bits: args.bits,
         builders: args.builder.clone(),
+        layouts: args.layout.clone(),
         file_rays,
         keep_hits: dumping,
         khr_rays: args.khr_rays.unwrap_or(0),
@@ -108,10 +112,10 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
         &inputs,
     )?;
     let cases = lbvh_cases(&args)?;
-    if dumping && cases.len() * args.builder.len() != 1 {
+    if dumping && cases.len() * args.builder.len() * args.layout.len() != 1 {
         anyhow::bail!(speculum::Error::Input(format!(
-            "--dump-rays/--dump-hits need a single case (one --tris or one --scene, one --builder), not {}",
-            cases.len() * args.builder.len()
+            "--dump-rays/--dump-hits need a single case (one --tris or one --scene, one --builder, one --layout), not {}",
+            cases.len() * args.builder.len() * args.layout.len()
         )));
     }
     let text = Text::new(&[c.json.as_deref()], c.quiet);
@@ -127,14 +131,16 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
         args.bits.bits(),
         opts.repeats
     ));
-    let runs = (cases.len() * opts.builders.len()) as u64;
+    let runs = (cases.len() * opts.builders.len() * opts.layouts.len()) as u64;
     let bar = progress(runs * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
     let mut results = Vec::new();
     for (name, v, i) in &cases {
         for &kind in &opts.builders {
-            let case = run_case(&ctx, name, v, i, &opts, kind, &mut || bar.inc(1))?;
-            bar.suspend(|| print_lbvh_case(&text, &case));
-            results.push(case);
+            for &layout in &opts.layouts {
+                let case = run_case(&ctx, name, v, i, &opts, (kind, layout), &mut || bar.inc(1))?;
+                bar.suspend(|| print_lbvh_case(&text, &case));
+                results.push(case);
+            }
         }
     }
     bar.finish_and_clear();
@@ -215,7 +221,7 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     };
     text.line(format_args!(
         "{:<14} {:>9} tris  build {}{untimed} ({:7.2} Mtris/s) [{}]  refit {}  compact {}",
-        format!("{} {}", case.name, case.builder.name()),
+        format!("{} {} {}", case.name, case.builder.name(), case.layout.name()),
         case.triangles,
         cell(Some(case.build_ms)),
         case.mtris_per_s,

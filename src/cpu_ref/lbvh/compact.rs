@@ -1,5 +1,7 @@
-//! Reference of `lbvh.compact`: the static walk's 32-byte nodes, each child's box
-//! rounded outward to 16-bit steps of a power-of-two grid over the root's box.
+//! Reference of `lbvh.compact`: the static walk's nodes, binary (32 bytes) or wide (64
+//! bytes: a binary node's children, each internal one opened into its two: up to four),
+//! each child's box rounded outward to 16-bit steps of a power-of-two grid over the
+//! root's box.
 
 use crate::aabb::Aabb;
 use crate::gpu_types::TraversalNode;
@@ -104,19 +106,58 @@ pub fn compact_box(half: [u32; 4], g: Vec3, st: Vec3) -> Aabb {
     }
 }
 
-/// `lbvh.compact`: the compact nodes of `nodes` (`glsl/shared/bvh.glsl`), as texels of
-/// 4 words: the grid's origin and step over the root's box, then each node's two
-/// halves.
-pub fn compact_nodes(nodes: &[TraversalNode]) -> Vec<[u32; 4]> {
+/// Slots of a wide node: a binary node's children, each internal one opened into its
+/// own two (`WIDE` in `glsl/shared/bvh.glsl`).
+pub const WIDE: usize = 4;
+
+/// The children of wide node `k` (made from binary node `k`): each child of node `k`
+/// that is a leaf as it is, each internal one opened into its two children; (lo, hi,
+/// link), in that order (`wide_entries` in `glsl/lbvh_compact.comp`). Unused slots
+/// are not listed.
+pub fn wide_entries(nodes: &[TraversalNode], k: usize) -> Vec<([f32; 3], [f32; 3], u32)> {
+    let n = &nodes[k];
+    let mut out = Vec::with_capacity(WIDE);
+    for (lo, hi, c) in [(n.lo0, n.hi0, n.child0), (n.lo1, n.hi1, n.child1)] {
+        if crate::gpu_types::bvh_leaf(c).is_some() {
+            out.push((lo, hi, c));
+        } else {
+            let m = &nodes[c as usize];
+            out.push((m.lo0, m.hi0, m.child0));
+            out.push((m.lo1, m.hi1, m.child1));
+        }
+    }
+    out
+}
+
+/// An unused slot of a wide node: no box, the link `BVH_INVALID` (never entered).
+pub const WIDE_EMPTY: [u32; 4] = [0, 0, 0, crate::shader_defines::BVH_INVALID];
+
+/// `lbvh.compact`: the static walk's nodes made from `nodes` (`glsl/shared/bvh.glsl`)
+/// with `slots` children a node (`tracers::lbvh::StaticLayout::slots`), as texels of 4
+/// words: the grid's origin (w: `slots`) and step over the root's box, then per binary
+/// node k its two halves (2) or the wide node of its children and grandchildren
+/// (`wide_entries`, `WIDE` slots, unused ones `WIDE_EMPTY`; the wide nodes of opened
+/// children are written too, and never walked).
+pub fn compact_nodes(nodes: &[TraversalNode], slots: u32) -> Vec<[u32; 4]> {
     let root = Aabb::of_node(&nodes[0]);
     let (g, st) = compact_grid(root.lo, root.hi);
     let mut out = vec![
-        [g.x.to_bits(), g.y.to_bits(), g.z.to_bits(), 0],
+        [g.x.to_bits(), g.y.to_bits(), g.z.to_bits(), slots],
         [st.x.to_bits(), st.y.to_bits(), st.z.to_bits(), 0],
     ];
-    for n in nodes {
-        out.push(compact_half(n.lo0, n.hi0, n.child0, g, st));
-        out.push(compact_half(n.lo1, n.hi1, n.child1, g, st));
+    for (k, n) in nodes.iter().enumerate() {
+        if slots == 2 {
+            out.push(compact_half(n.lo0, n.hi0, n.child0, g, st));
+            out.push(compact_half(n.lo1, n.hi1, n.child1, g, st));
+            continue;
+        }
+        let entries = wide_entries(nodes, k);
+        for slot in 0..WIDE {
+            out.push(match entries.get(slot) {
+                Some(&(lo, hi, link)) => compact_half(lo, hi, link, g, st),
+                None => WIDE_EMPTY,
+            });
+        }
     }
     out
 }

@@ -2,7 +2,7 @@
 //! walk's compact nodes, the sort's scratch), and the refit's schedule by height.
 
 use super::sort::SortBuffers;
-use super::{MortonBits, MAX_TRIANGLES};
+use super::{MortonBits, StaticLayout, MAX_TRIANGLES};
 use crate::aabb::{ordered_to_float, Aabb};
 use crate::error::{Error, Result};
 use crate::gpu_types::{PackedBvh, TraversalNode, TraversalTri};
@@ -13,11 +13,12 @@ use gpu_allocator::MemoryLocation;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
-/// The compact nodes (`lbvh.compact`; `glsl/shared/bvh.glsl`): 2 + 2 max(N-1, 1)
-/// texels of 16 bytes, and the same as the walk reads them.
+/// The static walk's nodes (`lbvh.compact`; `glsl/shared/bvh.glsl`): 2 + slots x
+/// max(N-1, 1) texels of 16 bytes in `layout`, and the same as the walk reads them.
 pub struct CompactNodes {
     pub buffer: Buffer,
     pub texels: TexelView,
+    pub layout: StaticLayout,
 }
 
 /// A BVH on the GPU and the scratch memory to rebuild it.
@@ -95,13 +96,18 @@ impl Bvh {
         })
     }
 
-    /// Memory for a BVH walked as the static one: `new` and its compact nodes.
+    /// Memory for a BVH walked as the static one: `new` and its compact nodes, binary.
     pub fn new_static(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits) -> Result<Self> {
+        Self::new_static_in(ctx, tri_count, bits, StaticLayout::Binary)
+    }
+
+    /// `new_static` with the walk's nodes in `layout`.
+    pub fn new_static_in(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits, layout: StaticLayout) -> Result<Self> {
         let mut bvh = Self::new(ctx, tri_count, bits)?;
         let buffer = Buffer::new(
             ctx,
             "lbvh.compact",
-            (2 + 2 * (tri_count as u64 - 1).max(1)) * 16,
+            (2 + layout.slots() as u64 * (tri_count as u64 - 1).max(1)) * 16,
             vk::BufferUsageFlags::STORAGE_BUFFER
                 | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
                 | vk::BufferUsageFlags::TRANSFER_DST
@@ -111,6 +117,7 @@ impl Bvh {
         bvh.compact = Some(CompactNodes {
             texels: TexelView::new(ctx, &buffer)?,
             buffer,
+            layout,
         });
         Ok(bvh)
     }
@@ -230,6 +237,29 @@ pub fn refit_order(bvh: &PackedBvh, tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]>)
         fill[h] += 1;
     }
     (order, levels)
+}
+
+/// Stack entries the static walk through this tree's wide nodes (`lbvh.compact`) can
+/// need at most: along its worst path from the root, each wide node's internal
+/// children but one (a step pushes all but the nearest).
+pub fn wide_stack_need(nodes: &[TraversalNode]) -> u32 {
+    let internal = |c: u32| crate::gpu_types::bvh_leaf(c).is_none();
+    let mut most = 0;
+    let mut stack = vec![(0u32, 0u32)];
+    while let Some((s, held)) = stack.pop() {
+        most = most.max(held);
+        let nd = &nodes[s as usize];
+        let children: Vec<u32> = [nd.child0, nd.child1]
+            .into_iter()
+            .filter(|&c| internal(c))
+            .flat_map(|c| [nodes[c as usize].child0, nodes[c as usize].child1])
+            .filter(|&c| internal(c))
+            .collect();
+        let pushed = (children.len() as u32).saturating_sub(1);
+        most = most.max(held + pushed);
+        stack.extend(children.into_iter().map(|c| (c, held + pushed)));
+    }
+    most
 }
 
 /// Stack entries a walk of this tree can need at most: the internal nodes on its

@@ -28,7 +28,7 @@ use sort::RadixSort;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
-pub use bvh::{refit_order, stack_need, Bvh, CompactNodes, RefitSchedule};
+pub use bvh::{refit_order, stack_need, wide_stack_need, Bvh, CompactNodes, RefitSchedule};
 pub use triangles::{index_buffer, Geometry, TriangleTexels, UploadedTriangles, VERTEX_USAGE};
 
 pub const BOUNDS: &str = "lbvh.bounds";
@@ -45,10 +45,12 @@ pub const MAX_TRIANGLES: u32 = 65535 * LBVH_WG;
 const _: () = assert!(MAX_TRIANGLES <= 1 << crate::shader_defines::BVH_LEAF_COUNT_SHIFT);
 
 // A tree over one-word keys (32 bits) and MAX_TRIANGLES leaves is at most 32 +
-// ceil(log2 MAX_TRIANGLES) deep, and a traversal holds at most one pending child per
-// level: its stack can never overflow in the frame (see TRACE_STACK).
+// ceil(log2 MAX_TRIANGLES) deep; the binary walk holds at most one pending child per
+// level, the wide walk WIDE - 1 per two levels: their stack can never overflow in the
+// frame (see TRACE_STACK).
 const MAX_DEPTH: u32 = 32 + (MAX_TRIANGLES - 1).ilog2() + 1;
 const _: () = assert!(MAX_DEPTH <= crate::shader_defines::TRACE_STACK);
+const _: () = assert!((crate::shader_defines::WIDE - 1) * MAX_DEPTH.div_ceil(2) <= crate::shader_defines::TRACE_STACK);
 
 /// Morton code width: 30 bits (10 per axis, one word) or 63 bits (21 per axis, two
 /// words). 63-bit codes separate close centroids in large scenes at twice the sort time.
@@ -103,6 +105,46 @@ pub enum BvhKind {
     Ploc,
 }
 
+/// How the static walk reads a tree (`lbvh.compact` writes it; both with boxes rounded
+/// outward to a 16-bit grid over the root's box): binary nodes of two children (32
+/// bytes), or wide nodes of up to `WIDE` (64 bytes: a binary node's children, each
+/// internal one opened into its two), which take half the steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StaticLayout {
+    #[default]
+    Binary,
+    Wide,
+}
+
+impl StaticLayout {
+    pub const ALL: [StaticLayout; 2] = [StaticLayout::Binary, StaticLayout::Wide];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StaticLayout::Binary => "binary",
+            StaticLayout::Wide => "wide",
+        }
+    }
+
+    pub fn about(self) -> &'static str {
+        match self {
+            StaticLayout::Binary => "two children a node, 32 bytes: one level a step",
+            StaticLayout::Wide => {
+                "up to four children a node (a binary node's, internal ones opened), 64 bytes: two levels a step"
+            }
+        }
+    }
+
+    /// Children a node holds (the compact nodes' header says it to the walk).
+    pub fn slots(self) -> u32 {
+        match self {
+            StaticLayout::Binary => 2,
+            StaticLayout::Wide => crate::shader_defines::WIDE,
+        }
+    }
+}
+
 impl BvhKind {
     pub const ALL: [BvhKind; 2] = [BvhKind::Lbvh, BvhKind::Ploc];
 
@@ -147,6 +189,15 @@ pub fn lockstep_fit(driver_name: &str, driver_info: &str) -> bool {
         .and_then(|v| v.split('.').next())
         .and_then(|m| m.parse::<u32>().ok());
     major.is_none_or(|m| m < 25)
+}
+
+/// Push constants of `lbvh_compact.comp`: the binary nodes, and the layout's children
+/// a node (`StaticLayout::slots`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CompactPush {
+    node_count: u32,
+    slots: u32,
 }
 
 /// Push constants of `lbvh_morton.comp` and `lbvh_fit.comp` (`lbvh.bounds` and the
@@ -202,7 +253,7 @@ impl LbvhBuilder {
             refit_leaves: Pipeline::compute::<u32>(ctx, REFIT, shaders::LBVH_REFIT_LEAVES_COMP)?,
             refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
             refit_top: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_TOP_COMP)?,
-            compact: Pipeline::compute::<u32>(ctx, COMPACT, shaders::LBVH_COMPACT_COMP)?,
+            compact: Pipeline::compute::<CompactPush>(ctx, COMPACT, shaders::LBVH_COMPACT_COMP)?,
             ploc: ploc::PlocBuilder::new(ctx)?,
         })
     }
@@ -271,7 +322,11 @@ impl LbvhBuilder {
             let first = timer.one_shot(|cmd, timer| self.record_build_ploc(cmd, timer, geom, bvh, &scratch))?;
             self.ploc.finish(geom.tri_count, bvh, &scratch, ploc::ROUNDS)?;
             let nodes: Vec<TraversalNode> = bytemuck::pod_collect_to_vec(&bvh.tnodes.read()?);
-            if stack_need(&nodes) <= crate::shader_defines::TRACE_STACK {
+            let need = match bvh.compact.as_ref().map(|c| c.layout) {
+                Some(StaticLayout::Wide) => wide_stack_need(&nodes),
+                _ => stack_need(&nodes),
+            };
+            if need <= crate::shader_defines::TRACE_STACK {
                 built = Some((first.scopes, BvhKind::Ploc));
             }
         }
@@ -497,7 +552,10 @@ impl LbvhBuilder {
                 ("nodes", Resource::Texels(&bvh.node_texels)),
                 ("compact", Resource::Buffer(&compact.buffer)),
             ],
-            &nodes,
+            &CompactPush {
+                node_count: nodes,
+                slots: compact.layout.slots(),
+            },
             Groups::Cover([nodes, 1, 1]),
         );
         timer.end(cmd, COMPACT);
@@ -510,7 +568,7 @@ impl LbvhBuilder {
 
 #[cfg(test)]
 mod tests {
-    use super::{lockstep_fit, stack_need};
+    use super::{lockstep_fit, stack_need, wide_stack_need};
     use crate::gpu_types::{bvh_leaf_link, TraversalNode};
 
     /// A walk needs one stack entry per internal node on the longest path: a chain of
@@ -536,6 +594,14 @@ mod tests {
         assert_eq!(stack_need(&chain), 70);
         let balanced = [node(1, 2), node(leaf(0), leaf(1)), node(leaf(2), leaf(3))];
         assert_eq!(stack_need(&balanced), 2);
+        // The wide walk: a chain never pushes (one internal grandchild a step), two
+        // levels of four internal grandchildren push three at the root.
+        assert_eq!(wide_stack_need(&chain), 0);
+        assert_eq!(wide_stack_need(&balanced), 0);
+        let mut deep = vec![node(1, 2), node(3, 4), node(5, 6)];
+        deep.extend((0..4).map(|j| node(leaf(2 * j), leaf(2 * j + 1))));
+        assert_eq!(stack_need(&deep), 3);
+        assert_eq!(wide_stack_need(&deep), 3);
     }
 
     #[test]

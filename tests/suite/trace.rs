@@ -49,6 +49,26 @@ impl Built {
             geometry: self.geometry(),
         }
     }
+    /// The tree walked as the static BVH (its compact nodes, boxes rounded outward) and
+    /// as the dynamic one (its exact 64-byte nodes), named.
+    fn both_walks(&self) -> [(&'static str, TraceScene<'_>); 2] {
+        [
+            (
+                "static (compact nodes)",
+                TraceScene {
+                    static_bvh: Some(self.traceable()),
+                    dynamic_bvh: None,
+                },
+            ),
+            (
+                "dynamic (exact nodes)",
+                TraceScene {
+                    static_bvh: None,
+                    dynamic_bvh: Some(self.traceable()),
+                },
+            ),
+        ]
+    }
     fn rebuild(&self, ctx: &Arc<Context>, b: &LbvhBuilder) {
         let mut timer = GpuTimer::new(ctx, 8).unwrap();
         ctx.one_shot(|cmd| {
@@ -159,19 +179,12 @@ fn closest_hits_equal_brute_force() {
         .flat_map(|b| StaticLayout::ALL.map(|l| (b, l)));
     for (bits, layout) in cases {
         let built = Built::new_in(&ctx, &b, (&v, &i), bits, layout);
-        let scene = TraceScene {
-            static_bvh: Some(built.traceable()),
-            dynamic_bvh: None,
-        };
-        let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
+        let [(_, as_static), (_, as_dynamic)] = built.both_walks();
+        let (gpu, _) = tracer.trace(&rays, as_static, false).unwrap();
         let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
         assert!(ties <= rays.len() / 1000, "{ties} ties");
         // The same BVH walked as the dynamic one (its exact 64-byte nodes, not the
         // static walk's compact ones, whose boxes are rounded outward): the same hits.
-        let as_dynamic = TraceScene {
-            static_bvh: None,
-            dynamic_bvh: Some(built.traceable()),
-        };
         let (exact, _) = tracer.trace(&rays, as_dynamic, false).unwrap();
         let exact: Vec<Hit> = exact.into_iter().map(Hit::without_bvh_bit).collect();
         assert_eq!(
@@ -216,22 +229,7 @@ fn rays_at_triangle_corners_hit_through_rounded_boxes() {
     let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
     for layout in StaticLayout::ALL {
         let built = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, layout);
-        for (walk, scene) in [
-            (
-                "static (compact nodes)",
-                TraceScene {
-                    static_bvh: Some(built.traceable()),
-                    dynamic_bvh: None,
-                },
-            ),
-            (
-                "dynamic (exact nodes)",
-                TraceScene {
-                    static_bvh: None,
-                    dynamic_bvh: Some(built.traceable()),
-                },
-            ),
-        ] {
+        for (walk, scene) in built.both_walks() {
             let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
             let gpu: Vec<Hit> = gpu.into_iter().map(Hit::without_bvh_bit).collect();
             let ties = compare(&gpu, &cpu, &rays, |p| triangle(&v, &i, p as usize));
@@ -506,19 +504,10 @@ fn the_deepest_built_tree_fits_the_stack() {
             bits == MortonBits::Bits30 || depth > 64,
             "{bits:?}: a chain {depth} deep"
         );
-        for scene in [
-            TraceScene {
-                static_bvh: Some(built.traceable()),
-                dynamic_bvh: None,
-            },
-            TraceScene {
-                static_bvh: None,
-                dynamic_bvh: Some(built.traceable()),
-            },
-        ] {
+        for (walk, scene) in built.both_walks() {
             let (hits, _) = tracer.trace(&[ray], scene, false).unwrap();
             let h = hits[0].without_bvh_bit();
-            assert_eq!((h.t, h.prim), (want.t, want.prim), "{bits:?}, {layout:?}");
+            assert_eq!((h.t, h.prim), (want.t, want.prim), "{bits:?}, {layout:?}, {walk}");
         }
     }
     assert_eq!(ctx.validation_messages(), 0);
@@ -678,16 +667,7 @@ fn a_planted_cycle_ends_in_a_reported_overrun() {
         ..through
     };
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
-    for scene in [
-        TraceScene {
-            static_bvh: Some(built.traceable()),
-            dynamic_bvh: None,
-        },
-        TraceScene {
-            static_bvh: None,
-            dynamic_bvh: Some(built.traceable()),
-        },
-    ] {
+    for (_, scene) in built.both_walks() {
         let (hits, _) = tracer.trace(&[through, past], scene, false).unwrap();
         assert_eq!(
             (hits[0].t, hits[0].prim),

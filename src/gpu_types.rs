@@ -210,6 +210,19 @@ pub struct Ray {
     pub tmax: f32,
 }
 
+impl Ray {
+    /// The ray from `origin` through `target` (reached at t = 1), every hit ahead of
+    /// the origin counted.
+    pub fn through(origin: glam::Vec3, target: glam::Vec3) -> Self {
+        Self {
+            origin: origin.to_array(),
+            tmin: 0.0,
+            dir: (target - origin).to_array(),
+            tmax: f32::MAX,
+        }
+    }
+}
+
 /// The result of tracing a `Ray` (std430, 16 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -53,6 +53,41 @@ pub struct Options {
     pub khr_rays: u32,
 }
 
+/// Mean steps (nodes visited), box tests and triangle tests of a ray's walk.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct WalkPerRay {
+    pub steps: f64,
+    pub boxes: f64,
+    pub triangles: f64,
+}
+
+impl WalkPerRay {
+    /// `of` the coherent and the incoherent set, walked in `layout`.
+    fn both(packed: &crate::gpu_types::PackedBvh, sets: [&[Ray]; 2], sample: u32, layout: StaticLayout) -> [Self; 2] {
+        sets.map(|rays| Self::of(packed, rays, sample, layout.slots()))
+    }
+
+    /// The mean over `sample` evenly spaced rays of `rays` (as `check_hits` takes
+    /// them), walked through `packed` with `slots` children a node.
+    fn of(packed: &crate::gpu_types::PackedBvh, rays: &[Ray], sample: u32, slots: u32) -> Self {
+        let step = (rays.len() / sample.max(1) as usize).max(1);
+        let walked: Vec<_> = rays
+            .iter()
+            .step_by(step)
+            .take(sample as usize)
+            .map(|r| crate::cpu_ref::walk::replay(&packed.nodes, &packed.tris, r, slots).1)
+            .collect();
+        let mean = |f: fn(&crate::cpu_ref::walk::WalkCounts) -> u32| {
+            walked.iter().map(|c| f(c) as f64).sum::<f64>() / walked.len().max(1) as f64
+        };
+        Self {
+            steps: mean(|c| c.steps),
+            boxes: mean(|c| c.boxes),
+            triangles: mean(|c| c.triangles),
+        }
+    }
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct CaseReport {
     pub name: String,
@@ -83,6 +118,10 @@ pub struct CaseReport {
     pub compact_ms: Stat,
     /// Internal nodes per triangle.
     pub nodes_per_triangle: f64,
+    /// What a walk of this tree in this layout does per ray, replayed on the CPU
+    /// (`cpu_ref::walk`: the same on every device) over the checked rays of the
+    /// coherent and the incoherent set.
+    pub walk_per_ray: [WalkPerRay; 2],
     /// BVH bytes (nodes, compact nodes and triangles) per triangle.
     pub bytes_per_triangle: f64,
     /// Rebuild scratch (sort buffers, counters) per triangle.
@@ -363,6 +402,7 @@ pub fn run_case(
             .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
     ];
     let embree = anchor((v, i), &sets, opts.repeats, build_ms.median)?;
+    let walk_per_ray = WalkPerRay::both(&packed, [&coherent_set, &incoherent_set], opts.check_rays, layout);
     let khr_case = (v, i, [&coherent_set[..], &incoherent_set[..]]);
     let khr = vendor_tracer(ctx, (opts, kind, layout), khr_case, &cpu, (&tracer, scene))?;
     let (file, kept) = match file_set {
@@ -393,6 +433,7 @@ pub fn run_case(
         refit_ms: built.refit_ms,
         compact_ms: built.compact_ms,
         nodes_per_triangle: (n - 1).max(1) as f64 / n as f64,
+        walk_per_ray,
         bytes_per_triangle: bvh.bytes() as f64 / n as f64,
         scratch_bytes_per_triangle: (bvh.sort.keys[0].size * 2 + bvh.sort.values[0].size * 2) as f64 / n as f64,
         sah,

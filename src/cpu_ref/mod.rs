@@ -15,6 +15,7 @@ pub mod sim;
 pub mod ssr;
 pub mod texture;
 pub mod trace;
+pub mod walk;
 
 /// A G-buffer base-colour texel (`gbuffer::ALBEDO_FORMAT`) as the shaders decode it
 /// (`srgb_decode`): linear base colour and roughness.

@@ -35,10 +35,22 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
     };
     // Each builder in both layouts; the vendor tracer with the first of each.
     let cases = BvhKind::ALL.into_iter().flat_map(|k| StaticLayout::ALL.map(|l| (k, l)));
+    let mut binary_steps = 0.0;
     for (kind, layout) in cases {
         let c = run_case(&ctx, "soup-5000", &v, &i, &opts, (kind, layout), &mut || {}).unwrap();
         assert!(c.valid, "{c:?}");
         assert_eq!(c.layout, layout);
+        // A walk's work per ray, replayed on the CPU: the wide layout takes fewer steps
+        // than the binary one for the same tree (the builds are deterministic).
+        let [_, incoherent] = c.walk_per_ray;
+        assert!(
+            incoherent.steps >= 1.0 && incoherent.boxes >= 2.0 * incoherent.steps,
+            "{incoherent:?}"
+        );
+        match layout {
+            StaticLayout::Binary => binary_steps = incoherent.steps,
+            StaticLayout::Wide => assert!(incoherent.steps < binary_steps, "{kind:?}: {incoherent:?}"),
+        }
         // The vendor tracer on the first builder's case: both orders, every checked hit
         // agreeing with the CPU, its builds timed.
         let first = kind == opts.builders[0] && layout == opts.layouts[0];

@@ -218,12 +218,7 @@ fn rays_at_triangle_corners_hit_through_rounded_boxes() {
                 rng.random_range(-1.5..1.5),
                 rng.random_range(-1.5..1.5),
             );
-            Ray {
-                origin: o.to_array(),
-                tmin: 0.0,
-                dir: (target - o).to_array(),
-                tmax: f32::MAX,
-            }
+            Ray::through(o, target)
         })
         .collect();
     let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();

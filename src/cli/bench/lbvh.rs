@@ -251,6 +251,18 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
         case.coherent.mrays_per_s,
         case.incoherent.mrays_per_s,
     ));
+    let walk = |w: &speculum::bench::lbvh::WalkPerRay| {
+        format!(
+            "{:.1} steps, {:.1} boxes, {:.1} triangles",
+            w.steps, w.boxes, w.triangles
+        )
+    };
+    text.line(format_args!(
+        "{:<14} a ray's walk (CPU replay, any device): coherent {}; incoherent {}",
+        "",
+        walk(&case.walk_per_ray[0]),
+        walk(&case.walk_per_ray[1])
+    ));
     if let Some(f) = &case.file {
         text.line(format_args!(
             "{:<14} rays file: {} rays, {} ({:.1} Mrays/s), {:.1}% hit, {} of {} checked differ, {} failed walks",

@@ -1,0 +1,216 @@
+//! The GPU's BVH walks replayed on the CPU (`walk_bvh` and `walk_wide` in
+//! `glsl/shared/traverse.glsl`: the same order, nearest child first, the same pushes),
+//! counting what one ray's walk does: the steps (nodes visited), the boxes and the
+//! triangles it tests. These are figures of a tree and a layout, the same on every
+//! device: where two trees' walks differ in speed on a device but not in these counts,
+//! the difference is the device's (memory order, divergence), not the tree's. The
+//! replay tests the exact boxes; the GPU's static walk tests them rounded outward to a
+//! 16-bit grid, and may enter a few more.
+
+use super::lbvh::wide_entries;
+use super::trace::intersect;
+use crate::gpu_types::{bvh_leaf, Hit, Ray, TraversalNode, TraversalTri};
+use crate::shader_defines::BVH_INVALID;
+use glam::Vec3;
+
+/// What one ray's walk did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WalkCounts {
+    /// Internal nodes visited (steps of the walk's loop).
+    pub steps: u32,
+    /// Child boxes tested.
+    pub boxes: u32,
+    /// Triangles tested.
+    pub triangles: u32,
+}
+
+/// `box_entry`: where the ray enters [lo, hi] within (tmin, tmax), infinity if it
+/// does not.
+fn box_entry(lo: [f32; 3], hi: [f32; 3], o: Vec3, inv: Vec3, tmin: f32, tmax: f32) -> f32 {
+    let t0 = (Vec3::from(lo) - o) * inv;
+    let t1 = (Vec3::from(hi) - o) * inv;
+    let enter = t0.min(t1).max_element().max(tmin);
+    let exit = t0.max(t1).min_element().min(tmax);
+    if enter <= exit {
+        enter
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// One ray's closest hit through the tree `nodes` (triangles `tris` in leaf order),
+/// walked as the binary walk (`slots` 2) or the wide one (`slots` `WIDE`), and what
+/// the walk did.
+pub fn replay(nodes: &[TraversalNode], tris: &[TraversalTri], ray: &Ray, slots: u32) -> (Hit, WalkCounts) {
+    let o = Vec3::from(ray.origin);
+    let d = Vec3::from(ray.dir);
+    let inv = Vec3::ONE / Vec3::select(d.cmpeq(Vec3::ZERO), Vec3::splat(1e-30), d);
+    let mut best = Hit {
+        t: ray.tmax,
+        prim: BVH_INVALID,
+        u: 0.0,
+        v: 0.0,
+    };
+    let mut counts = WalkCounts::default();
+    let leaf = |link: u32, best: &mut Hit, counts: &mut WalkCounts| {
+        let (first, count) = bvh_leaf(link).expect("a leaf link");
+        for t in &tris[first as usize..(first + count) as usize] {
+            counts.triangles += 1;
+            let corners = [Vec3::from(t.a), Vec3::from(t.b), Vec3::from(t.c)];
+            if let Some((th, u, v)) = intersect(ray, &corners) {
+                let closer = th < best.t || (th == best.t && t.id < best.prim);
+                if th > ray.tmin && closer {
+                    *best = Hit {
+                        t: th,
+                        prim: t.id,
+                        u,
+                        v,
+                    };
+                }
+            }
+        }
+    };
+    let mut stack: Vec<u32> = Vec::new();
+    let mut node = 0u32;
+    loop {
+        counts.steps += 1;
+        // The node's children: (box entry, link), as the walk tests them.
+        let children: Vec<([f32; 3], [f32; 3], u32)> = if slots == 2 {
+            let n = &nodes[node as usize];
+            vec![(n.lo0, n.hi0, n.child0), (n.lo1, n.hi1, n.child1)]
+        } else {
+            wide_entries(nodes, node as usize)
+        };
+        let mut t: Vec<(f32, u32)> = children
+            .iter()
+            .map(|&(lo, hi, link)| {
+                counts.boxes += 1;
+                (box_entry(lo, hi, o, inv, ray.tmin, best.t), link)
+            })
+            .collect();
+        for e in t.iter_mut() {
+            if e.0 != f32::INFINITY && bvh_leaf(e.1).is_some() {
+                leaf(e.1, &mut best, &mut counts);
+                e.0 = f32::INFINITY;
+            }
+        }
+        let next = if slots == 2 {
+            binary_next(&t, &mut stack)
+        } else {
+            wide_next(t, best.t, &mut stack)
+        };
+        if let Some(next) = next {
+            node = next;
+            continue;
+        }
+        match stack.pop() {
+            Some(next) => node = next,
+            None => break,
+        }
+    }
+    (best, counts)
+}
+
+/// `walk_bvh`'s choice after a node's leaves: the nearer of the entered internal
+/// children (the other pushed), or `None` to pop.
+fn binary_next(t: &[(f32, u32)], stack: &mut Vec<u32>) -> Option<u32> {
+    let ((t0, c0), (t1, c1)) = (t[0], t[1]);
+    match (t0 != f32::INFINITY, t1 != f32::INFINITY) {
+        (true, true) => {
+            let (near, far) = if t0 <= t1 { (c0, c1) } else { (c1, c0) };
+            stack.push(far);
+            Some(near)
+        }
+        (true, false) => Some(c0),
+        (false, true) => Some(c1),
+        (false, false) => None,
+    }
+}
+
+/// `walk_wide`'s choice after a node's leaves: children entered beyond `best_t`
+/// dropped, the rest ordered by its sorting network, all but the nearest pushed far
+/// first; the nearest, or `None` to pop.
+fn wide_next(mut t: Vec<(f32, u32)>, best_t: f32, stack: &mut Vec<u32>) -> Option<u32> {
+    t.resize(crate::shader_defines::WIDE as usize, (f32::INFINITY, BVH_INVALID));
+    for e in t.iter_mut() {
+        if e.0 > best_t {
+            e.0 = f32::INFINITY;
+        }
+    }
+    for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+        if t[b].0 < t[a].0 {
+            t.swap(a, b);
+        }
+    }
+    if t[0].0 == f32::INFINITY {
+        return None;
+    }
+    for k in (1..t.len()).rev() {
+        if t[k].0 != f32::INFINITY {
+            stack.push(t[k].1);
+        }
+    }
+    Some(t[0].1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cpu_ref::lbvh::{build, morton_keys, sort_pairs};
+    use crate::cpu_ref::trace::brute_force;
+    use crate::scene::soup::{default_size, random_soup};
+    use rand::{Rng, SeedableRng};
+
+    /// Both walks of an LBVH over a random soup find brute force's hits (ties aside),
+    /// visit at most the tree's nodes, and the wide walk takes about half the steps for
+    /// four box tests a step; a miss far from the scene takes one step and no triangle.
+    #[test]
+    fn both_replays_find_brute_force_hits_and_count_their_work() {
+        let n = 2000;
+        let (v, i) = random_soup(n, 1.0, default_size(n), 5);
+        let keys = morton_keys(&v, &i, 1);
+        let (keys, values) = sort_pairs(&keys, &(0..n as u32).collect::<Vec<_>>());
+        let bvh = build(&keys, &values, &v, &i);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(6);
+        let mut r = || {
+            Vec3::new(
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-1.5..1.5),
+            )
+        };
+        let rays: Vec<Ray> = (0..500).map(|_| Ray::through(r() * 2.0, r() * 0.5)).collect();
+        let mut totals = [WalkCounts::default(); 2];
+        let mut ties = 0;
+        for ray in &rays {
+            let want = brute_force(ray, &v, &i);
+            for (k, slots) in [2, crate::shader_defines::WIDE].into_iter().enumerate() {
+                let (hit, c) = replay(&bvh.nodes, &bvh.tris, ray, slots);
+                assert_eq!(hit.t, want.t, "slots {slots}");
+                ties += (hit.prim != want.prim) as u32;
+                assert!((c.steps as usize) < n && c.boxes >= 2 * c.steps);
+                totals[k].steps += c.steps;
+                totals[k].boxes += c.boxes;
+                totals[k].triangles += c.triangles;
+            }
+        }
+        assert!(ties <= 2, "{ties} ties");
+        let [binary, wide] = totals;
+        // Two levels a step: about half the steps, as many boxes (four a step).
+        assert!(
+            2 * wide.steps < 3 * binary.steps && wide.boxes < 2 * binary.boxes,
+            "{binary:?} {wide:?}"
+        );
+        assert!(binary.triangles > 0 && wide.triangles > 0);
+        let away = Ray {
+            origin: [10.0, 10.0, 10.0],
+            tmin: 0.0,
+            dir: [1.0, 0.0, 0.0],
+            tmax: f32::MAX,
+        };
+        for slots in [2, crate::shader_defines::WIDE] {
+            let (hit, c) = replay(&bvh.nodes, &bvh.tris, &away, slots);
+            assert_eq!((hit.prim, c.steps, c.triangles), (BVH_INVALID, 1, 0));
+        }
+    }
+}

@@ -8,6 +8,7 @@
 #include "glossy.glsl"
 #include "surface.glsl"
 #include "pixel_list.glsl"
+#include "hit_uv.glsl"
 layout(binding = 1) uniform sampler2D gb_depth;
 layout(binding = 2) uniform sampler2D gb_normal;
 layout(binding = 3, std430) readonly buffer Materials { Material materials[]; };
@@ -15,9 +16,7 @@ layout(binding = 4) uniform sampler2D shadow_map;
 layout(binding = 5, std430) readonly buffer Pixels { uint pixels[]; };
 layout(binding = 6, std430) readonly buffer Indirect { uvec4 indirect; }; // w: count
 layout(binding = 7, rgba32f) uniform writeonly image2D rt_out;
-// Bindings 8-15: traverse.glsl. Texture coordinates of the static and dynamic vertices.
-layout(binding = 16, std430) readonly buffer StaticUvs { vec2 s_uvs[]; };
-layout(binding = 17, std430) readonly buffer DynamicUvs { vec2 d_uvs[]; };
+// Bindings 8-15: the tracer's; 16-17: hit_uv.glsl's texture coordinates.
 layout(binding = 18) uniform sampler2DArray scene_textures;
 layout(binding = 19) uniform sampler2D gb_albedo; // a: perceptual roughness
 // The mean distance to the first hits of the pixel's rays (HIT_FAR for a miss), for
@@ -30,14 +29,6 @@ layout(push_constant) uniform Push {
     uint dynamic_tris;
     uint shadows;      // SHADOWS_*: how hits are shadowed
 } pc;
-
-vec2 hit_uv(uint prim, uint k) {
-    uint t = prim & 0x7fffffffu;
-    if ((prim & 0x80000000u) == 0u) {
-        return s_uvs[s_indices[3u * t + k]];
-    }
-    return d_uvs[d_indices[3u * t + k]];
-}
 
 // The radiance along one path from `origin` (just off the reflecting surface) in
 // direction `dir`, its ray cone `cone` wide at the origin and spreading by `spread`;

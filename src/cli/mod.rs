@@ -11,7 +11,7 @@ use anyhow::{Context as _, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use speculum::scene::Floor;
-use speculum::settings::{Shadows, Tracer};
+use speculum::settings::{Shadows, Tracer, Visibility};
 use speculum::vk::{Context, ContextDesc};
 use speculum::Settings;
 use std::io::IsTerminal;
@@ -56,6 +56,9 @@ pub struct SettingsArgs {
     /// Where shadows come from [default: map, or the settings file's].
     #[arg(long, value_parser = choice(&Shadows::ALL, Shadows::name, Shadows::about))]
     pub shadows: Option<Shadows>,
+    /// How the G-buffer is made [default: raster, or the settings file's].
+    #[arg(long, value_parser = choice(&Visibility::ALL, Visibility::name, Visibility::about))]
+    pub visibility: Option<Visibility>,
     /// The ray tracer [default: lbvh, or the settings file's].
     #[arg(long, value_parser = choice(&Tracer::ALL, Tracer::name, Tracer::about))]
     pub tracer: Option<Tracer>,
@@ -76,6 +79,9 @@ impl SettingsArgs {
         }
         if let Some(shadows) = self.shadows {
             s.shadows = shadows;
+        }
+        if let Some(visibility) = self.visibility {
+            s.visibility = visibility;
         }
         s.validate()?;
         Ok(s)

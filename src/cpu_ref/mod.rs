@@ -8,6 +8,7 @@ pub mod denoise;
 pub mod glossy;
 pub mod lbvh;
 pub mod merge;
+pub mod primary;
 pub mod reflect;
 pub mod shading;
 pub mod shadows;

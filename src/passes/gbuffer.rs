@@ -32,10 +32,15 @@ pub const MATERIAL_FORMAT: vk::Format = vk::Format::R32_UINT;
 pub const MOTION_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 impl GBuffer {
-    /// Creates the targets. They accept transfers too, so tests can fill and read them.
+    /// Creates the targets: attachments of the raster, storage images of the primary
+    /// rays (`gbuffer.trace`, which copies its depth in). They accept transfers too, so
+    /// tests can fill and read them.
     pub fn new(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<Self> {
         let transfer = vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
-        let color = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | transfer;
+        let color = vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | transfer;
         let depth = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | transfer;
         Ok(Self {
             depth: Image::new(ctx, "gbuffer.depth", extent, DEPTH_FORMAT, depth)?,

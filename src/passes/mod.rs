@@ -19,6 +19,7 @@
 
 pub mod compose;
 pub mod gbuffer;
+pub mod gbuffer_trace;
 pub mod light_direct;
 pub mod reflect_denoise;
 pub mod reflect_merge;

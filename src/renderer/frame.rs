@@ -13,6 +13,7 @@ use super::tracer::{FrameTracer, Kernels};
 use super::{FrameSlot, Lighting, Reflections, Renderer};
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposeInputs;
+use crate::passes::gbuffer_trace::PrimaryInputs;
 use crate::passes::light_direct::Sun;
 use crate::passes::reflect_denoise::{DenoiseInputs, DenoiseParams};
 use crate::passes::reflect_merge::{MergeInputs, MergeParams};
@@ -261,19 +262,31 @@ fn record_shading<'a, T: Tracer>(
 }
 
 /// `shadow.map` to `light.direct`, as `plan` says.
-fn record_lighting<T: Tracer>(
+fn record_lighting<'a, T: Tracer>(
     f: &mut FrameRecorder<'_>,
     plan: &FramePlan,
     cmd: vk::CommandBuffer,
     l: &Lighting,
-    i: &FrameInputs<'_>,
-    t: &Traced<'_, T>,
+    i: &FrameInputs<'a>,
+    t: &Traced<'a, T>,
 ) {
     let (ubo, g, shadows) = (i.ubo, &l.gbuffer.out, i.st.shadows);
     if plan.runs(Row::ShadowMap) {
         f.row(Row::ShadowMap, || l.shadow.record(cmd, ubo, &i.geometries));
     }
-    f.row(Row::GBuffer, || l.gbuffer.record(cmd, ubo, &i.surfaces, &i.geometries));
+    if plan.runs(Row::GBuffer) {
+        f.row(Row::GBuffer, || l.gbuffer.record(cmd, ubo, &i.surfaces, &i.geometries));
+    } else {
+        let inputs = PrimaryInputs {
+            frame: ubo,
+            surfaces: i.surfaces,
+            // The dynamic geometry's, drawn after the static scene's (any buffer without).
+            previous: i.geometries.last().expect("the static scene's geometry").previous,
+            scene: t.scene,
+        };
+        let kernel = &t.kernels.primary;
+        f.row(Row::GBufferTrace, || l.gbuffer_trace.record(cmd, kernel, &inputs, g));
+    }
     if plan.shadow_rays() {
         f.row(Row::ShadowClassify, || {
             l.shadow_trace.classify(cmd, ubo, g, &l.shadow.out, shadows)

@@ -5,6 +5,7 @@
 
 use crate::error::Result;
 use crate::passes::gbuffer::GBufferPass;
+use crate::passes::gbuffer_trace::GBufferTracePass;
 use crate::passes::light_direct::LightDirectPass;
 use crate::passes::reflect_denoise::DenoisePass;
 use crate::passes::reflect_merge::MergePass;
@@ -19,11 +20,13 @@ use crate::vk::Context;
 use ash::vk;
 use std::sync::Arc;
 
-/// `shadow.map` to `light.direct`: the shadow map, the G-buffer, the shadow rays and
-/// the direct light.
+/// `shadow.map` to `light.direct`: the shadow map, the G-buffer (rasterized or traced), the
+/// shadow rays and the direct light.
 pub struct Lighting {
     pub shadow: ShadowMapPass,
     pub gbuffer: GBufferPass,
+    /// `gbuffer.trace`: the same G-buffer (`gbuffer`'s targets) by primary rays.
+    pub gbuffer_trace: GBufferTracePass,
     pub shadow_trace: ShadowTracePass,
     /// `shadow.compact`: the shadow mask's compaction into the shadow-ray list.
     pub shadow_compact: CompactPass,
@@ -35,6 +38,7 @@ impl Lighting {
         Ok(Self {
             shadow: Self::shadow_map(ctx, settings)?,
             gbuffer: GBufferPass::new(ctx, extent)?,
+            gbuffer_trace: GBufferTracePass::new(ctx, extent)?,
             shadow_trace: ShadowTracePass::new(ctx, extent)?,
             shadow_compact: CompactPass::new(ctx, shadow_trace::COMPACT_PIPELINES, extent)?,
             light: LightDirectPass::new(ctx, extent)?,
@@ -49,6 +53,7 @@ impl Lighting {
     /// Every screen-sized image at `extent` (the shadow map is not screen-sized).
     pub(super) fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
         self.gbuffer.resize(extent)?;
+        self.gbuffer_trace.resize(extent)?;
         self.shadow_trace.resize(extent)?;
         self.shadow_compact.resize(extent)?;
         self.light.resize(extent)

@@ -10,7 +10,7 @@ use super::table::Row;
 use crate::passes::compose::ComposeMode;
 use crate::passes::reflect_merge::BlurParams;
 use crate::passes::ssr_trace::Classify;
-use crate::settings::{Hybrid, Mode, Settings};
+use crate::settings::{Hybrid, Mode, Settings, Visibility};
 
 /// What moves in the scene, as the frame steps it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -59,6 +59,8 @@ pub struct FramePlan {
     pub blur: BlurParams,
     pub denoise: bool,
     pub compose: ComposeMode,
+    /// How the G-buffer is made this frame.
+    pub visibility: Visibility,
     shadow_map: bool,
     shadow_rays: bool,
     hiz: bool,
@@ -117,6 +119,7 @@ impl FramePlan {
                 Mode::Provenance => ComposeMode::Provenance,
                 Mode::Ssr | Mode::Hybrid | Mode::Rt => ComposeMode::Reflect,
             },
+            visibility: st.visibility,
             shadow_map: st.shadows.uses_map(),
             shadow_rays: st.shadows.traces(),
             hiz: marches && st.ssr_hiz,
@@ -129,7 +132,9 @@ impl FramePlan {
         let m = self.motion;
         let steps = m.dynamic && m.advance;
         match row {
-            Row::Uniforms | Row::GBuffer | Row::LightDirect | Row::Compose => true,
+            Row::Uniforms | Row::LightDirect | Row::Compose => true,
+            Row::GBuffer => self.visibility == Visibility::Raster,
+            Row::GBufferTrace => self.visibility == Visibility::Rays,
             Row::SimRigid => steps,
             Row::SimTransform => steps && m.rigid,
             Row::SimCloth => steps && m.cloth,
@@ -307,6 +312,33 @@ mod tests {
         assert_eq!(paused.previous, Previous::Held);
         assert!(!paused.runs(SimRigid) && !paused.runs(SimTransform) && !paused.runs(DynamicBvh));
         assert_eq!(plan(&st, STILL, Path::March).previous, Previous::None);
+    }
+
+    /// Visibility by rays swaps the raster G-buffer's row for the traced one in every
+    /// mode and on a moving scene; every other row stays as it was.
+    #[test]
+    fn visibility_swaps_one_row() {
+        let moving = Motion {
+            dynamic: true,
+            cloth: true,
+            ..STILL
+        };
+        for mode in Mode::ALL {
+            for motion in [STILL, moving] {
+                let raster = plan(&settings(mode), motion, Path::March).rows();
+                let st = Settings {
+                    visibility: Visibility::Rays,
+                    ..settings(mode)
+                };
+                let rays = plan(&st, motion, Path::March).rows();
+                let swapped: Vec<Row> = raster
+                    .iter()
+                    .map(|&r| if r == GBuffer { GBufferTrace } else { r })
+                    .collect();
+                assert!(raster.contains(&GBuffer) && !raster.contains(&GBufferTrace), "{mode:?}");
+                assert_eq!(rays, swapped, "{mode:?}");
+            }
+        }
     }
 
     /// Shadows by rays add their three rows; the glossy filter runs with a radius or a

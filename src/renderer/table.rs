@@ -8,7 +8,9 @@ use crate::passes::reflect_merge;
 use crate::passes::rt_reflect;
 use crate::passes::ssr_hiz;
 use crate::passes::ssr_trace;
-use crate::passes::{gbuffer, light_direct, shadow_map, shadow_trace, sim_cloth, sim_skin, sim_transform, ssr_compact};
+use crate::passes::{
+    gbuffer, gbuffer_trace, light_direct, shadow_map, shadow_trace, sim_cloth, sim_skin, sim_transform, ssr_compact,
+};
 use crate::tracers::khr;
 use crate::tracers::lbvh::dynamic::DynamicBvh;
 
@@ -40,7 +42,10 @@ pub enum Row {
     /// built once).
     DynamicAccel,
     ShadowMap,
+    /// The G-buffer rasterized (`visibility` raster).
     GBuffer,
+    /// The G-buffer by primary rays (`visibility` rays).
+    GBufferTrace,
     ShadowClassify,
     ShadowCompact,
     ShadowTrace,
@@ -59,7 +64,7 @@ pub enum Row {
 
 impl Row {
     /// Every row, in frame order.
-    pub const ALL: [Row; 21] = [
+    pub const ALL: [Row; 22] = [
         Row::Uniforms,
         Row::SimRigid,
         Row::SimTransform,
@@ -69,6 +74,7 @@ impl Row {
         Row::DynamicAccel,
         Row::ShadowMap,
         Row::GBuffer,
+        Row::GBufferTrace,
         Row::ShadowClassify,
         Row::ShadowCompact,
         Row::ShadowTrace,
@@ -96,6 +102,7 @@ impl Row {
             Row::DynamicAccel => &khr::SCOPES,
             Row::ShadowMap => &[shadow_map::NAME],
             Row::GBuffer => &[gbuffer::NAME],
+            Row::GBufferTrace => &[gbuffer_trace::NAME],
             Row::ShadowClassify => &[shadow_trace::CLASSIFY_NAME],
             Row::ShadowCompact => &[shadow_trace::COMPACT_NAME],
             Row::ShadowTrace => &[shadow_trace::NAME],

@@ -1,5 +1,5 @@
 //! The frame's tracer (`settings::Tracer`), held as one value: the tracing kernels
-//! (`rt.reflect`, `shadow.trace`) made for one tracer, and, for the vendor tracer, its
+//! (`gbuffer.trace`, `rt.reflect`, `shadow.trace`) made for one tracer, and, for the vendor tracer, its
 //! acceleration structures. The kernels' type names the tracer (`tracers::Tracer`), so
 //! the frame cannot trace one tracer's structures with the other's kernels; the
 //! renderer stores the choice nowhere else (`Renderer::tracer` reads it back).
@@ -7,7 +7,7 @@
 use super::gpu_scene::{DynamicGeometry, SceneBuffers};
 use crate::error::Result;
 use crate::gpu_types::GpuVertex;
-use crate::passes::{rt_reflect, shadow_trace};
+use crate::passes::{gbuffer_trace, rt_reflect, shadow_trace};
 use crate::settings::{self, Settings};
 use crate::tracers::khr::{KhrScene, StaticInput, StaticOrder};
 use crate::tracers::{Khr, Lbvh, Tracer};
@@ -16,6 +16,7 @@ use std::sync::Arc;
 
 /// The frame's tracing kernels for tracer `T`.
 pub(super) struct Kernels<T: Tracer> {
+    pub primary: gbuffer_trace::Kernel<T>,
     pub reflect: rt_reflect::Kernel<T>,
     pub shadow: shadow_trace::Kernel<T>,
 }
@@ -23,6 +24,7 @@ pub(super) struct Kernels<T: Tracer> {
 impl<T: Tracer> Kernels<T> {
     fn new(ctx: &Arc<Context>) -> Result<Self> {
         Ok(Self {
+            primary: gbuffer_trace::Kernel::new(ctx)?,
             reflect: rt_reflect::Kernel::new(ctx)?,
             shadow: shadow_trace::Kernel::new(ctx)?,
         })

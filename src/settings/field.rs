@@ -2,7 +2,7 @@
 //! HUD shows it, how a change applies, and its value as one type for generic code
 //! (validation, the HUD, the README's list).
 
-use super::{HybridPolicy, Mode, Settings, Shadows, Tracer};
+use super::{HybridPolicy, Mode, Settings, Shadows, Tracer, Visibility};
 
 /// One setting: everything the struct, validation, the renderer, the HUD, the CLI and
 /// the README need to know of it.
@@ -93,6 +93,7 @@ pub enum Value {
     Bool(bool),
     Mode(Mode),
     Shadows(Shadows),
+    Visibility(Visibility),
     Tracer(Tracer),
     HybridPolicy(HybridPolicy),
 }
@@ -127,6 +128,7 @@ value_of!(f32, F32);
 value_of!(bool, Bool);
 value_of!(Mode, Mode);
 value_of!(Shadows, Shadows);
+value_of!(Visibility, Visibility);
 value_of!(Tracer, Tracer);
 value_of!(HybridPolicy, HybridPolicy);
 
@@ -138,6 +140,7 @@ impl std::fmt::Display for Value {
             Value::Bool(v) => write!(f, "{v}"),
             Value::Mode(m) => write!(f, "{}", m.name()),
             Value::Shadows(m) => write!(f, "{}", m.name()),
+            Value::Visibility(v) => write!(f, "{}", v.name()),
             Value::Tracer(t) => write!(f, "{}", t.name()),
             Value::HybridPolicy(p) => write!(f, "{}", p.name()),
         }

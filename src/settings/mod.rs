@@ -148,6 +148,37 @@ impl HybridPolicy {
     }
 }
 
+/// How the frame finds what each pixel sees: the G-buffer rasterized, or traced by one
+/// primary ray a pixel (`about` says what each is).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Visibility {
+    Raster,
+    Rays,
+}
+
+impl Visibility {
+    pub const ALL: [Visibility; 2] = [Visibility::Raster, Visibility::Rays];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Visibility::Raster => "raster",
+            Visibility::Rays => "rays",
+        }
+    }
+
+    /// What the visibility is, in a line (the CLI's help, the HUD).
+    pub fn about(self) -> &'static str {
+        match self {
+            Visibility::Raster => "The G-buffer rasterized (gbuffer): vertex and fragment work",
+            Visibility::Rays => {
+                "The G-buffer by one primary ray a pixel through the tracer (gbuffer.trace): compute work, \
+                 texture detail from ray cones"
+            }
+        }
+    }
+}
+
 /// Where the sun's shadows come from, on the visible surface and at every ray-traced
 /// reflection hit alike (`about` says what each is).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -360,6 +391,11 @@ settings_table! {
     /// shadow ray per lit pixel (exact, one any-hit traversal each), or the hybrid (the
     /// map where it is sure, rays where it is not).
     shadows: Shadows = Shadows::Map, Range::Any, Hud::Own, NextFrame;
+    /// How the G-buffer is made: rasterized (vertex and fragment work, which a GPU that
+    /// runs them on few units pays for), or one primary ray a pixel through the tracer
+    /// (compute work; the texture's level of detail from ray cones instead of screen
+    /// derivatives). Both write the same targets, so every later pass is the same.
+    visibility: Visibility = Visibility::Raster, Range::Any, Hud::Own, NextFrame;
     /// Hybrid shadows: a shadow-map texel within this light-depth distance of the
     /// biased compare leaves the map unsure and the pixel gets a shadow ray (acne and
     /// detached contact shadows live there): wider traces more pixels, closer to
@@ -532,6 +568,7 @@ pub fn markdown_table() -> String {
         let range = match (f.range, (f.get)(&defaults)) {
             (Range::Any, Value::Mode(_)) => Mode::ALL.map(Mode::name).join(", "),
             (Range::Any, Value::Shadows(_)) => Shadows::ALL.map(Shadows::name).join(", "),
+            (Range::Any, Value::Visibility(_)) => Visibility::ALL.map(Visibility::name).join(", "),
             (Range::Any, Value::Tracer(_)) => Tracer::ALL.map(Tracer::name).join(", "),
             (Range::Any, Value::HybridPolicy(_)) => HybridPolicy::ALL.map(HybridPolicy::name).join(", "),
             (Range::Any, Value::Bool(_)) => "true, false".into(),
@@ -643,7 +680,7 @@ mod tests {
             let e = d.with_field(name, value).unwrap_err().to_string();
             assert!(e.contains(says), "{name} = {value}: {e}");
         }
-        assert_eq!(Settings::field_names().len(), 39);
+        assert_eq!(Settings::field_names().len(), 40);
     }
 
     /// The README's settings list is the table's (`speculum settings --list`).

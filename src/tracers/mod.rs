@@ -31,11 +31,14 @@ pub use lbvh::Geometry;
 pub const TRACE_RAYS_ARGS: u64 = 16;
 
 /// How many rays a trace launches: one per entry of a list sized on the GPU (its
-/// indirect buffer, `passes::CompactOutputs::indirect`), or a count known here.
+/// indirect buffer, `passes::CompactOutputs::indirect`), a count known here, or one per
+/// cell of a width x height grid (a compute kernel's `WG_2D` x `WG_2D` tiles covering it,
+/// or a launch of that size).
 #[derive(Clone, Copy)]
 pub enum Rays<'a> {
     Listed(&'a Buffer),
     Count(u32),
+    Grid(u32, u32),
 }
 
 /// One tracer, as a type: its setting, what a trace goes through, and how its kernel
@@ -106,6 +109,7 @@ impl Tracer for Lbvh {
         let groups = match rays {
             Rays::Listed(indirect) => Groups::Indirect(indirect),
             Rays::Count(n) => Groups::Cover([n, 1, 1]),
+            Rays::Grid(w, h) => Groups::Cover([w, h, 1]),
         };
         pipeline.dispatch(cmd, resources, push, groups)
     }
@@ -140,6 +144,7 @@ impl Tracer for Khr {
         let launch = match rays {
             Rays::Listed(indirect) => Launch::Indirect(indirect, TRACE_RAYS_ARGS),
             Rays::Count(n) => Launch::Exact(n),
+            Rays::Grid(w, h) => Launch::Grid(w, h),
         };
         pipeline.trace(cmd, resources, push, launch)
     }

@@ -306,7 +306,8 @@ impl Image {
         self.extent.width as u64 * self.extent.height as u64 * texel_bytes(self.format)
     }
 
-    fn copy_region(&self) -> vk::BufferImageCopy {
+    /// The whole image (its first level and layer) as one tightly packed buffer copy.
+    pub fn copy_region(&self) -> vk::BufferImageCopy {
         vk::BufferImageCopy::default()
             .image_subresource(
                 vk::ImageSubresourceLayers::default()

@@ -25,6 +25,8 @@ pub struct RtShaders<'a> {
 pub enum Launch<'a> {
     /// Exactly this many.
     Exact(u32),
+    /// A grid of this width and height (`gl_LaunchIDEXT.xy`).
+    Grid(u32, u32),
     /// A `VkTraceRaysIndirectCommandKHR` (width, height, depth) at this byte offset of
     /// this buffer, written on the GPU.
     Indirect(&'a Buffer, u64),
@@ -146,7 +148,8 @@ impl RtPipeline {
     }
 
     /// Binds, pushes and launches the rays: one per entry, `gl_LaunchIDEXT.x` (the
-    /// launch's width; height and depth 1).
+    /// launch's width; height and depth 1), or one per cell of a grid
+    /// (`gl_LaunchIDEXT.xy`).
     pub fn trace<P: Pod>(&self, cmd: vk::CommandBuffer, resources: &[Bind<'_>], push: &P, launch: Launch<'_>) {
         self.pipeline.bind(cmd, resources, push);
         let rt = self.pipeline.ctx().ray_tracing.as_ref().expect("made with ray tracing");
@@ -158,6 +161,7 @@ impl RtPipeline {
         unsafe {
             match launch {
                 Launch::Exact(n) => rt.pipeline.cmd_trace_rays(cmd, raygen, miss, hit, &callable, n, 1, 1),
+                Launch::Grid(w, h) => rt.pipeline.cmd_trace_rays(cmd, raygen, miss, hit, &callable, w, h, 1),
                 Launch::Indirect(args, offset) => {
                     rt.pipeline
                         .cmd_trace_rays_indirect(cmd, raygen, miss, hit, &callable, args.address() + offset)

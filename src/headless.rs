@@ -77,6 +77,9 @@ pub struct TimingsReport {
     pub vs_rt_mode: Option<Comparison>,
     /// A hybrid frame's split of the work (`hybrid_policy`); `null` in other modes.
     pub hybrid: Option<HybridSplit>,
+    /// With `visibility = adaptive`: the G-buffer's ways, their frames and prices, and
+    /// the one the frames take; `null` with a fixed `visibility`.
+    pub visibility: Option<VisibilitySplit>,
     /// The self-check of every measured frame, the reference's included (`vk::timing`).
     pub timing: TimingCheck,
 }
@@ -114,6 +117,48 @@ pub struct HybridSplit {
 #[derive(Clone, Debug, Serialize)]
 pub struct PathReport {
     pub path: String,
+    pub frames: u64,
+    pub ms: Option<f64>,
+}
+
+/// The adaptive frame's G-buffer (`visibility = adaptive`, `renderer::stages`).
+#[derive(Clone, Debug, Serialize)]
+pub struct VisibilitySplit {
+    /// The way the frames take (`raster` or `rays`): the cheaper once both are priced,
+    /// until then the one being priced.
+    pub way: String,
+    /// Each way's frames since the settings last changed, and its price (the median of
+    /// its last checked `gbuffer` or `gbuffer.trace` times, ms) once it has
+    /// `stages::SAMPLES` of them.
+    pub ways: Vec<WayReport>,
+    /// Once both are priced, one frame in this many takes the other way.
+    pub recheck_every: u32,
+}
+
+impl VisibilitySplit {
+    /// One line: each way's frames and price, and the way the frames take.
+    pub fn summary(&self) -> String {
+        let ways: Vec<String> = self
+            .ways
+            .iter()
+            .map(|w| {
+                let ms = w.ms.map_or(String::new(), |m| format!(", {m:.2} ms"));
+                format!("{} {} frames{ms}", w.way, w.frames)
+            })
+            .collect();
+        format!(
+            "{} (next: {}, rechecked 1 frame in {})",
+            ways.join("; "),
+            self.way,
+            self.recheck_every
+        )
+    }
+}
+
+/// One way of an adaptive stage in `VisibilitySplit`.
+#[derive(Clone, Debug, Serialize)]
+pub struct WayReport {
+    pub way: String,
     pub frames: u64,
     pub ms: Option<f64>,
 }
@@ -418,6 +463,7 @@ fn finish(
             None => None,
         },
         hybrid: hybrid_split(renderer, settings)?,
+        visibility: visibility_split(renderer, settings),
         timing: Timings::check_all(&[timings, ref_timings]),
     };
     Ok(Rendered {
@@ -438,6 +484,32 @@ pub fn render(
     tick: Tick<'_>,
 ) -> Result<Rendered> {
     render_frames(ctx, scene, settings, plan, tick, None)
+}
+
+/// The adaptive G-buffer's `VisibilitySplit` (`None` with a fixed `visibility`).
+pub(crate) fn visibility_split(renderer: &Renderer, settings: &Settings) -> Option<VisibilitySplit> {
+    use crate::renderer::stages::RECHECK_EVERY;
+    use crate::settings::Visibility;
+    if settings.visibility != Visibility::Adaptive {
+        return None;
+    }
+    let stage = renderer.visibility_ways();
+    let next = stage.frame_way(renderer.frame_index());
+    Some(VisibilitySplit {
+        way: Visibility::FIXED[if stage.priced() { stage.chosen } else { next }]
+            .name()
+            .to_string(),
+        ways: Visibility::FIXED
+            .iter()
+            .enumerate()
+            .map(|(w, v)| WayReport {
+                way: v.name().to_string(),
+                frames: stage.frames[w],
+                ms: stage.price(w),
+            })
+            .collect(),
+        recheck_every: RECHECK_EVERY,
+    })
 }
 
 /// The last frame's `HybridSplit`, in the modes that have one (`hybrid`, `provenance`).

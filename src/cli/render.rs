@@ -323,6 +323,9 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
             ));
         }
     }
+    if let Some(v) = &r.visibility {
+        text.line(format_args!("  visibility adaptive: {}", v.summary()));
+    }
     text.line(format_args!(
         "  {} shadows: lit pixels {}, shadow rays {} ({:.1}%)",
         r.shadows,

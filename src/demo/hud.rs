@@ -5,7 +5,7 @@
 use super::script::Action;
 use crate::reflection_maps::{FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
-use crate::settings::{Applies, Field, Hud, HybridPolicy, Mode, Settings, Shadows, Tracer, Value, FIELDS};
+use crate::settings::{Applies, Field, Hud, HybridPolicy, Mode, Settings, Shadows, Tracer, Value, Visibility, FIELDS};
 use crate::vk::swapchain::present_mode_name;
 use ash::vk;
 use egui::{Color32, RichText};
@@ -28,6 +28,8 @@ pub struct HudInfo<'a> {
     /// Median ms per pass over the history, in frame order.
     pub passes: &'a [(&'static str, f64)],
     pub stats: Option<&'a super::Stats>,
+    /// `visibility = adaptive`: the G-buffer's ways and prices (`None` when fixed).
+    pub visibility: Option<&'a crate::headless::VisibilitySplit>,
     pub camera: Camera,
     pub speed: f32,
     pub dynamic: bool,
@@ -189,6 +191,16 @@ fn mode_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: &mut
                 .on_hover_text(sh.about());
         }
     });
+    ui.horizontal(|ui| {
+        ui.label("visibility");
+        for v in Visibility::ALL {
+            ui.selectable_value(&mut s.visibility, v, v.name())
+                .on_hover_text(v.about());
+        }
+    });
+    if let Some(v) = info.visibility {
+        ui.label(format!("  {}", v.summary()));
+    }
     ui.horizontal(|ui| {
         ui.label("tracer");
         for t in Tracer::ALL {
@@ -424,6 +436,17 @@ mod tests {
         let ctx = egui::Context::default();
         let settings = Settings::default();
         let camera = Camera::framing(glam::Vec3::splat(-1.0), glam::Vec3::ONE);
+        let visibility = crate::headless::VisibilitySplit {
+            way: "raster".into(),
+            ways: ["raster", "rays"]
+                .map(|w| crate::headless::WayReport {
+                    way: w.into(),
+                    frames: 3,
+                    ms: Some(1.5),
+                })
+                .into(),
+            recheck_every: 64,
+        };
         let info = HudInfo {
             scene: "room",
             device: "test",
@@ -436,6 +459,7 @@ mod tests {
             wall_ms: &[16.0],
             passes: &[("gbuffer", 1.0)],
             stats: None,
+            visibility: Some(&visibility),
             camera,
             speed: 1.0,
             dynamic: true,

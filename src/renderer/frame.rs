@@ -7,7 +7,7 @@
 
 use super::exchange::{FrameCounts, Path};
 use super::gpu_scene::DynamicGeometry;
-use super::plan::{FramePlan, Motion, Previous};
+use super::plan::{FramePlan, Motion, Previous, Ways};
 use super::table::{Row, FRAME};
 use super::tracer::{FrameTracer, Kernels};
 use super::{FrameSlot, Lighting, Reflections, Renderer};
@@ -23,7 +23,7 @@ use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_trace::MarchInputs;
 use crate::passes::{SceneGeometry, Surfaces};
-use crate::settings::{Hybrid, Settings, SsrParams};
+use crate::settings::{Hybrid, Settings, SsrParams, Visibility};
 use crate::tracers::khr::KhrScene;
 use crate::tracers::lbvh::LbvhBuilder;
 use crate::tracers::{TraceScene, Traceable, Tracer};
@@ -141,7 +141,15 @@ impl Renderer {
         if hybrid.adaptive() {
             self.paths.frames[path as usize] += 1;
         }
-        FramePlan::new(&self.settings, motion, path, self.exchange.applied, self.fail_mask_view)
+        let way = self.visibility.frame_way(self.frame_index);
+        if self.settings.visibility == Visibility::Adaptive {
+            self.visibility.count(way);
+        }
+        let ways = Ways {
+            path,
+            visibility: Visibility::FIXED[way],
+        };
+        FramePlan::new(&self.settings, motion, ways, self.exchange.applied, self.fail_mask_view)
     }
 
     /// Records one frame into `cmd` (begun, not ended) with frame slot `slot`'s queries
@@ -166,7 +174,16 @@ impl Renderer {
             slots,
             ..
         } = self;
-        let FrameSlot { timer, sim_ms, counts } = &mut slots[slot];
+        let FrameSlot {
+            timer,
+            sim_ms,
+            counts,
+            visibility,
+        } = &mut slots[slot];
+        // An adaptive frame's G-buffer way, priced when the frame has finished.
+        *visibility = (st.visibility == Visibility::Adaptive)
+            .then(|| Visibility::FIXED.iter().position(|&v| v == plan.visibility))
+            .flatten();
         let d = &ctx.device;
         let mut f = FrameRecorder::begin(timer, cmd, plan.rows());
         // This frame's uniforms: the view's, and where the glossy rays' sequence is.

@@ -25,6 +25,7 @@ mod gpu_scene;
 mod passes;
 pub mod plan;
 mod readback;
+pub mod stages;
 pub mod table;
 mod tracer;
 mod view;
@@ -49,6 +50,7 @@ use exchange::{ExchangeRate, FrameCounts, Path, Paths};
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
 pub use passes::{Lighting, Reflections};
+use stages::Stage;
 use std::sync::Arc;
 use tracer::FrameTracer;
 
@@ -59,6 +61,8 @@ struct FrameSlot {
     sim_ms: Option<f64>,
     /// A hybrid frame's path and counts, for the exchange rate and the paths' prices.
     counts: FrameCounts,
+    /// An adaptive frame's G-buffer way (`Visibility::FIXED`), for its price.
+    visibility: Option<usize>,
 }
 
 impl FrameSlot {
@@ -67,6 +71,7 @@ impl FrameSlot {
             timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
             sim_ms: None,
             counts: FrameCounts::new(ctx)?,
+            visibility: None,
         })
     }
 }
@@ -80,6 +85,10 @@ fn extent(settings: &Settings) -> vk::Extent2D {
 
 /// The glossy rays' sample stream of a reference renderer (`Renderer::reference`).
 const REFERENCE_STREAM: u32 = 1;
+
+/// The frame (modulo `stages::RECHECK_EVERY`) on which an adaptive G-buffer's frames
+/// recheck the other way: apart from the hybrid's recheck (the last of the 64).
+const VISIBILITY_RECHECK: u32 = 31;
 
 pub struct Renderer {
     ctx: Arc<Context>,
@@ -125,6 +134,8 @@ pub struct Renderer {
     /// The adaptive hybrid's paths: marching with the tiles, or idle (tracing every
     /// pixel) until the next probe frame; and what each has cost.
     paths: Paths,
+    /// `visibility = adaptive`: the G-buffer's ways (`Visibility::FIXED`) and prices.
+    visibility: Stage<2>,
     cmd: vk::CommandBuffer,
 }
 
@@ -203,6 +214,7 @@ impl Renderer {
             paused: false,
             exchange: ExchangeRate::default(),
             paths: Paths::default(),
+            visibility: Stage::new(VISIBILITY_RECHECK),
             step_once: false,
             cmd: ctx.allocate_command_buffer()?,
         })
@@ -288,6 +300,7 @@ impl Renderer {
         // Other settings, other costs: the adaptive hybrid prices its paths anew.
         if settings != self.settings {
             self.paths = Paths::default();
+            self.visibility = Stage::new(VISIBILITY_RECHECK);
         }
         self.settings = settings;
         self.uniforms = self.view.uniforms(&self.settings);
@@ -389,6 +402,17 @@ impl Renderer {
     /// The adaptive hybrid's paths: which one the frames take, and their prices.
     pub fn hybrid_paths(&self) -> Paths {
         self.paths
+    }
+
+    /// `visibility = adaptive`: the G-buffer's ways (`Visibility::FIXED` order), which
+    /// one the frames take, and their prices.
+    pub fn visibility_ways(&self) -> Stage<2> {
+        self.visibility
+    }
+
+    /// The index of the next frame to be recorded.
+    pub fn frame_index(&self) -> u32 {
+        self.frame_index
     }
 
     /// Triangles of the dynamic geometry (0 for a static scene).
@@ -526,6 +550,14 @@ impl Renderer {
         if let Some(recorded) = s.counts.take() {
             let scopes = table::reflection_rows().iter().flat_map(|r| r.scopes().iter().copied());
             exchange::take_frame((&mut self.exchange, &mut self.paths), recorded, &times, (FRAME, scopes));
+        }
+        if let Some(way) = s.visibility.take() {
+            let row = [Row::GBuffer, Row::GBufferTrace][way];
+            let ms = times
+                .problem
+                .is_none()
+                .then(|| row.scopes().iter().filter_map(|&n| times.get(n)).sum());
+            self.visibility.take(way, ms);
         }
         Ok(times)
     }

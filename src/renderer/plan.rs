@@ -67,13 +67,31 @@ pub struct FramePlan {
     traces: bool,
 }
 
+/// The ways the adaptive stages chose for a frame: the hybrid's path (read where
+/// `Hybrid::of(st)` is adaptive) and the G-buffer's (read where `visibility` is
+/// adaptive; raster or rays).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ways {
+    pub path: Path,
+    pub visibility: Visibility,
+}
+
 impl FramePlan {
-    /// The plan of a frame of `st` with the scene's `motion`, the adaptive hybrid's
-    /// `path` (`Path::March` when `Hybrid::of(st)` is not adaptive), the exchange rate
-    /// the frames have measured (`applied`, `TILE_ONE` units), and whether the fail
-    /// mask is shown instead of the reflections.
-    pub fn new(st: &Settings, motion: Motion, path: Path, applied: u32, fail_mask_view: bool) -> Self {
+    /// The plan of a frame of `st` with the scene's `motion`, the adaptive stages'
+    /// `ways`, the exchange rate the frames have measured (`applied`, `TILE_ONE`
+    /// units), and whether the fail mask is shown instead of the reflections.
+    pub fn new(st: &Settings, motion: Motion, ways: Ways, applied: u32, fail_mask_view: bool) -> Self {
         let mode = st.mode;
+        let path = ways.path;
+        let visibility = match st.visibility {
+            Visibility::Adaptive => ways.visibility,
+            fixed => fixed,
+        };
+        assert_ne!(
+            visibility,
+            Visibility::Adaptive,
+            "an adaptive frame's way is raster or rays"
+        );
         let hybrid = Hybrid::of(st);
         let path = if hybrid.adaptive() { path } else { Path::March };
         let idle = path != Path::March;
@@ -119,7 +137,7 @@ impl FramePlan {
                 Mode::Provenance => ComposeMode::Provenance,
                 Mode::Ssr | Mode::Hybrid | Mode::Rt => ComposeMode::Reflect,
             },
-            visibility: st.visibility,
+            visibility,
             shadow_map: st.shadows.uses_map(),
             shadow_rays: st.shadows.traces(),
             hiz: marches && st.ssr_hiz,
@@ -175,7 +193,8 @@ mod tests {
     use Row::*;
 
     fn plan(st: &Settings, motion: Motion, path: Path) -> FramePlan {
-        FramePlan::new(st, motion, path, 37, false)
+        let visibility = Visibility::Raster;
+        FramePlan::new(st, motion, Ways { path, visibility }, 37, false)
     }
 
     fn settings(mode: Mode) -> Settings {
@@ -337,6 +356,19 @@ mod tests {
                     .collect();
                 assert!(raster.contains(&GBuffer) && !raster.contains(&GBufferTrace), "{mode:?}");
                 assert_eq!(rays, swapped, "{mode:?}");
+                // Adaptive: the frame's way; a fixed setting ignores it.
+                let ways = Ways {
+                    path: Path::March,
+                    visibility: Visibility::Rays,
+                };
+                let adaptive = FramePlan::new(&settings(mode), motion, ways, 37, false);
+                assert_eq!(settings(mode).visibility, Visibility::Adaptive);
+                assert_eq!(adaptive.rows(), swapped, "{mode:?}");
+                let fixed = Settings {
+                    visibility: Visibility::Raster,
+                    ..settings(mode)
+                };
+                assert_eq!(FramePlan::new(&fixed, motion, ways, 37, false).rows(), raster);
             }
         }
     }
@@ -369,7 +401,11 @@ mod tests {
             plan(&settings(Mode::Raster), STILL, Path::March).compose,
             ComposeMode::Plain
         );
-        let view = FramePlan::new(&settings(Mode::Hybrid), STILL, Path::March, 0, true);
+        let ways = Ways {
+            path: Path::March,
+            visibility: Visibility::Raster,
+        };
+        let view = FramePlan::new(&settings(Mode::Hybrid), STILL, ways, 0, true);
         assert_eq!(view.compose, ComposeMode::FailMask);
         assert_eq!(
             plan(&settings(Mode::Provenance), STILL, Path::March).compose,

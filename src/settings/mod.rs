@@ -148,22 +148,27 @@ impl HybridPolicy {
     }
 }
 
-/// How the frame finds what each pixel sees: the G-buffer rasterized, or traced by one
-/// primary ray a pixel (`about` says what each is).
+/// How the frame finds what each pixel sees: the G-buffer rasterized, traced by one
+/// primary ray a pixel, or whichever of the two the frame's own timestamps find cheaper
+/// (`about` says what each is).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Visibility {
     Raster,
     Rays,
+    Adaptive,
 }
 
 impl Visibility {
-    pub const ALL: [Visibility; 2] = [Visibility::Raster, Visibility::Rays];
+    pub const ALL: [Visibility; 3] = [Visibility::Raster, Visibility::Rays, Visibility::Adaptive];
+    /// The two ways a frame is made, in the order the adaptive frame prices them.
+    pub const FIXED: [Visibility; 2] = [Visibility::Raster, Visibility::Rays];
 
     pub fn name(self) -> &'static str {
         match self {
             Visibility::Raster => "raster",
             Visibility::Rays => "rays",
+            Visibility::Adaptive => "adaptive",
         }
     }
 
@@ -174,6 +179,10 @@ impl Visibility {
             Visibility::Rays => {
                 "The G-buffer by one primary ray a pixel through the tracer (gbuffer.trace): compute work, \
                  texture detail from ray cones"
+            }
+            Visibility::Adaptive => {
+                "Raster or rays, whichever the frame's own timestamps price cheaper on this device \
+                 (each priced over its first frames, rechecked one frame in 64)"
             }
         }
     }
@@ -395,7 +404,9 @@ settings_table! {
     /// runs them on few units pays for), or one primary ray a pixel through the tracer
     /// (compute work; the texture's level of detail from ray cones instead of screen
     /// derivatives). Both write the same targets, so every later pass is the same.
-    visibility: Visibility = Visibility::Raster, Range::Any, Hud::Own, NextFrame;
+    /// `adaptive` prices both from the frame's own timestamps (their first frames, then
+    /// one frame in 64) and takes the cheaper; a fixed choice makes frames reproducible.
+    visibility: Visibility = Visibility::Adaptive, Range::Any, Hud::Own, NextFrame;
     /// Hybrid shadows: a shadow-map texel within this light-depth distance of the
     /// biased compare leaves the map unsure and the pixel gets a shadow ray (acne and
     /// detached contact shadows live there): wider traces more pixels, closer to

@@ -8,7 +8,7 @@
 use crate::common;
 
 use speculum::cpu_ref::ssr::tile_hysteresis;
-use speculum::settings::{HybridPolicy, Mode};
+use speculum::settings::{HybridPolicy, Mode, Visibility};
 use speculum::shader_defines::{FAIL_SKIPPED, TILE_KNOWN, TILE_RAYS_ONLY, TILE_SUCCESS, TILE_WORDS};
 use speculum::{Renderer, Settings};
 
@@ -22,6 +22,7 @@ fn settings(policy: HybridPolicy, exchange_rate: f32) -> Settings {
         mode: Mode::Hybrid,
         hybrid_policy: policy,
         exchange_rate,
+        visibility: Visibility::Raster,
         ..Default::default()
     }
 }

@@ -241,12 +241,12 @@ fn frames(scene: &speculum::scene::Scene, settings: &speculum::Settings, n: usiz
 /// Every frame of `drop` (rigid bodies: instances of their shapes' bottom levels, the
 /// top level rebuilt from the poses), of `cloth` and of the walking figure (their
 /// deformable bottom level updated every frame) through the vendor tracer matches the LBVH's, 60 frames each, hybrid with
-/// ray shadows (the adaptive hybrid at a fixed exchange rate: a measured one would
-/// follow each run's timings); and the cloth updated 29 times in 30 frames renders as
+/// ray shadows (the adaptive hybrid at a fixed exchange rate and the G-buffer
+/// rasterized: measured ones would follow each run's timings); and the cloth updated 29 times in 30 frames renders as
 /// the cloth rebuilt every frame.
 #[test]
 fn khr_moving_scenes_render_what_lbvh_renders() {
-    use speculum::settings::{Mode, Shadows, Tracer};
+    use speculum::settings::{Mode, Shadows, Tracer, Visibility};
     use speculum::Settings;
     if common::context().ray_tracing.is_none() {
         return;
@@ -261,6 +261,7 @@ fn khr_moving_scenes_render_what_lbvh_renders() {
             shadows: Shadows::Rays,
             tracer,
             exchange_rate: 0.5,
+            visibility: Visibility::Raster,
             ..Default::default()
         };
         let lbvh = frames(&scene, &settings(Tracer::Lbvh), 60);
@@ -279,6 +280,7 @@ fn khr_moving_scenes_render_what_lbvh_renders() {
         tracer: Tracer::Khr,
         refit_rebuild_every: 30,
         exchange_rate: 0.5,
+        visibility: Visibility::Raster,
         ..Default::default()
     };
     let rebuilt = Settings {

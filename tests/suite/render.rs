@@ -413,10 +413,11 @@ fn every_kernel_specialization_renders_the_same_frames() {
         let cases = [
             (
                 "room",
-                // A fixed exchange rate: a measured one follows each run's timings.
+                // A fixed exchange rate and G-buffer: measured ones follow each run's timings.
                 Settings {
                     static_ploc: false,
                     exchange_rate: 0.5,
+                    visibility: speculum::settings::Visibility::Raster,
                     ..Settings::default()
                 },
             ),

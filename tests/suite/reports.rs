@@ -88,9 +88,13 @@ const DYNAMIC_SCOPES: [&str; 11] = [
 /// The scopes only shadows other than `map` run (these reports are of `map` shadows).
 const TRACED_SHADOW_SCOPES: [&str; 3] = ["shadow.classify", "shadow.compact", "shadow.trace"];
 
-/// `passes_ms` of a frame with `map` shadows (see `check_scopes`).
+/// The scope only a G-buffer by rays runs (`visibility`).
+const RAYS_VISIBILITY: &str = "gbuffer.trace";
+
+/// `passes_ms` of frames with `map` shadows and a rasterized G-buffer (see
+/// `check_scopes`).
 fn check_passes(p: &Value, not_run: &[&str]) {
-    check_scopes(p, &[not_run, &TRACED_SHADOW_SCOPES].concat());
+    check_scopes(p, &[not_run, &TRACED_SHADOW_SCOPES, &[RAYS_VISIBILITY]].concat());
 }
 
 /// `passes_ms` has every scope of the frame, in frame order; `null` where not run
@@ -124,7 +128,7 @@ fn render_report_follows_the_schema() {
             "--height",
             "32",
             "--frames",
-            "2",
+            "8",
             "--warmup",
             "0",
             "--mode",
@@ -139,7 +143,32 @@ fn render_report_follows_the_schema() {
         (r["settings"]["width"].as_u64(), r["settings"]["mode"].as_str()),
         (Some(48), Some("ssr"))
     );
-    check_passes(&r["passes_ms"], &["ssr.compact", "rt.reflect"]);
+    // The default adaptive G-buffer prices both ways in the first frames (three checked
+    // frames each): both G-buffer scopes ran.
+    check_scopes(
+        &r["passes_ms"],
+        &[&["ssr.compact", "rt.reflect"][..], &TRACED_SHADOW_SCOPES].concat(),
+    );
+    let v = &r["visibility"];
+    assert_eq!(v["recheck_every"], speculum::renderer::stages::RECHECK_EVERY, "{v}");
+    let ways = v["ways"].as_array().unwrap();
+    let names: Vec<&str> = ways.iter().map(|w| w["way"].as_str().unwrap()).collect();
+    assert_eq!(names, ["raster", "rays"]);
+    for w in ways {
+        assert!(w["frames"].as_u64().unwrap() >= 3, "{v}");
+    }
+    let checked = r["timing"]["discarded"] == 0 && r["timing"]["failed"] == 0;
+    if checked {
+        // Every frame checked: both ways priced, and the frames take the cheaper (or the
+        // one in use within `HOLD` of it).
+        let ms: Vec<f64> = ways.iter().map(|w| w["ms"].as_f64().expect("priced")).collect();
+        let (taken, other) = match v["way"].as_str().unwrap() {
+            "raster" => (ms[0], ms[1]),
+            "rays" => (ms[1], ms[0]),
+            w => panic!("{w}"),
+        };
+        assert!(taken * (1.0 - speculum::renderer::stages::HOLD) <= other, "{v}");
+    }
     check_stat(&r["frame_ms"], "frame_ms");
     assert_eq!(r["traced_pixels"], 0, "ssr mode traces nothing");
     assert_eq!(
@@ -202,7 +231,12 @@ fn bench_reports_follow_the_schema() {
     let small = ["--width", "48", "--height", "32"];
     // A fixed exchange rate: the adaptive hybrid marches in every measured frame (with
     // a measured one it may not, and its march scopes may be null).
-    std::fs::write(dir.path().join("s.json"), r#"{"exchange_rate": 0.1}"#).unwrap();
+    // A rasterized G-buffer: the adaptive one may not have priced rays yet.
+    std::fs::write(
+        dir.path().join("s.json"),
+        r#"{"exchange_rate": 0.1, "visibility": "raster"}"#,
+    )
+    .unwrap();
     let modes = speculum(
         &[
             &["bench", "modes", "--rounds", "2", "--warmup", "0", "--json", "r.json"][..],
@@ -238,6 +272,7 @@ fn bench_reports_follow_the_schema() {
     let shadows = speculum(
         &[
             &["bench", "shadows", "--rounds", "2", "--warmup", "0", "--json", "r.json"][..],
+            &["--settings", "s.json"],
             &small,
         ]
         .concat(),
@@ -253,9 +288,9 @@ fn bench_reports_follow_the_schema() {
             assert!(s["vs_rays"][k].is_number(), "{k} in {s}");
         }
         let not_run: &[&str] = match s["shadows"].as_str().unwrap() {
-            "map" => &TRACED_SHADOW_SCOPES,
-            "rays" => &["shadow.map"],
-            _ => &[],
+            "map" => &["shadow.classify", "shadow.compact", "shadow.trace", RAYS_VISIBILITY],
+            "rays" => &["shadow.map", RAYS_VISIBILITY],
+            _ => &[RAYS_VISIBILITY],
         };
         assert_eq!(s["trace_over_rays"].is_null(), s["shadows"] == "map");
         check_scopes(&s["passes_ms"], not_run);
@@ -263,7 +298,12 @@ fn bench_reports_follow_the_schema() {
     std::fs::remove_file(dir.path().join("r.json")).unwrap();
 
     let reflect = speculum(
-        &[&["bench", "reflect", "--frames", "1", "--json", "r.json"][..], &small].concat(),
+        &[
+            &["bench", "reflect", "--frames", "1", "--json", "r.json"][..],
+            &["--settings", "s.json"],
+            &small,
+        ]
+        .concat(),
         dir.path(),
     );
     check_header(&reflect, "bench.reflect", true);

@@ -84,11 +84,12 @@ fn far_dynamic_scenes_render_the_same() {
     let ctx = common::context();
     let offset = glam::Vec3::new(1e4, -3e3, 2e4);
     let frame20 = |scene: &Scene| {
-        // A fixed exchange rate: a measured one follows each run's timings.
+        // A fixed exchange rate and G-buffer: measured ones follow each run's timings.
         let settings = Settings {
             width: SIZE.0,
             height: SIZE.1,
             exchange_rate: 0.5,
+            visibility: speculum::settings::Visibility::Raster,
             ..Default::default()
         };
         let mut r = Renderer::new(&ctx, scene, &settings).unwrap();

@@ -79,7 +79,10 @@ pub struct TimingsReport {
     pub hybrid: Option<HybridSplit>,
     /// With `visibility = adaptive`: the G-buffer's ways, their frames and prices, and
     /// the one the frames take; `null` with a fixed `visibility`.
-    pub visibility: Option<VisibilitySplit>,
+    pub visibility: Option<StageReport>,
+    /// With `shadows = adaptive`: the same of the shadows' sources (`shadows` is then
+    /// `adaptive`); `null` with a fixed source.
+    pub shadow_ways: Option<StageReport>,
     /// The self-check of every measured frame, the reference's included (`vk::timing`).
     pub timing: TimingCheck,
 }
@@ -121,21 +124,42 @@ pub struct PathReport {
     pub ms: Option<f64>,
 }
 
-/// The adaptive frame's G-buffer (`visibility = adaptive`, `renderer::stages`).
+/// One adaptive stage of the frame (`renderer::stages`): `visibility = adaptive`
+/// (ways `raster`, `rays`) or `shadows = adaptive` (`hybrid`, `rays`).
 #[derive(Clone, Debug, Serialize)]
-pub struct VisibilitySplit {
-    /// The way the frames take (`raster` or `rays`): the cheaper once both are priced,
-    /// until then the one being priced.
+pub struct StageReport {
+    /// The way the frames take: the cheapest once every way is priced, until then the
+    /// one being priced.
     pub way: String,
     /// Each way's frames since the settings last changed, and its price (the median of
-    /// its last checked `gbuffer` or `gbuffer.trace` times, ms) once it has
-    /// `stages::SAMPLES` of them.
+    /// its last checked times of the stage's rows, ms) once it has `stages::SAMPLES` of
+    /// them.
     pub ways: Vec<WayReport>,
-    /// Once both are priced, one frame in this many takes the other way.
+    /// Once every way is priced, one frame in this many takes another.
     pub recheck_every: u32,
 }
 
-impl VisibilitySplit {
+impl StageReport {
+    /// `stage`'s ways, named `names`, before frame `index` is recorded.
+    pub fn of<const N: usize>(stage: &crate::renderer::stages::Stage<N>, names: [&str; N], index: u32) -> Self {
+        let way = if stage.priced() {
+            stage.chosen
+        } else {
+            stage.frame_way(index)
+        };
+        Self {
+            way: names[way].to_string(),
+            ways: (0..N)
+                .map(|w| WayReport {
+                    way: names[w].to_string(),
+                    frames: stage.frames[w],
+                    ms: stage.price(w),
+                })
+                .collect(),
+            recheck_every: crate::renderer::stages::RECHECK_EVERY,
+        }
+    }
+
     /// One line: each way's frames and price, and the way the frames take.
     pub fn summary(&self) -> String {
         let ways: Vec<String> = self
@@ -155,7 +179,7 @@ impl VisibilitySplit {
     }
 }
 
-/// One way of an adaptive stage in `VisibilitySplit`.
+/// One way of an adaptive stage in `StageReport`.
 #[derive(Clone, Debug, Serialize)]
 pub struct WayReport {
     pub way: String,
@@ -429,6 +453,7 @@ fn finish(
         rt_frame_ms = Some(frame_stat(&ref_timings));
         reference_rgba = Some(reference);
     }
+    let (visibility, shadow_ways) = stage_reports(renderer, settings);
     let report = TimingsReport {
         header: Header::new("render", Some(ctx), Some(settings)),
         scene: scene.name.clone(),
@@ -463,7 +488,8 @@ fn finish(
             None => None,
         },
         hybrid: hybrid_split(renderer, settings)?,
-        visibility: visibility_split(renderer, settings),
+        visibility,
+        shadow_ways,
         timing: Timings::check_all(&[timings, ref_timings]),
     };
     Ok(Rendered {
@@ -486,30 +512,17 @@ pub fn render(
     render_frames(ctx, scene, settings, plan, tick, None)
 }
 
-/// The adaptive G-buffer's `VisibilitySplit` (`None` with a fixed `visibility`).
-pub(crate) fn visibility_split(renderer: &Renderer, settings: &Settings) -> Option<VisibilitySplit> {
-    use crate::renderer::stages::RECHECK_EVERY;
-    use crate::settings::Visibility;
-    if settings.visibility != Visibility::Adaptive {
-        return None;
-    }
-    let stage = renderer.visibility_ways();
-    let next = stage.frame_way(renderer.frame_index());
-    Some(VisibilitySplit {
-        way: Visibility::FIXED[if stage.priced() { stage.chosen } else { next }]
-            .name()
-            .to_string(),
-        ways: Visibility::FIXED
-            .iter()
-            .enumerate()
-            .map(|(w, v)| WayReport {
-                way: v.name().to_string(),
-                frames: stage.frames[w],
-                ms: stage.price(w),
-            })
-            .collect(),
-        recheck_every: RECHECK_EVERY,
-    })
+/// The adaptive stages' reports (`None` where the setting is fixed): the G-buffer's
+/// and the shadows'.
+pub(crate) fn stage_reports(renderer: &Renderer, settings: &Settings) -> (Option<StageReport>, Option<StageReport>) {
+    use crate::settings::{Shadows, Visibility};
+    let stages = renderer.stages();
+    let index = renderer.frame_index();
+    let visibility = (settings.visibility == Visibility::Adaptive)
+        .then(|| StageReport::of(&stages.visibility, Visibility::FIXED.map(Visibility::name), index));
+    let shadows = (settings.shadows == Shadows::Adaptive)
+        .then(|| StageReport::of(&stages.shadows, Shadows::ADAPTIVE.map(Shadows::name), index));
+    (visibility, shadows)
 }
 
 /// The last frame's `HybridSplit`, in the modes that have one (`hybrid`, `provenance`).

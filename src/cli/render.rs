@@ -326,6 +326,9 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
     if let Some(v) = &r.visibility {
         text.line(format_args!("  visibility adaptive: {}", v.summary()));
     }
+    if let Some(v) = &r.shadow_ways {
+        text.line(format_args!("  shadows adaptive: {}", v.summary()));
+    }
     text.line(format_args!(
         "  {} shadows: lit pixels {}, shadow rays {} ({:.1}%)",
         r.shadows,

@@ -172,7 +172,7 @@ impl Demo {
         let cmdline = self.command_line();
         let gpu: Vec<f64> = self.history.gpu_ms.iter().copied().collect();
         let wall: Vec<f64> = self.history.wall_ms.iter().copied().collect();
-        let visibility = crate::headless::visibility_split(&self.renderer, &settings);
+        let stages = crate::headless::stage_reports(&self.renderer, &settings);
         let info = hud::HudInfo {
             scene: &self.scene_name,
             device: &self.ctx.device_name,
@@ -185,7 +185,7 @@ impl Demo {
             wall_ms: &wall,
             passes: &passes,
             stats: self.stats.as_ref(),
-            visibility: visibility.as_ref(),
+            stages: &stages,
             camera: self.camera.camera(),
             speed: self.camera.speed,
             dynamic: self.renderer.is_dynamic(),

@@ -3,6 +3,7 @@
 //! UI pass, through the same paths as keys and scripts.
 
 use super::script::Action;
+use crate::headless::StageReport;
 use crate::reflection_maps::{FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
 use crate::settings::{Applies, Field, Hud, HybridPolicy, Mode, Settings, Shadows, Tracer, Value, Visibility, FIELDS};
@@ -28,8 +29,9 @@ pub struct HudInfo<'a> {
     /// Median ms per pass over the history, in frame order.
     pub passes: &'a [(&'static str, f64)],
     pub stats: Option<&'a super::Stats>,
-    /// `visibility = adaptive`: the G-buffer's ways and prices (`None` when fixed).
-    pub visibility: Option<&'a crate::headless::VisibilitySplit>,
+    /// The adaptive stages' ways and prices: the G-buffer's and the shadows' (`None`
+    /// where the setting is fixed).
+    pub stages: &'a (Option<StageReport>, Option<StageReport>),
     pub camera: Camera,
     pub speed: f32,
     pub dynamic: bool,
@@ -191,6 +193,9 @@ fn mode_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: &mut
                 .on_hover_text(sh.about());
         }
     });
+    if let Some(v) = &info.stages.1 {
+        ui.label(format!("  {}", v.summary()));
+    }
     ui.horizontal(|ui| {
         ui.label("visibility");
         for v in Visibility::ALL {
@@ -198,7 +203,7 @@ fn mode_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: &mut
                 .on_hover_text(v.about());
         }
     });
-    if let Some(v) = info.visibility {
+    if let Some(v) = &info.stages.0 {
         ui.label(format!("  {}", v.summary()));
     }
     ui.horizontal(|ui| {
@@ -436,17 +441,11 @@ mod tests {
         let ctx = egui::Context::default();
         let settings = Settings::default();
         let camera = Camera::framing(glam::Vec3::splat(-1.0), glam::Vec3::ONE);
-        let visibility = crate::headless::VisibilitySplit {
-            way: "raster".into(),
-            ways: ["raster", "rays"]
-                .map(|w| crate::headless::WayReport {
-                    way: w.into(),
-                    frames: 3,
-                    ms: Some(1.5),
-                })
-                .into(),
-            recheck_every: 64,
-        };
+        let stage = crate::renderer::stages::Stage::<2>::new(0);
+        let stages = (
+            Some(StageReport::of(&stage, ["raster", "rays"], 0)),
+            Some(StageReport::of(&stage, ["hybrid", "rays"], 0)),
+        );
         let info = HudInfo {
             scene: "room",
             device: "test",
@@ -459,7 +458,7 @@ mod tests {
             wall_ms: &[16.0],
             passes: &[("gbuffer", 1.0)],
             stats: None,
-            visibility: Some(&visibility),
+            stages: &stages,
             camera,
             speed: 1.0,
             dynamic: true,

@@ -8,6 +8,7 @@
 use super::exchange::{FrameCounts, Path};
 use super::gpu_scene::DynamicGeometry;
 use super::plan::{FramePlan, Motion, Previous, Ways};
+use super::stages::Taken;
 use super::table::{Row, FRAME};
 use super::tracer::{FrameTracer, Kernels};
 use super::{FrameSlot, Lighting, Reflections, Renderer};
@@ -23,7 +24,7 @@ use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_trace::MarchInputs;
 use crate::passes::{SceneGeometry, Surfaces};
-use crate::settings::{Hybrid, Settings, SsrParams, Visibility};
+use crate::settings::{Hybrid, Settings, SsrParams};
 use crate::tracers::khr::KhrScene;
 use crate::tracers::lbvh::LbvhBuilder;
 use crate::tracers::{TraceScene, Traceable, Tracer};
@@ -122,7 +123,7 @@ impl Renderer {
     /// This frame's plan (`plan::FramePlan`): whether it steps the scene (taking a
     /// single step asked for), what moves, and the adaptive hybrid's path (counted
     /// among the paths taken).
-    fn plan_frame(&mut self) -> FramePlan {
+    fn plan_frame(&mut self) -> (FramePlan, Taken) {
         let advance = !self.paused || std::mem::take(&mut self.step_once);
         let dy = self.dynamic.as_ref();
         let motion = Motion {
@@ -141,15 +142,14 @@ impl Renderer {
         if hybrid.adaptive() {
             self.paths.frames[path as usize] += 1;
         }
-        let way = self.visibility.frame_way(self.frame_index);
-        if self.settings.visibility == Visibility::Adaptive {
-            self.visibility.count(way);
-        }
+        let (visibility, shadows, taken) = self.stages.frame_ways(&self.settings, self.frame_index);
         let ways = Ways {
             path,
-            visibility: Visibility::FIXED[way],
+            visibility,
+            shadows,
         };
-        FramePlan::new(&self.settings, motion, ways, self.exchange.applied, self.fail_mask_view)
+        let plan = FramePlan::new(&self.settings, motion, ways, self.exchange.applied, self.fail_mask_view);
+        (plan, taken)
     }
 
     /// Records one frame into `cmd` (begun, not ended) with frame slot `slot`'s queries
@@ -159,7 +159,8 @@ impl Renderer {
     /// seen the slot's previous frame finish (a fence) before; several slots' frames may
     /// be in flight on the queue at once.
     pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
-        let plan = self.plan_frame();
+        let (plan, taken) = self.plan_frame();
+        self.frame_shadows = plan.shadows;
         let Self {
             ctx,
             settings: st,
@@ -178,12 +179,10 @@ impl Renderer {
             timer,
             sim_ms,
             counts,
-            visibility,
+            taken: slot_taken,
         } = &mut slots[slot];
-        // An adaptive frame's G-buffer way, priced when the frame has finished.
-        *visibility = (st.visibility == Visibility::Adaptive)
-            .then(|| Visibility::FIXED.iter().position(|&v| v == plan.visibility))
-            .flatten();
+        // The adaptive stages' ways, priced when the frame has finished.
+        *slot_taken = taken;
         let d = &ctx.device;
         let mut f = FrameRecorder::begin(timer, cmd, plan.rows());
         // This frame's uniforms: the view's, and where the glossy rays' sequence is.
@@ -287,7 +286,7 @@ fn record_lighting<'a, T: Tracer>(
     i: &FrameInputs<'a>,
     t: &Traced<'a, T>,
 ) {
-    let (ubo, g, shadows) = (i.ubo, &l.gbuffer.out, i.st.shadows);
+    let (ubo, g, shadows) = (i.ubo, &l.gbuffer.out, plan.shadows);
     if plan.runs(Row::ShadowMap) {
         f.row(Row::ShadowMap, || l.shadow.record(cmd, ubo, &i.geometries));
     }
@@ -378,7 +377,7 @@ fn record_reflections<'a, T: Tracer>(
         };
         let kernel = &t.kernels.reflect;
         f.row(Row::RtReflect, || {
-            rt.record(cmd, kernel, &inputs, st.max_bounces, st.shadows)
+            rt.record(cmd, kernel, &inputs, st.max_bounces, plan.shadows)
         });
     }
     if plan.counts {

@@ -41,7 +41,7 @@ use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::scene::{Camera, Scene};
-use crate::settings::{self, Applies, Mode, Settings};
+use crate::settings::{self, Applies, Mode, Settings, Shadows};
 use crate::tracers::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits, StaticLayout};
 use crate::tracers::Traceable;
 use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
@@ -50,7 +50,7 @@ use exchange::{ExchangeRate, FrameCounts, Path, Paths};
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
 pub use passes::{Lighting, Reflections};
-use stages::Stage;
+use stages::{Stages, Taken};
 use std::sync::Arc;
 use tracer::FrameTracer;
 
@@ -61,8 +61,8 @@ struct FrameSlot {
     sim_ms: Option<f64>,
     /// A hybrid frame's path and counts, for the exchange rate and the paths' prices.
     counts: FrameCounts,
-    /// An adaptive frame's G-buffer way (`Visibility::FIXED`), for its price.
-    visibility: Option<usize>,
+    /// The ways the frame took in its adaptive stages, for their prices.
+    taken: Taken,
 }
 
 impl FrameSlot {
@@ -71,7 +71,7 @@ impl FrameSlot {
             timer: GpuTimer::new(ctx, SCOPES.len() as u32)?,
             sim_ms: None,
             counts: FrameCounts::new(ctx)?,
-            visibility: None,
+            taken: Taken::default(),
         })
     }
 }
@@ -85,10 +85,6 @@ fn extent(settings: &Settings) -> vk::Extent2D {
 
 /// The glossy rays' sample stream of a reference renderer (`Renderer::reference`).
 const REFERENCE_STREAM: u32 = 1;
-
-/// The frame (modulo `stages::RECHECK_EVERY`) on which an adaptive G-buffer's frames
-/// recheck the other way: apart from the hybrid's recheck (the last of the 64).
-const VISIBILITY_RECHECK: u32 = 31;
 
 pub struct Renderer {
     ctx: Arc<Context>,
@@ -134,8 +130,10 @@ pub struct Renderer {
     /// The adaptive hybrid's paths: marching with the tiles, or idle (tracing every
     /// pixel) until the next probe frame; and what each has cost.
     paths: Paths,
-    /// `visibility = adaptive`: the G-buffer's ways (`Visibility::FIXED`) and prices.
-    visibility: Stage<2>,
+    /// `visibility` and `shadows = adaptive`: their ways and prices.
+    stages: Stages,
+    /// The last recorded frame's shadows (`shadows = adaptive`: its way).
+    frame_shadows: Shadows,
     cmd: vk::CommandBuffer,
 }
 
@@ -214,7 +212,11 @@ impl Renderer {
             paused: false,
             exchange: ExchangeRate::default(),
             paths: Paths::default(),
-            visibility: Stage::new(VISIBILITY_RECHECK),
+            stages: Stages::default(),
+            frame_shadows: match settings.shadows {
+                Shadows::Adaptive => Shadows::ADAPTIVE[0],
+                fixed => fixed,
+            },
             step_once: false,
             cmd: ctx.allocate_command_buffer()?,
         })
@@ -300,7 +302,7 @@ impl Renderer {
         // Other settings, other costs: the adaptive hybrid prices its paths anew.
         if settings != self.settings {
             self.paths = Paths::default();
-            self.visibility = Stage::new(VISIBILITY_RECHECK);
+            self.stages = Stages::default();
         }
         self.settings = settings;
         self.uniforms = self.view.uniforms(&self.settings);
@@ -404,10 +406,11 @@ impl Renderer {
         self.paths
     }
 
-    /// `visibility = adaptive`: the G-buffer's ways (`Visibility::FIXED` order), which
-    /// one the frames take, and their prices.
-    pub fn visibility_ways(&self) -> Stage<2> {
-        self.visibility
+    /// The adaptive stages (`visibility`, `shadows`): each one's ways (in
+    /// `Visibility::FIXED` and `Shadows::ADAPTIVE` order), which one the frames take,
+    /// and their prices.
+    pub fn stages(&self) -> Stages {
+        self.stages
     }
 
     /// The index of the next frame to be recorded.
@@ -551,14 +554,7 @@ impl Renderer {
             let scopes = table::reflection_rows().iter().flat_map(|r| r.scopes().iter().copied());
             exchange::take_frame((&mut self.exchange, &mut self.paths), recorded, &times, (FRAME, scopes));
         }
-        if let Some(way) = s.visibility.take() {
-            let row = [Row::GBuffer, Row::GBufferTrace][way];
-            let ms = times
-                .problem
-                .is_none()
-                .then(|| row.scopes().iter().filter_map(|&n| times.get(n)).sum());
-            self.visibility.take(way, ms);
-        }
+        self.stages.take(std::mem::take(&mut s.taken), &times);
         Ok(times)
     }
 

@@ -10,7 +10,7 @@ use super::table::Row;
 use crate::passes::compose::ComposeMode;
 use crate::passes::reflect_merge::BlurParams;
 use crate::passes::ssr_trace::Classify;
-use crate::settings::{Hybrid, Mode, Settings, Visibility};
+use crate::settings::{Hybrid, Mode, Settings, Shadows, Visibility};
 
 /// What moves in the scene, as the frame steps it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -61,6 +61,8 @@ pub struct FramePlan {
     pub compose: ComposeMode,
     /// How the G-buffer is made this frame.
     pub visibility: Visibility,
+    /// Where this frame's shadows come from (never `Adaptive`: its way).
+    pub shadows: Shadows,
     shadow_map: bool,
     shadow_rays: bool,
     hiz: bool,
@@ -68,12 +70,14 @@ pub struct FramePlan {
 }
 
 /// The ways the adaptive stages chose for a frame: the hybrid's path (read where
-/// `Hybrid::of(st)` is adaptive) and the G-buffer's (read where `visibility` is
-/// adaptive; raster or rays).
+/// `Hybrid::of(st)` is adaptive), the G-buffer's (read where `visibility` is adaptive;
+/// raster or rays) and the shadows' (read where `shadows` is adaptive; one of
+/// `Shadows::ADAPTIVE`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Ways {
     pub path: Path,
     pub visibility: Visibility,
+    pub shadows: Shadows,
 }
 
 impl FramePlan {
@@ -91,6 +95,14 @@ impl FramePlan {
             visibility,
             Visibility::Adaptive,
             "an adaptive frame's way is raster or rays"
+        );
+        let shadows = match st.shadows {
+            Shadows::Adaptive => ways.shadows,
+            fixed => fixed,
+        };
+        assert!(
+            shadows != Shadows::Adaptive,
+            "an adaptive frame's shadows are one source"
         );
         let hybrid = Hybrid::of(st);
         let path = if hybrid.adaptive() { path } else { Path::March };
@@ -138,8 +150,9 @@ impl FramePlan {
                 Mode::Ssr | Mode::Hybrid | Mode::Rt => ComposeMode::Reflect,
             },
             visibility,
-            shadow_map: st.shadows.uses_map(),
-            shadow_rays: st.shadows.traces(),
+            shadows,
+            shadow_map: shadows.uses_map(),
+            shadow_rays: shadows.traces(),
             hiz: marches && st.ssr_hiz,
             traces: mode.traces(),
         }
@@ -188,13 +201,21 @@ impl FramePlan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::settings::{HybridPolicy, Shadows};
+    use crate::settings::HybridPolicy;
     use crate::shader_defines::TILE_ONE;
     use Row::*;
 
+    /// Ways no fixed setting reads.
+    fn ways(path: Path) -> Ways {
+        Ways {
+            path,
+            visibility: Visibility::Raster,
+            shadows: Shadows::Hybrid,
+        }
+    }
+
     fn plan(st: &Settings, motion: Motion, path: Path) -> FramePlan {
-        let visibility = Visibility::Raster;
-        FramePlan::new(st, motion, Ways { path, visibility }, 37, false)
+        FramePlan::new(st, motion, ways(path), 37, false)
     }
 
     fn settings(mode: Mode) -> Settings {
@@ -358,8 +379,8 @@ mod tests {
                 assert_eq!(rays, swapped, "{mode:?}");
                 // Adaptive: the frame's way; a fixed setting ignores it.
                 let ways = Ways {
-                    path: Path::March,
                     visibility: Visibility::Rays,
+                    ..ways(Path::March)
                 };
                 let adaptive = FramePlan::new(&settings(mode), motion, ways, 37, false);
                 assert_eq!(settings(mode).visibility, Visibility::Adaptive);
@@ -384,6 +405,30 @@ mod tests {
         let p = plan(&rays, STILL, Path::March);
         assert!(p.shadow_rays() && !p.runs(ShadowMap));
         assert!(p.runs(ShadowClassify) && p.runs(ShadowCompact) && p.runs(ShadowTrace));
+        // Adaptive shadows: the frame's way, its rows, and the kernels' value.
+        let adaptive = Settings {
+            shadows: Shadows::Adaptive,
+            ..settings(Mode::Rt)
+        };
+        for way in Shadows::ADAPTIVE {
+            let fixed = Settings {
+                shadows: way,
+                ..settings(Mode::Rt)
+            };
+            let p = FramePlan::new(
+                &adaptive,
+                STILL,
+                Ways {
+                    shadows: way,
+                    ..ways(Path::March)
+                },
+                37,
+                false,
+            );
+            assert_eq!(p.rows(), plan(&fixed, STILL, Path::March).rows(), "{way:?}");
+            assert_eq!((p.shadows, p.runs(ShadowMap)), (way, way == Shadows::Hybrid));
+        }
+        assert_eq!(p.shadows, Shadows::Rays, "a fixed source ignores the way");
         let glossy = Settings {
             glossy: true,
             denoise_radius: 0,
@@ -401,11 +446,7 @@ mod tests {
             plan(&settings(Mode::Raster), STILL, Path::March).compose,
             ComposeMode::Plain
         );
-        let ways = Ways {
-            path: Path::March,
-            visibility: Visibility::Raster,
-        };
-        let view = FramePlan::new(&settings(Mode::Hybrid), STILL, ways, 0, true);
+        let view = FramePlan::new(&settings(Mode::Hybrid), STILL, ways(Path::March), 0, true);
         assert_eq!(view.compose, ComposeMode::FailMask);
         assert_eq!(
             plan(&settings(Mode::Provenance), STILL, Path::March).compose,

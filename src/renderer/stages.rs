@@ -1,7 +1,8 @@
 //! The frame's adaptive stages: a stage that can be made more than one way
-//! (`visibility = adaptive`: the G-buffer rasterized or by primary rays) is priced
-//! from the frame's own self-checked timestamps, as the adaptive hybrid prices its
-//! paths (`exchange`), and the frames take the cheaper way.
+//! (`visibility = adaptive`: the G-buffer rasterized or by primary rays; `shadows =
+//! adaptive`: hybrid or ray-traced shadows) is priced from the frame's own
+//! self-checked timestamps, as the adaptive hybrid prices its paths (`exchange`), and
+//! the frames take the cheaper way.
 //!
 //! Each way is tried in turn until it has `SAMPLES` checked frames (the first frames
 //! of a renderer, or after its settings change); its price is the median of its last
@@ -11,6 +12,10 @@
 //! a moving camera, a scene that grows). Another way is taken only once it undercuts
 //! the one in use by more than `HOLD` of its price, so timing noise does not flip the
 //! frames between two ways that cost the same.
+
+use super::table::Row;
+use crate::settings::{Settings, Shadows, Visibility};
+use crate::vk::TimerReadout;
 
 /// Checked frames a way needs before it is priced.
 pub const SAMPLES: u32 = 3;
@@ -100,6 +105,92 @@ impl<const N: usize> Stage<N> {
     /// Whether every way is priced (the frames take the chosen one).
     pub fn priced(&self) -> bool {
         (0..N).all(|w| self.price(w).is_some())
+    }
+}
+
+/// The rows a shadow source's price covers: the map, the rays' three passes and the
+/// direct light that reads their visibility (the shadow rays at reflection hits, inside
+/// `rt.reflect`, are not priced: they cost alike where the reflections trace few hits).
+const SHADOW_ROWS: [Row; 5] = [
+    Row::ShadowMap,
+    Row::ShadowClassify,
+    Row::ShadowCompact,
+    Row::ShadowTrace,
+    Row::LightDirect,
+];
+
+/// The rows way `way` of the G-buffer (`Visibility::FIXED` order) is priced by.
+const VISIBILITY_ROWS: [[Row; 1]; 2] = [[Row::GBuffer], [Row::GBufferTrace]];
+
+/// The frame's adaptive stages, besides the hybrid's paths: the G-buffer's ways
+/// (`Visibility::FIXED`) and the shadows' (`Shadows::ADAPTIVE`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stages {
+    pub visibility: Stage<2>,
+    pub shadows: Stage<2>,
+}
+
+/// The ways one frame took in its adaptive stages (`None`: that stage is fixed), to
+/// price once the frame has finished.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Taken {
+    pub visibility: Option<usize>,
+    pub shadows: Option<usize>,
+}
+
+impl Default for Stages {
+    fn default() -> Self {
+        // Each stage rechecks on its own frame of the 64, apart from the hybrid's
+        // probe (the last one).
+        Self {
+            visibility: Stage::new(31),
+            shadows: Stage::new(47),
+        }
+    }
+}
+
+impl Stages {
+    /// Frame `index`'s G-buffer and shadows under `st`: each stage's way where it is
+    /// adaptive (counted as taken), else the setting's.
+    pub fn frame_ways(&mut self, st: &Settings, index: u32) -> (Visibility, Shadows, Taken) {
+        let mut taken = Taken::default();
+        let visibility = match st.visibility {
+            Visibility::Adaptive => {
+                let way = self.visibility.frame_way(index);
+                self.visibility.count(way);
+                taken.visibility = Some(way);
+                Visibility::FIXED[way]
+            }
+            fixed => fixed,
+        };
+        let shadows = match st.shadows {
+            Shadows::Adaptive => {
+                let way = self.shadows.frame_way(index);
+                self.shadows.count(way);
+                taken.shadows = Some(way);
+                Shadows::ADAPTIVE[way]
+            }
+            fixed => fixed,
+        };
+        (visibility, shadows, taken)
+    }
+
+    /// After a frame that took `taken`: each adaptive stage's rows' time, where the
+    /// frame's timings passed their self-check.
+    pub fn take(&mut self, taken: Taken, times: &TimerReadout) {
+        let ms = |rows: &[Row]| {
+            let scopes = rows.iter().flat_map(|r| r.scopes().iter());
+            times
+                .problem
+                .is_none()
+                .then(|| scopes.filter_map(|&n| times.get(n)).sum::<f64>())
+        };
+        if let Some(way) = taken.visibility {
+            self.visibility.take(way, ms(&VISIBILITY_ROWS[way]));
+        }
+        if let Some(way) = taken.shadows {
+            self.shadows.take(way, ms(&SHADOW_ROWS));
+        }
     }
 }
 

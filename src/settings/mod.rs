@@ -189,19 +189,25 @@ impl Visibility {
 }
 
 /// Where the sun's shadows come from, on the visible surface and at every ray-traced
-/// reflection hit alike (`about` says what each is).
+/// reflection hit alike (`about` says what each is). `adaptive` is not a source: each
+/// frame takes one of `ADAPTIVE` (its plan's `shadows`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Shadows {
     Map,
     Rays,
     Hybrid,
+    Adaptive,
 }
 
 impl Shadows {
-    pub const ALL: [Shadows; 3] = [Shadows::Map, Shadows::Rays, Shadows::Hybrid];
+    pub const ALL: [Shadows; 4] = [Shadows::Map, Shadows::Rays, Shadows::Hybrid, Shadows::Adaptive];
+    /// The sources `adaptive` prices, in the order it tries them: the two of equal
+    /// quality (`hybrid` traces wherever the map is unsure, and there is exactly `rays`).
+    pub const ADAPTIVE: [Shadows; 2] = [Shadows::Hybrid, Shadows::Rays];
 
-    /// Whether the shadow map is rendered (every mode but `rays` reads it).
+    /// Whether the shadow map is rendered (every source but `rays` reads it; an
+    /// adaptive frame's is its way's).
     pub fn uses_map(self) -> bool {
         self != Shadows::Rays
     }
@@ -217,6 +223,7 @@ impl Shadows {
             Shadows::Map => "map",
             Shadows::Rays => "rays",
             Shadows::Hybrid => "hybrid",
+            Shadows::Adaptive => "adaptive",
         }
     }
 
@@ -228,15 +235,21 @@ impl Shadows {
             Shadows::Hybrid => {
                 "The shadow map where every PCF texel agrees and none is near the compare; a shadow ray elsewhere"
             }
+            Shadows::Adaptive => {
+                "Hybrid or rays (the same shadows where hybrid traces), whichever the frame's own timestamps \
+                 price cheaper on this device (each priced over its first frames, rechecked one frame in 64)"
+            }
         }
     }
 
-    /// The value the kernels read (`SHADOWS_*` in shader_defines).
+    /// The value the kernels read (`SHADOWS_*` in shader_defines): a frame's own
+    /// source, never `Adaptive` (the frame's plan resolves it).
     pub fn gpu(self) -> u32 {
         match self {
             Shadows::Map => SHADOWS_MAP,
             Shadows::Rays => SHADOWS_RAYS,
             Shadows::Hybrid => SHADOWS_HYBRID,
+            Shadows::Adaptive => panic!("an adaptive frame's shadows are resolved by its plan"),
         }
     }
 }
@@ -398,7 +411,9 @@ settings_table! {
     /// Where shadows come from, on the visible surface and at every ray-traced
     /// reflection hit: the shadow map (cheap, limited by its resolution and bias), a
     /// shadow ray per lit pixel (exact, one any-hit traversal each), or the hybrid (the
-    /// map where it is sure, rays where it is not).
+    /// map where it is sure, rays where it is not). `adaptive` prices the two of equal
+    /// quality, hybrid and rays, from the frame's own timestamps (their first frames,
+    /// then one frame in 64) and takes the cheaper.
     shadows: Shadows = Shadows::Map, Range::Any, Hud::Own, NextFrame;
     /// How the G-buffer is made: rasterized (vertex and fragment work, which a GPU that
     /// runs them on few units pays for), or one primary ray a pixel through the tracer

@@ -34,6 +34,7 @@ mod scale;
 mod shadows;
 mod sim;
 mod ssr;
+mod stages;
 mod timing;
 mod trace;
 mod tune;

@@ -1,0 +1,82 @@
+//! The frame's adaptive stages (`renderer::stages`) on a renderer: `visibility` and
+//! `shadows = adaptive` try each of their ways over their first frames, each frame
+//! records its way's rows and no other, and once every way is priced the frames take
+//! the cheapest (within `HOLD` of the one in use). The pricing itself, frame by frame
+//! against made-up times: the unit tests in `src/renderer/stages.rs`.
+
+use crate::common;
+
+use speculum::renderer::stages::{Stage, HOLD, SAMPLES};
+use speculum::settings::{Mode, Shadows, Visibility};
+use speculum::{Renderer, Settings};
+
+/// The cheapest way is the one taken, or the one in use is within `HOLD` of it.
+fn takes_the_cheapest<const N: usize>(stage: &Stage<N>, what: &str) {
+    let prices: Vec<f64> = (0..N).map(|w| stage.price(w).expect("priced")).collect();
+    let cheapest = prices.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(
+        prices[stage.chosen] * (1.0 - HOLD) <= cheapest,
+        "{what}: {prices:?}, chosen {}",
+        stage.chosen
+    );
+}
+
+#[test]
+fn adaptive_stages_try_each_way_then_take_the_cheapest() {
+    let ctx = common::context();
+    let scene = speculum::scene::builtin::room().unwrap();
+    let settings = Settings {
+        width: 160,
+        height: 96,
+        mode: Mode::Hybrid,
+        visibility: Visibility::Adaptive,
+        shadows: Shadows::Adaptive,
+        exchange_rate: 0.5,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&ctx, &scene, &settings).unwrap();
+    let mut frames = 0;
+    while !(r.stages().visibility.priced() && r.stages().shadows.priced()) {
+        assert!(frames < 40, "not priced in 40 frames: {:?}", r.stages());
+        let before = r.stages();
+        let visibility = Visibility::FIXED[before.visibility.frame_way(r.frame_index())];
+        let shadows = Shadows::ADAPTIVE[before.shadows.frame_way(r.frame_index())];
+        let times = r.render_frame().unwrap();
+        frames += 1;
+        // The frame's rows are its ways'.
+        let ran = |scope: &str| times.get(scope).is_some();
+        assert_eq!(
+            (ran("gbuffer"), ran("gbuffer.trace")),
+            (visibility == Visibility::Raster, visibility == Visibility::Rays),
+            "frame {frames}"
+        );
+        assert_eq!(ran("shadow.map"), shadows == Shadows::Hybrid, "frame {frames}");
+        assert!(ran("shadow.trace"), "both ways trace");
+        let stats = r.shadow_maps().unwrap().stats();
+        assert!(stats.lit_pixels > 1000, "{stats:?}");
+        match shadows {
+            Shadows::Rays => assert_eq!(stats.traced_pixels, stats.lit_pixels, "frame {frames}"),
+            _ => assert!(stats.traced_pixels < stats.lit_pixels, "frame {frames}: {stats:?}"),
+        }
+    }
+    let stages = r.stages();
+    for (what, frames) in [
+        ("visibility", stages.visibility.frames),
+        ("shadows", stages.shadows.frames),
+    ] {
+        assert!(frames.iter().all(|&n| n >= SAMPLES as u64), "{what}: {frames:?}");
+    }
+    takes_the_cheapest(&stages.visibility, "visibility");
+    takes_the_cheapest(&stages.shadows, "shadows");
+    // A change of settings prices anew; a fixed setting counts nothing.
+    r.set_settings(Settings {
+        visibility: Visibility::Rays,
+        ..settings
+    })
+    .unwrap();
+    r.render_frame().unwrap();
+    let after = r.stages();
+    assert_eq!(after.visibility.frames, [0, 0]);
+    assert_eq!(after.shadows.frames.iter().sum::<u64>(), 1);
+    assert_eq!(ctx.validation_messages(), 0);
+}

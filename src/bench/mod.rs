@@ -5,6 +5,7 @@ pub mod anchor;
 pub mod dynamic;
 #[cfg(feature = "embree")]
 pub mod embree;
+pub mod frame;
 pub mod khr;
 pub mod lbvh;
 pub mod modes;

@@ -100,6 +100,12 @@ fn check_passes(p: &Value, not_run: &[&str]) {
 /// `passes_ms` has every scope of the frame, in frame order; `null` where not run
 /// (`not_run`, and a dynamic scene's scopes).
 fn check_scopes(p: &Value, not_run: &[&str]) {
+    check_scopes_or(p, not_run, &[]);
+}
+
+/// `check_scopes`, with scopes that may or may not have run (`either`: an adaptive
+/// stage's, whose choice may change within the measured frames).
+fn check_scopes_or(p: &Value, not_run: &[&str], either: &[&str]) {
     let not_run: Vec<&str> = not_run.iter().chain(&DYNAMIC_SCOPES).copied().collect();
     let names: Vec<&str> = p.as_object().unwrap().keys().map(String::as_str).collect();
     let want: Vec<&str> = speculum::renderer::SCOPES
@@ -109,6 +115,12 @@ fn check_scopes(p: &Value, not_run: &[&str]) {
         .collect();
     assert_eq!(names, want);
     for (name, v) in p.as_object().unwrap() {
+        if either.contains(&name.as_str()) {
+            if !v.is_null() {
+                check_stat(v, name);
+            }
+            continue;
+        }
         if not_run.contains(&name.as_str()) {
             assert!(v.is_null(), "{name} did not run: {v}");
         } else {
@@ -294,6 +306,66 @@ fn bench_reports_follow_the_schema() {
         };
         assert_eq!(s["trace_over_rays"].is_null(), s["shadows"] == "map");
         check_scopes(&s["passes_ms"], not_run);
+    }
+    std::fs::remove_file(dir.path().join("r.json")).unwrap();
+
+    let frame = speculum(
+        &[
+            &["bench", "frame", "--rounds", "2", "--warmup", "0", "--json", "r.json"][..],
+            &["--settings", "s.json"],
+            &small,
+        ]
+        .concat(),
+        dir.path(),
+    );
+    check_header(&frame, "bench.frame", true);
+    let scene = &frame["scenes"][0];
+    let variants = scene["variants"].as_array().unwrap();
+    assert_eq!(variants.len(), 12, "every visibility with every shadow source");
+    for v in variants {
+        check_stat(&v["frame_ms"], "frame_ms");
+        check_stat(&v["frame_over_raster"], "frame_over_raster");
+        assert!(v["ssim_vs_raster"].is_number(), "{v}");
+        let (vis, sh) = (v["visibility"].as_str().unwrap(), v["shadows"].as_str().unwrap());
+        // An adaptive stage reports its ways, and its rows are the way it took.
+        let way = |stage: &str, setting: &str| match setting {
+            "adaptive" => {
+                let w = &v[stage];
+                assert_eq!(w["ways"].as_array().unwrap().len(), 2, "{v}");
+                assert!(
+                    w["ways"].as_array().unwrap().iter().all(|w| w["ms"].is_number()),
+                    "priced: {v}"
+                );
+                w["way"].as_str().unwrap().to_string()
+            }
+            fixed => {
+                assert!(v[stage].is_null(), "{v}");
+                fixed.to_string()
+            }
+        };
+        let (vis_way, sh_way) = (way("visibility_ways", vis), way("shadow_ways", sh));
+        assert_eq!(
+            v["over_cheapest_fixed"].is_number(),
+            vis == "adaptive" || sh == "adaptive",
+            "{v}"
+        );
+        // The rows of the way taken ran; the other way's did unless the stage is
+        // adaptive (it may have changed its choice, or rechecked, within the rounds).
+        let mut not_run = vec![if vis_way == "rays" { "gbuffer" } else { RAYS_VISIBILITY }];
+        not_run.extend(match sh_way.as_str() {
+            "map" => &TRACED_SHADOW_SCOPES[..],
+            "rays" => &["shadow.map"],
+            _ => &[],
+        });
+        let either: Vec<&str> = not_run
+            .iter()
+            .copied()
+            .filter(|&s| match s {
+                "gbuffer" | RAYS_VISIBILITY => vis == "adaptive",
+                _ => sh == "adaptive",
+            })
+            .collect();
+        check_scopes_or(&v["passes_ms"], &not_run, &either);
     }
     std::fs::remove_file(dir.path().join("r.json")).unwrap();
 

@@ -1,4 +1,4 @@
-//! `speculum bench modes|shadows|reflect|lbvh|dynamic|suite`: GPU timing benchmarks
+//! `speculum bench modes|shadows|frame|reflect|lbvh|dynamic|suite`: GPU timing benchmarks
 //! that check what they time.
 
 mod dynamic;
@@ -11,7 +11,7 @@ use anyhow::Result;
 use clap::{Args, Subcommand};
 use dynamic::{dynamic, DynamicArgs};
 use lbvh::{lbvh, LbvhArgs};
-use scenes::{modes, reflect, shadows, ModesArgs, ReflectArgs};
+use scenes::{frame, modes, reflect, shadows, ModesArgs, ReflectArgs};
 use std::path::PathBuf;
 use suite::{suite, SuiteArgs};
 
@@ -29,6 +29,10 @@ pub enum BenchCommand {
     /// per-pass medians, frame and shadow.trace time against rays, the traced share,
     /// and SSIM and sun visibility against the rays frame.
     Shadows(ModesArgs),
+    /// Every visibility (raster, rays, adaptive) with every shadow source timed in the
+    /// same run, interleaved: per-pass medians, frame time and SSIM against the raster
+    /// frame, and the adaptive variants' choices and frame time over the cheapest fixed one.
+    Frame(ModesArgs),
     /// A dynamic scene's per-frame costs as its bodies grow: simulation, transform,
     /// dynamic BVH rebuild vs refit, tracing, the frame; refit vs rebuilt traversal.
     Dynamic(DynamicArgs),
@@ -56,6 +60,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Reflect(a) => reflect(a),
         BenchCommand::Modes(a) => modes(a),
         BenchCommand::Shadows(a) => shadows(a),
+        BenchCommand::Frame(a) => frame(a),
         BenchCommand::Dynamic(a) => dynamic(a),
         BenchCommand::Suite(a) => suite(a),
     }

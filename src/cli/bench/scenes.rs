@@ -1,4 +1,4 @@
-//! `speculum bench modes|shadows|reflect`: a scene's frames in several settings,
+//! `speculum bench modes|shadows|frame|reflect`: a scene's frames in several settings,
 //! interleaved in one run.
 
 use super::{valid_or_fail, Common};
@@ -298,6 +298,88 @@ fn print_shadows(text: &Text, r: &speculum::bench::shadows::SceneShadows, device
     row("SSIM vs rays", &|s| format!("{:.4}", s.vs_rays.ssim));
     text.line(format_args!("  checks {}", if r.valid { "valid" } else { "INVALID" }));
     let timing: speculum::vk::TimingCheck = r.shadows.iter().map(|s| &s.timing).collect();
+    text.line(format_args!("  {}", crate::cli::timing_note(&timing)));
+    text.line(format_args!(
+        "  {}",
+        crate::cli::steady_note(&r.warmup, Some(&r.rounds_check))
+    ));
+}
+
+pub(super) fn frame(args: ModesArgs) -> Result<()> {
+    use speculum::bench::frame::{run, variants, FrameReport};
+    let (warmup, rounds) = (speculum::steady::WarmUp::from_arg(args.warmup), args.rounds);
+    scene_bench(
+        &args,
+        "bench.frame",
+        variants().len() as u64,
+        |ctx, scene, settings, tick| run(ctx, scene, settings, warmup, rounds, tick),
+        |text, r, device| print_frame(text, r, device, rounds),
+        |r| r.valid,
+        |header, scenes, valid| FrameReport {
+            header,
+            rounds,
+            warmup: warmup.rule(),
+            scenes,
+            valid,
+        },
+    )
+}
+
+fn print_frame(text: &Text, r: &speculum::bench::frame::SceneFrame, device: &str, rounds: u32) {
+    text.line(format_args!(
+        "{} on {device}: {}x{}, {} mode, median of {rounds} interleaved rounds, GPU ms",
+        r.scene, r.resolution[0], r.resolution[1], r.mode
+    ));
+    text.line(format_args!(
+        "  {:<10} {:<9} {:>8} {:>8} {:>8} {:>8} {:>8}  {:>7} {:>8}  adaptive: over the cheapest fixed; chose",
+        "visibility", "shadows", "gbuffer", "g.trace", "shadow", "frame", "/raster", "SSIM", "RMSE"
+    ));
+    let shadow_scopes = [
+        "shadow.map",
+        "shadow.classify",
+        "shadow.compact",
+        "shadow.trace",
+        "light.direct",
+    ];
+    for v in &r.variants {
+        let ms = |p: &str| {
+            v.passes_ms
+                .get(p)
+                .map_or("-".to_string(), |s| format!("{:.2}", s.median))
+        };
+        let shadow: f64 = shadow_scopes
+            .iter()
+            .filter_map(|&p| v.passes_ms.get(p))
+            .map(|s| s.median)
+            .sum();
+        let chose = |w: &Option<speculum::headless::StageReport>| w.as_ref().map(|w| w.way.clone());
+        let choices: Vec<String> = [chose(&v.visibility_ways), chose(&v.shadow_ways)]
+            .into_iter()
+            .flatten()
+            .collect();
+        let adaptive = match (v.over_cheapest_fixed, &v.cheapest_fixed) {
+            (Some(over), Some(fixed)) => format!("{over:.3} of {fixed}; {}", choices.join(", ")),
+            _ => String::new(),
+        };
+        text.line(format_args!(
+            "  {:<10} {:<9} {:>8} {:>8} {:>8.2} {:>8.2} {:>8.3}  {:>7.4} {:>8.4}  {adaptive}",
+            v.visibility,
+            v.shadows,
+            ms("gbuffer"),
+            ms("gbuffer.trace"),
+            shadow,
+            v.frame_ms.median,
+            v.frame_over_raster.median,
+            v.ssim_vs_raster,
+            v.rmse_vs_raster
+        ));
+    }
+    text.line(format_args!(
+        "  adaptive over the cheapest fixed, at most {:.3}; checks {}",
+        r.adaptive_over_cheapest,
+        if r.valid { "valid" } else { "INVALID" }
+    ));
+    let timing: speculum::vk::TimingCheck = r.variants.iter().map(|v| &v.timing).collect();
     text.line(format_args!("  {}", crate::cli::timing_note(&timing)));
     text.line(format_args!(
         "  {}",

@@ -18,6 +18,7 @@
 use crate::error::Result;
 use crate::headless::StageReport;
 use crate::metrics::compare_rgba8;
+use crate::renderer::stages::{shadow_scopes, visibility_scopes, Stages, HOLD, RECHECK_EVERY};
 use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Settings, Shadows, Visibility};
@@ -59,6 +60,14 @@ pub struct FrameVariant {
     /// The adaptive stages after the run (`null` where fixed).
     pub visibility_ways: Option<StageReport>,
     pub shadow_ways: Option<StageReport>,
+    /// An adaptive variant: whether each adaptive stage chose the way whose rows the
+    /// fixed variants measured cheapest in this run (or one within `stages::HOLD` of
+    /// it), and what its recheck frames cost a frame on average (each stage's price
+    /// difference over `RECHECK_EVERY`, by its own prices, ms): once priced, an
+    /// adaptive frame records its choice's rows and nothing else, so its frame is the
+    /// chosen fixed variant's plus this. `null` for a fixed variant.
+    pub chose_cheapest: Option<bool>,
+    pub recheck_ms: Option<f64>,
     /// The self-check of this variant's measured frames (`vk::timing`).
     pub timing: TimingCheck,
 }
@@ -71,8 +80,13 @@ pub struct SceneFrame {
     /// The reflection mode every variant was rendered in.
     pub mode: String,
     pub variants: Vec<FrameVariant>,
-    /// The largest `over_cheapest_fixed` of the adaptive variants.
+    /// The largest `over_cheapest_fixed` of the adaptive variants (their frame times
+    /// against fixed ones of the same rounds: the noise of one frame against another
+    /// is in it), whether every adaptive stage chose the cheapest way, and the largest
+    /// `recheck_ms` over the frame time of its variant.
     pub adaptive_over_cheapest: f64,
+    pub adaptive_chose_cheapest: bool,
+    pub adaptive_recheck_share: f64,
     /// How the warm-up went and how the rounds held (`steady`): a run whose rounds kept
     /// straying is not valid.
     pub warmup: WarmUpReport,
@@ -121,23 +135,7 @@ pub fn run(
         .iter()
         .map(|w| crate::Renderer::new(ctx, scene, &settings(w)))
         .collect::<Result<Vec<_>>>()?;
-    // Rounds of every renderer (a dynamic scene's stay in step) until every adaptive
-    // stage is priced.
-    let priced = |rs: &[crate::Renderer]| {
-        rs.iter().zip(&ways).all(|(r, &(v, s))| {
-            (v != Visibility::Adaptive || r.stages().visibility.priced())
-                && (s != Shadows::Adaptive || r.stages().shadows.priced())
-        })
-    };
-    for _ in 0..PRICE_FRAMES {
-        if priced(&renderers) {
-            break;
-        }
-        for r in &mut renderers {
-            r.render_frame()?;
-        }
-    }
-    let priced = priced(&renderers);
+    let priced = price_stages(&mut renderers, &ways)?;
     let measured = super::interleave(&mut renderers, warmup, rounds, tick)?;
     let (timings, frames) = (&measured.timings, &measured.frames);
     let at = |w: (Visibility, Shadows)| ways.iter().position(|&x| x == w).expect("every variant is measured");
@@ -165,6 +163,11 @@ pub fn run(
                 .expect("a fixed variant")
         });
         let (stages, index) = (renderers[i].stages(), renderers[i].frame_index());
+        let rows_ms = |w: (Visibility, Shadows), scopes: &[&str]| -> f64 {
+            let passes = PassTimes::of(&timings[at(w)]);
+            scopes.iter().filter_map(|&n| passes.get(n)).map(|s| s.median).sum()
+        };
+        let judged = adaptive.then(|| judge(&stages, (v, s), rows_ms));
         variants.push(FrameVariant {
             visibility: v.name().to_string(),
             shadows: s.name().to_string(),
@@ -179,12 +182,19 @@ pub fn run(
                 .then(|| StageReport::of(&stages.visibility, Visibility::FIXED.map(Visibility::name), index)),
             shadow_ways: (s == Shadows::Adaptive)
                 .then(|| StageReport::of(&stages.shadows, Shadows::ADAPTIVE.map(Shadows::name), index)),
+            chose_cheapest: judged.map(|j| j.0),
+            recheck_ms: judged.map(|j| j.1),
             timing: timings[i].check().clone(),
         });
     }
     let adaptive_over_cheapest = variants
         .iter()
         .filter_map(|v| v.over_cheapest_fixed)
+        .fold(0.0, f64::max);
+    let adaptive_chose_cheapest = variants.iter().all(|v| v.chose_cheapest != Some(false));
+    let adaptive_recheck_share = variants
+        .iter()
+        .filter_map(|v| v.recheck_ms.map(|ms| ms / v.frame_ms.median))
         .fold(0.0, f64::max);
     let valid = priced
         && variants
@@ -197,8 +207,81 @@ pub fn run(
         mode: base.mode.name().to_string(),
         variants,
         adaptive_over_cheapest,
+        adaptive_chose_cheapest,
+        adaptive_recheck_share,
         warmup: measured.warmup,
         rounds_check: measured.rounds_check,
         valid,
     })
+}
+
+/// Rounds of every renderer (a dynamic scene's stay in step) until every adaptive stage
+/// is priced, at most `PRICE_FRAMES`: whether they all are.
+fn price_stages(renderers: &mut [crate::Renderer], ways: &[(Visibility, Shadows)]) -> Result<bool> {
+    let priced = |rs: &[crate::Renderer]| {
+        rs.iter().zip(ways).all(|(r, &(v, s))| {
+            (v != Visibility::Adaptive || r.stages().visibility.priced())
+                && (s != Shadows::Adaptive || r.stages().shadows.priced())
+        })
+    };
+    for _ in 0..PRICE_FRAMES {
+        if priced(renderers) {
+            break;
+        }
+        for r in renderers.iter_mut() {
+            r.render_frame()?;
+        }
+    }
+    Ok(priced(renderers))
+}
+
+/// An adaptive variant `(v, s)`'s stages judged by the run's fixed variants
+/// (`rows_ms`: a variant's median time of some scopes): whether each stage chose the
+/// way whose rows they measured cheapest (or one within `HOLD`), and its recheck
+/// frames' cost a frame (ms, by the stage's own prices). A stage is judged with the
+/// other stage at its setting, or at the way that one chose.
+fn judge(
+    stages: &Stages,
+    (v, s): (Visibility, Shadows),
+    rows_ms: impl Fn((Visibility, Shadows), &[&str]) -> f64,
+) -> (bool, f64) {
+    let vis_now = match v {
+        Visibility::Adaptive => Visibility::FIXED[stages.visibility.chosen],
+        fixed => fixed,
+    };
+    let sh_now = match s {
+        Shadows::Adaptive => Shadows::ADAPTIVE[stages.shadows.chosen],
+        fixed => fixed,
+    };
+    let mut judged = Vec::new();
+    if v == Visibility::Adaptive {
+        let measured: Vec<f64> = (0..2)
+            .map(|w| rows_ms((Visibility::FIXED[w], sh_now), &visibility_scopes(w)))
+            .collect();
+        judged.push((stages.visibility, measured));
+    }
+    if s == Shadows::Adaptive {
+        let measured: Vec<f64> = Shadows::ADAPTIVE
+            .iter()
+            .map(|&fs| rows_ms((vis_now, fs), &shadow_scopes()))
+            .collect();
+        judged.push((stages.shadows, measured));
+    }
+    let chose_cheapest = judged.iter().all(|(stage, measured)| {
+        let cheapest = measured.iter().copied().fold(f64::INFINITY, f64::min);
+        measured[stage.chosen] * (1.0 - HOLD) <= cheapest
+    });
+    let recheck_ms = judged
+        .iter()
+        .map(|(stage, _)| {
+            let chosen = stage.price(stage.chosen).unwrap_or(0.0);
+            let others: f64 = (0..2)
+                .filter(|&w| w != stage.chosen)
+                .filter_map(|w| stage.price(w))
+                .map(|p| p - chosen)
+                .sum();
+            others / RECHECK_EVERY as f64
+        })
+        .sum();
+    (chose_cheapest, recheck_ms)
 }

@@ -122,6 +122,19 @@ const SHADOW_ROWS: [Row; 5] = [
 /// The rows way `way` of the G-buffer (`Visibility::FIXED` order) is priced by.
 const VISIBILITY_ROWS: [[Row; 1]; 2] = [[Row::GBuffer], [Row::GBufferTrace]];
 
+/// The timer scopes way `way` of the G-buffer (`Visibility::FIXED` order) is priced by.
+pub fn visibility_scopes(way: usize) -> Vec<&'static str> {
+    VISIBILITY_ROWS[way]
+        .iter()
+        .flat_map(|r| r.scopes().iter().copied())
+        .collect()
+}
+
+/// The timer scopes a shadow source is priced by.
+pub fn shadow_scopes() -> Vec<&'static str> {
+    SHADOW_ROWS.iter().flat_map(|r| r.scopes().iter().copied()).collect()
+}
+
 /// The frame's adaptive stages, besides the hybrid's paths: the G-buffer's ways
 /// (`Visibility::FIXED`) and the shadows' (`Shadows::ADAPTIVE`).
 #[derive(Clone, Copy, Debug, PartialEq)]

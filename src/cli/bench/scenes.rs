@@ -357,8 +357,12 @@ fn print_frame(text: &Text, r: &speculum::bench::frame::SceneFrame, device: &str
             .into_iter()
             .flatten()
             .collect();
-        let adaptive = match (v.over_cheapest_fixed, &v.cheapest_fixed) {
-            (Some(over), Some(fixed)) => format!("{over:.3} of {fixed}; {}", choices.join(", ")),
+        let adaptive = match (v.over_cheapest_fixed, &v.cheapest_fixed, v.chose_cheapest, v.recheck_ms) {
+            (Some(over), Some(fixed), Some(cheapest), Some(recheck)) => format!(
+                "{over:.3} of {fixed}; chose {}{}, rechecks {recheck:.2} ms",
+                choices.join(", "),
+                if cheapest { "" } else { " (NOT the cheapest)" }
+            ),
             _ => String::new(),
         };
         text.line(format_args!(
@@ -375,7 +379,9 @@ fn print_frame(text: &Text, r: &speculum::bench::frame::SceneFrame, device: &str
         ));
     }
     text.line(format_args!(
-        "  adaptive over the cheapest fixed, at most {:.3}; checks {}",
+        "  adaptive: chose the cheapest ways {}; rechecks at most {:.2}% of a frame; frame over the cheapest fixed at most {:.3} (frame-to-frame noise in it); checks {}",
+        if r.adaptive_chose_cheapest { "yes" } else { "NO" },
+        100.0 * r.adaptive_recheck_share,
         r.adaptive_over_cheapest,
         if r.valid { "valid" } else { "INVALID" }
     ));

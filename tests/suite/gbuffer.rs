@@ -616,7 +616,8 @@ fn check_traced_texel(
 /// same targets, so the two frames differ only where a pixel's one sample differs
 /// (the rasterizer's coverage and interpolation against the ray's exact hit, the
 /// texture's level from a ray cone against screen derivatives). Per built-in scene
-/// (static, textured, glossy, rigid bodies, cloth, several frames on the moving ones),
+/// (static, textured, glossy, rigid bodies, cloth, several frames on the moving ones)
+/// and the skinned walking figure,
 /// every mode (the tracers in turn), the hybrid with a fixed exchange rate (a measured
 /// one follows each run's timings): the frames' SSIM at least 0.995 (the filed floor)
 /// and RMSE at most 0.01 (lavapipe, 128x80: at worst 0.99845 and 0.0053, `gallery`'s
@@ -631,7 +632,11 @@ fn visibility_by_rays_renders_the_raster_frame() {
         .into_iter()
         .filter(|&t| t == Tracer::Lbvh || ctx.ray_tracing.is_some())
         .collect();
-    for name in speculum::scene::builtin::NAMES {
+    // And the walking figure: a skinned, animated model.
+    let names = speculum::scene::builtin::NAMES
+        .into_iter()
+        .chain(["assets/models/figure.glb"]);
+    for name in names {
         let name = if name == "gallery" { "gallery:20000" } else { name };
         let scene = speculum::scene::load(name).unwrap();
         // The moving scenes over several frames: the motion and previous vertices.

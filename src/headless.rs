@@ -260,7 +260,10 @@ pub type Tick<'a> = &'a mut dyn FnMut();
 
 /// Renders rounds of one frame of each of `renderers` until `warmup` is done (a round's
 /// GPU time is its frames' together, by their timestamps; the wall time where a readout
-/// lacks the frame), `tick` after every frame: what the warm-up took.
+/// lacks the frame), `tick` after every frame: what the warm-up took. After a steady
+/// warm-up the adaptive stages price their ways again, at the settled clocks (the first
+/// frames priced them cold: a GPU measures 4.5x slow then), in rounds until every one
+/// is priced (at most `stages::PRICE_ROUNDS`); a fixed count renders exactly its frames.
 pub fn warm_up(renderers: &mut [&mut Renderer], warmup: WarmUp, tick: Tick<'_>) -> Result<WarmUpReport> {
     let mut warming = warmup.start();
     while !warming.done() {
@@ -273,7 +276,22 @@ pub fn warm_up(renderers: &mut [&mut Renderer], warmup: WarmUp, tick: Tick<'_>) 
         }
         warming.add(ms);
     }
-    Ok(warming.report())
+    let mut report = warming.report();
+    if matches!(warmup, WarmUp::Steady { .. }) && renderers.iter().any(|r| r.adaptive_stages()) {
+        for r in renderers.iter_mut() {
+            r.reprice_stages();
+        }
+        while report.pricing_rounds < crate::renderer::stages::PRICE_ROUNDS
+            && !renderers.iter().all(|r| r.stages_priced())
+        {
+            for r in renderers.iter_mut() {
+                r.render_frame()?;
+                tick();
+            }
+            report.pricing_rounds += 1;
+        }
+    }
+    Ok(report)
 }
 
 /// Called with every measured frame; its error ends the render.

@@ -110,6 +110,9 @@ pub struct WarmUpReport {
     /// Whether the frame times settled (always true for a fixed count, which does not
     /// ask).
     pub settled: bool,
+    /// After a steady warm-up, the rounds that priced the adaptive stages again at the
+    /// settled clocks (`renderer::stages`; 0 without one, or after a fixed count).
+    pub pricing_rounds: u32,
 }
 
 /// A warm-up under way: fed each warm-up frame's time until `done`.
@@ -177,6 +180,7 @@ impl Warming {
             gpu_ms: self.gpu_ms,
             wall_s: self.start.elapsed().as_secs_f64(),
             settled,
+            pricing_rounds: 0,
         }
     }
 }

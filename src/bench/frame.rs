@@ -9,16 +9,17 @@
 //! at most 1.02).
 //!
 //! Before the warm-up, every renderer renders rounds until every adaptive stage is
-//! priced (at most `PRICE_FRAMES`; a dynamic scene's renderers stay in step): the
-//! measured rounds time the frames the adaptive ones take once they have chosen, their
-//! recheck frames included where a round falls on one.
+//! priced (at most `stages::PRICE_ROUNDS`; a dynamic scene's renderers stay in step),
+//! and a steady warm-up prices them again at the settled clocks: the measured rounds
+//! time the frames the adaptive ones take once they have chosen, their recheck frames
+//! included where a round falls on one.
 //! Checked in the same run: every frame time is finite, every adaptive stage priced,
 //! and the rounds settled.
 
 use crate::error::Result;
 use crate::headless::StageReport;
 use crate::metrics::compare_rgba8;
-use crate::renderer::stages::{shadow_scopes, visibility_scopes, Stages, HOLD, RECHECK_EVERY};
+use crate::renderer::stages::{shadow_scopes, visibility_scopes, Stages, HOLD, PRICE_ROUNDS, RECHECK_EVERY};
 use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Settings, Shadows, Visibility};
@@ -26,9 +27,6 @@ use crate::steady::{RoundsCheck, WarmUp, WarmUpReport};
 use crate::vk::{Context, TimingCheck};
 use serde::Serialize;
 use std::sync::Arc;
-
-/// Frames an adaptive renderer may take to price its stages before the warm-up.
-pub const PRICE_FRAMES: u32 = 40;
 
 /// The variants, in the order they are rendered: every visibility with every shadow
 /// source.
@@ -135,7 +133,7 @@ pub fn run(
         .iter()
         .map(|w| crate::Renderer::new(ctx, scene, &settings(w)))
         .collect::<Result<Vec<_>>>()?;
-    let priced = price_stages(&mut renderers, &ways)?;
+    price_stages(&mut renderers)?;
     let measured = super::interleave(&mut renderers, warmup, rounds, tick)?;
     let (timings, frames) = (&measured.timings, &measured.frames);
     let at = |w: (Visibility, Shadows)| ways.iter().position(|&x| x == w).expect("every variant is measured");
@@ -187,15 +185,8 @@ pub fn run(
             timing: timings[i].check().clone(),
         });
     }
-    let adaptive_over_cheapest = variants
-        .iter()
-        .filter_map(|v| v.over_cheapest_fixed)
-        .fold(0.0, f64::max);
-    let adaptive_chose_cheapest = variants.iter().all(|v| v.chose_cheapest != Some(false));
-    let adaptive_recheck_share = variants
-        .iter()
-        .filter_map(|v| v.recheck_ms.map(|ms| ms / v.frame_ms.median))
-        .fold(0.0, f64::max);
+    let (adaptive_over_cheapest, adaptive_chose_cheapest, adaptive_recheck_share) = adaptive_summary(&variants);
+    let priced = renderers.iter().all(crate::Renderer::stages_priced);
     let valid = priced
         && variants
             .iter()
@@ -216,23 +207,17 @@ pub fn run(
 }
 
 /// Rounds of every renderer (a dynamic scene's stay in step) until every adaptive stage
-/// is priced, at most `PRICE_FRAMES`: whether they all are.
-fn price_stages(renderers: &mut [crate::Renderer], ways: &[(Visibility, Shadows)]) -> Result<bool> {
-    let priced = |rs: &[crate::Renderer]| {
-        rs.iter().zip(ways).all(|(r, &(v, s))| {
-            (v != Visibility::Adaptive || r.stages().visibility.priced())
-                && (s != Shadows::Adaptive || r.stages().shadows.priced())
-        })
-    };
-    for _ in 0..PRICE_FRAMES {
-        if priced(renderers) {
+/// is priced, at most `PRICE_ROUNDS`: whether they all are.
+fn price_stages(renderers: &mut [crate::Renderer]) -> Result<bool> {
+    for _ in 0..PRICE_ROUNDS {
+        if renderers.iter().all(crate::Renderer::stages_priced) {
             break;
         }
         for r in renderers.iter_mut() {
             r.render_frame()?;
         }
     }
-    Ok(priced(renderers))
+    Ok(renderers.iter().all(crate::Renderer::stages_priced))
 }
 
 /// An adaptive variant `(v, s)`'s stages judged by the run's fixed variants
@@ -284,4 +269,19 @@ fn judge(
         })
         .sum();
     (chose_cheapest, recheck_ms)
+}
+
+/// Over the adaptive variants: the largest `over_cheapest_fixed`, whether every one
+/// chose the cheapest ways, and the largest recheck cost over its frame time.
+fn adaptive_summary(variants: &[FrameVariant]) -> (f64, bool, f64) {
+    let over = variants
+        .iter()
+        .filter_map(|v| v.over_cheapest_fixed)
+        .fold(0.0, f64::max);
+    let chose = variants.iter().all(|v| v.chose_cheapest != Some(false));
+    let recheck = variants
+        .iter()
+        .filter_map(|v| v.recheck_ms.map(|ms| ms / v.frame_ms.median))
+        .fold(0.0, f64::max);
+    (over, chose, recheck)
 }

@@ -324,6 +324,9 @@ pub fn steady_note(w: &speculum::steady::WarmUpReport, rounds: Option<&speculum:
         w.wall_s,
         if w.settled { "" } else { ", clocks NOT SETTLED" }
     );
+    if w.pricing_rounds > 0 {
+        s += &format!(", then {} rounds pricing the adaptive stages", w.pricing_rounds);
+    }
     if let Some(note) = rounds.and_then(|r| r.note()) {
         s += "; ";
         s += &note;

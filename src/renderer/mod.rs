@@ -413,6 +413,22 @@ impl Renderer {
         self.stages
     }
 
+    /// Whether a stage of the settings is adaptive (`visibility` or `shadows`).
+    pub fn adaptive_stages(&self) -> bool {
+        self.settings.visibility == settings::Visibility::Adaptive || self.settings.shadows == Shadows::Adaptive
+    }
+
+    /// Whether every adaptive stage of the settings is priced.
+    pub fn stages_priced(&self) -> bool {
+        self.stages.priced(&self.settings)
+    }
+
+    /// Forgets the adaptive stages' prices: the next frames price every way again (at
+    /// the clocks of now, after a warm-up).
+    pub fn reprice_stages(&mut self) {
+        self.stages = Stages::default();
+    }
+
     /// The index of the next frame to be recorded.
     pub fn frame_index(&self) -> u32 {
         self.frame_index

@@ -17,6 +17,10 @@ use super::table::Row;
 use crate::settings::{Settings, Shadows, Visibility};
 use crate::vk::TimerReadout;
 
+/// Rounds a run may render to price its adaptive stages (after a steady warm-up,
+/// before a benchmark's rounds) before it goes on unpriced.
+pub const PRICE_ROUNDS: u32 = 40;
+
 /// Checked frames a way needs before it is priced.
 pub const SAMPLES: u32 = 3;
 /// Samples kept per way; its price is their median.
@@ -186,6 +190,12 @@ impl Stages {
             fixed => fixed,
         };
         (visibility, shadows, taken)
+    }
+
+    /// Whether every stage `st` makes adaptive is priced.
+    pub fn priced(&self, st: &Settings) -> bool {
+        (st.visibility != Visibility::Adaptive || self.visibility.priced())
+            && (st.shadows != Shadows::Adaptive || self.shadows.priced())
     }
 
     /// After a frame that took `taken`: each adaptive stage's rows' time, where the

@@ -80,3 +80,40 @@ fn adaptive_stages_try_each_way_then_take_the_cheapest() {
     assert_eq!(after.shadows.frames.iter().sum::<u64>(), 1);
     assert_eq!(ctx.validation_messages(), 0);
 }
+
+/// A steady warm-up prices the adaptive stages again once the clocks have settled (the
+/// first frames priced them cold): every way's frames counted afresh, every stage
+/// priced before the measured frames. A fixed count renders exactly its frames, and a
+/// renderer without an adaptive stage prices nothing.
+#[test]
+fn a_steady_warm_up_prices_the_stages_at_settled_clocks() {
+    use speculum::steady::WarmUp;
+    let ctx = common::context();
+    let scene = speculum::scene::builtin::room().unwrap();
+    // Large enough for lavapipe's timestamps to pass their self-check (see
+    // `reports::bench_reports_follow_the_schema`).
+    let settings = |visibility| Settings {
+        width: 640,
+        height: 360,
+        visibility,
+        exchange_rate: 0.5,
+        ..Default::default()
+    };
+    let mut adaptive = Renderer::new(&ctx, &scene, &settings(Visibility::Adaptive)).unwrap();
+    let mut fixed = Renderer::new(&ctx, &scene, &settings(Visibility::Raster)).unwrap();
+    let report =
+        speculum::headless::warm_up(&mut [&mut adaptive, &mut fixed], WarmUp::from_arg(None), &mut || {}).unwrap();
+    let frames = adaptive.stages().visibility.frames;
+    assert!(adaptive.stages_priced(), "{report:?}");
+    assert_eq!(
+        frames.iter().sum::<u64>(),
+        report.pricing_rounds as u64,
+        "the ways' frames are the pricing rounds' (counted afresh): {report:?}"
+    );
+    assert!(frames.iter().all(|&n| n >= SAMPLES as u64), "{frames:?}");
+    let alone = speculum::headless::warm_up(&mut [&mut fixed], WarmUp::from_arg(None), &mut || {}).unwrap();
+    assert_eq!(alone.pricing_rounds, 0);
+    let counted = speculum::headless::warm_up(&mut [&mut adaptive], WarmUp::Frames(2), &mut || {}).unwrap();
+    assert_eq!((counted.frames, counted.pricing_rounds), (2, 0));
+    assert_eq!(ctx.validation_messages(), 0);
+}

@@ -179,6 +179,8 @@ fn a_fixed_rate_is_deterministic_and_the_first_frame_is_ssr_first() {
 /// split.
 #[test]
 fn the_rate_is_measured_and_reported() {
+    // The rate is measured from frames whose timings pass their self-check: alone.
+    let _alone = common::alone();
     let ctx = common::context();
     let scene = speculum::scene::builtin::room().unwrap();
     let mut r = Renderer::new(&ctx, &scene, &settings(HybridPolicy::Adaptive, 0.0)).unwrap();
@@ -291,6 +293,8 @@ fn with_no_ssr_first_tile_the_march_stops_between_probe_frames() {
 fn measured_paths_are_tried_and_the_cheapest_taken() {
     use speculum::renderer::exchange::Path;
     use speculum::renderer::PROBE_EVERY;
+    // The paths are priced by frames whose timings pass their self-check: alone.
+    let _alone = common::alone();
     let ctx = common::context();
     let (mut r, mut rt) = adaptive_and_rt(&ctx, 0.0);
     for k in 0..=2 * PROBE_EVERY {

@@ -23,11 +23,15 @@ fn takes_the_cheapest<const N: usize>(stage: &Stage<N>, what: &str) {
 
 #[test]
 fn adaptive_stages_try_each_way_then_take_the_cheapest() {
+    // A stage is priced by frames whose timings pass their self-check: alone, and
+    // frames large enough for lavapipe's timestamps (small traced frames leave more
+    // time between their scopes than the check allows: docs/experiments.md).
+    let _alone = common::alone();
     let ctx = common::context();
     let scene = speculum::scene::builtin::room().unwrap();
     let settings = Settings {
-        width: 160,
-        height: 96,
+        width: 640,
+        height: 360,
         mode: Mode::Hybrid,
         visibility: Visibility::Adaptive,
         shadows: Shadows::Adaptive,
@@ -88,10 +92,10 @@ fn adaptive_stages_try_each_way_then_take_the_cheapest() {
 #[test]
 fn a_steady_warm_up_prices_the_stages_at_settled_clocks() {
     use speculum::steady::WarmUp;
+    let _alone = common::alone();
     let ctx = common::context();
     let scene = speculum::scene::builtin::room().unwrap();
-    // Large enough for lavapipe's timestamps to pass their self-check (see
-    // `reports::bench_reports_follow_the_schema`).
+    // Large enough for lavapipe's timestamps to pass their self-check (above).
     let settings = |visibility| Settings {
         width: 640,
         height: 360,

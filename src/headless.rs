@@ -165,10 +165,7 @@ impl StageReport {
         let ways: Vec<String> = self
             .ways
             .iter()
-            .map(|w| {
-                let ms = w.ms.map_or(String::new(), |m| format!(", {m:.2} ms"));
-                format!("{} {} frames{ms}", w.way, w.frames)
-            })
+            .map(|w| frames_and_price(&w.way, w.frames, w.ms))
             .collect();
         format!(
             "{} (next: {}, rechecked 1 frame in {})",
@@ -177,6 +174,13 @@ impl StageReport {
             self.recheck_every
         )
     }
+}
+
+/// An adaptive choice's way (or the hybrid's path) in a line of text: its frames, and
+/// its price where it has one (`raster 11 frames, 12.24 ms`).
+pub fn frames_and_price(name: &str, frames: u64, ms: Option<f64>) -> String {
+    let ms = ms.map_or(String::new(), |m| format!(", {m:.2} ms"));
+    format!("{name} {frames} frames{ms}")
 }
 
 /// One way of an adaptive stage in `StageReport`.
@@ -281,17 +285,24 @@ pub fn warm_up(renderers: &mut [&mut Renderer], warmup: WarmUp, tick: Tick<'_>) 
         for r in renderers.iter_mut() {
             r.reprice_stages();
         }
-        while report.pricing_rounds < crate::renderer::stages::PRICE_ROUNDS
-            && !renderers.iter().all(|r| r.stages_priced())
-        {
-            for r in renderers.iter_mut() {
-                r.render_frame()?;
-                tick();
-            }
-            report.pricing_rounds += 1;
-        }
+        report.pricing_rounds = price_stages(renderers, tick)?;
     }
     Ok(report)
+}
+
+/// Renders rounds of one frame of each of `renderers` (a dynamic scene's stay in step)
+/// until every adaptive stage is priced, at most `stages::PRICE_ROUNDS`, `tick` after
+/// every frame: the rounds rendered.
+pub fn price_stages(renderers: &mut [&mut Renderer], tick: Tick<'_>) -> Result<u32> {
+    let mut rounds = 0;
+    while rounds < crate::renderer::stages::PRICE_ROUNDS && !renderers.iter().all(|r| r.stages_priced()) {
+        for r in renderers.iter_mut() {
+            r.render_frame()?;
+            tick();
+        }
+        rounds += 1;
+    }
+    Ok(rounds)
 }
 
 /// Called with every measured frame; its error ends the render.

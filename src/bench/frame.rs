@@ -19,7 +19,7 @@
 use crate::error::Result;
 use crate::headless::StageReport;
 use crate::metrics::compare_rgba8;
-use crate::renderer::stages::{shadow_scopes, visibility_scopes, Stages, HOLD, PRICE_ROUNDS, RECHECK_EVERY};
+use crate::renderer::stages::{shadow_scopes, visibility_scopes, Stages, HOLD, RECHECK_EVERY};
 use crate::report::{PassTimes, Stat};
 use crate::scene::Scene;
 use crate::settings::{Settings, Shadows, Visibility};
@@ -133,7 +133,7 @@ pub fn run(
         .iter()
         .map(|w| crate::Renderer::new(ctx, scene, &settings(w)))
         .collect::<Result<Vec<_>>>()?;
-    price_stages(&mut renderers)?;
+    crate::headless::price_stages(&mut renderers.iter_mut().collect::<Vec<_>>(), &mut || {})?;
     let measured = super::interleave(&mut renderers, warmup, rounds, tick)?;
     let (timings, frames) = (&measured.timings, &measured.frames);
     let at = |w: (Visibility, Shadows)| ways.iter().position(|&x| x == w).expect("every variant is measured");
@@ -204,20 +204,6 @@ pub fn run(
         rounds_check: measured.rounds_check,
         valid,
     })
-}
-
-/// Rounds of every renderer (a dynamic scene's stay in step) until every adaptive stage
-/// is priced, at most `PRICE_ROUNDS`: whether they all are.
-fn price_stages(renderers: &mut [crate::Renderer]) -> Result<bool> {
-    for _ in 0..PRICE_ROUNDS {
-        if renderers.iter().all(crate::Renderer::stages_priced) {
-            break;
-        }
-        for r in renderers.iter_mut() {
-            r.render_frame()?;
-        }
-    }
-    Ok(renderers.iter().all(crate::Renderer::stages_priced))
 }
 
 /// An adaptive variant `(v, s)`'s stages judged by the run's fixed variants

@@ -308,10 +308,7 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
             let paths: Vec<String> = h
                 .paths
                 .iter()
-                .map(|p| {
-                    let ms = p.ms.map_or(String::new(), |m| format!(", {m:.2} ms"));
-                    format!("{} {} frames{ms}", p.path, p.frames)
-                })
+                .map(|p| speculum::headless::frames_and_price(&p.path, p.frames, p.ms))
                 .collect();
             text.line(format_args!(
                 "    paths: {} (next: {}, probe frames 1 in {}); tile flips {} (most in one tile {})",

@@ -334,13 +334,7 @@ fn print_frame(text: &Text, r: &speculum::bench::frame::SceneFrame, device: &str
         "  {:<10} {:<9} {:>8} {:>8} {:>8} {:>8} {:>8}  {:>7} {:>8}  adaptive: over the cheapest fixed; chose",
         "visibility", "shadows", "gbuffer", "g.trace", "shadow", "frame", "/raster", "SSIM", "RMSE"
     ));
-    let shadow_scopes = [
-        "shadow.map",
-        "shadow.classify",
-        "shadow.compact",
-        "shadow.trace",
-        "light.direct",
-    ];
+    let shadow_scopes = speculum::renderer::stages::shadow_scopes();
     for v in &r.variants {
         let ms = |p: &str| {
             v.passes_ms

@@ -83,6 +83,9 @@ pub struct TimingsReport {
     /// With `shadows = adaptive`: the same of the shadows' sources (`shadows` is then
     /// `adaptive`); `null` with a fixed source.
     pub shadow_ways: Option<StageReport>,
+    /// With `static_ploc`: the static tree kept, PLOC's or the LBVH's, and what each
+    /// took over the same rays (`renderer::static_tree`); `null` otherwise.
+    pub static_tree: Option<crate::renderer::static_tree::StaticTreeChoice>,
     /// The self-check of every measured frame, the reference's included (`vk::timing`).
     pub timing: TimingCheck,
 }
@@ -519,6 +522,7 @@ fn finish(
         hybrid: hybrid_split(renderer, settings)?,
         visibility,
         shadow_ways,
+        static_tree: renderer.static_tree.clone(),
         timing: Timings::check_all(&[timings, ref_timings]),
     };
     Ok(Rendered {

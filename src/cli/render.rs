@@ -326,6 +326,9 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
     if let Some(v) = &r.shadow_ways {
         text.line(format_args!("  shadows adaptive: {}", v.summary()));
     }
+    if let Some(t) = &r.static_tree {
+        text.line(format_args!("  static tree: {}", t.summary()));
+    }
     text.line(format_args!(
         "  {} shadows: lit pixels {}, shadow rays {} ({:.1}%)",
         r.shadows,

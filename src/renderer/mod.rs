@@ -26,6 +26,7 @@ mod passes;
 pub mod plan;
 mod readback;
 pub mod stages;
+pub mod static_tree;
 pub mod table;
 mod tracer;
 mod view;
@@ -42,7 +43,7 @@ use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::scene::{Camera, Scene};
 use crate::settings::{self, Applies, Mode, Settings, Shadows};
-use crate::tracers::lbvh::{Bvh, BvhKind, LbvhBuilder, MortonBits, StaticLayout};
+use crate::tracers::lbvh::{Bvh, LbvhBuilder, MortonBits};
 use crate::tracers::Traceable;
 use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
 use ash::vk;
@@ -107,8 +108,14 @@ pub struct Renderer {
     pub compose: ComposePass,
     /// BVH over the scene's (static) triangles, built at creation.
     pub static_bvh: Bvh,
-    /// GPU milliseconds per stage of the static BVH build.
+    /// GPU milliseconds per stage of the static BVH build (of the tree kept).
     pub static_bvh_build: Vec<(&'static str, f64)>,
+    /// With `static_ploc`: PLOC's tree or the LBVH's, whichever walked `static_rays`
+    /// faster (`static_tree`).
+    pub static_tree: Option<static_tree::StaticTreeChoice>,
+    /// Rays from the static scene's surfaces, relative to the render origin: what the
+    /// choice of its tree times.
+    static_rays: Vec<crate::gpu_types::Ray>,
     /// The tracer's kernels and, for the vendor tracer, its acceleration structures.
     tracer: FrameTracer,
     /// What moves, when the scene has bodies.
@@ -137,24 +144,6 @@ pub struct Renderer {
     cmd: vk::CommandBuffer,
 }
 
-/// How the static walk reads the static scene's BVH.
-fn static_layout(settings: &Settings) -> StaticLayout {
-    if settings.static_wide {
-        StaticLayout::Wide
-    } else {
-        StaticLayout::Binary
-    }
-}
-
-/// The builder of the static scene's BVH.
-fn static_kind(settings: &Settings) -> BvhKind {
-    if settings.static_ploc {
-        BvhKind::Ploc
-    } else {
-        BvhKind::Lbvh
-    }
-}
-
 impl Renderer {
     /// Uploads the scene and creates every pass at the settings' resolution.
     pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: &Settings) -> Result<Self> {
@@ -174,10 +163,18 @@ impl Renderer {
         )?;
         // The static BVH, once: the scene has no dynamic geometry yet.
         let tris = scene_buffers.mesh.index_count / 3;
-        let static_bvh = Bvh::new_static_in(ctx, tris, MortonBits::Bits30, static_layout(settings))?;
+        let static_bvh = Bvh::new_static_in(ctx, tris, MortonBits::Bits30, static_tree::layout(settings))?;
         let builder = LbvhBuilder::new(ctx)?;
-        let (static_bvh_build, _) =
-            builder.build_now(scene_buffers.mesh.triangles(), &static_bvh, static_kind(settings))?;
+        let count = static_tree::ray_count(ctx.device_type);
+        let static_rays = static_tree::surface_rays(&scene.vertices, &scene.indices, origin, count, 1);
+        let (static_bvh, static_bvh_build, static_tree) = static_tree::build(
+            ctx,
+            &builder,
+            scene_buffers.mesh.triangles(),
+            static_bvh,
+            settings,
+            &static_rays,
+        )?;
         let dynamic = if scene.is_dynamic() {
             Some(DynamicGeometry::new(ctx, scene, settings, origin)?)
         } else {
@@ -201,6 +198,8 @@ impl Renderer {
             compose: ComposePass::new(ctx, extent)?,
             static_bvh,
             static_bvh_build,
+            static_tree,
+            static_rays,
             tracer,
             dynamic,
             transform: SimTransformPass::new(ctx)?,
@@ -282,13 +281,11 @@ impl Renderer {
         if !old.changed(&settings, Applies::StaticBvh).is_empty() {
             // WAR: frames in flight still walk the old tree.
             self.ctx.wait_idle()?;
-            if settings.static_wide != self.settings.static_wide {
-                let tris = self.scene.mesh.index_count / 3;
-                self.static_bvh = Bvh::new_static_in(&self.ctx, tris, MortonBits::Bits30, static_layout(&settings))?;
-            }
-            (self.static_bvh_build, _) =
-                self.builder
-                    .build_now(self.scene.mesh.triangles(), &self.static_bvh, static_kind(&settings))?;
+            let tris = self.scene.mesh.index_count / 3;
+            let fresh = Bvh::new_static_in(&self.ctx, tris, MortonBits::Bits30, static_tree::layout(&settings))?;
+            let geom = self.scene.mesh.triangles();
+            let built = static_tree::build(&self.ctx, &self.builder, geom, fresh, &settings, &self.static_rays)?;
+            (self.static_bvh, self.static_bvh_build, self.static_tree) = built;
         }
         if !old.changed(&settings, Applies::Tracer).is_empty() {
             self.ctx.wait_idle()?;

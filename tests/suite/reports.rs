@@ -186,6 +186,11 @@ fn render_report_follows_the_schema() {
         assert!(taken * (1.0 - speculum::renderer::stages::HOLD) <= other, "{v}");
     }
     check_stat(&r["frame_ms"], "frame_ms");
+    // The default static_ploc: the tree kept is the one whose walk was cheaper.
+    let t = &r["static_tree"];
+    let (ploc, lbvh) = (t["ploc_ms"].as_f64().unwrap(), t["lbvh_ms"].as_f64().unwrap());
+    assert!(ploc > 0.0 && lbvh > 0.0 && t["rays"].as_u64().unwrap() > 0, "{t}");
+    assert_eq!(t["kept"], if lbvh < ploc { "lbvh" } else { "ploc" }, "{t}");
     assert_eq!(r["traced_pixels"], 0, "ssr mode traces nothing");
     assert_eq!(
         r["fail_reasons"].as_object().unwrap().len(),

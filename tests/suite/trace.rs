@@ -677,3 +677,69 @@ fn a_planted_cycle_ends_in_a_reported_overrun() {
     }
     assert_eq!(ctx.validation_messages(), 0);
 }
+
+/// With `static_ploc` the static tree kept (`renderer::static_tree::build`) is the one
+/// the choice names, bit for bit a fresh build by its builder and not the other's, and
+/// the one whose rays' walk measured cheaper; its hits equal brute force. With the
+/// LBVH asked for, or without rays, nothing is measured and the LBVH (or PLOC) tree is
+/// as asked.
+#[test]
+fn the_static_tree_kept_is_the_one_that_walked_faster() {
+    use speculum::renderer::static_tree;
+    use speculum::settings::Settings;
+    use speculum::tracers::lbvh::BvhKind;
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let n = 4000;
+    let (v, i) = random_soup(n, 1.0, default_size(n), 31);
+    let triangles = UploadedTriangles::new(&ctx, "t", &v, &i).unwrap();
+    let geom = triangles.geometry();
+    let fresh = || Bvh::new_static_in(&ctx, n as u32, MortonBits::Bits30, StaticLayout::Binary).unwrap();
+    let tree = |bvh: &Bvh| {
+        let mut t = bvh.read_packed().unwrap();
+        t.nodes.iter_mut().for_each(|n| n.unused = 0);
+        t
+    };
+    let built_by = |kind| {
+        let bvh = fresh();
+        b.build_now(geom, &bvh, kind).unwrap();
+        tree(&bvh)
+    };
+    let (ploc, lbvh) = (built_by(BvhKind::Ploc), built_by(BvhKind::Lbvh));
+    assert!(ploc != lbvh, "the two builders' trees differ");
+    let rays = static_tree::surface_rays(&v, &i, Vec3::ZERO, 4096, 3);
+    let settings = Settings::default();
+    assert!(settings.static_ploc);
+    let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &rays).unwrap();
+    let choice = choice.expect("static_ploc measures");
+    assert_eq!(choice.rays, 4096);
+    assert!(choice.ploc_ms > 0.0 && choice.lbvh_ms > 0.0, "{choice:?}");
+    let want = if choice.lbvh_ms < choice.ploc_ms {
+        "lbvh"
+    } else {
+        "ploc"
+    };
+    assert_eq!(choice.kept, want, "{choice:?}");
+    assert!(tree(&kept) == if want == "lbvh" { lbvh.clone() } else { ploc.clone() });
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
+    let scene = TraceScene {
+        static_bvh: Some(Traceable {
+            bvh: &kept,
+            geometry: geom,
+        }),
+        dynamic_bvh: None,
+    };
+    let some = &rays[..1000];
+    let (gpu, _) = tracer.trace(some, scene, false).unwrap();
+    let cpu: Vec<Hit> = some.iter().map(|r| brute_force(r, &v, &i)).collect();
+    let ties = compare(&gpu, &cpu, some, |p| triangle(&v, &i, p as usize));
+    assert!(ties <= 2, "{ties} ties");
+    let lbvh_only = Settings {
+        static_ploc: false,
+        ..settings.clone()
+    };
+    let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &lbvh_only, &rays).unwrap();
+    assert!(choice.is_none() && tree(&kept) == lbvh);
+    let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &[]).unwrap();
+    assert!(choice.is_none() && tree(&kept) == ploc);
+}

@@ -186,6 +186,7 @@ impl Demo {
             passes: &passes,
             stats: self.stats.as_ref(),
             stages: &stages,
+            static_tree: self.renderer.static_tree.as_ref(),
             camera: self.camera.camera(),
             speed: self.camera.speed,
             dynamic: self.renderer.is_dynamic(),

@@ -32,6 +32,8 @@ pub struct HudInfo<'a> {
     /// The adaptive stages' ways and prices: the G-buffer's and the shadows' (`None`
     /// where the setting is fixed).
     pub stages: &'a (Option<StageReport>, Option<StageReport>),
+    /// With `static_ploc`: the static tree kept and both trees' prices.
+    pub static_tree: Option<&'a crate::renderer::static_tree::StaticTreeChoice>,
     pub camera: Camera,
     pub speed: f32,
     pub dynamic: bool,
@@ -212,6 +214,9 @@ fn mode_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: &mut
             ui.selectable_value(&mut s.tracer, t, t.name()).on_hover_text(t.about());
         }
     });
+    if let Some(t) = info.static_tree {
+        ui.label(format!("  static tree: {}", t.summary()));
+    }
     ui.horizontal(|ui| {
         ui.label("hybrid");
         for p in HybridPolicy::ALL {
@@ -446,6 +451,12 @@ mod tests {
             Some(StageReport::of(&stage, ["raster", "rays"], 0)),
             Some(StageReport::of(&stage, ["hybrid", "rays"], 0)),
         );
+        let tree = crate::renderer::static_tree::StaticTreeChoice {
+            kept: "ploc",
+            ploc_ms: 1.0,
+            lbvh_ms: 1.5,
+            rays: 16_384,
+        };
         let info = HudInfo {
             scene: "room",
             device: "test",
@@ -459,6 +470,7 @@ mod tests {
             passes: &[("gbuffer", 1.0)],
             stats: None,
             stages: &stages,
+            static_tree: Some(&tree),
             camera,
             speed: 1.0,
             dynamic: true,

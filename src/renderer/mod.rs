@@ -115,7 +115,7 @@ pub struct Renderer {
     pub static_tree: Option<static_tree::StaticTreeChoice>,
     /// Rays from the static scene's surfaces, relative to the render origin: what the
     /// choice of its tree times.
-    static_rays: Vec<crate::gpu_types::Ray>,
+    static_rays: static_tree::ChoiceRays,
     /// The tracer's kernels and, for the vendor tracer, its acceleration structures.
     tracer: FrameTracer,
     /// What moves, when the scene has bodies.
@@ -165,16 +165,11 @@ impl Renderer {
         let tris = scene_buffers.mesh.index_count / 3;
         let static_bvh = Bvh::new_static_in(ctx, tris, MortonBits::Bits30, static_tree::layout(settings))?;
         let builder = LbvhBuilder::new(ctx)?;
-        let count = static_tree::ray_count(ctx.device_type);
-        let static_rays = static_tree::surface_rays(&scene.vertices, &scene.indices, origin, count, 1);
-        let (static_bvh, static_bvh_build, static_tree) = static_tree::build(
-            ctx,
-            &builder,
-            scene_buffers.mesh.triangles(),
-            static_bvh,
-            settings,
-            &static_rays,
-        )?;
+        let geom = scene_buffers.mesh.triangles();
+        let built = builder.build_now(geom, &static_bvh, static_tree::kind(settings))?;
+        let static_rays = static_tree::frame_rays(ctx, geom, &static_bvh, scene, settings, origin)?;
+        let (static_bvh, static_bvh_build, static_tree) =
+            static_tree::choose(ctx, &builder, geom, (static_bvh, built), settings, &static_rays)?;
         let dynamic = if scene.is_dynamic() {
             Some(DynamicGeometry::new(ctx, scene, settings, origin)?)
         } else {

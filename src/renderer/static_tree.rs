@@ -1,17 +1,22 @@
 //! The static scene's tree, built once at load. With `static_ploc`, PLOC's, unless the
 //! LBVH's tree of the same triangles walks this device's rays faster: both are built,
-//! the same rays (from the scene's surfaces, in random directions: what reflection and
-//! shadow rays are) traced through each in alternation, and the faster kept. A PLOC
-//! tree has walked faster on lavapipe in every scene measured but one, and 4x slower
-//! than the LBVH's on an NVIDIA H200 on a scanned statue (docs/lbvh.md); measuring on
+//! the same rays traced through each in alternation, and the faster kept. The rays are
+//! what a frame traces: the scene camera's view, where it hits, starts a reflection
+//! ray (on a reflective material) and a shadow ray towards the sun (any hit); rays
+//! from the scene's surfaces in random directions make up the reflections where the
+//! view sees few reflectors. A PLOC
+//! tree has walked faster on lavapipe on every built-in scene, and 4x slower than the
+//! LBVH's on an NVIDIA H200 on a scanned statue (docs/lbvh.md); measuring on
 //! the device at hand is what keeps it from ever walking slower. Both trees find the
 //! same hits (the closest, equal distances to the smaller id), so the choice moves
 //! time, never pixels.
 
 use crate::error::Result;
-use crate::gpu_types::{GpuVertex, Ray};
+use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::rt_trace::{TracePass, NAME};
+use crate::scene::{Camera, Scene};
 use crate::settings::Settings;
+use crate::shader_defines::BVH_INVALID;
 use crate::tracers::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, StaticLayout};
 use crate::tracers::{Lbvh, TraceScene, Traceable};
 use crate::vk::Context;
@@ -53,11 +58,11 @@ pub fn kind(settings: &Settings) -> BvhKind {
 pub struct StaticTreeChoice {
     /// The tree kept: `ploc`, or `lbvh` where it walked the rays faster.
     pub kept: &'static str,
-    /// GPU milliseconds of the rays through each tree (`rt.trace`), medians of the
-    /// timed rounds.
+    /// GPU milliseconds of the rays through each tree (`rt.trace`: the reflection
+    /// rays' and the shadow rays' times, added), medians of the timed rounds.
     pub ploc_ms: f64,
     pub lbvh_ms: f64,
-    /// Rays a round.
+    /// Rays a round, reflection and shadow rays together (`ChoiceRays`).
     pub rays: u32,
 }
 
@@ -65,7 +70,7 @@ impl StaticTreeChoice {
     /// One line of text: the tree kept and both prices.
     pub fn summary(&self) -> String {
         format!(
-            "{} kept (PLOC {:.3} ms, LBVH {:.3} ms for {} rays from the surfaces)",
+            "{} kept (PLOC {:.3} ms, LBVH {:.3} ms for {} reflection and shadow rays)",
             self.kept, self.ploc_ms, self.lbvh_ms, self.rays
         )
     }
@@ -131,21 +136,181 @@ pub fn surface_rays(vertices: &[GpuVertex], indices: &[u32], origin: Vec3, count
         .collect()
 }
 
+/// Rays from the camera through the pixel centres of an image of about `count` pixels
+/// and `aspect` (width over height), less `origin`, their directions of unit length,
+/// in 8x8 tiles row by row as a frame's kernels take neighbouring pixels together (a
+/// subgroup of random pixels diverges, and then every tree walks alike slowly).
+pub fn view_rays(camera: &Camera, aspect: f32, origin: Vec3, count: u32) -> Vec<Ray> {
+    let forward = (camera.target - camera.position).normalize_or_zero();
+    let right = forward.cross(camera.up).normalize_or_zero();
+    let up = right.cross(forward);
+    let tan = (0.5 * camera.fov_y_deg.to_radians()).tan();
+    let h = ((count as f32 / aspect).sqrt() as u32).max(1);
+    let w = (count / h).max(1);
+    let (tiles_x, tiles_y) = (w.div_ceil(8), h.div_ceil(8));
+    let mut rays = Vec::with_capacity((w * h) as usize);
+    for tile in 0..tiles_x * tiles_y {
+        let (tx, ty) = (tile % tiles_x, tile / tiles_x);
+        for k in 0..64 {
+            let (px, py) = (8 * tx + k % 8, 8 * ty + k / 8);
+            if px >= w || py >= h {
+                continue;
+            }
+            let x = 2.0 * (px as f32 + 0.5) / w as f32 - 1.0;
+            let y = 1.0 - 2.0 * (py as f32 + 0.5) / h as f32;
+            let d = (forward + right * (x * tan * aspect) + up * (y * tan)).normalize_or_zero();
+            rays.push(Ray {
+                origin: (camera.position - origin).to_array(),
+                tmin: camera.near,
+                dir: d.to_array(),
+                tmax: camera.far,
+            });
+        }
+    }
+    rays
+}
+
+/// The rays the choice of the static tree times, as a frame traces them: reflection
+/// rays (closest hit) and shadow rays (any hit).
+#[derive(Clone, Debug, Default)]
+pub struct ChoiceRays {
+    pub reflect: Vec<Ray>,
+    pub shadow: Vec<Ray>,
+}
+
+impl ChoiceRays {
+    /// Rays of both kinds.
+    pub fn len(&self) -> usize {
+        self.reflect.len() + self.shadow.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// What the view `rays` (unit directions) seen against their `hits` on the static
+/// triangles of the scene (ids in index order) start, from each hit point with tmin
+/// `tmin`: the mirror reflection where the triangle's material reflects more than
+/// `reflective_min`, and a shadow ray towards the sun `to_sun` where the side facing
+/// the viewer faces it: the rays a frame traces. Misses start none.
+pub fn frame_rays_from(
+    (rays, hits): (&[Ray], &[Hit]),
+    scene: &Scene,
+    reflective_min: f32,
+    to_sun: Vec3,
+    tmin: f32,
+) -> ChoiceRays {
+    let corner = |t: usize, k: usize| Vec3::from(scene.vertices[scene.indices[3 * t + k] as usize].position);
+    let mut out = ChoiceRays::default();
+    for (r, h) in rays.iter().zip(hits) {
+        if h.prim == BVH_INVALID || h.prim & 0x8000_0000 != 0 || h.t.is_nan() || h.t <= 0.0 {
+            continue;
+        }
+        let t = h.prim as usize;
+        let n = (corner(t, 1) - corner(t, 0))
+            .cross(corner(t, 2) - corner(t, 0))
+            .normalize_or_zero();
+        if n == Vec3::ZERO {
+            continue;
+        }
+        let d = Vec3::from(r.dir);
+        let p = (Vec3::from(r.origin) + d * h.t).to_array();
+        let ray = |dir: Vec3| Ray {
+            origin: p,
+            tmin,
+            dir: dir.to_array(),
+            tmax: f32::MAX,
+        };
+        let material = scene.vertices[scene.indices[3 * t] as usize].material as usize;
+        if scene
+            .materials
+            .get(material)
+            .is_some_and(|m| m.reflectivity > reflective_min)
+        {
+            out.reflect.push(ray(d - 2.0 * d.dot(n) * n));
+        }
+        let facing = if n.dot(d) < 0.0 { n } else { -n };
+        if facing.dot(to_sun) > 0.0 {
+            out.shadow.push(ray(to_sun));
+        }
+    }
+    out
+}
+
+/// The rays the choice of the static tree times (`choose`): `ray_count` rays of the
+/// scene camera's view traced through `tree` over `geom` (any tree: both find the same
+/// hits), and the reflection and shadow rays they start (`frame_rays_from`); where the
+/// view starts fewer than half the count of reflection rays, rays from the surfaces
+/// (`surface_rays`) make them up. Computed once, at load: the static scene does not
+/// change.
+pub fn frame_rays(
+    ctx: &Arc<Context>,
+    geom: Geometry<'_>,
+    tree: &Bvh,
+    scene: &Scene,
+    settings: &Settings,
+    origin: Vec3,
+) -> Result<ChoiceRays> {
+    let count = ray_count(ctx.device_type);
+    let aspect = settings.width as f32 / settings.height as f32;
+    let view = view_rays(&scene.camera, aspect, origin, count);
+    let scene_tree = TraceScene {
+        static_bvh: Some(Traceable {
+            bvh: tree,
+            geometry: geom,
+        }),
+        dynamic_bvh: None,
+    };
+    let (hits, _) = TracePass::<Lbvh>::new(ctx)?.trace(&view, scene_tree, false)?;
+    let (lo, hi) = scene.bounds();
+    let tmin = 1e-4 * (hi - lo).length();
+    let mut rays = frame_rays_from(
+        (&view, &hits),
+        scene,
+        settings.reflective_min,
+        scene.light.direction,
+        tmin,
+    );
+    let short = (count / 2).saturating_sub(rays.reflect.len() as u32);
+    rays.reflect
+        .extend(surface_rays(&scene.vertices, &scene.indices, origin, short, 2));
+    Ok(rays)
+}
+
+/// A build's GPU milliseconds per stage and the kind built (`LbvhBuilder::build_now`).
+pub type Stages = (Vec<(&'static str, f64)>, BvhKind);
+
+/// The static tree kept, its build's GPU milliseconds per stage, and the choice.
+pub type Kept = (Bvh, Vec<(&'static str, f64)>, Option<StaticTreeChoice>);
+
 /// Builds the static scene's BVH over `geom` into `bvh` (`layout(settings)`) with the
-/// settings' builder; with PLOC, also the LBVH's tree, and keeps the one that walks
-/// `rays` faster (see the module). Returns the tree kept, its build's GPU milliseconds
-/// per stage, and the choice (`None` when the LBVH was asked for, when the PLOC tree
-/// was too deep for the walk and the LBVH was built instead, or without rays).
-#[allow(clippy::type_complexity)]
+/// settings' builder, then `choose`. Returns the tree kept, its build's GPU
+/// milliseconds per stage, and the choice.
 pub fn build(
     ctx: &Arc<Context>,
     builder: &LbvhBuilder,
     geom: Geometry<'_>,
     bvh: Bvh,
     settings: &Settings,
-    rays: &[Ray],
-) -> Result<(Bvh, Vec<(&'static str, f64)>, Option<StaticTreeChoice>)> {
-    let (scopes, built) = builder.build_now(geom, &bvh, kind(settings))?;
+    rays: &ChoiceRays,
+) -> Result<Kept> {
+    let built = builder.build_now(geom, &bvh, kind(settings))?;
+    choose(ctx, builder, geom, (bvh, built), settings, rays)
+}
+
+/// After `bvh` was built over `geom` (`built`: its stages' GPU milliseconds and the
+/// kind built): with PLOC, also builds the LBVH's tree and keeps the one that walks
+/// `rays` faster (see the module). Returns the tree kept, its build's GPU milliseconds
+/// per stage, and the choice (`None` when the LBVH was asked for, when the PLOC tree
+/// was too deep for the walk and the LBVH was built instead, or without rays).
+pub fn choose(
+    ctx: &Arc<Context>,
+    builder: &LbvhBuilder,
+    geom: Geometry<'_>,
+    (bvh, (scopes, built)): (Bvh, Stages),
+    settings: &Settings,
+    rays: &ChoiceRays,
+) -> Result<Kept> {
     if built != BvhKind::Ploc || rays.is_empty() {
         return Ok((bvh, scopes, None));
     }
@@ -160,15 +325,19 @@ pub fn build(
             }),
             dynamic_bvh: None,
         };
-        let mut ms = f64::NAN;
-        for _ in 0..TRIES {
-            let (_, readout) = tracer.trace(rays, scene, false)?;
-            ms = readout.get(NAME).unwrap_or(f64::NAN);
-            if readout.problem.is_none() {
-                break;
+        let mut total = 0.0;
+        for (set, any_hit) in [(&rays.reflect, false), (&rays.shadow, true)] {
+            let mut ms = 0.0;
+            for _ in 0..TRIES {
+                let (_, readout) = tracer.trace(set, scene, any_hit)?;
+                ms = readout.get(NAME).unwrap_or(0.0);
+                if readout.problem.is_none() {
+                    break;
+                }
             }
+            total += ms;
         }
-        Ok(ms)
+        Ok(total)
     };
     let (mut ploc_ms, mut lbvh_ms) = (Vec::new(), Vec::new());
     for round in 0..=ROUNDS {
@@ -252,6 +421,72 @@ mod tests {
         assert_eq!(surface_rays(&vertices, &indices, origin, 50, 9)[..], rays[..50]);
         let flat = vec![v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(2.0, 0.0, 0.0)];
         assert!(surface_rays(&flat, &[0, 1, 2], Vec3::ZERO, 10, 1).is_empty());
+    }
+
+    /// The view's rays leave the camera through the whole image in 8x8 tiles; where
+    /// they hit, a reflective floor starts a mirror reflection and, lit, a shadow ray
+    /// towards the sun; a matte floor only the shadow ray; a floor seen from its unlit
+    /// side, none; a miss, none.
+    #[test]
+    fn frame_rays_follow_the_view() {
+        let camera = Camera {
+            position: Vec3::new(0.0, 2.0, 0.0),
+            target: Vec3::new(0.0, 0.0, -2.0),
+            up: Vec3::Y,
+            fov_y_deg: 60.0,
+            near: 0.01,
+            far: 100.0,
+        };
+        let view = view_rays(&camera, 2.0, Vec3::ZERO, 1000);
+        assert!((900..=1000).contains(&view.len()), "{}", view.len());
+        for r in &view {
+            assert_eq!(r.origin, [0.0, 2.0, 0.0]);
+            assert!((Vec3::from(r.dir).length() - 1.0).abs() < 1e-5);
+        }
+        // Neighbours in a tile: the first 8 rays are one row of pixels, left to right,
+        // the next 8 the row below.
+        assert!(view[..8].windows(2).all(|w| w[0].dir[0] < w[1].dir[0]));
+        assert!((view[8].dir[0] - view[0].dir[0]).abs() < 0.01 && view[8].dir[1] < view[0].dir[1]);
+        let mut scene = crate::scene::builtin::room().unwrap();
+        let p = Vec3::new(0.3, 0.0, -2.0);
+        let down = Ray {
+            origin: [0.3, 2.0, -2.0],
+            tmin: 0.0,
+            dir: [0.0, -1.0, 0.0],
+            tmax: f32::MAX,
+        };
+        // A floor triangle of the scene, its material made a mirror, then matte.
+        let t = (0..scene.indices.len() / 3)
+            .find(|&t| {
+                let c = |k| Vec3::from(scene.vertices[scene.indices[3 * t + k] as usize].position);
+                let n = (c(1) - c(0)).cross(c(2) - c(0));
+                n.x == 0.0 && n.z == 0.0 && c(0).y.abs() < 1e-3
+            })
+            .expect("room has a floor at y = 0");
+        let hit = Hit {
+            t: 2.0,
+            prim: t as u32,
+            u: 0.2,
+            v: 0.2,
+        };
+        let material = scene.vertices[scene.indices[3 * t] as usize].material as usize;
+        let sun = Vec3::new(0.0, 1.0, 1.0).normalize();
+        scene.materials[material].reflectivity = 0.5;
+        let rays = frame_rays_from((&[down], &[hit]), &scene, 0.02, sun, 1e-3);
+        assert_eq!((rays.reflect.len(), rays.shadow.len()), (1, 1));
+        assert_eq!(rays.reflect[0].origin, p.to_array());
+        assert!(Vec3::from(rays.reflect[0].dir).abs_diff_eq(Vec3::Y, 1e-6));
+        assert_eq!((rays.shadow[0].dir, rays.shadow[0].tmin), (sun.to_array(), 1e-3));
+        scene.materials[material].reflectivity = 0.0;
+        let rays = frame_rays_from((&[down], &[hit]), &scene, 0.02, sun, 1e-3);
+        assert_eq!((rays.reflect.len(), rays.shadow.len()), (0, 1));
+        let rays = frame_rays_from((&[down], &[hit]), &scene, 0.02, -sun, 1e-3);
+        assert!(rays.is_empty(), "the sun below the floor: no shadow ray");
+        let miss = Hit {
+            prim: BVH_INVALID,
+            ..hit
+        };
+        assert!(frame_rays_from((&[down], &[miss]), &scene, 0.02, sun, 1e-3).is_empty());
     }
 
     #[test]

@@ -344,9 +344,9 @@ settings_table! {
     /// Build the static scene's BVH (once, at load) with PLOC instead of the LBVH:
     /// its tree is close to a binned-SAH builder's, so every ray walks fewer nodes, at
     /// a slower build. The LBVH's tree is built too, and kept instead where it walks
-    /// rays from the scene's surfaces faster on this device (reported as
-    /// `static_tree`). Dynamic geometry, rebuilt or refit per frame, always gets the
-    /// LBVH.
+    /// the reflection and shadow rays of the scene camera's view faster on this device
+    /// (measured at load, reported as `static_tree`). Dynamic geometry, rebuilt or
+    /// refit per frame, always gets the LBVH.
     static_ploc: bool = true, Range::Any, Hud::Checkbox, StaticBvh;
     /// Walk the static scene's BVH through wide nodes (up to four children, a binary
     /// node's with each internal one opened: two levels a step, 64 bytes a node)

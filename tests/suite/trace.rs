@@ -707,7 +707,10 @@ fn the_static_tree_kept_is_the_one_that_walked_faster() {
     };
     let (ploc, lbvh) = (built_by(BvhKind::Ploc), built_by(BvhKind::Lbvh));
     assert!(ploc != lbvh, "the two builders' trees differ");
-    let rays = static_tree::surface_rays(&v, &i, Vec3::ZERO, 4096, 3);
+    let rays = static_tree::ChoiceRays {
+        reflect: static_tree::surface_rays(&v, &i, Vec3::ZERO, 3072, 3),
+        shadow: static_tree::surface_rays(&v, &i, Vec3::ZERO, 1024, 4),
+    };
     let settings = Settings::default();
     assert!(settings.static_ploc);
     let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &rays).unwrap();
@@ -729,7 +732,7 @@ fn the_static_tree_kept_is_the_one_that_walked_faster() {
         }),
         dynamic_bvh: None,
     };
-    let some = &rays[..1000];
+    let some = &rays.reflect[..1000];
     let (gpu, _) = tracer.trace(some, scene, false).unwrap();
     let cpu: Vec<Hit> = some.iter().map(|r| brute_force(r, &v, &i)).collect();
     let ties = compare(&gpu, &cpu, some, |p| triangle(&v, &i, p as usize));
@@ -740,6 +743,7 @@ fn the_static_tree_kept_is_the_one_that_walked_faster() {
     };
     let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &lbvh_only, &rays).unwrap();
     assert!(choice.is_none() && tree(&kept) == lbvh);
-    let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &[]).unwrap();
+    let none = static_tree::ChoiceRays::default();
+    let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &none).unwrap();
     assert!(choice.is_none() && tree(&kept) == ploc);
 }

@@ -4,12 +4,11 @@
 //! what a frame traces: the scene camera's view, where it hits, starts a reflection
 //! ray (on a reflective material) and a shadow ray towards the sun (any hit); rays
 //! from the scene's surfaces in random directions make up the reflections where the
-//! view sees few reflectors. A PLOC
-//! tree has walked faster on lavapipe on every built-in scene, and 4x slower than the
-//! LBVH's on an NVIDIA H200 on a scanned statue (docs/lbvh.md); measuring on
-//! the device at hand is what keeps it from ever walking slower. Both trees find the
-//! same hits (the closest, equal distances to the smaller id), so the choice moves
-//! time, never pixels.
+//! view sees few reflectors. A PLOC tree has walked faster on lavapipe on every
+//! built-in scene, and 4x slower than the LBVH's on an NVIDIA H200 on a scanned statue
+//! (docs/lbvh.md); measuring on the device at hand is what keeps it from ever walking
+//! slower. Both trees find the same hits (the closest, equal distances to the smaller
+//! id), so the choice moves time, never pixels.
 
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};

@@ -38,6 +38,7 @@ pub use view::{frame_uniforms, render_origin, View};
 use crate::error::Result;
 use crate::gpu_types::FrameUniforms;
 use crate::passes::compose::ComposePass;
+use crate::passes::rt_trace::TracePass;
 use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
@@ -113,8 +114,9 @@ pub struct Renderer {
     /// With `static_ploc`: PLOC's tree or the LBVH's, whichever walked `static_rays`
     /// faster (`static_tree`).
     pub static_tree: Option<static_tree::StaticTreeChoice>,
-    /// Rays from the static scene's surfaces, relative to the render origin: what the
-    /// choice of its tree times.
+    /// The reflection and shadow rays of the scene camera's view at load, relative to
+    /// the render origin (`static_tree::frame_rays`): what the choice of its tree
+    /// times, again when the static BVH is rebuilt.
     static_rays: static_tree::ChoiceRays,
     /// The tracer's kernels and, for the vendor tracer, its acceleration structures.
     tracer: FrameTracer,
@@ -167,9 +169,17 @@ impl Renderer {
         let builder = LbvhBuilder::new(ctx)?;
         let geom = scene_buffers.mesh.triangles();
         let built = builder.build_now(geom, &static_bvh, static_tree::kind(settings))?;
-        let static_rays = static_tree::frame_rays(ctx, geom, &static_bvh, scene, settings, origin)?;
-        let (static_bvh, static_bvh_build, static_tree) =
-            static_tree::choose(ctx, &builder, geom, (static_bvh, built), settings, &static_rays)?;
+        // One trace kernel for the view's rays and the choice's rounds.
+        let trace = TracePass::<crate::tracers::Lbvh>::new(ctx)?;
+        let static_rays = static_tree::frame_rays(ctx, &trace, geom, &static_bvh, scene, settings, origin)?;
+        let (static_bvh, static_bvh_build, static_tree) = static_tree::choose(
+            ctx,
+            (&builder, &trace),
+            geom,
+            (static_bvh, built),
+            settings,
+            &static_rays,
+        )?;
         let dynamic = if scene.is_dynamic() {
             Some(DynamicGeometry::new(ctx, scene, settings, origin)?)
         } else {

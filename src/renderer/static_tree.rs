@@ -18,7 +18,7 @@ use crate::settings::Settings;
 use crate::shader_defines::BVH_INVALID;
 use crate::tracers::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, StaticLayout};
 use crate::tracers::{Lbvh, TraceScene, Traceable};
-use crate::vk::Context;
+use crate::vk::{remeasure, Context};
 use ash::vk;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
@@ -29,10 +29,9 @@ use std::sync::Arc;
 /// (lavapipe walks 0.3-30 Mrays/s) few, so a load stays short.
 const RAYS_GPU: u32 = 262_144;
 const RAYS_CPU: u32 = 16_384;
-/// Timed rounds of each tree, the two alternating, after one untimed round each.
+/// Timed rounds of each tree, the two alternating, after one untimed round each (a
+/// round whose timestamps fail their self-check is measured again: `vk::remeasure`).
 const ROUNDS: usize = 3;
-/// Tries of a round whose timestamps fail their self-check.
-const TRIES: usize = 3;
 
 /// How the static walk reads the static scene's BVH.
 pub fn layout(settings: &Settings) -> StaticLayout {
@@ -84,6 +83,12 @@ pub fn ray_count(device_type: vk::PhysicalDeviceType) -> u32 {
     }
 }
 
+/// The corners of triangle `t` of `vertices` and `indices` (the renderer does not
+/// call the CPU references, whose `cpu_ref::lbvh::triangle` is the same).
+fn corners(vertices: &[GpuVertex], indices: &[u32], t: usize) -> [Vec3; 3] {
+    [0, 1, 2].map(|k| Vec3::from(vertices[indices[3 * t + k] as usize].position))
+}
+
 /// `count` rays from points on the triangles of `vertices` and `indices` (each
 /// triangle drawn by its area, a point uniform on it), less `origin` (the render
 /// origin: the GPU's copy of the scene is relative to it), each in a direction uniform
@@ -91,12 +96,11 @@ pub fn ray_count(device_type: vk::PhysicalDeviceType) -> u32 {
 /// diagonal, so a ray does not stop at its own triangle. Reproducible by `seed`. None
 /// for a scene without area.
 pub fn surface_rays(vertices: &[GpuVertex], indices: &[u32], origin: Vec3, count: u32, seed: u64) -> Vec<Ray> {
-    let corner = |t: usize, k: usize| Vec3::from(vertices[indices[3 * t + k] as usize].position);
     let tris = indices.len() / 3;
     let mut areas = Vec::with_capacity(tris);
     let (mut lo, mut hi, mut total) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN), 0.0f64);
     for t in 0..tris {
-        let (a, b, c) = (corner(t, 0), corner(t, 1), corner(t, 2));
+        let [a, b, c] = corners(vertices, indices, t);
         lo = lo.min(a.min(b).min(c));
         hi = hi.max(a.max(b).max(c));
         total += 0.5 * f64::from((b - a).cross(c - a).length());
@@ -111,7 +115,7 @@ pub fn surface_rays(vertices: &[GpuVertex], indices: &[u32], origin: Vec3, count
         .map(|_| {
             let at = rng.random_range(0.0..total);
             let t = areas.partition_point(|&s| s <= at).min(tris - 1);
-            let (a, b, c) = (corner(t, 0), corner(t, 1), corner(t, 2));
+            let [a, b, c] = corners(vertices, indices, t);
             let (r1, r2): (f32, f32) = (rng.random(), rng.random());
             let s = r1.sqrt();
             let p = a * (1.0 - s) + b * (s * (1.0 - r2)) + c * (s * r2);
@@ -199,16 +203,14 @@ pub fn frame_rays_from(
     to_sun: Vec3,
     tmin: f32,
 ) -> ChoiceRays {
-    let corner = |t: usize, k: usize| Vec3::from(scene.vertices[scene.indices[3 * t + k] as usize].position);
     let mut out = ChoiceRays::default();
     for (r, h) in rays.iter().zip(hits) {
         if h.prim == BVH_INVALID || h.prim & 0x8000_0000 != 0 || h.t.is_nan() || h.t <= 0.0 {
             continue;
         }
         let t = h.prim as usize;
-        let n = (corner(t, 1) - corner(t, 0))
-            .cross(corner(t, 2) - corner(t, 0))
-            .normalize_or_zero();
+        let [a, b, c] = corners(&scene.vertices, &scene.indices, t);
+        let n = (b - a).cross(c - a).normalize_or_zero();
         if n == Vec3::ZERO {
             continue;
         }
@@ -226,7 +228,7 @@ pub fn frame_rays_from(
             .get(material)
             .is_some_and(|m| m.reflectivity > reflective_min)
         {
-            out.reflect.push(ray(d - 2.0 * d.dot(n) * n));
+            out.reflect.push(ray(d.reflect(n)));
         }
         let facing = if n.dot(d) < 0.0 { n } else { -n };
         if facing.dot(to_sun) > 0.0 {
@@ -244,6 +246,7 @@ pub fn frame_rays_from(
 /// change.
 pub fn frame_rays(
     ctx: &Arc<Context>,
+    tracer: &TracePass<Lbvh>,
     geom: Geometry<'_>,
     tree: &Bvh,
     scene: &Scene,
@@ -260,7 +263,7 @@ pub fn frame_rays(
         }),
         dynamic_bvh: None,
     };
-    let (hits, _) = TracePass::<Lbvh>::new(ctx)?.trace(&view, scene_tree, false)?;
+    let (hits, _) = tracer.trace(&view, scene_tree, false)?;
     let (lo, hi) = scene.bounds();
     let tmin = 1e-4 * (hi - lo).length();
     let mut rays = frame_rays_from(
@@ -294,17 +297,18 @@ pub fn build(
     rays: &ChoiceRays,
 ) -> Result<Kept> {
     let built = builder.build_now(geom, &bvh, kind(settings))?;
-    choose(ctx, builder, geom, (bvh, built), settings, rays)
+    let tracer = TracePass::<Lbvh>::new(ctx)?;
+    choose(ctx, (builder, &tracer), geom, (bvh, built), settings, rays)
 }
 
 /// After `bvh` was built over `geom` (`built`: its stages' GPU milliseconds and the
 /// kind built): with PLOC, also builds the LBVH's tree and keeps the one that walks
-/// `rays` faster (see the module). Returns the tree kept, its build's GPU milliseconds
+/// `rays` faster through `tracer` (see the module). Returns the tree kept, its build's GPU milliseconds
 /// per stage, and the choice (`None` when the LBVH was asked for, when the PLOC tree
 /// was too deep for the walk and the LBVH was built instead, or without rays).
 pub fn choose(
     ctx: &Arc<Context>,
-    builder: &LbvhBuilder,
+    (builder, tracer): (&LbvhBuilder, &TracePass<Lbvh>),
     geom: Geometry<'_>,
     (bvh, (scopes, built)): (Bvh, Stages),
     settings: &Settings,
@@ -315,7 +319,6 @@ pub fn choose(
     }
     let lbvh = Bvh::new_static_in(ctx, geom.tri_count, MortonBits::Bits30, layout(settings))?;
     let (lbvh_scopes, _) = builder.build_now(geom, &lbvh, BvhKind::Lbvh)?;
-    let tracer = TracePass::<Lbvh>::new(ctx)?;
     let time = |tree: &Bvh| -> Result<f64> {
         let scene = TraceScene {
             static_bvh: Some(Traceable {
@@ -326,15 +329,8 @@ pub fn choose(
         };
         let mut total = 0.0;
         for (set, any_hit) in [(&rays.reflect, false), (&rays.shadow, true)] {
-            let mut ms = 0.0;
-            for _ in 0..TRIES {
-                let (_, readout) = tracer.trace(set, scene, any_hit)?;
-                ms = readout.get(NAME).unwrap_or(0.0);
-                if readout.problem.is_none() {
-                    break;
-                }
-            }
-            total += ms;
+            let (_, readout, _) = remeasure(|| tracer.trace(set, scene, any_hit))?;
+            total += readout.get(NAME).unwrap_or(0.0);
         }
         Ok(total)
     };

@@ -1,8 +1,8 @@
 #version 460
 // lbvh.ploc, before the rounds: each triangle in key order into the BVH's triangles,
 // and as a one-triangle leaf into the first cluster array; the state's count (N) and
-// the first round's dispatch; the root's parent link. A single triangle is its own
-// tree (bvh.glsl).
+// the first round's dispatch (none for at most PLOC_TAIL_CAP: ploc_tail.comp's); the
+// root's parent link. A single triangle is its own tree (bvh.glsl).
 // CPU reference: cpu_ref::lbvh::ploc (tests/lbvh.rs).
 #include "ploc.glsl"
 
@@ -23,7 +23,8 @@ void main() {
     if (j == 0u) {
         state.count[0] = pc.n;
         state.next_slot = 0u;
-        args = uvec3(pc.n > 1u ? (pc.n + LBVH_WG - 1u) / LBVH_WG : 0u, 1u, 1u);
+        state.live = 0u;
+        args = uvec3(pc.n > PLOC_TAIL_CAP ? (pc.n + LBVH_WG - 1u) / LBVH_WG : 0u, 1u, 1u);
     }
     if (j >= pc.n) {
         return;

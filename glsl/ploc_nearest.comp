@@ -26,23 +26,7 @@ void main() {
     if (i >= c) {
         return;
     }
-    vec3 lo, hi;
-    cluster_box(i, lo, hi);
-    uint lo_j = i >= PLOC_RADIUS ? i - PLOC_RADIUS : 0u;
-    uint hi_j = min(c - 1u, i + PLOC_RADIUS);
-    uint best = i;
-    float best_area = 1.0 / 0.0;
-    for (uint j = lo_j; j <= hi_j; ++j) {
-        if (j == i) {
-            continue;
-        }
-        vec3 jlo, jhi;
-        cluster_box(j, jlo, jhi);
-        float a = bvh_area(min(lo, jlo), max(hi, jhi));
-        if (a < best_area) {
-            best_area = a;
-            best = j;
-        }
-    }
+    uint best;
+    PLOC_NEAREST(cluster_box, i, c, best)
     nearest[i] = best;
 }

@@ -1,7 +1,7 @@
 #version 460
 // lbvh.ploc, round step 3 (one workgroup): each tile's first kept position and first
-// merge, the next round's count and dispatch (none once one cluster is left), and the
-// slots this round's merges take. Each invocation sums a run of consecutive tiles.
+// merge, the next round's count and dispatch (none once at most PLOC_TAIL_CAP clusters
+// are left: ploc_tail.comp's), and the slots this round's merges take. Each invocation sums a run of consecutive tiles.
 // CPU reference: cpu_ref::lbvh::ploc (tests/lbvh.rs).
 #include "ploc.glsl"
 #define WG_SCAN_SIZE PLOC_SCAN_WG
@@ -16,7 +16,7 @@ layout(binding = 3, std430) writeonly buffer NextArgs { uvec3 next_args; };
 
 void main() {
     uint c = state.count[pc.parity];
-    uint tiles = c > 1u ? (c + LBVH_WG - 1u) / LBVH_WG : 0u;
+    uint tiles = c > PLOC_TAIL_CAP ? (c + LBVH_WG - 1u) / LBVH_WG : 0u;
     uint l = gl_LocalInvocationID.x;
     uint per = (tiles + PLOC_SCAN_WG - 1u) / PLOC_SCAN_WG;
     uint first = l * per, last = min(tiles, first + per);
@@ -38,6 +38,9 @@ void main() {
         state.count[1u - pc.parity] = next;
         state.base_slot = state.next_slot;
         state.next_slot += merge_total;
-        next_args = uvec3(next > 1u ? (next + LBVH_WG - 1u) / LBVH_WG : 0u, 1u, 1u);
+        if (tiles != 0u) {
+            state.live = 1u - pc.parity;
+        }
+        next_args = uvec3(next > PLOC_TAIL_CAP ? (next + LBVH_WG - 1u) / LBVH_WG : 0u, 1u, 1u);
     }
 }

@@ -1,9 +1,9 @@
 #version 460
 // lbvh.ploc, round step 4: the clusters close ranks into the other array; the first
 // of each mutual pair writes their node (both halves) into its slot (ploc.glsl), links
-// both children to it, and goes on as the merged cluster, a leaf when its triangles
-// are one run of at most BVH_LEAF_MAX and that costs no more SAH than the split. Indirect: ceil(count / LBVH_WG)
-// workgroups. A node's own parent link is written when it is merged in turn.
+// both children to it, and goes on as the merged cluster (ploc_merged). Indirect:
+// ceil(count / LBVH_WG) workgroups. A node's own parent link is written when it is
+// merged in turn.
 // CPU reference: cpu_ref::lbvh::ploc (tests/lbvh.rs).
 #include "ploc.glsl"
 #define WG_SCAN_SIZE LBVH_WG
@@ -18,7 +18,6 @@ layout(binding = 3, std430) readonly buffer TileOffsets { uvec2 tile_offsets[]; 
 layout(binding = 4, std430) readonly buffer State { PlocState state; };
 layout(binding = 5, std430) buffer TNodes { TraversalNode tnodes[]; };
 layout(binding = 6, std430) buffer TTris { TraversalTri ttris[]; };
-
 
 void main() {
     uint c = state.count[pc.parity];
@@ -45,21 +44,6 @@ void main() {
     }
     Cluster b = clusters[j];
     uint slot = pc.n - 2u - (state.base_slot + off.y + (run >> 16));
-    tnodes[slot].lo0 = a.lo;
-    tnodes[slot].child0 = a.ref;
-    tnodes[slot].hi0 = a.hi;
-    tnodes[slot].child1 = b.ref;
-    tnodes[slot].lo1 = b.lo;
-    tnodes[slot].hi1 = b.hi;
-    LINK_NODE(tnodes, ttris, a.node, slot << 1u);
-    LINK_NODE(tnodes, ttris, b.node, (slot << 1u) | 1u);
-    vec3 lo = min(a.lo, b.lo), hi = max(a.hi, b.hi);
-    uint count = (a.count & ~PLOC_SCATTERED) + (b.count & ~PLOC_SCATTERED);
-    bool run_of_leaves = ((a.count | b.count) & PLOC_SCATTERED) == 0u
-        && (a.first + a.count == b.first || b.first + b.count == a.first);
-    uint first = min(a.first, b.first);
-    float cost;
-    bool leaf = bvh_collapse(bvh_area(lo, hi), a.cost, b.cost, count, run_of_leaves, cost);
-    next_clusters[pos] = Cluster(lo, leaf ? bvh_leaf_ref(first, count) : slot, hi, cost, slot, first,
-                                 count | (run_of_leaves ? 0u : PLOC_SCATTERED), 0u);
+    PLOC_WRITE_NODE(tnodes, ttris, slot, a, b)
+    next_clusters[pos] = ploc_merged(a, b, slot);
 }

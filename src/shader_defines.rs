@@ -94,7 +94,19 @@ pub const RT_LIST_WG: u32 = 256;
 pub const PLOC_RADIUS: u32 = 16;
 /// Workgroup of PLOC's per-round scan of tile counts (one workgroup).
 pub const PLOC_SCAN_WG: u32 = 256;
+/// Clusters at most which PLOC's last rounds run in one workgroup (`ploc_tail.comp`),
+/// their boxes in shared memory, rather than as four dispatches each: the last 20-30
+/// of a build's 35-60 rounds. On lavapipe a workgroup runs on one core at about twice
+/// the rounds' time per cluster, and a round's dispatches cost about 0.1 ms: 256 and
+/// 512 measured alike, 4096 slower (docs/experiments.md).
+pub const PLOC_TAIL_CAP: u32 = 512;
+/// Workgroup of PLOC's last rounds.
+pub const PLOC_TAIL_WG: u32 = 256;
 const _: () = assert!(PLOC_SCAN_WG.is_multiple_of(16) && LBVH_WG.is_multiple_of(16));
+// ploc_tail_round.glsl packs its counts in 16 bits.
+const _: () = assert!(PLOC_TAIL_WG.is_multiple_of(16) && PLOC_TAIL_CAP < 1 << 16);
+// Its shared memory (boxes, the scan) within the 16 KiB every Vulkan device has.
+const _: () = assert!(PLOC_TAIL_CAP * 24 + (PLOC_TAIL_WG + PLOC_TAIL_WG / 16 + 1) * 4 <= 16384);
 
 /// Marks a BVH child link as a leaf: (count - 1) << `BVH_LEAF_COUNT_SHIFT` | the
 /// position of its first triangle in leaf order.
@@ -279,6 +291,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("RT_LIST_WG", RT_LIST_WG),
     ("PLOC_RADIUS", PLOC_RADIUS),
     ("PLOC_SCAN_WG", PLOC_SCAN_WG),
+    ("PLOC_TAIL_CAP", PLOC_TAIL_CAP),
+    ("PLOC_TAIL_WG", PLOC_TAIL_WG),
     ("BVH_LEAF_BIT", BVH_LEAF_BIT),
     ("BVH_LEAF_COUNT_SHIFT", BVH_LEAF_COUNT_SHIFT),
     ("BVH_LEAF_MAX", BVH_LEAF_MAX),

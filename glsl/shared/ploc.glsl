@@ -36,6 +36,8 @@ struct PlocState {
     uint count[2];
     uint next_slot; // slots taken by the merges so far
     uint base_slot; // the first slot of this round's merges
+    uint live;      // the cluster array the last round that ran wrote (a round with at
+                    // most PLOC_TAIL_CAP clusters leaves the arrays as they are)
 };
 
 layout(push_constant) uniform Push {
@@ -61,4 +63,55 @@ layout(push_constant) uniform Push {
             tnodes[node_].parent = (link);                                                \
         }                                                                                 \
     }
+
+// `best`: cluster i's nearest of the `c` among the PLOC_RADIUS on either side, by the
+// area of their union box, ties to the smaller position; `box(j, lo, hi)` is the
+// includer's read of a cluster's box.
+#define PLOC_NEAREST(box, i, c, best)                                                     \
+    {                                                                                     \
+        vec3 lo_, hi_;                                                                    \
+        box(i, lo_, hi_);                                                                 \
+        uint last_ = min(c - 1u, i + PLOC_RADIUS);                                        \
+        float best_area_ = 1.0 / 0.0;                                                     \
+        best = i;                                                                         \
+        for (uint j_ = i >= PLOC_RADIUS ? i - PLOC_RADIUS : 0u; j_ <= last_; ++j_) {      \
+            if (j_ != i) {                                                                \
+                vec3 jlo_, jhi_;                                                          \
+                box(j_, jlo_, jhi_);                                                      \
+                float a_ = bvh_area(min(lo_, jlo_), max(hi_, jhi_));                      \
+                if (a_ < best_area_) {                                                    \
+                    best_area_ = a_;                                                      \
+                    best = j_;                                                            \
+                }                                                                         \
+            }                                                                             \
+        }                                                                                 \
+    }
+
+// The first of a mutual pair `a`, `b` merged into node `slot`: the node's two halves and
+// both children's parent links, on the includer's buffers.
+#define PLOC_WRITE_NODE(tnodes, ttris, slot, a, b)                                        \
+    {                                                                                     \
+        tnodes[slot].lo0 = a.lo;                                                          \
+        tnodes[slot].child0 = a.ref;                                                      \
+        tnodes[slot].hi0 = a.hi;                                                          \
+        tnodes[slot].child1 = b.ref;                                                      \
+        tnodes[slot].lo1 = b.lo;                                                          \
+        tnodes[slot].hi1 = b.hi;                                                          \
+        LINK_NODE(tnodes, ttris, a.node, slot << 1u);                                     \
+        LINK_NODE(tnodes, ttris, b.node, (slot << 1u) | 1u);                              \
+    }
+
+// The cluster `a` and `b` merge into at node `slot`: a leaf when their triangles are one
+// run of at most BVH_LEAF_MAX and that costs no more SAH than the split.
+Cluster ploc_merged(Cluster a, Cluster b, uint slot) {
+    vec3 lo = min(a.lo, b.lo), hi = max(a.hi, b.hi);
+    uint count = (a.count & ~PLOC_SCATTERED) + (b.count & ~PLOC_SCATTERED);
+    bool run_of_leaves = ((a.count | b.count) & PLOC_SCATTERED) == 0u
+        && (a.first + a.count == b.first || b.first + b.count == a.first);
+    uint first = min(a.first, b.first);
+    float cost;
+    bool leaf = bvh_collapse(bvh_area(lo, hi), a.cost, b.cost, count, run_of_leaves, cost);
+    return Cluster(lo, leaf ? bvh_leaf_ref(first, count) : slot, hi, cost, slot, first,
+                   count | (run_of_leaves ? 0u : PLOC_SCATTERED), 0u);
+}
 #endif

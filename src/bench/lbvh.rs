@@ -16,7 +16,7 @@ use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::rt_trace::TracePass;
 use crate::report::{Header, PassTimes, Stat};
-use crate::tracers::lbvh::ploc::{PlocScratch, ROUNDS};
+use crate::tracers::lbvh::ploc::{first_rounds, PlocScratch};
 use crate::tracers::lbvh::{
     Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule, StaticLayout, UploadedTriangles,
 };
@@ -99,8 +99,8 @@ pub struct CaseReport {
     pub morton_bits: u32,
     /// Stage → GPU milliseconds, in build order.
     pub stages_ms: PassTimes,
-    /// GPU milliseconds of a whole build (for PLOC, its first submission: `ROUNDS`
-    /// rounds).
+    /// GPU milliseconds of a whole build (for PLOC, its first submission:
+    /// `first_rounds` rounds and the tail).
     pub build_ms: Stat,
     /// PLOC rounds a build needed beyond the first submission's (submitted again,
     /// untimed; 0 for the LBVH).
@@ -248,8 +248,9 @@ pub fn timed_ploc_build(
         builder.record_build_ploc(cmd, timer, geometry, bvh, scratch);
         timer.end(cmd, BUILD);
     })?;
-    let rounds = builder.ploc.finish(geometry.tri_count, bvh, scratch, ROUNDS)?;
-    Ok((readout, rounds - ROUNDS))
+    let first = first_rounds(geometry.tri_count);
+    let rounds = builder.ploc.finish(geometry.tri_count, bvh, scratch, first)?;
+    Ok((readout, rounds - first))
 }
 
 /// What the timed builds of one case measured: per-stage samples, and the refit and

@@ -495,18 +495,21 @@ fn size_classes_keep_walls_apart() {
 }
 
 /// PLOC builds (the static scene's tree): the nodes, slots, links and boxes equal
-/// `cpu_ref::lbvh::ploc` bit for bit after the LBVH's sort, the invariants hold, and a
-/// build whose first submission runs too few rounds is finished by `finish` to the same
-/// tree; its SAH on `room` stays within 1.05x of binned SAH (1.28x for the LBVH).
+/// `cpu_ref::lbvh::ploc` bit for bit after the LBVH's sort, the invariants hold, on
+/// counts the one-workgroup tail builds alone (up to `PLOC_TAIL_CAP`, the cap itself
+/// included) and ones the rounds hand over to it (one above the cap too), and a build
+/// whose first submission runs too few rounds for the tail (none) is finished by
+/// `finish` to the same tree; its SAH on `room` stays within 1.05x of binned SAH (1.28x for the LBVH).
 #[test]
 fn ploc_matches_cpu_exactly() {
-    use speculum::shader_defines::PLOC_RADIUS;
-    use speculum::tracers::lbvh::ploc::{PlocBuilder, PlocScratch, ROUNDS};
+    use speculum::shader_defines::{PLOC_RADIUS, PLOC_TAIL_CAP};
+    use speculum::tracers::lbvh::ploc::{first_rounds, PlocBuilder, PlocScratch};
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
     let p = PlocBuilder::new(&ctx).unwrap();
     let room = speculum::scene::builtin::room().unwrap();
-    let mut cases: Vec<(String, Vec<GpuVertex>, Vec<u32>)> = [1usize, 2, 3, 1000, 65537]
+    let cap = PLOC_TAIL_CAP as usize;
+    let mut cases: Vec<(String, Vec<GpuVertex>, Vec<u32>)> = [1usize, 2, 3, 1000, cap, cap + 1, 65537]
         .iter()
         .enumerate()
         .map(|(seed, &n)| {
@@ -519,7 +522,7 @@ fn ploc_matches_cpu_exactly() {
         let n = (i.len() / 3) as u32;
         let g = upload(&ctx, v, i);
         let scratch = PlocScratch::new(&ctx, n).unwrap();
-        for first_rounds in [ROUNDS, 3] {
+        for first in [first_rounds(n), 0] {
             let bvh = Bvh::new(&ctx, n, MortonBits::Bits30).unwrap();
             poison_packed(&bvh);
             ctx.one_shot(|cmd| {
@@ -530,10 +533,10 @@ fn ploc_matches_cpu_exactly() {
             .unwrap();
             // PLOC's expected tree from the GPU's own sorted order (`gpu_sorted`).
             let want = cref::ploc(&gpu_sorted(&bvh).1, v, i, PLOC_RADIUS as usize);
-            ctx.one_shot(|cmd| p.record(cmd, g.geometry(), &bvh, &scratch, first_rounds))
+            ctx.one_shot(|cmd| p.record(cmd, g.geometry(), &bvh, &scratch, first))
                 .unwrap();
-            let rounds = p.finish(n, &bvh, &scratch, first_rounds).unwrap();
-            let what = format!("{name}, {first_rounds} rounds first ({rounds} in all)");
+            let rounds = p.finish(n, &bvh, &scratch, first).unwrap();
+            let what = format!("{name}, {first} rounds first ({rounds} in all)");
             let got = assert_packed(&bvh, &want, &what);
             cref::check_bvh(&got, v, i).unwrap_or_else(|e| panic!("{what}: {e}"));
             if name == "room" {
@@ -555,7 +558,7 @@ fn ploc_matches_cpu_exactly() {
 /// exact box within two grid steps of it, with the same link, unused slots empty.
 #[test]
 fn compact_nodes_match_cpu_and_hold_the_boxes() {
-    use speculum::tracers::lbvh::ploc::{PlocScratch, ROUNDS};
+    use speculum::tracers::lbvh::ploc::{first_rounds, PlocScratch};
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
     let mut rng = common::rng(31);
@@ -668,7 +671,7 @@ fn compact_nodes_match_cpu_and_hold_the_boxes() {
             b.record_build_ploc(cmd, &mut timer, g.geometry(), &ploc, &scratch);
         })
         .unwrap();
-        b.ploc.finish(n, &ploc, &scratch, ROUNDS).unwrap();
+        b.ploc.finish(n, &ploc, &scratch, first_rounds(n)).unwrap();
         check(&ploc, &format!("{name}, PLOC"));
         if name == "soup 40000" {
             g.vertices.write(bytemuck::cast_slice(&wave(v))).unwrap();

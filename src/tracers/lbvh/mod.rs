@@ -288,7 +288,7 @@ impl LbvhBuilder {
     }
 
     /// Records a PLOC build of `bvh` over `geom`: the LBVH's bounds, codes and sort,
-    /// then `ploc::ROUNDS` rounds of `lbvh.ploc`, each stage under its timer scope. After
+    /// then `ploc::first_rounds` rounds of `lbvh.ploc` and its tail, each stage under its timer scope. After
     /// the submission, `self.ploc.finish` ends a build that needed more rounds.
     pub fn record_build_ploc(
         &self,
@@ -300,7 +300,8 @@ impl LbvhBuilder {
     ) {
         self.record_keys(cmd, timer, geom, bvh);
         timer.begin(cmd, ploc::PLOC);
-        self.ploc.record(cmd, geom, bvh, scratch, ploc::ROUNDS);
+        self.ploc
+            .record(cmd, geom, bvh, scratch, ploc::first_rounds(geom.tri_count));
         timer.end(cmd, ploc::PLOC);
     }
 
@@ -320,7 +321,8 @@ impl LbvhBuilder {
         if kind == BvhKind::Ploc {
             let scratch = ploc::PlocScratch::new(&self.ctx, geom.tri_count)?;
             let first = timer.one_shot(|cmd, timer| self.record_build_ploc(cmd, timer, geom, bvh, &scratch))?;
-            self.ploc.finish(geom.tri_count, bvh, &scratch, ploc::ROUNDS)?;
+            self.ploc
+                .finish(geom.tri_count, bvh, &scratch, ploc::first_rounds(geom.tri_count))?;
             let nodes: Vec<TraversalNode> = bytemuck::pod_collect_to_vec(&bvh.tnodes.read()?);
             let need = match bvh.compact.as_ref().map(|c| c.layout) {
                 Some(StaticLayout::Wide) => wide_stack_need(&nodes),

@@ -2,16 +2,18 @@
 //! static scene): PLOC (Meister & Bittner 2018) over the triangles in Morton order,
 //! after the LBVH's bounds, codes and sort, into the same layout (`glsl/shared/bvh.glsl`,
 //! `glsl/shared/ploc.glsl`). Rounds of nearest-neighbour search, merge and compaction
-//! run until one cluster is left; their count is the data's, so their sizes live on
-//! the GPU (indirect dispatches) and `finish` records more rounds when the first
-//! submission did not end the build. A merged cluster of at most `BVH_LEAF_MAX`
+//! run until one cluster is left: four dispatches each while more than
+//! `PLOC_TAIL_CAP` clusters are left, then all the rest in one workgroup
+//! (`glsl/ploc_tail.comp`). Their count is the data's, so their sizes live on the GPU
+//! (indirect dispatches) and `finish` records more rounds when the first submission
+//! did not end the build. A merged cluster of at most `BVH_LEAF_MAX`
 //! triangles that are one run in key order becomes a leaf where that costs no more SAH
 //! than its split; the refit follows the parent links as for the LBVH.
 //! CPU reference: `cpu_ref::lbvh::ploc` (tests/suite/lbvh.rs).
 
 use super::{Bvh, Geometry};
 use crate::error::Result;
-use crate::shader_defines::LBVH_WG;
+use crate::shader_defines::{LBVH_WG, PLOC_TAIL_CAP};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Pipeline, Resource, TexelView};
@@ -22,9 +24,23 @@ use std::sync::Arc;
 
 pub const PLOC: &str = "lbvh.ploc";
 
-/// Rounds a build records before it looks whether one cluster is left: PLOC needs
-/// about 35-60 on the scenes and soups measured (2K to 1M triangles).
-pub const ROUNDS: u32 = 64;
+/// Rounds of four dispatches a build of `n` triangles records (before the one-workgroup
+/// tail) before it looks whether one cluster is left: enough to reach `PLOC_TAIL_CAP`
+/// clusters where each round keeps 0.85 of them, and one more. Rounds kept 0.75-0.82
+/// of the clusters on soups of 10K to 1M triangles and `room` until 512 were left,
+/// 0.84 on `gallery` (on average); a round recorded past the cap dispatches nothing
+/// but its one-workgroup scan, and a build that needs more rounds submits again
+/// (`finish`).
+pub fn first_rounds(n: u32) -> u32 {
+    if n <= PLOC_TAIL_CAP {
+        return 0;
+    }
+    let rounds = (f64::from(n) / f64::from(PLOC_TAIL_CAP)).ln() / (1.0f64 / 0.85).ln();
+    rounds.ceil() as u32 + 1
+}
+
+/// Rounds `finish` records per submission after the first.
+const MORE_ROUNDS: u32 = 8;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -69,7 +85,7 @@ impl PlocScratch {
             nearest: buf("ploc.nearest", n * 4, none)?,
             tile_counts: buf("ploc.tile_counts", tiles * 4, none)?,
             tile_offsets: buf("ploc.tile_offsets", tiles * 8, none)?,
-            state: buf("ploc.state", 16, none)?,
+            state: buf("ploc.state", 32, none)?,
             args: [buf("ploc.args0", 16, indirect)?, buf("ploc.args1", 16, indirect)?],
             capacity,
         })
@@ -90,6 +106,7 @@ pub struct PlocBuilder {
     count: Pipeline,
     scan: Pipeline,
     scatter: Pipeline,
+    tail: Pipeline,
 }
 
 impl PlocBuilder {
@@ -102,11 +119,12 @@ impl PlocBuilder {
             count: p("lbvh.ploc.count", shaders::PLOC_COUNT_COMP)?,
             scan: p("lbvh.ploc.scan", shaders::PLOC_SCAN_COMP)?,
             scatter: p("lbvh.ploc.scatter", shaders::PLOC_SCATTER_COMP)?,
+            tail: p("lbvh.ploc.tail", shaders::PLOC_TAIL_COMP)?,
         })
     }
 
-    /// Records the leaves (from the ids `bvh.sort` left in key order) and `rounds`
-    /// rounds. The sorted ids must be visible to compute reads; the BVH ends visible to
+    /// Records the leaves (from the ids `bvh.sort` left in key order), `rounds` rounds
+    /// and the tail. The sorted ids must be visible to compute reads; the BVH ends visible to
     /// all reads.
     pub fn record(&self, cmd: vk::CommandBuffer, geom: Geometry<'_>, bvh: &Bvh, s: &PlocScratch, rounds: u32) {
         assert!(
@@ -138,7 +156,8 @@ impl PlocBuilder {
         self.record_rounds(cmd, n, bvh, s, 0, rounds);
     }
 
-    /// Records `rounds` more rounds after the first `done`.
+    /// Records `rounds` more rounds after the first `done`, then the tail (which ends
+    /// the build if at most `PLOC_TAIL_CAP` clusters are left by then).
     pub fn record_rounds(&self, cmd: vk::CommandBuffer, n: u32, bvh: &Bvh, s: &PlocScratch, done: u32, rounds: u32) {
         let d = &self.ctx.device;
         let rw = access::COMPUTE_READ_WRITE;
@@ -200,18 +219,35 @@ impl PlocBuilder {
                 Groups::Indirect(&s.args[p]),
             );
         }
+        let p = (done + rounds) % 2;
+        // RAW: the tail reads the clusters, the count and the tree the rounds wrote.
+        barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+        self.tail.dispatch(
+            cmd,
+            &[
+                ("clusters0", Resource::Buffer(&s.clusters[0])),
+                ("clusters1", Resource::Buffer(&s.clusters[1])),
+                ("nearest", Resource::Buffer(&s.nearest)),
+                ("state", Resource::Buffer(&s.state)),
+                ("t_nodes", Resource::Buffer(&bvh.tnodes)),
+                ("t_tris", Resource::Buffer(&bvh.ttris)),
+            ],
+            &PlocPush { n, parity: p },
+            Groups::Exact([1, 1, 1]),
+        );
         // RAW: traversal, a readback or the next build reads the tree and the state.
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::ALL_READ_WRITE);
     }
 
     /// After a submitted `record` of `rounds` rounds: records and submits more rounds
-    /// until one cluster is left. Returns the rounds recorded in all.
+    /// (each time with the tail) until one cluster is left. Returns the rounds of four
+    /// dispatches recorded in all.
     pub fn finish(&self, n: u32, bvh: &Bvh, s: &PlocScratch, mut rounds: u32) -> Result<u32> {
         while s.clusters_left(rounds)? > 1 {
             bvh.reshaped();
             self.ctx
-                .one_shot(|cmd| self.record_rounds(cmd, n, bvh, s, rounds, ROUNDS))?;
-            rounds += ROUNDS;
+                .one_shot(|cmd| self.record_rounds(cmd, n, bvh, s, rounds, MORE_ROUNDS))?;
+            rounds += MORE_ROUNDS;
         }
         Ok(rounds)
     }

@@ -13,7 +13,7 @@
 
 use super::{Bvh, Geometry};
 use crate::error::Result;
-use crate::shader_defines::{LBVH_WG, PLOC_TAIL_CAP};
+use crate::shader_defines::{LBVH_WG, PLOC_RADIUS, PLOC_TAIL_CAP};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, Groups, Pipeline, Resource, TexelView};
@@ -54,6 +54,8 @@ pub struct PlocScratch {
     clusters: [Buffer; 2],
     /// `clusters` as texels, what the nearest-neighbour search reads.
     cluster_texels: [TexelView; 2],
+    /// Each cluster's union-box areas with the `PLOC_RADIUS` after it (`ploc_areas`).
+    areas: Buffer,
     nearest: Buffer,
     tile_counts: Buffer,
     tile_offsets: Buffer,
@@ -82,6 +84,7 @@ impl PlocScratch {
         Ok(Self {
             cluster_texels: [TexelView::new(ctx, &clusters[0])?, TexelView::new(ctx, &clusters[1])?],
             clusters,
+            areas: buf("ploc.areas", n * 4 * u64::from(PLOC_RADIUS), none)?,
             nearest: buf("ploc.nearest", n * 4, none)?,
             tile_counts: buf("ploc.tile_counts", tiles * 4, none)?,
             tile_offsets: buf("ploc.tile_offsets", tiles * 8, none)?,
@@ -102,6 +105,7 @@ impl PlocScratch {
 pub struct PlocBuilder {
     ctx: Arc<Context>,
     init: Pipeline,
+    areas: Pipeline,
     nearest: Pipeline,
     count: Pipeline,
     scan: Pipeline,
@@ -115,6 +119,7 @@ impl PlocBuilder {
         Ok(Self {
             ctx: ctx.clone(),
             init: p("lbvh.ploc.init", shaders::PLOC_INIT_COMP)?,
+            areas: p("lbvh.ploc.areas", shaders::PLOC_AREAS_COMP)?,
             nearest: p("lbvh.ploc.nearest", shaders::PLOC_NEAREST_COMP)?,
             count: p("lbvh.ploc.count", shaders::PLOC_COUNT_COMP)?,
             scan: p("lbvh.ploc.scan", shaders::PLOC_SCAN_COMP)?,
@@ -167,10 +172,23 @@ impl PlocBuilder {
             // RAW: this round reads the clusters, count and arguments the previous
             // step wrote (its dispatch size too).
             barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_AND_INDIRECT);
-            self.nearest.dispatch(
+            self.areas.dispatch(
                 cmd,
                 &[
                     ("cluster_texels", Resource::Texels(&s.cluster_texels[p])),
+                    ("areas", Resource::Buffer(&s.areas)),
+                    ("state", Resource::Buffer(&s.state)),
+                ],
+                &push,
+                Groups::Indirect(&s.args[p]),
+            );
+            // RAW: the search reads the areas (WAR: the areas' previous reads are this
+            // round's earlier barriers' sources).
+            barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+            self.nearest.dispatch(
+                cmd,
+                &[
+                    ("areas", Resource::Buffer(&s.areas)),
                     ("nearest", Resource::Buffer(&s.nearest)),
                     ("state", Resource::Buffer(&s.state)),
                 ],

@@ -27,6 +27,8 @@ pub enum Groups<'a> {
     Cover([u32; 3]),
     /// A `VkDispatchIndirectCommand` at the start of this buffer, written on the GPU.
     Indirect(&'a Buffer),
+    /// A `VkDispatchIndirectCommand` at this byte offset (a multiple of 4) of the buffer.
+    IndirectAt(&'a Buffer, u64),
 }
 
 /// A resource and the name of the shader binding it is for: the GLSL variable's name,
@@ -478,6 +480,16 @@ impl Pipeline {
             Groups::Indirect(args) => {
                 // SAFETY: `cmd` is recording; `args` holds a VkDispatchIndirectCommand.
                 unsafe { device.cmd_dispatch_indirect(cmd, args.raw, 0) };
+                return;
+            }
+            Groups::IndirectAt(args, offset) => {
+                assert!(
+                    offset.is_multiple_of(4) && offset + 12 <= args.size,
+                    "indirect arguments at {offset} of {} bytes",
+                    args.size
+                );
+                // SAFETY: `cmd` is recording; `args` holds a VkDispatchIndirectCommand at `offset`.
+                unsafe { device.cmd_dispatch_indirect(cmd, args.raw, offset) };
                 return;
             }
         };

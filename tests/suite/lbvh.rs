@@ -9,7 +9,7 @@ use rand::Rng;
 use speculum::cpu_ref::lbvh as cref;
 use speculum::gpu_types::{GpuVertex, PackedBvh};
 use speculum::scene::soup::{default_size, random_soup};
-use speculum::shader_defines::{SORT_ITEMS_MAX, SORT_WG_CPU, SORT_WG_GPU};
+use speculum::shader_defines::{BVH_INVALID, SORT_ITEMS_MAX, SORT_WG_CPU, SORT_WG_GPU};
 use speculum::tracers::lbvh::sort::{RadixSort, SortBuffers, SortTile};
 use speculum::tracers::lbvh::{Bvh, LbvhBuilder, MortonBits, StaticLayout, UploadedTriangles};
 use speculum::vk::{Context, GpuTimer};
@@ -616,27 +616,49 @@ fn compact_nodes_match_cpu_and_hold_the_boxes() {
         let layout = bvh.compact.as_ref().unwrap().layout;
         let slots = layout.slots() as usize;
         let want = cref::compact_nodes(&nodes, slots as u32);
-        assert_eq!(got, want, "{what}, {layout:?}: compact nodes");
+        let first = (0..want.len()).find(|&t| got[t] != want[t]);
+        assert!(
+            first.is_none(),
+            "{what}, {layout:?}: compact nodes differ first at texel {first:?} of {}: {:?} against {:?}",
+            want.len(),
+            first.map(|t| got[t]),
+            first.map(|t| want[t])
+        );
+        assert!(
+            got[want.len()..].iter().all(|t| *t == [0xc3c3_c3c3; 4]),
+            "{what}, {layout:?}: nothing written past the nodes placed"
+        );
+        let place = cref::compact_places(&nodes, slots as u32).expect("a built tree is ordered");
+        let placed = place.iter().filter(|&&p| p != BVH_INVALID).count();
+        assert_eq!(2 + slots * placed, want.len(), "{what}: the nodes placed are written");
         let (g, st) = (Vec3::from_array(f32_3(got[0])), Vec3::from_array(f32_3(got[1])));
-        // Every node holds its binary node's children (wide: each internal one opened):
-        // each rounded box holds its exact box within two grid steps, with its link.
+        // Every node placed holds its binary node's children (wide: each internal one
+        // opened): each rounded box holds its exact box within two grid steps, with its
+        // link (an internal node's: its place).
+        let link = |c: u32| match speculum::gpu_types::bvh_leaf(c) {
+            Some(_) => c,
+            None => place[c as usize],
+        };
         for (k, nd) in nodes.iter().enumerate() {
+            if place[k] == BVH_INVALID {
+                continue;
+            }
             let mut want = Vec::new();
             for side in 0..2u32 {
                 let c = [nd.child0, nd.child1][side as usize];
                 match speculum::gpu_types::bvh_leaf(c) {
-                    _ if slots == 2 => want.push((speculum::aabb::Aabb::of_half(nd, side), c)),
+                    _ if slots == 2 => want.push((speculum::aabb::Aabb::of_half(nd, side), link(c))),
                     Some(_) => want.push((speculum::aabb::Aabb::of_half(nd, side), c)),
                     None => {
                         let m = &nodes[c as usize];
-                        want.push((speculum::aabb::Aabb::of_half(m, 0), m.child0));
-                        want.push((speculum::aabb::Aabb::of_half(m, 1), m.child1));
+                        want.push((speculum::aabb::Aabb::of_half(m, 0), link(m.child0)));
+                        want.push((speculum::aabb::Aabb::of_half(m, 1), link(m.child1)));
                     }
                 }
             }
             assert!(want.len() <= slots);
             for slot in 0..slots {
-                let half = got[2 + slots * k + slot];
+                let half = got[2 + slots * place[k] as usize + slot];
                 let Some((exact, link)) = want.get(slot) else {
                     assert_eq!(half, cref::WIDE_EMPTY, "{what}: node {k} slot {slot}: unused");
                     continue;
@@ -813,4 +835,83 @@ fn rigid_keys_match_cpu_and_build_the_cpu_tree() {
         let got = assert_packed(&bvh, &want, &format!("{bodies} bodies"));
         cref::check_bvh(&got, &world, &i).unwrap_or_else(|e| panic!("{bodies} bodies: {e}"));
     }
+}
+
+/// `lbvh.compact` after a planted tree (output poisoned): the compact nodes equal the
+/// CPU's exactly, nothing written past them. Chains of 33, 65 and 100 nodes (5, 6 and
+/// 7 jump rounds: both halves of the turn-taking states; the deepest node of the first
+/// two exactly as many steps below the root as the rounds span), each also cut by a
+/// leaf near its end (nodes 61 to 98 of 100 inside that leaf, deeper than the rounds
+/// reach: not placed), in preorder; a chain without parent links, and the root its own child, keep every node
+/// in its slot; so does every tree of a builder whose fit climbs in lockstep.
+#[test]
+fn compact_order_is_preorder_or_the_slots() {
+    use speculum::gpu_types::{bvh_leaf_link, TraversalNode};
+    let ctx = common::context();
+    let free = LbvhBuilder::new(&ctx).unwrap();
+    let lockstep = LbvhBuilder::with_fit(&ctx, true).unwrap();
+    let compact = |b: &LbvhBuilder, bvh: &Bvh| -> Vec<[u32; 4]> {
+        let c = &bvh.compact.as_ref().unwrap().buffer;
+        c.write(&vec![0xc3u8; c.size as usize]).unwrap();
+        let mut timer = GpuTimer::new(&ctx, 2).unwrap();
+        ctx.one_shot(|cmd| {
+            timer.reset(cmd);
+            b.record_compact(cmd, &mut timer, bvh);
+        })
+        .unwrap();
+        bytemuck::pod_collect_to_vec(&c.read().unwrap())
+    };
+    let check = |got: &[[u32; 4]], want: &[[u32; 4]], what: &str| {
+        assert_eq!(got[..want.len()], want[..], "{what}");
+        assert!(
+            got[want.len()..].iter().all(|t| *t == [0xc3c3_c3c3; 4]),
+            "{what}: past the nodes"
+        );
+    };
+    for m in [33u32, 65, 100] {
+        let (v, i) = random_soup(m as usize + 1, 1.0, default_size(1000), u64::from(m));
+        let g = upload(&ctx, &v, &i);
+        for layout in StaticLayout::ALL {
+            let bvh = build_in(&ctx, &free, &g, MortonBits::Bits30, layout);
+            let built = bvh.read_packed().unwrap().nodes;
+            let slots = layout.slots();
+            let root = built[0];
+            let node = |c0, c1, parent| TraversalNode {
+                child0: c0,
+                child1: c1,
+                parent,
+                ..root
+            };
+            let link = |s: u32| if s == 0 { BVH_INVALID } else { (s - 1) << 1 | 1 };
+            let chain: Vec<TraversalNode> = (0..m)
+                .map(|s| match s + 1 == m {
+                    true => node(bvh_leaf_link(s, 1), bvh_leaf_link(s + 1, 1), link(s)),
+                    false => node(bvh_leaf_link(s, 1), s + 1, link(s)),
+                })
+                .collect();
+            let mut cut = chain.clone();
+            cut[60.min(m as usize - 2)].child1 = bvh_leaf_link(61, 2);
+            let mut unlinked = chain.clone();
+            unlinked.iter_mut().for_each(|n| n.parent = BVH_INVALID);
+            let mut cycle = built.clone();
+            cycle[0].child0 = 0;
+            for (name, nodes, ordered) in [
+                ("chain", &chain, true),
+                ("cut chain", &cut, true),
+                ("unlinked chain", &unlinked, false),
+                ("cycle", &cycle, false),
+            ] {
+                let what = format!("{name} of {m}, {layout:?}");
+                bvh.tnodes.write(bytemuck::cast_slice(nodes)).unwrap();
+                let places = cref::compact_places(nodes, slots);
+                assert_eq!(places.is_some(), ordered, "{what}: ordered");
+                check(&compact(&free, &bvh), &cref::compact_nodes(nodes, slots), &what);
+            }
+            let in_slots: Vec<u32> = (0..m).collect();
+            bvh.tnodes.write(bytemuck::cast_slice(&chain)).unwrap();
+            let want = cref::compact_nodes_placed(&chain, slots, &in_slots);
+            check(&compact(&lockstep, &bvh), &want, &format!("lockstep, {m}, {layout:?}"));
+        }
+    }
+    assert_eq!(ctx.validation_messages(), 0);
 }

@@ -132,31 +132,81 @@ pub fn wide_entries(nodes: &[TraversalNode], k: usize) -> Vec<([f32; 3], [f32; 3
 /// An unused slot of a wide node: no box, the link `BVH_INVALID` (never entered).
 pub const WIDE_EMPTY: [u32; 4] = [0, 0, 0, crate::shader_defines::BVH_INVALID];
 
-/// `lbvh.compact`: the static walk's nodes made from `nodes` (`glsl/shared/bvh.glsl`)
-/// with `slots` children a node (`tracers::lbvh::StaticLayout::slots`), as texels of 4
-/// words: the grid's origin (w: `slots`) and step over the root's box, then per binary
-/// node k its two halves (2) or the wide node of its children and grandchildren
-/// (`wide_entries`, `WIDE` slots, unused ones `WIDE_EMPTY`; the wide nodes of opened
-/// children are written too, and never walked).
+/// Where `lbvh.compact` puts each of `nodes` (`glsl/shared/bvh_order.glsl`): its
+/// place in preorder from the root (a node, its first child's subtree, its second's),
+/// counting only the nodes the walk in a layout of `slots` children reaches (binary:
+/// the internal nodes outside leaves; wide: those at an even depth), `BVH_INVALID` for
+/// the rest. None where the nodes from the root are not a tree whose every internal
+/// child links back to its parent's half (a cycle, a planted tree without parent
+/// links): there every node keeps its slot.
+pub fn compact_places(nodes: &[TraversalNode], slots: u32) -> Option<Vec<u32>> {
+    let invalid = crate::shader_defines::BVH_INVALID;
+    let mut place = vec![invalid; nodes.len()];
+    let mut next = 0;
+    let mut stack = vec![(0usize, 0u32)];
+    while let Some((k, depth)) = stack.pop() {
+        if place[k] != invalid {
+            return None;
+        }
+        if slots == 2 || depth % 2 == 0 {
+            place[k] = next;
+            next += 1;
+        }
+        let n = &nodes[k];
+        for (side, c) in [(1, n.child1), (0, n.child0)] {
+            if crate::gpu_types::bvh_leaf(c).is_some() {
+                continue;
+            }
+            if c as usize >= nodes.len() || nodes[c as usize].parent != (k as u32) << 1 | side {
+                return None;
+            }
+            stack.push((c as usize, depth + 1));
+        }
+    }
+    Some(place)
+}
+
+/// `lbvh.compact`: the static walk's nodes made from `nodes` (`glsl/shared/bvh.glsl`),
+/// each at its place (`compact_places`), its internal children's links to theirs: the
+/// header and the nodes placed, as many as are written (the rest of the buffer is
+/// left as it was).
 pub fn compact_nodes(nodes: &[TraversalNode], slots: u32) -> Vec<[u32; 4]> {
+    let place = compact_places(nodes, slots).unwrap_or_else(|| (0..nodes.len() as u32).collect());
+    compact_nodes_placed(nodes, slots, &place)
+}
+
+/// `compact_nodes` with each node at `place` (`BVH_INVALID`: not written); the places
+/// written must be 0 to some count, each once.
+pub fn compact_nodes_placed(nodes: &[TraversalNode], slots: u32, place: &[u32]) -> Vec<[u32; 4]> {
     let root = Aabb::of_node(&nodes[0]);
     let (g, st) = compact_grid(root.lo, root.hi);
-    let mut out = vec![
-        [g.x.to_bits(), g.y.to_bits(), g.z.to_bits(), slots],
-        [st.x.to_bits(), st.y.to_bits(), st.z.to_bits(), 0],
-    ];
+    let link = |c: u32| match crate::gpu_types::bvh_leaf(c) {
+        Some(_) => c,
+        None => place[c as usize],
+    };
+    let placed = place
+        .iter()
+        .filter(|&&p| p != crate::shader_defines::BVH_INVALID)
+        .count();
+    let mut out = vec![[0u32; 4]; 2 + slots as usize * placed];
+    out[0] = [g.x.to_bits(), g.y.to_bits(), g.z.to_bits(), slots];
+    out[1] = [st.x.to_bits(), st.y.to_bits(), st.z.to_bits(), 0];
     for (k, n) in nodes.iter().enumerate() {
+        let Some(at) = place.get(k).filter(|&&p| p != crate::shader_defines::BVH_INVALID) else {
+            continue;
+        };
+        let base = 2 + slots as usize * *at as usize;
         if slots == 2 {
-            out.push(compact_half(n.lo0, n.hi0, n.child0, g, st));
-            out.push(compact_half(n.lo1, n.hi1, n.child1, g, st));
+            out[base] = compact_half(n.lo0, n.hi0, link(n.child0), g, st);
+            out[base + 1] = compact_half(n.lo1, n.hi1, link(n.child1), g, st);
             continue;
         }
         let entries = wide_entries(nodes, k);
         for slot in 0..WIDE {
-            out.push(match entries.get(slot) {
-                Some(&(lo, hi, link)) => compact_half(lo, hi, link, g, st),
+            out[base + slot] = match entries.get(slot) {
+                Some(&(lo, hi, c)) => compact_half(lo, hi, link(c), g, st),
                 None => WIDE_EMPTY,
-            });
+            };
         }
     }
     out

@@ -19,6 +19,8 @@ pub struct CompactNodes {
     pub buffer: Buffer,
     pub texels: TexelView,
     pub layout: StaticLayout,
+    /// Where `lbvh.compact` puts each node (its scratch).
+    pub order: super::order::OrderScratch,
 }
 
 /// A BVH on the GPU and the scratch memory to rebuild it.
@@ -118,6 +120,7 @@ impl Bvh {
             texels: TexelView::new(ctx, &buffer)?,
             buffer,
             layout,
+            order: super::order::OrderScratch::new(ctx, (tri_count - 1).max(1))?,
         });
         Ok(bvh)
     }

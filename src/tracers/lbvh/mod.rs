@@ -11,6 +11,7 @@
 
 mod bvh;
 pub mod dynamic;
+pub mod order;
 pub mod ploc;
 pub mod rigid;
 pub mod sort;
@@ -221,6 +222,7 @@ pub struct LbvhBuilder {
     refit_level: Pipeline,
     refit_top: Pipeline,
     compact: Pipeline,
+    order: order::OrderKernels,
     pub ploc: ploc::PlocBuilder,
 }
 
@@ -254,6 +256,7 @@ impl LbvhBuilder {
             refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
             refit_top: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_TOP_COMP)?,
             compact: Pipeline::compute::<CompactPush>(ctx, COMPACT, shaders::LBVH_COMPACT_COMP)?,
+            order: order::OrderKernels::new(ctx, !lockstep)?,
             ploc: ploc::PlocBuilder::new(ctx)?,
         })
     }
@@ -535,8 +538,8 @@ impl LbvhBuilder {
 
     /// Records `lbvh.compact` under its timer scope: the compact nodes the walk of the
     /// static BVH reads, from the nodes as the last build or refit left them (which
-    /// must be visible to compute reads, as those leave them). The compact nodes end
-    /// visible to all later reads.
+    /// must be visible to compute reads, as those leave them), in preorder (`order`).
+    /// The compact nodes end visible to all later reads.
     /// Panics for a BVH made without them (`Bvh::new`).
     pub fn record_compact(&self, cmd: vk::CommandBuffer, timer: &mut GpuTimer, bvh: &Bvh) {
         let compact = bvh
@@ -548,15 +551,22 @@ impl LbvhBuilder {
         barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
         let nodes = (bvh.tri_count - 1).max(1);
         timer.begin(cmd, COMPACT);
+        let slots = compact.layout.slots();
+        let o = &compact.order;
+        self.order
+            .record(cmd, Resource::Texels(&bvh.node_texels), nodes, slots, o);
         self.compact.dispatch(
             cmd,
             &[
                 ("nodes", Resource::Texels(&bvh.node_texels)),
                 ("compact", Resource::Buffer(&compact.buffer)),
+                ("counts", Resource::Buffer(&o.counts)),
+                ("jump0", Resource::Buffer(&o.jump[0])),
+                ("jump1", Resource::Buffer(&o.jump[1])),
             ],
             &CompactPush {
                 node_count: nodes,
-                slots: compact.layout.slots(),
+                slots,
             },
             Groups::Cover([nodes, 1, 1]),
         );

@@ -477,12 +477,11 @@ impl Pipeline {
         let direct = match groups {
             Groups::Exact(g) => g,
             Groups::Cover(size) => self.groups_covering(size),
-            Groups::Indirect(args) => {
-                // SAFETY: `cmd` is recording; `args` holds a VkDispatchIndirectCommand.
-                unsafe { device.cmd_dispatch_indirect(cmd, args.raw, 0) };
-                return;
-            }
-            Groups::IndirectAt(args, offset) => {
+            Groups::Indirect(args) | Groups::IndirectAt(args, _) => {
+                let offset = match groups {
+                    Groups::IndirectAt(_, offset) => offset,
+                    _ => 0,
+                };
                 assert!(
                     offset.is_multiple_of(4) && offset + 12 <= args.size,
                     "indirect arguments at {offset} of {} bytes",

@@ -602,32 +602,13 @@ fn compact_nodes_match_cpu_and_hold_the_boxes() {
         cases.push((name.into(), v, i));
     }
     let check = |bvh: &Bvh, what: &str| {
-        let compact = &bvh.compact.as_ref().expect("made by new_static").buffer;
-        compact.write(&vec![0xc3u8; compact.size as usize]).unwrap();
-        let mut timer = GpuTimer::new(&ctx, 2).unwrap();
-        ctx.one_shot(|cmd| {
-            timer.reset(cmd);
-            b.record_compact(cmd, &mut timer, bvh);
-        })
-        .unwrap();
+        let got = compact_poisoned(&ctx, &b, bvh);
         assert!(bvh.compact_current(), "{what}: compact nodes current");
-        let got: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&compact.read().unwrap());
         let nodes = bvh.read_packed().unwrap().nodes;
         let layout = bvh.compact.as_ref().unwrap().layout;
         let slots = layout.slots() as usize;
         let want = cref::compact_nodes(&nodes, slots as u32);
-        let first = (0..want.len()).find(|&t| got[t] != want[t]);
-        assert!(
-            first.is_none(),
-            "{what}, {layout:?}: compact nodes differ first at texel {first:?} of {}: {:?} against {:?}",
-            want.len(),
-            first.map(|t| got[t]),
-            first.map(|t| want[t])
-        );
-        assert!(
-            got[want.len()..].iter().all(|t| *t == [0xc3c3_c3c3; 4]),
-            "{what}, {layout:?}: nothing written past the nodes placed"
-        );
+        assert_written(&got, &want, &format!("{what}, {layout:?}: compact nodes"));
         let place = cref::compact_places(&nodes, slots as u32).expect("a built tree is ordered");
         let placed = place.iter().filter(|&&p| p != BVH_INVALID).count();
         assert_eq!(2 + slots * placed, want.len(), "{what}: the nodes placed are written");
@@ -707,6 +688,37 @@ fn compact_nodes_match_cpu_and_hold_the_boxes() {
         }
     }
     assert_eq!(ctx.validation_messages(), 0);
+}
+
+/// `lbvh.compact` recorded into `bvh`'s compact nodes poisoned with 0xc3 bytes; what
+/// it left there.
+fn compact_poisoned(ctx: &Arc<Context>, b: &LbvhBuilder, bvh: &Bvh) -> Vec<[u32; 4]> {
+    let compact = &bvh.compact.as_ref().expect("made by new_static").buffer;
+    compact.write(&vec![0xc3u8; compact.size as usize]).unwrap();
+    let mut timer = GpuTimer::new(ctx, 2).unwrap();
+    ctx.one_shot(|cmd| {
+        timer.reset(cmd);
+        b.record_compact(cmd, &mut timer, bvh);
+    })
+    .unwrap();
+    bytemuck::pod_collect_to_vec(&compact.read().unwrap())
+}
+
+/// The compact nodes `got` (`compact_poisoned`) start with `want` exactly, and the
+/// poison is untouched past them.
+fn assert_written(got: &[[u32; 4]], want: &[[u32; 4]], what: &str) {
+    let first = (0..want.len()).find(|&t| got[t] != want[t]);
+    assert!(
+        first.is_none(),
+        "{what}: differ first at texel {first:?} of {}: {:?} against {:?}",
+        want.len(),
+        first.map(|t| got[t]),
+        first.map(|t| want[t])
+    );
+    assert!(
+        got[want.len()..].iter().all(|t| *t == [0xc3c3_c3c3; 4]),
+        "{what}: nothing written past the nodes placed"
+    );
 }
 
 fn f32_3(t: [u32; 4]) -> [f32; 3] {
@@ -850,24 +862,6 @@ fn compact_order_is_preorder_or_the_slots() {
     let ctx = common::context();
     let free = LbvhBuilder::new(&ctx).unwrap();
     let lockstep = LbvhBuilder::with_fit(&ctx, true).unwrap();
-    let compact = |b: &LbvhBuilder, bvh: &Bvh| -> Vec<[u32; 4]> {
-        let c = &bvh.compact.as_ref().unwrap().buffer;
-        c.write(&vec![0xc3u8; c.size as usize]).unwrap();
-        let mut timer = GpuTimer::new(&ctx, 2).unwrap();
-        ctx.one_shot(|cmd| {
-            timer.reset(cmd);
-            b.record_compact(cmd, &mut timer, bvh);
-        })
-        .unwrap();
-        bytemuck::pod_collect_to_vec(&c.read().unwrap())
-    };
-    let check = |got: &[[u32; 4]], want: &[[u32; 4]], what: &str| {
-        assert_eq!(got[..want.len()], want[..], "{what}");
-        assert!(
-            got[want.len()..].iter().all(|t| *t == [0xc3c3_c3c3; 4]),
-            "{what}: past the nodes"
-        );
-    };
     for m in [33u32, 65, 100] {
         let (v, i) = random_soup(m as usize + 1, 1.0, default_size(1000), u64::from(m));
         let g = upload(&ctx, &v, &i);
@@ -905,12 +899,20 @@ fn compact_order_is_preorder_or_the_slots() {
                 bvh.tnodes.write(bytemuck::cast_slice(nodes)).unwrap();
                 let places = cref::compact_places(nodes, slots);
                 assert_eq!(places.is_some(), ordered, "{what}: ordered");
-                check(&compact(&free, &bvh), &cref::compact_nodes(nodes, slots), &what);
+                assert_written(
+                    &compact_poisoned(&ctx, &free, &bvh),
+                    &cref::compact_nodes(nodes, slots),
+                    &what,
+                );
             }
             let in_slots: Vec<u32> = (0..m).collect();
             bvh.tnodes.write(bytemuck::cast_slice(&chain)).unwrap();
             let want = cref::compact_nodes_placed(&chain, slots, &in_slots);
-            check(&compact(&lockstep, &bvh), &want, &format!("lockstep, {m}, {layout:?}"));
+            assert_written(
+                &compact_poisoned(&ctx, &lockstep, &bvh),
+                &want,
+                &format!("lockstep, {m}, {layout:?}"),
+            );
         }
     }
     assert_eq!(ctx.validation_messages(), 0);

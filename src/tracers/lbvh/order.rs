@@ -62,11 +62,6 @@ impl OrderScratch {
             )?,
         })
     }
-
-    /// Bytes of the scratch.
-    pub fn bytes(&self) -> u64 {
-        self.counts.size + self.jump[0].size + self.jump[1].size + self.args.size
-    }
 }
 
 #[repr(C)]

@@ -18,7 +18,7 @@ layout(local_size_x = LBVH_WG) in;
 
 layout(binding = 0) uniform utextureBuffer nodes;
 layout(binding = 1, std430) writeonly buffer Compact { uvec4 compact[]; };
-layout(binding = 2, std430) readonly buffer Counts { uint counts[]; };
+layout(binding = 2, std430) readonly buffer Counts { uvec4 counts[]; };
 // The jump states after an even and after an odd count of rounds.
 layout(binding = 3, std430) readonly buffer Jump0 { uvec4 jump0[]; };
 layout(binding = 4, std430) readonly buffer Jump1 { uvec4 jump1[]; };
@@ -49,8 +49,9 @@ void main() {
     if (i >= pc.node_count) {
         return;
     }
-    bool ordered = counts[2u] != 0u;
-    bool odd_rounds = (order_rounds(counts[2u]) & 1u) != 0u;
+    uint height = counts[0].z;
+    bool ordered = height != 0u;
+    bool odd_rounds = (order_rounds(height) & 1u) != 0u;
     TraversalNode root = node_from_texels(nodes, 0u);
     vec3 g, st;
     compact_grid(min(root.lo0, root.lo1), max(root.hi0, root.hi1), g, st);

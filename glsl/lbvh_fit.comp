@@ -20,6 +20,10 @@
 // range of triangles in key order; the node stays in its slot, linked to its parent,
 // out of the traversal's reach (the refit still keeps its boxes, which it climbs).
 //
+// For a static BVH (pc.order), each node's counts for lbvh.compact's order too
+// (bvh_order.glsl): the climber carries its subtree's (a leaf's are 0) and the uniting
+// invocation reads its sibling's, written before the sibling's swap as its half is.
+//
 // Memory ordering: the half is made visible to the sibling's invocation with
 // memoryBarrierBuffer() on `coherent` buffers, between the store and the swap
 // (release) and between the swap and the loads (acquire). LOCKSTEP (a specialization,
@@ -29,6 +33,7 @@
 // sits in uniform control flow.
 // CPU reference: cpu_ref::lbvh::build (tests/lbvh.rs).
 #include "bvh.glsl"
+#include "bvh_order.glsl"
 
 layout(local_size_x = LBVH_WG) in;
 
@@ -42,10 +47,13 @@ layout(binding = 5, std430) coherent buffer TNodes { TraversalNode tnodes[]; };
 layout(binding = 6, std430) writeonly buffer TTris { TraversalTri ttris[]; };
 // The SAH cost of the subtree whose box is in each half, by link (2 per node).
 layout(binding = 7, std430) coherent buffer Costs { float costs[]; };
+// Each node's order counts (bvh_order.glsl), where pc.order.
+layout(binding = 8, std430) coherent buffer Counts { uvec4 counts[]; };
 
 layout(push_constant) uniform Push {
     uint n;         // triangles (leaves)
     uint key_words; // 1 or 2
+    uint order;     // 1: write the order counts
 } pc;
 
 // true: the climb in workgroup lockstep (see above).
@@ -75,8 +83,8 @@ uint key_bit(uvec3 k, int b) {
 }
 
 // A node on its way up: its key range, the extended keys at its ends, its box, its
-// subtree's SAH cost, its reference (a leaf's or its slot), and the split of its
-// parent.
+// subtree's SAH cost, its reference (a leaf's or its slot), its order counts, and the
+// split of its parent.
 struct Climber {
     uint l;
     uint r;
@@ -86,6 +94,7 @@ struct Climber {
     vec3 hi;
     float cost;
     uint ref;
+    uvec3 counts; // order counts (bvh_order.glsl): 0 for a leaf
     uint p;
     bool left;
 };
@@ -157,6 +166,12 @@ void unite(inout Climber c, uint link, uint other) {
     uint count = c.r - c.l + 1u;
     bool leaf = bvh_collapse(bvh_area(c.lo, c.hi), left_cost, right_cost, count, true, c.cost);
     c.ref = leaf ? bvh_leaf_ref(c.l, count) : slot;
+    if (pc.order != 0u) {
+        uint sib = c.left ? tnodes[slot].child1 : tnodes[slot].child0;
+        uvec3 v = order_counts(c.counts, order_internal(sib) ? counts[sib].xyz : uvec3(0u));
+        counts[slot] = uvec4(v, 0u);
+        c.counts = leaf ? uvec3(0u) : v;
+    }
 }
 
 // Leaf j: its triangle in the traversal layout, and the climber it starts; returns the
@@ -172,12 +187,16 @@ uint start_leaf(uint j, int root_bit, out Climber c) {
     c.hi = max(a, max(b, v));
     c.cost = bvh_area(c.lo, c.hi);
     c.ref = bvh_leaf_ref(j, 1u);
+    c.counts = uvec3(0u);
     c.p = 0u;
     c.left = true;
     uint link = pc.n == 1u ? 0u : find_parent(c, root_bit);
     ttris[j] = TraversalTri(a, prim, b, link, v, 0u);
     if (pc.n == 1u) {
         tnodes[0] = TraversalNode(c.lo, c.ref, c.hi, c.ref, c.lo, BVH_INVALID, c.hi, 0u);
+        if (pc.order != 0u) {
+            counts[0] = ORDER_ONE_LEAF;
+        }
     }
     return link;
 }

@@ -1,26 +1,42 @@
 #version 460
-// lbvh.compact, its order's second step (bvh_order.glsl): each node's jump state of
-// one step, to its parent. A node after an internal first sibling adds that
-// sibling's subtree: binary, all its nodes (A + B); wide, at an even depth its wide
-// nodes (A) and at an odd one those of its children (B). Nothing when the root has no
-// counts (the nodes stay in place).
+// lbvh.compact, its order's first step (bvh_order.glsl), after the builder's counts:
+// each node's jump state of one step, to its parent. A node after an internal first
+// sibling adds that sibling's subtree: binary, all its nodes (A + B); wide, at an even
+// depth its wide nodes (A) and at an odd one those of its children (B). Nothing when
+// the root has no counts (the nodes stay in place). The first invocation writes the
+// jump rounds' indirect arguments: the rounds the root's height needs get the groups,
+// the rest of those recorded none.
 #include "bvh.glsl"
 #include "bvh_order.glsl"
 
 layout(local_size_x = LBVH_WG) in;
 
 layout(binding = 0) uniform utextureBuffer nodes;
-layout(binding = 1, std430) readonly buffer Counts { uint counts[]; };
+layout(binding = 1, std430) readonly buffer Counts { uvec4 counts[]; };
 layout(binding = 2, std430) writeonly buffer Jump { uvec4 jump[]; };
+// The jump rounds' VkDispatchIndirectCommands, 4 words apart.
+layout(binding = 3, std430) writeonly buffer Args { uvec4 args[]; };
 
 layout(push_constant) uniform Push {
     uint node_count;
-    uint slots; // 2: binary, WIDE: wide
+    uint slots;  // 2: binary, WIDE: wide
+    uint rounds; // recorded jump rounds
 } pc;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= pc.node_count || counts[2u] == 0u) {
+    if (i >= pc.node_count) {
+        return;
+    }
+    uint height = counts[0].z;
+    if (i == 0u) {
+        uint groups = (pc.node_count + LBVH_WG - 1u) / LBVH_WG;
+        uint rounds = order_rounds(height);
+        for (uint r = 0u; r < pc.rounds; ++r) {
+            args[r] = uvec4(r < rounds ? groups : 0u, 1u, 1u, 0u);
+        }
+    }
+    if (height == 0u) {
         return;
     }
     if (i == 0u) {
@@ -38,7 +54,7 @@ void main() {
     uint sib = pn.child0;
     uvec2 ab = uvec2(0u);
     if (side == 1u && order_internal(sib)) {
-        ab = uvec2(counts[4u * sib], counts[4u * sib + 1u]);
+        ab = counts[sib].xy;
     }
     uint even = 1u + (pc.slots == 2u ? ab.x + ab.y : ab.x);
     uint odd = pc.slots == 2u ? even : ab.y;

@@ -2,7 +2,7 @@
 // lbvh.compact, its order's jump round (bvh_order.glsl): each node's state composed
 // with its target's, so its path to the root halves in steps. A state whose target
 // is the root is final (the root's own adds nothing). Dispatched indirectly:
-// lbvh_order_climb gives the rounds a tree needs their groups and the rest none.
+// lbvh_order_init gives the rounds a tree needs their groups and the rest none.
 #include "bvh.glsl"
 #include "bvh_order.glsl"
 

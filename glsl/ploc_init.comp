@@ -17,6 +17,8 @@ layout(binding = 4, std430) writeonly buffer TNodes { TraversalNode tnodes[]; };
 layout(binding = 5, std430) writeonly buffer TTris { TraversalTri ttris[]; };
 layout(binding = 6, std430) writeonly buffer State { PlocState state; };
 layout(binding = 7, std430) writeonly buffer Args { uvec3 args; };
+// The order counts, written here only for a single triangle (ploc.glsl).
+layout(binding = 8, std430) writeonly buffer Counts { uvec4 counts[]; };
 
 void main() {
     uint j = gl_GlobalInvocationID.x;
@@ -38,6 +40,9 @@ void main() {
     clusters[j] = Cluster(lo, leaf, hi, bvh_area(lo, hi), leaf, j, 1u, 0u);
     if (pc.n == 1u) {
         tnodes[0] = TraversalNode(lo, leaf, hi, leaf, lo, BVH_INVALID, hi, 0u);
+        if (pc.order != 0u) {
+            counts[0] = ORDER_ONE_LEAF;
+        }
     } else if (j == 0u) {
         tnodes[0].parent = BVH_INVALID; // the root, the last merge, is never linked
     }

@@ -3,7 +3,7 @@
 // of each mutual pair writes their node (both halves) into its slot (ploc.glsl), links
 // both children to it, and goes on as the merged cluster (ploc_merged). Indirect:
 // ceil(count / LBVH_WG) workgroups. A node's own parent link is written when it is
-// merged in turn.
+// merged in turn; so are its order counts (where pc.order).
 // CPU reference: cpu_ref::lbvh::ploc (tests/lbvh.rs).
 #include "ploc.glsl"
 #define WG_SCAN_SIZE LBVH_WG
@@ -18,6 +18,8 @@ layout(binding = 3, std430) readonly buffer TileOffsets { uvec2 tile_offsets[]; 
 layout(binding = 4, std430) readonly buffer State { PlocState state; };
 layout(binding = 5, std430) buffer TNodes { TraversalNode tnodes[]; };
 layout(binding = 6, std430) buffer TTris { TraversalTri ttris[]; };
+// The order counts (ploc.glsl: PLOC_WRITE_COUNTS).
+layout(binding = 7, std430) buffer Counts { uvec4 counts[]; };
 
 void main() {
     uint c = state.count[pc.parity];
@@ -45,5 +47,6 @@ void main() {
     Cluster b = clusters[j];
     uint slot = pc.n - 2u - (state.base_slot + off.y + (run >> 16));
     PLOC_WRITE_NODE(tnodes, ttris, slot, a, b)
+    PLOC_WRITE_COUNTS(counts, slot, a, b)
     next_clusters[pos] = ploc_merged(a, b, slot);
 }

@@ -21,6 +21,8 @@ layout(binding = 2, std430) coherent buffer Nearest { uint nearest[]; };
 layout(binding = 3, std430) buffer State { PlocState state; };
 layout(binding = 4, std430) buffer TNodes { TraversalNode tnodes[]; };
 layout(binding = 5, std430) buffer TTris { TraversalTri ttris[]; };
+// The order counts (ploc.glsl: PLOC_WRITE_COUNTS): a round reads those of earlier ones.
+layout(binding = 6, std430) coherent buffer Counts { uvec4 counts[]; };
 
 // The round's boxes (lo, hi), which its nearest-neighbour search reads 2 * PLOC_RADIUS
 // times each: shared memory rather than the `coherent` cluster arrays.

@@ -5,15 +5,17 @@
 // wide node's children are its binary node's grandchildren). Nodes inside a leaf are
 // not placed. Mirrored by cpu_ref::lbvh::compact_places (tests/lbvh.rs).
 //
-// 1. lbvh_order_climb: bottom-up, each node's reachable internal nodes at an even and
-//    at an odd depth below it (A, B: A = 1 + B(child0) + B(child1), B = A(child0) +
-//    A(child1), a leaf counting 0) and its height H, in `counts` (4 words a node: A,
-//    B, H, arrivals). The root's H says how many jump rounds run (their indirect
-//    arguments). A root left without counts (H = 0: a cycle, a node its parent does
-//    not link back, or a driver that cannot climb) keeps the nodes where they are.
+// 1. The builder, bottom-up as it makes the tree (lbvh.fit's climb, lbvh.ploc's
+//    merges): each internal node's reachable internal nodes at an even and at an odd
+//    depth below it (A, B: A = 1 + B(child0) + B(child1), B = A(child0) + A(child1),
+//    a leaf counting 0) and its height H, in `counts` (a uvec4 a node: A, B, H, 0;
+//    order_counts). A node is counted as internal even where it became a leaf (its
+//    parent links the leaf, never the node). The root's H says how many jump rounds
+//    run. A tree whose root has no counts (H = 0: nodes written by the host) keeps the
+//    nodes where they are.
 // 2. lbvh_order_init: each node's step to its parent: what it adds to its place if it
 //    sits at an even depth (1, plus the earlier siblings' subtrees) and if at an odd
-//    one, as a jump state (below).
+//    one, as a jump state (below); and the jump rounds' indirect arguments.
 // 3. lbvh_order_jump, order_rounds(H) times: pointer jumping, each node's state
 //    composed with its target's, until every target is the root: the place is the sum
 //    along the path from the root.
@@ -39,5 +41,13 @@ uint order_rounds(uint h) {
 bool order_internal(uint c) {
     return (c & BVH_LEAF_BIT) == 0u;
 }
+
+// A node's (A, B, H) from its children's (a leaf's are 0).
+uvec3 order_counts(uvec3 c0, uvec3 c1) {
+    return uvec3(1u + c0.y + c1.y, c0.x + c1.x, 1u + max(c0.z, c1.z));
+}
+
+// The counts of a single triangle's tree: its root, both halves the one leaf.
+#define ORDER_ONE_LEAF uvec4(1u, 0u, 1u, 0u)
 
 #endif

@@ -13,6 +13,7 @@
 #ifndef PLOC_GLSL
 #define PLOC_GLSL
 #include "bvh.glsl"
+#include "bvh_order.glsl"
 
 // A cluster: its box, its traversal reference (a leaf's range of triangles, or its
 // node's slot), its subtree's SAH cost, its node in the binary tree (where its parent
@@ -43,6 +44,7 @@ struct PlocState {
 layout(push_constant) uniform Push {
     uint n;      // triangles
     uint parity; // the round's parity: clusters and counts it reads
+    uint order;  // 1: each merge writes its node's order counts (bvh_order.glsl)
 } pc;
 
 // A cluster's decision, from the nearest-neighbour array: kept (in place, or as the
@@ -99,6 +101,16 @@ layout(push_constant) uniform Push {
         tnodes[slot].hi1 = b.hi;                                                          \
         LINK_NODE(tnodes, ttris, a.node, slot << 1u);                                     \
         LINK_NODE(tnodes, ttris, b.node, (slot << 1u) | 1u);                              \
+    }
+
+// Where pc.order: the order counts (bvh_order.glsl) of node `slot`, which `a` and `b`
+// merge into, from theirs (written by their merges, in earlier rounds; a leaf's are 0),
+// on the includer's `counts`.
+#define PLOC_WRITE_COUNTS(counts, slot, a, b)                                             \
+    if (pc.order != 0u) {                                                                 \
+        uvec3 ca_ = order_internal(a.ref) ? counts[a.ref].xyz : uvec3(0u);                \
+        uvec3 cb_ = order_internal(b.ref) ? counts[b.ref].xyz : uvec3(0u);                \
+        counts[slot] = uvec4(order_counts(ca_, cb_), 0u);                                 \
     }
 
 // The cluster `a` and `b` merge into at node `slot`: a leaf when their triangles are one

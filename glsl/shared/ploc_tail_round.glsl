@@ -41,6 +41,7 @@ uint ROUND(uint c, inout uint merges) {
             Cluster a = SRC[i], b = SRC[nn_];
             uint slot = pc.n - 2u - (merges + (run >> 16));
             PLOC_WRITE_NODE(tnodes, ttris, slot, a, b)
+            PLOC_WRITE_COUNTS(counts, slot, a, b)
             DST[run & 0xffffu] = ploc_merged(a, b, slot);
         } else if (keep) {
             DST[run & 0xffffu] = SRC[i];

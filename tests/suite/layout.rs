@@ -190,7 +190,8 @@ fn compose_push_layout_matches_glsl() {
 }
 
 /// The push-constant block's size is reflected (pipelines check their push type
-/// against it): 20 B for compose, 8 B for the fit's triangle count and key width, 4 B
+/// against it): 20 B for compose, 12 B for the fit's triangle count, key width and order
+/// switch, 4 B
 /// for the refit's triangle count and for light.direct's visibility switch.
 #[test]
 fn push_block_sizes_are_reflected() {
@@ -198,7 +199,7 @@ fn push_block_sizes_are_reflected() {
         reflected(shaders::COMPOSE_COMP).push_size as usize,
         size_of::<ComposePush>()
     );
-    assert_eq!(reflected(shaders::LBVH_FIT_COMP).push_size, 8);
+    assert_eq!(reflected(shaders::LBVH_FIT_COMP).push_size, 12);
     assert_eq!(reflected(shaders::LBVH_REFIT_LEAVES_COMP).push_size, 4);
     assert_eq!(
         reflected(shaders::REFLECT_BLUR_COMP).push_size,

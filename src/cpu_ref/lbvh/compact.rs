@@ -132,6 +132,49 @@ pub fn wide_entries(nodes: &[TraversalNode], k: usize) -> Vec<([f32; 3], [f32; 3
 /// An unused slot of a wide node: no box, the link `BVH_INVALID` (never entered).
 pub const WIDE_EMPTY: [u32; 4] = [0, 0, 0, crate::shader_defines::BVH_INVALID];
 
+/// Each node's order counts, as the builders leave them (`Bvh::counts`,
+/// `glsl/shared/bvh_order.glsl`): its internal nodes below at an even and at an odd depth,
+/// itself included, and its height, `[A, B, H, 0]`, by its child links (a leaf counts
+/// 0), for every node, also one inside a leaf. None where the links are not a forest (a
+/// node reached twice, a cycle, a link past the nodes).
+pub fn order_counts(nodes: &[TraversalNode]) -> Option<Vec<[u32; 4]>> {
+    let internal = |c: u32| crate::gpu_types::bvh_leaf(c).is_none();
+    let mut counts = vec![None::<[u32; 4]>; nodes.len()];
+    let mut seen = vec![false; nodes.len()];
+    let mut linked = vec![false; nodes.len()];
+    for top in 0..nodes.len() {
+        let mut stack = vec![top];
+        while let Some(&k) = stack.last() {
+            if counts[k].is_some() {
+                stack.pop();
+                continue;
+            }
+            let children = [nodes[k].child0, nodes[k].child1];
+            if !seen[k] {
+                seen[k] = true;
+                for c in children.into_iter().filter(|&c| internal(c)).map(|c| c as usize) {
+                    if c >= nodes.len() || linked[c] || (seen[c] && counts[c].is_none()) {
+                        return None; // past the nodes, a second parent, a cycle
+                    }
+                    linked[c] = true;
+                    stack.push(c);
+                }
+                continue;
+            }
+            let [a, b] = children.map(|c| {
+                if internal(c) {
+                    counts[c as usize].unwrap()
+                } else {
+                    [0; 4]
+                }
+            });
+            counts[k] = Some([1 + a[1] + b[1], a[0] + b[0], 1 + a[2].max(b[2]), 0]);
+            stack.pop();
+        }
+    }
+    counts.into_iter().collect()
+}
+
 /// Where `lbvh.compact` puts each of `nodes` (`glsl/shared/bvh_order.glsl`): its
 /// place in preorder from the root (a node, its first child's subtree, its second's),
 /// counting only the nodes the walk in a layout of `slots` children reaches (binary:

@@ -42,6 +42,10 @@ pub struct Bvh {
     pub(super) ends: Buffer,
     /// The fit's SAH cost of the subtree in each half of each node.
     pub(super) costs: Buffer,
+    /// Each node's order counts (`glsl/shared/bvh_order.glsl`: a `uvec4` a node), which
+    /// the builders write for a BVH with compact nodes and `lbvh.compact` reads; 16
+    /// bytes, never written, for one without.
+    pub counts: Buffer,
     pub(super) bounds: Buffer,
     pub sort: SortBuffers,
     pub tri_count: u32,
@@ -91,6 +95,7 @@ impl Bvh {
             ttris,
             ends: buf("lbvh.ends", (tri_count as u64 - 1).max(1) * 4)?,
             costs: buf("lbvh.costs", (tri_count as u64 - 1).max(1) * 2 * 4)?,
+            counts: buf("lbvh.order.counts", 16)?,
             bounds: buf("lbvh.bounds", 15 * 4)?,
             sort: SortBuffers::new(ctx, tri_count, bits.key_words())?,
             tri_count,
@@ -106,6 +111,15 @@ impl Bvh {
     /// `new_static` with the walk's nodes in `layout`.
     pub fn new_static_in(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits, layout: StaticLayout) -> Result<Self> {
         let mut bvh = Self::new(ctx, tri_count, bits)?;
+        bvh.counts = Buffer::new(
+            ctx,
+            "lbvh.order.counts",
+            (tri_count as u64 - 1).max(1) * 16,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
         let buffer = Buffer::new(
             ctx,
             "lbvh.compact",
@@ -140,6 +154,27 @@ impl Bvh {
     /// A build or refit of the nodes was recorded: the compact nodes are stale.
     pub(super) fn reshaped(&self) {
         self.shaped.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Whether the builders write the order counts (`counts`): a BVH with compact nodes.
+    pub(super) fn ordered(&self) -> u32 {
+        u32::from(self.compact.is_some())
+    }
+
+    /// Writes `nodes` from the host: a tree no builder made (tests, tools), its compact
+    /// nodes stale. With `counts` (each node's, `cpu_ref::lbvh::order_counts`) the compact
+    /// nodes are ordered by them; without, the counts are cleared and every node keeps
+    /// its slot.
+    pub fn plant(&self, nodes: &[TraversalNode], counts: Option<&[[u32; 4]]>) -> Result<()> {
+        self.tnodes.write(bytemuck::cast_slice(nodes))?;
+        if self.compact.is_some() {
+            match counts {
+                Some(c) => self.counts.write(bytemuck::cast_slice(c))?,
+                None => self.counts.write(&vec![0u8; self.counts.size as usize])?,
+            }
+        }
+        self.reshaped();
+        Ok(())
     }
 
     /// (centroid bounds, scene bounds) from the last `lbvh.bounds`, read back.

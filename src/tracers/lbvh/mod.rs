@@ -201,14 +201,24 @@ struct CompactPush {
     slots: u32,
 }
 
-/// Push constants of `lbvh_morton.comp` and `lbvh_fit.comp` (`lbvh.bounds` and the
-/// refit push the triangle count alone, as a `u32`).
+/// Push constants of `lbvh_morton.comp` (`lbvh.bounds` and the refit push the triangle
+/// count alone, as a `u32`; the fit `FitPush`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct KeyPush {
     tri_count: u32,
     /// 1: 30-bit Morton codes, 2: 63-bit.
     key_words: u32,
+}
+
+/// Push constants of `lbvh_fit.comp`: `KeyPush`'s, and whether it writes the order
+/// counts (`Bvh::counts`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct FitPush {
+    tri_count: u32,
+    key_words: u32,
+    order: u32,
 }
 
 /// The LBVH kernels.
@@ -251,12 +261,12 @@ impl LbvhBuilder {
             bounds: Pipeline::compute::<u32>(ctx, BOUNDS, shaders::LBVH_BOUNDS_COMP)?,
             morton: Pipeline::compute::<KeyPush>(ctx, MORTON, shaders::LBVH_MORTON_COMP)?,
             sort: RadixSort::new(ctx)?,
-            fit: Pipeline::compute_specialized::<KeyPush>(ctx, FIT, shaders::LBVH_FIT_COMP, &[lockstep as u32])?,
+            fit: Pipeline::compute_specialized::<FitPush>(ctx, FIT, shaders::LBVH_FIT_COMP, &[lockstep as u32])?,
             refit_leaves: Pipeline::compute::<u32>(ctx, REFIT, shaders::LBVH_REFIT_LEAVES_COMP)?,
             refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
             refit_top: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_TOP_COMP)?,
             compact: Pipeline::compute::<CompactPush>(ctx, COMPACT, shaders::LBVH_COMPACT_COMP)?,
-            order: order::OrderKernels::new(ctx, !lockstep)?,
+            order: order::OrderKernels::new(ctx)?,
             ploc: ploc::PlocBuilder::new(ctx)?,
         })
     }
@@ -525,10 +535,12 @@ impl LbvhBuilder {
                 ("t_nodes", Resource::Buffer(&bvh.tnodes)),
                 ("t_tris", Resource::Buffer(&bvh.ttris)),
                 ("costs", Resource::Buffer(&bvh.costs)),
+                ("counts", Resource::Buffer(&bvh.counts)),
             ],
-            &KeyPush {
+            &FitPush {
                 tri_count: geom.tri_count,
                 key_words: bvh.bits.key_words(),
+                order: bvh.ordered(),
             },
             Groups::Cover([geom.tri_count, 1, 1]),
         );
@@ -547,20 +559,21 @@ impl LbvhBuilder {
             .as_ref()
             .expect("compact nodes of a BVH made by Bvh::new_static");
         let d = &self.ctx.device;
-        // WAR: earlier walks of the compact nodes finish before they are rewritten.
-        barrier::global(d, cmd, access::COMPUTE_READ, access::COMPUTE_WRITE);
+        // WAR: earlier walks of the compact nodes, and the last order's reads of its
+        // scratch (its rounds' arguments too), finish before they are rewritten.
+        barrier::global(d, cmd, access::COMPUTE_ANY, access::COMPUTE_WRITE);
         let nodes = (bvh.tri_count - 1).max(1);
         timer.begin(cmd, COMPACT);
         let slots = compact.layout.slots();
         let o = &compact.order;
         self.order
-            .record(cmd, Resource::Texels(&bvh.node_texels), nodes, slots, o);
+            .record(cmd, Resource::Texels(&bvh.node_texels), &bvh.counts, nodes, slots, o);
         self.compact.dispatch(
             cmd,
             &[
                 ("nodes", Resource::Texels(&bvh.node_texels)),
                 ("compact", Resource::Buffer(&compact.buffer)),
-                ("counts", Resource::Buffer(&o.counts)),
+                ("counts", Resource::Buffer(&bvh.counts)),
                 ("jump0", Resource::Buffer(&o.jump[0])),
                 ("jump1", Resource::Buffer(&o.jump[1])),
             ],

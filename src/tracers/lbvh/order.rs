@@ -2,10 +2,10 @@
 //! `glsl/shared/bvh_order.glsl`): each node's place in preorder from the root, so a
 //! walk going down reads the node after the one it left, and only the nodes a walk can
 //! reach take room (binary: the internal nodes outside leaves; wide: those at an even
-//! depth). Made on the GPU: subtree counts by a climb (`lbvh_order_climb`), then each
-//! node's place by pointer jumping (`lbvh_order_init`, `lbvh_order_jump`), as many
-//! rounds as the tree's height asks (indirect dispatches). CPU reference:
-//! `cpu_ref::lbvh::compact_places`.
+//! depth). Made on the GPU: the builders leave each node's subtree counts
+//! (`Bvh::counts`, written bottom-up as they make the tree), then each node's place by
+//! pointer jumping (`lbvh_order_init`, `lbvh_order_jump`), as many rounds as the tree's
+//! height asks (indirect dispatches). CPU reference: `cpu_ref::lbvh::compact_places`.
 
 use crate::error::Result;
 use crate::shaders;
@@ -27,12 +27,9 @@ pub fn recorded_rounds(nodes: u32) -> u32 {
     }
 }
 
-/// The order's scratch, beside the compact nodes: 48 bytes a node and the rounds'
+/// The order's scratch, beside the compact nodes: 32 bytes a node and the rounds'
 /// indirect arguments.
 pub struct OrderScratch {
-    /// 4 words a node: the reachable internal nodes below it at an even and an odd
-    /// depth, its height, its children's arrivals.
-    pub(super) counts: Buffer,
     /// The jump states, read and written in turns.
     pub(super) jump: [Buffer; 2],
     /// One `VkDispatchIndirectCommand` a recorded round, 16 bytes apart.
@@ -50,7 +47,6 @@ impl OrderScratch {
         let n = u64::from(nodes.max(1));
         let none = vk::BufferUsageFlags::empty();
         Ok(Self {
-            counts: buf("lbvh.order.counts", n * 16, none)?,
             jump: [
                 buf("lbvh.order.jump0", n * 16, none)?,
                 buf("lbvh.order.jump1", n * 16, none)?,
@@ -66,80 +62,62 @@ impl OrderScratch {
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct ClimbPush {
-    node_count: u32,
-    rounds: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
 struct InitPush {
     node_count: u32,
     slots: u32,
+    rounds: u32,
 }
 
 /// The order's kernels.
 pub struct OrderKernels {
     ctx: Arc<Context>,
-    climb: Pipeline,
     init: Pipeline,
     jump: Pipeline,
-    /// Whether the climb runs: not where `lbvh.fit` must climb in lockstep (lavapipe
-    /// before Mesa 25), where the nodes keep their slots.
-    climbs: bool,
 }
 
 impl OrderKernels {
-    pub fn new(ctx: &Arc<Context>, climbs: bool) -> Result<Self> {
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
         Ok(Self {
             ctx: ctx.clone(),
-            climb: Pipeline::compute::<ClimbPush>(ctx, "lbvh.order.climb", shaders::LBVH_ORDER_CLIMB_COMP)?,
             init: Pipeline::compute::<InitPush>(ctx, "lbvh.order.init", shaders::LBVH_ORDER_INIT_COMP)?,
             jump: Pipeline::compute::<u32>(ctx, "lbvh.order.jump", shaders::LBVH_ORDER_JUMP_COMP)?,
-            climbs,
         })
     }
 
-    /// Records the order of `node_count` binary nodes (`nodes`, their texels, visible to
-    /// compute reads) for a layout of `slots` children a node, into `s`; it ends visible
-    /// to compute reads. Earlier reads of the scratch must be complete (caller's barrier).
-    pub fn record(&self, cmd: vk::CommandBuffer, nodes: Resource<'_>, node_count: u32, slots: u32, s: &OrderScratch) {
+    /// Records the order of `node_count` binary nodes (`nodes`, their texels, and
+    /// `counts`, the builder's, visible to compute reads) for a layout of `slots`
+    /// children a node, into `s`; it ends visible to compute reads. Earlier reads of the
+    /// scratch must be complete (caller's barrier, the indirect ones included).
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        nodes: Resource<'_>,
+        counts: &Buffer,
+        node_count: u32,
+        slots: u32,
+        s: &OrderScratch,
+    ) {
         let d = &self.ctx.device;
-        // SAFETY: `cmd` is recording; the buffers are alive and not in use.
-        unsafe {
-            d.cmd_fill_buffer(cmd, s.counts.raw, 0, vk::WHOLE_SIZE, 0);
-            d.cmd_fill_buffer(cmd, s.args.raw, 0, vk::WHOLE_SIZE, 0);
-        }
-        // RAW: the climb adds to the zeroed arrivals and reads zeroed counts.
-        barrier::global(d, cmd, access::TRANSFER_WRITE, access::COMPUTE_READ_WRITE);
         let rounds = recorded_rounds(node_count);
-        if self.climbs {
-            self.climb.dispatch(
-                cmd,
-                &[
-                    ("nodes", nodes),
-                    ("counts", Resource::Buffer(&s.counts)),
-                    ("args", Resource::Buffer(&s.args)),
-                ],
-                &ClimbPush { node_count, rounds },
-                Groups::Cover([node_count, 1, 1]),
-            );
-        }
-        // RAW: init reads the counts, the rounds their arguments.
-        barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_AND_INDIRECT);
         self.init.dispatch(
             cmd,
             &[
                 ("nodes", nodes),
-                ("counts", Resource::Buffer(&s.counts)),
+                ("counts", Resource::Buffer(counts)),
                 ("jump", Resource::Buffer(&s.jump[0])),
+                ("args", Resource::Buffer(&s.args)),
             ],
-            &InitPush { node_count, slots },
+            &InitPush {
+                node_count,
+                slots,
+                rounds,
+            },
             Groups::Cover([node_count, 1, 1]),
         );
         for r in 0..rounds as usize {
-            // RAW on the states just written, WAR on those the round before read.
-            barrier::global(d, cmd, access::COMPUTE_READ_WRITE, access::COMPUTE_READ_WRITE);
+            // RAW on the states just written (and the rounds' arguments), WAR on those
+            // the round before read.
+            barrier::global(d, cmd, access::COMPUTE_READ_WRITE, access::COMPUTE_ANY);
             self.jump.dispatch(
                 cmd,
                 &[
@@ -150,7 +128,7 @@ impl OrderKernels {
                 Groups::IndirectAt(&s.args, 16 * r as u64),
             );
         }
-        // RAW: lbvh.compact reads the counts and the last states.
+        // RAW: lbvh.compact reads the last states.
         barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ);
     }
 }

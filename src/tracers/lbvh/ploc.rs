@@ -47,6 +47,18 @@ const MORE_ROUNDS: u32 = 8;
 struct PlocPush {
     n: u32,
     parity: u32,
+    /// 1: the merges write the order counts (`Bvh::counts`).
+    order: u32,
+}
+
+impl PlocPush {
+    fn new(n: u32, parity: u32, bvh: &Bvh) -> Self {
+        Self {
+            n,
+            parity,
+            order: bvh.ordered(),
+        }
+    }
 }
 
 /// The scratch memory of a PLOC build over up to `capacity` triangles.
@@ -154,8 +166,9 @@ impl PlocBuilder {
                 ("t_tris", Resource::Buffer(&bvh.ttris)),
                 ("state", Resource::Buffer(&s.state)),
                 ("args", Resource::Buffer(&s.args[0])),
+                ("counts", Resource::Buffer(&bvh.counts)),
             ],
-            &PlocPush { n, parity: 0 },
+            &PlocPush::new(n, 0, bvh),
             Groups::Cover([n, 1, 1]),
         );
         self.record_rounds(cmd, n, bvh, s, 0, rounds);
@@ -168,7 +181,7 @@ impl PlocBuilder {
         let rw = access::COMPUTE_READ_WRITE;
         for r in done..done + rounds {
             let (p, q) = ((r % 2) as usize, ((r + 1) % 2) as usize);
-            let push = PlocPush { n, parity: p as u32 };
+            let push = PlocPush::new(n, p as u32, bvh);
             // RAW: this round reads the clusters, count and arguments the previous
             // step wrote (its dispatch size too).
             barrier::global(d, cmd, access::COMPUTE_WRITE, access::COMPUTE_READ_AND_INDIRECT);
@@ -232,6 +245,7 @@ impl PlocBuilder {
                     ("state", Resource::Buffer(&s.state)),
                     ("t_nodes", Resource::Buffer(&bvh.tnodes)),
                     ("t_tris", Resource::Buffer(&bvh.ttris)),
+                    ("counts", Resource::Buffer(&bvh.counts)),
                 ],
                 &push,
                 Groups::Indirect(&s.args[p]),
@@ -249,8 +263,9 @@ impl PlocBuilder {
                 ("state", Resource::Buffer(&s.state)),
                 ("t_nodes", Resource::Buffer(&bvh.tnodes)),
                 ("t_tris", Resource::Buffer(&bvh.ttris)),
+                ("counts", Resource::Buffer(&bvh.counts)),
             ],
-            &PlocPush { n, parity: p },
+            &PlocPush::new(n, p, bvh),
             Groups::Exact([1, 1, 1]),
         );
         // RAW: traversal, a readback or the next build reads the tree and the state.

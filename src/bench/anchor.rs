@@ -23,6 +23,9 @@ pub struct AnchorReport {
     pub build_ms: Stat,
     /// Speculum's build time over Embree's (> 1: Embree builds faster).
     pub build_ratio: f64,
+    /// The same with `lbvh.compact` added (the static walk's nodes, part of a static
+    /// tree's build).
+    pub static_build_ratio: f64,
     pub coherent: AnchorRays,
     pub incoherent: AnchorRays,
     pub file: Option<AnchorRays>,

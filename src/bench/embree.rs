@@ -226,13 +226,14 @@ impl Drop for Scene<'_> {
 
 /// Embree LOW and MEDIUM on a case: each built `repeats` times after a warm-up, each
 /// of `sets` (coherent, incoherent, the file's; `None` where absent) traced `repeats`
-/// times after a warm-up and compared with Speculum's hits.
+/// times after a warm-up and compared with Speculum's hits; Speculum's build and
+/// compaction milliseconds for the build ratios.
 pub fn anchor_reports(
     vertices: &[GpuVertex],
     indices: &[u32],
     sets: &[Option<AnchorSet<'_>>; 3],
     repeats: u32,
-    speculum_build_ms: f64,
+    (speculum_build_ms, compact_ms): (f64, f64),
 ) -> Result<Vec<AnchorReport>> {
     let anchor = Anchor::new()?;
     let mut reports = Vec::new();
@@ -263,6 +264,7 @@ pub fn anchor_reports(
             threads: anchor.threads as u32,
             build_ms,
             build_ratio: speculum_build_ms / build_ms.median,
+            static_build_ratio: (speculum_build_ms + compact_ms) / build_ms.median,
             coherent: coherent.expect("a coherent set"),
             incoherent: incoherent.expect("an incoherent set"),
             file,

@@ -321,13 +321,14 @@ fn time_builds(
 }
 
 /// The Embree anchor of a case's ray sets: (rays, Speculum's hits, its Mrays/s,
-/// coherent) per set (cargo feature `embree`; `None` without it).
+/// coherent) per set, against its (build, compaction) milliseconds (cargo feature
+/// `embree`; `None` without it).
 #[cfg_attr(not(feature = "embree"), allow(unused_variables))]
 fn anchor(
     (v, i): (&[GpuVertex], &[u32]),
     sets: &[Option<AnchorSet<'_>>; 3],
     repeats: u32,
-    build_ms: f64,
+    build_ms: (f64, f64),
 ) -> Result<Option<Vec<AnchorReport>>> {
     #[cfg(feature = "embree")]
     return Ok(Some(super::embree::anchor_reports(v, i, sets, repeats, build_ms)?));
@@ -402,7 +403,7 @@ pub fn run_case(
             .as_ref()
             .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
     ];
-    let embree = anchor((v, i), &sets, opts.repeats, build_ms.median)?;
+    let embree = anchor((v, i), &sets, opts.repeats, (build_ms.median, built.compact_ms.median))?;
     let walk_per_ray = WalkPerRay::both(&packed, [&coherent_set, &incoherent_set], opts.check_rays, layout);
     let khr_case = (v, i, [&coherent_set[..], &incoherent_set[..]]);
     let khr = vendor_tracer(ctx, (opts, kind, layout), khr_case, &cpu, (&tracer, scene))?;

@@ -146,7 +146,10 @@ fn lbvh_benchmark_anchors_against_embree() {
         assert_eq!(qualities, ["low", "medium"]);
         for a in anchors {
             assert!(
-                a.build_ms.median > 0.0 && a.build_ratio.is_finite() && a.threads >= 1,
+                a.build_ms.median > 0.0
+                    && a.build_ratio.is_finite()
+                    && a.static_build_ratio > a.build_ratio
+                    && a.threads >= 1,
                 "{a:?}"
             );
             assert!(a.file.is_none());

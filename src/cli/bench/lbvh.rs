@@ -295,12 +295,13 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
             })
             .collect();
         text.line(format_args!(
-            "{:<14} Embree {} ({} CPU threads, wall ms): build {} (Speculum {:.2}x its time); {}",
+            "{:<14} Embree {} ({} CPU threads, wall ms): build {} (Speculum {:.2}x its time, {:.2}x with lbvh.compact); {}",
             "",
             a.quality.to_uppercase(),
             a.threads,
             cell(Some(a.build_ms)),
             a.build_ratio,
+            a.static_build_ratio,
             rays.join(", ")
         ));
     }

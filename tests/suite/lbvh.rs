@@ -860,8 +860,9 @@ fn rigid_keys_match_cpu_and_build_the_cpu_tree() {
 /// deepest node of the first two exactly as many steps below the root as the rounds
 /// span), each also cut by a leaf near its end (nodes 61 to 98 of 100 inside that leaf,
 /// deeper than the rounds reach: not placed), in preorder; a chain planted without
-/// counts keeps every node in its slot. A builder whose fit climbs in lockstep leaves
-/// the same counts as the free climb (both equal to the CPU's).
+/// counts keeps every node in its slot (a plant of too few nodes or counts is refused).
+/// A builder whose fit climbs in lockstep leaves the same counts as the free climb
+/// (both equal to the CPU's).
 #[test]
 fn compact_order_is_preorder_or_the_slots() {
     use speculum::gpu_types::{bvh_leaf_link, TraversalNode};
@@ -903,6 +904,9 @@ fn compact_order_is_preorder_or_the_slots() {
                 );
             }
             let in_slots: Vec<u32> = (0..m).collect();
+            let counts = cref::order_counts(&chain).unwrap();
+            assert!(bvh.plant(&chain[1..], None).is_err(), "a node short");
+            assert!(bvh.plant(&chain, Some(&counts[1..])).is_err(), "a count short");
             bvh.plant(&chain, None).unwrap();
             assert_written(
                 &compact_poisoned(&ctx, &free, &bvh),

@@ -164,8 +164,16 @@ impl Bvh {
     /// Writes `nodes` from the host: a tree no builder made (tests, tools), its compact
     /// nodes stale. With `counts` (each node's, `cpu_ref::lbvh::order_counts`) the compact
     /// nodes are ordered by them; without, the counts are cleared and every node keeps
-    /// its slot.
+    /// its slot. Both must hold every node of the BVH.
     pub fn plant(&self, nodes: &[TraversalNode], counts: Option<&[[u32; 4]]>) -> Result<()> {
+        let want = self.tnodes.size as usize / std::mem::size_of::<TraversalNode>();
+        if nodes.len() != want || counts.is_some_and(|c| c.len() != want) {
+            return Err(Error::Bvh(format!(
+                "{} nodes and {:?} counts planted into a BVH of {want} nodes",
+                nodes.len(),
+                counts.map(<[_]>::len)
+            )));
+        }
         self.tnodes.write(bytemuck::cast_slice(nodes))?;
         if self.compact.is_some() {
             match counts {

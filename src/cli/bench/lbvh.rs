@@ -16,6 +16,10 @@ pub struct LbvhArgs {
     /// --scene is given).
     #[arg(long, num_args = 1..)]
     pub tris: Vec<u32>,
+    /// Dense closed surfaces of about these triangle counts (a bumpy torus: a scanned
+    /// model's class, small even triangles on one surface, where a soup's fill a volume).
+    #[arg(long, num_args = 1..)]
+    pub surface: Vec<u32>,
     /// Built-in scene names or .obj paths to benchmark as well.
     #[arg(long, num_args = 1..)]
     pub scene: Vec<String>,
@@ -177,26 +181,39 @@ fn dump_rays(
 }
 
 /// Every case's triangles, loaded before any GPU work (a bad scene fails first): the
-/// soups of `--tris` (10K, 100K, 1M without `--tris` or `--scene`), then the scenes.
+/// soups of `--tris` (10K, 100K, 1M without `--tris`, `--surface` or `--scene`), the
+/// surfaces, then the scenes.
 fn lbvh_cases(args: &LbvhArgs) -> Result<Vec<Case>> {
+    use speculum::scene::soup::{bumpy_torus, default_size, random_soup, BUMPY_TORUS_MIN};
     let mut tris = args.tris.clone();
-    if tris.is_empty() && args.scene.is_empty() {
+    if tris.is_empty() && args.surface.is_empty() && args.scene.is_empty() {
         tris = vec![10_000, 100_000, 1_000_000];
+    }
+    let max = speculum::tracers::lbvh::MAX_TRIANGLES;
+    for (flag, counts, min) in [
+        ("--tris", &tris, 1),
+        ("--surface", &args.surface, BUMPY_TORUS_MIN as u32),
+    ] {
+        if let Some(n) = counts.iter().find(|&&n| n < min || n > max) {
+            anyhow::bail!(speculum::Error::Input(format!(
+                "{flag} {n}: a case needs {min} to {max} triangles"
+            )));
+        }
     }
     let mut cases = Vec::new();
     for &n in &tris {
-        if n == 0 {
-            anyhow::bail!("--tris 0: a BVH needs at least one triangle");
-        }
-        if n > speculum::tracers::lbvh::MAX_TRIANGLES {
-            anyhow::bail!(
-                "--tris {n}: more than the LBVH's {} triangles",
-                speculum::tracers::lbvh::MAX_TRIANGLES
-            );
-        }
-        let size = speculum::scene::soup::default_size(n as usize);
-        let (v, i) = speculum::scene::soup::random_soup(n as usize, 1.0, size, n as u64);
+        let (v, i) = random_soup(n as usize, 1.0, default_size(n as usize), n as u64);
         cases.push((format!("soup-{n}"), v, i));
+    }
+    for &n in &args.surface {
+        let (v, i) = bumpy_torus(n as usize);
+        let made = i.len() / 3;
+        if made > max as usize {
+            anyhow::bail!(speculum::Error::Input(format!(
+                "--surface {n}: its grid makes {made} triangles, more than the LBVH's {max}"
+            )));
+        }
+        cases.push((format!("surface-{made}"), v, i));
     }
     for name in &args.scene {
         // The model alone: a floor would be triangles the benchmark did not ask for.

@@ -55,6 +55,12 @@ pub struct Bvh {
 impl Bvh {
     /// Memory for a BVH over `tri_count` triangles.
     pub fn new(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits) -> Result<Self> {
+        Self::alloc(ctx, tri_count, bits, false)
+    }
+
+    /// `new`'s memory, with room for every node's order counts where `ordered` (a BVH
+    /// that will have compact nodes).
+    fn alloc(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits, ordered: bool) -> Result<Self> {
         if tri_count == 0 {
             return Err(Error::Bvh("a BVH needs at least one triangle".into()));
         }
@@ -95,7 +101,14 @@ impl Bvh {
             ttris,
             ends: buf("lbvh.ends", (tri_count as u64 - 1).max(1) * 4)?,
             costs: buf("lbvh.costs", (tri_count as u64 - 1).max(1) * 2 * 4)?,
-            counts: buf("lbvh.order.counts", 16)?,
+            counts: buf(
+                "lbvh.order.counts",
+                if ordered {
+                    (tri_count as u64 - 1).max(1) * 16
+                } else {
+                    16
+                },
+            )?,
             bounds: buf("lbvh.bounds", 15 * 4)?,
             sort: SortBuffers::new(ctx, tri_count, bits.key_words())?,
             tri_count,
@@ -110,16 +123,7 @@ impl Bvh {
 
     /// `new_static` with the walk's nodes in `layout`.
     pub fn new_static_in(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits, layout: StaticLayout) -> Result<Self> {
-        let mut bvh = Self::new(ctx, tri_count, bits)?;
-        bvh.counts = Buffer::new(
-            ctx,
-            "lbvh.order.counts",
-            (tri_count as u64 - 1).max(1) * 16,
-            vk::BufferUsageFlags::STORAGE_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_DST
-                | vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::GpuOnly,
-        )?;
+        let mut bvh = Self::alloc(ctx, tri_count, bits, true)?;
         let buffer = Buffer::new(
             ctx,
             "lbvh.compact",

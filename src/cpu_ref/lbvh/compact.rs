@@ -181,7 +181,7 @@ pub fn order_counts(nodes: &[TraversalNode]) -> Option<Vec<[u32; 4]>> {
 /// the internal nodes outside leaves; wide: those at an even depth), `BVH_INVALID` for
 /// the rest. None where the nodes from the root are not a tree whose every internal
 /// child links back to its parent's half (a cycle, a planted tree without parent
-/// links): there every node keeps its slot.
+/// links), which no builder makes.
 pub fn compact_places(nodes: &[TraversalNode], slots: u32) -> Option<Vec<u32>> {
     let invalid = crate::shader_defines::BVH_INVALID;
     let mut place = vec![invalid; nodes.len()];
@@ -212,9 +212,11 @@ pub fn compact_places(nodes: &[TraversalNode], slots: u32) -> Option<Vec<u32>> {
 /// `lbvh.compact`: the static walk's nodes made from `nodes` (`glsl/shared/bvh.glsl`),
 /// each at its place (`compact_places`), its internal children's links to theirs: the
 /// header and the nodes placed, as many as are written (the rest of the buffer is
-/// left as it was).
+/// left as it was). For a tree `compact_places` orders, as the GPU does by its
+/// builder's counts; nodes planted without counts keep their slots there
+/// (`compact_nodes_placed` with each node's own).
 pub fn compact_nodes(nodes: &[TraversalNode], slots: u32) -> Vec<[u32; 4]> {
-    let place = compact_places(nodes, slots).unwrap_or_else(|| (0..nodes.len() as u32).collect());
+    let place = compact_places(nodes, slots).expect("compact_nodes of a tree from the root with parent links back");
     compact_nodes_placed(nodes, slots, &place)
 }
 

@@ -1,7 +1,7 @@
 #version 460
 // lbvh.compact, its order's first step (bvh_order.glsl), after the builder's counts:
 // each node's jump state of one step, to its parent. A node after an internal first
-// sibling adds that sibling's subtree: binary, all its nodes (A + B); wide, at an even
+// sibling adds that sibling's subtree: binary and compressed wide, all its nodes (A + B); wide, at an even
 // depth its wide nodes (A) and at an odd one those of its children (B). Nothing when
 // the root has no counts (the nodes stay in place). The first invocation writes the
 // jump rounds' indirect arguments: the rounds the root's height needs get the groups,
@@ -19,7 +19,7 @@ layout(binding = 3, std430) writeonly buffer Args { uvec4 args[]; };
 
 layout(push_constant) uniform Push {
     uint node_count;
-    uint slots;  // 2: binary, WIDE: wide
+    uint slots;  // 2: binary, WIDE: wide, WIDE8: compressed wide (placed as binary)
     uint rounds; // recorded jump rounds
 } pc;
 
@@ -56,7 +56,7 @@ void main() {
     if (side == 1u && order_internal(sib)) {
         ab = counts[sib].xy;
     }
-    uint even = 1u + (pc.slots == 2u ? ab.x + ab.y : ab.x);
-    uint odd = pc.slots == 2u ? even : ab.y;
+    uint even = 1u + (pc.slots != WIDE ? ab.x + ab.y : ab.x);
+    uint odd = pc.slots != WIDE ? even : ab.y;
     jump[i] = uvec4(p, even, odd, ORDER_ODD);
 }

@@ -123,14 +123,23 @@ pub const BVH_INVALID: u32 = 0xffff_ffff;
 pub const WIDE: u32 = 4;
 // The static walk orders a wide node's children by a sorting network of four.
 const _: () = assert!(WIDE == 4);
+/// Children of a compressed wide node of the static walk (`lbvh.compact`, the `wide8`
+/// layout): a binary node's subtree opened three levels, each child's box in 8 bits an
+/// axis on the node's own grid (Ylitie, Karras & Laine 2017's quantization).
+pub const WIDE8: u32 = 8;
+/// 16-byte texels of a compressed wide node: its grid, its children's quantized boxes
+/// (three texels), their links (two).
+pub const WIDE8_TEXELS: u32 = 6;
 /// Traversal stack entries per ray. An LBVH over one-word keys (a 30-bit
 /// Morton code and 2 size-class bits) is at most 32 + ceil(log2 N) levels deep (equal
 /// keys split by index); the binary walk holds at most one pending child per level, the
-/// wide walk at most `WIDE - 1` per two levels: 96 is enough for every tree the frame
-/// builds (`tracers::lbvh` asserts it against `MAX_TRIANGLES`). Two-word keys (`bench
-/// lbvh --bits 63`) can build deeper trees; a walk that runs out of stack returns
-/// t = -1, which the benchmark counts as a mismatch.
-pub const TRACE_STACK: u32 = 96;
+/// wide walk at most `WIDE - 1` per two levels, the compressed wide walk `WIDE8 - 1`
+/// per three: enough for every tree the frame builds (`tracers::lbvh` asserts it
+/// against `MAX_TRIANGLES`). Two-word keys (`bench lbvh --bits 63`) can build deeper
+/// trees: the deepest chain the tests build from them (tests/suite/trace.rs) needs 147
+/// entries in the compressed wide walk. A walk that runs out of stack returns t = -1,
+/// which the benchmark counts as a mismatch.
+pub const TRACE_STACK: u32 = 152;
 
 /// Binary-search steps that refine an SSR hit inside its last stride: log2 of the
 /// largest stride worth refining to one pixel (16 px).
@@ -299,6 +308,8 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BVH_INVALID", BVH_INVALID),
     ("TRACE_STACK", TRACE_STACK),
     ("WIDE", WIDE),
+    ("WIDE8", WIDE8),
+    ("WIDE8_TEXELS", WIDE8_TEXELS),
     ("SSR_REFINE_STEPS", SSR_REFINE_STEPS),
     ("SSR_LIST_WG", SSR_LIST_WG),
     ("LIST_STRIPES", LIST_STRIPES),

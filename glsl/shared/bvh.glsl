@@ -149,6 +149,18 @@ TraversalNode node_from_texels(utextureBuffer nodes, uint i) {
 // the same). The step is at least 2 units in the last place of the grid's largest
 // coordinate, so rounding never moves a coordinate by a whole step. Mirrored by
 // cpu_ref::lbvh::{compact_grid, compact_half, compact_box}.
+//
+// The compressed wide layout (WIDE8 children, WIDE8_TEXELS texels a node after the same
+// header; Ylitie, Karras & Laine 2017's quantization): node i at texel 2 + 6i,
+//
+//   texel 0: the node's grid origin (f32 x3, its children's lower corner), its steps'
+//            exponent bytes (x | y << 8 | z << 16: each step a power of two)
+//   texels 1-3: each child's box on that grid, 255 steps an axis, a byte a coordinate:
+//            words lo.x[0-3], lo.x[4-7], lo.y.., lo.z.., hi.x.., hi.y.., hi.z..
+//            (child j in byte j % 4)
+//   texels 4-5: the children's links, BVH_INVALID for an unused slot
+//
+// Mirrored by cpu_ref::lbvh::{wide8_node, wide8_boxes}.
 
 // The smallest power of two at least x (x >= 0, finite), at least the smallest normal.
 float pow2_at_least(float x) {
@@ -167,17 +179,28 @@ float two_ulps(float x) {
     return uintBitsToFloat(e >= (23u << 23) ? e - (22u << 23) : 0x00800000u);
 }
 
-// The grid over the box [lo, hi] (finite): origin lo, per axis the smallest power of
-// two step whose 65,534 steps span the box and that is at least two_ulps of its
-// largest coordinate (so step 65,535 lies beyond hi, rounded).
-void compact_grid(vec3 lo, vec3 hi, out vec3 g, out vec3 st) {
+// The grid over the box [lo, hi] (finite) with steps 0..top: origin lo, per axis the
+// smallest power of two step whose top - 1 steps span the box and that is at least
+// two_ulps of its largest coordinate (so step top lies beyond hi, rounded).
+void grid_over(vec3 lo, vec3 hi, uint top, out vec3 g, out vec3 st) {
     g = lo;
+    float span = float(top - 1u);
     for (int a = 0; a < 3; ++a) {
         precise float ext = hi[a] - lo[a];
-        float s = pow2_at_least(ext * (1.0 / 65536.0));
-        s = s * 65534.0 < ext ? 2.0 * s : s;
+        float s = pow2_at_least(ext * (1.0 / float(top + 1u)));
+        s = s * span < ext ? 2.0 * s : s;
         st[a] = max(s, two_ulps(max(abs(lo[a]), abs(hi[a]))));
     }
+}
+
+// The last step of the compact nodes' 16-bit grid and of a compressed wide node's
+// 8-bit one.
+#define GRID16 65535u
+#define GRID8 255u
+
+// The compact nodes' grid over the root's box [lo, hi].
+void compact_grid(vec3 lo, vec3 hi, out vec3 g, out vec3 st) {
+    grid_over(lo, hi, GRID16, g, st);
 }
 
 // Grid coordinate q along an axis with origin g and step s.
@@ -193,27 +216,28 @@ float grid_units(float x, float g, float s) {
     return d;
 }
 
-// The grid steps of x (g <= x, inside the grid's box) rounded down (the largest q
-// with grid_at(q) <= x) or up (the smallest with grid_at(q) >= x).
-uint grid_down(float x, float g, float s) {
-    uint q = uint(clamp(floor(grid_units(x, g, s)), 0.0, 65535.0));
+// The grid steps of x (g <= x, inside the grid's box of steps 0..top) rounded down
+// (the largest q with grid_at(q) <= x) or up (the smallest with grid_at(q) >= x).
+uint grid_down(float x, float g, float s, uint top) {
+    uint q = uint(clamp(floor(grid_units(x, g, s)), 0.0, float(top)));
     for (int k = 0; k < 2 && q > 0u && grid_at(q, g, s) > x; ++k) {
         --q;
     }
     return grid_at(q, g, s) > x ? 0u : q;
 }
-uint grid_up(float x, float g, float s) {
-    uint q = uint(clamp(ceil(grid_units(x, g, s)), 0.0, 65535.0));
-    for (int k = 0; k < 2 && q < 65535u && grid_at(q, g, s) < x; ++k) {
+uint grid_up(float x, float g, float s, uint top) {
+    uint q = uint(clamp(ceil(grid_units(x, g, s)), 0.0, float(top)));
+    for (int k = 0; k < 2 && q < top && grid_at(q, g, s) < x; ++k) {
         ++q;
     }
-    return grid_at(q, g, s) < x ? 65535u : q;
+    return grid_at(q, g, s) < x ? top : q;
 }
 
 // One half of a compact node: the box [lo, hi] rounded outward and the child.
 uvec4 compact_half(vec3 lo, vec3 hi, uint child, vec3 g, vec3 st) {
-    uvec3 l = uvec3(grid_down(lo.x, g.x, st.x), grid_down(lo.y, g.y, st.y), grid_down(lo.z, g.z, st.z));
-    uvec3 h = uvec3(grid_up(hi.x, g.x, st.x), grid_up(hi.y, g.y, st.y), grid_up(hi.z, g.z, st.z));
+    uvec3 l = uvec3(grid_down(lo.x, g.x, st.x, GRID16), grid_down(lo.y, g.y, st.y, GRID16),
+                    grid_down(lo.z, g.z, st.z, GRID16));
+    uvec3 h = uvec3(grid_up(hi.x, g.x, st.x, GRID16), grid_up(hi.y, g.y, st.y, GRID16), grid_up(hi.z, g.z, st.z, GRID16));
     return uvec4(l.x | (l.y << 16u), l.z | (h.x << 16u), h.y | (h.z << 16u), child);
 }
 

@@ -1,7 +1,8 @@
 // Where lbvh.compact puts each node (lbvh_order_*.comp): the static walk's nodes in
 // preorder from the root, a node, then its first child's subtree, then its second's,
-// so a walk that goes down reads the node just after the one it left. Binary: every
-// internal node the walk can reach; wide: those at an even depth (the wide nodes: a
+// so a walk that goes down reads the node just after the one it left. Binary (and
+// compressed wide, whose walk reaches a third of them): every internal node the walk
+// can reach; wide: those at an even depth (the wide nodes: a
 // wide node's children are its binary node's grandchildren). Nodes inside a leaf are
 // not placed. Mirrored by cpu_ref::lbvh::compact_places (tests/lbvh.rs).
 //

@@ -356,6 +356,126 @@ void walk_wide(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, ui
     }
 }
 
+// The entry distances of four children of a compressed wide node (bvh.glsl) into
+// vectors: their boxes' coordinate bytes (a word each: lo x, y, z, hi x, y, z) on the
+// grid (g, st), their links; +inf for a box missed within [tmin, tmax] or an unused
+// slot. The same arithmetic as box_entry per child.
+vec4 wide8_entries(uvec3 wlo, uvec3 whi, uvec4 link, vec3 g, vec3 st, vec3 o, vec3 inv_dir, float tmin,
+                   float tmax) {
+    const uvec4 sh = uvec4(0u, 8u, 16u, 24u);
+    vec4 lx = g.x + vec4((uvec4(wlo.x) >> sh) & 0xffu) * st.x;
+    vec4 ly = g.y + vec4((uvec4(wlo.y) >> sh) & 0xffu) * st.y;
+    vec4 lz = g.z + vec4((uvec4(wlo.z) >> sh) & 0xffu) * st.z;
+    vec4 hx = g.x + vec4((uvec4(whi.x) >> sh) & 0xffu) * st.x;
+    vec4 hy = g.y + vec4((uvec4(whi.y) >> sh) & 0xffu) * st.y;
+    vec4 hz = g.z + vec4((uvec4(whi.z) >> sh) & 0xffu) * st.z;
+    vec4 t0x = (lx - o.x) * inv_dir.x, t1x = (hx - o.x) * inv_dir.x;
+    vec4 t0y = (ly - o.y) * inv_dir.y, t1y = (hy - o.y) * inv_dir.y;
+    vec4 t0z = (lz - o.z) * inv_dir.z, t1z = (hz - o.z) * inv_dir.z;
+    vec4 enter = max(max(min(t0x, t1x), min(t0y, t1y)), max(min(t0z, t1z), vec4(tmin)));
+    vec4 exit = min(min(max(t0x, t1x), max(t0y, t1y)), min(max(t0z, t1z), vec4(tmax)));
+    bvec4 hit = bvec4(uvec4(lessThanEqual(enter, exit)) & uvec4(notEqual(link, uvec4(BVH_INVALID))));
+    return mix(vec4(1.0 / 0.0), enter, hit);
+}
+
+// Orders slots a and b of four children (vectors t, link) by entry distance.
+#define WIDE8_ORDER(t, link, a, b)                                                           \
+    if (t[b] < t[a]) {                                                                     \
+        float tt = t[a];                                                                   \
+        t[a] = t[b];                                                                       \
+        t[b] = tt;                                                                         \
+        uint ll = link[a];                                                                 \
+        link[a] = link[b];                                                                 \
+        link[b] = ll;                                                                      \
+    }
+
+// One ray's walk of the static BVH through its compressed wide nodes (lbvh.compact):
+// a step tests a node's WIDE8 children (two vectors of four), the leaves among the
+// hit ones at once, and goes on to the nearest internal child; the others are pushed
+// far first: each four ordered by walk_wide's network, the two merged from their far
+// ends (ties to the first four). A step descends three levels and pushes at most
+// WIDE8 - 1 (tracers::lbvh asserts TRACE_STACK holds them). `failed` and `max_steps`
+// as in walk_bvh. Mirrored by cpu_ref::walk::replay.
+void walk_wide8(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, uint max_steps, inout Hit best,
+                inout bool failed) {
+    uint sp = 0u;
+    uint steps = 0u;
+    uint top = BVH_INVALID; // when set, the top of the sp entries; the array holds the rest
+    uint node = 0u;         // the root's compressed wide node
+    while (true) {
+        if (++steps > max_steps) {
+            failed = true;
+            break;
+        }
+        int base = int(2u + WIDE8_TEXELS * node);
+        uvec4 h = texelFetch(s_nodes, base);
+        uvec4 q0 = texelFetch(s_nodes, base + 1);
+        uvec4 q1 = texelFetch(s_nodes, base + 2);
+        uvec4 q2 = texelFetch(s_nodes, base + 3);
+        uvec4 la = texelFetch(s_nodes, base + 4);
+        uvec4 lb = texelFetch(s_nodes, base + 5);
+        vec3 g = uintBitsToFloat(h.xyz);
+        vec3 st = uintBitsToFloat(((uvec3(h.w) >> uvec3(0u, 8u, 16u)) & 0xffu) << 23u);
+        vec4 ta = wide8_entries(uvec3(q0.x, q0.z, q1.x), uvec3(q1.z, q2.x, q2.z), la, g, st, origin, inv_dir, tmin,
+                                best.t);
+        vec4 tb = wide8_entries(uvec3(q0.y, q0.w, q1.y), uvec3(q1.w, q2.y, q2.w), lb, g, st, origin, inv_dir, tmin,
+                                best.t);
+        bool found = false;
+        for (uint k = 0u; k < 4u; ++k) {
+            if (!found && ta[k] != 1.0 / 0.0 && (la[k] & BVH_LEAF_BIT) != 0u) {
+                found = hit_leaf(0u, la[k], r, tmin, any_hit, best);
+                ta[k] = 1.0 / 0.0;
+            }
+        }
+        for (uint k = 0u; k < 4u; ++k) {
+            if (!found && tb[k] != 1.0 / 0.0 && (lb[k] & BVH_LEAF_BIT) != 0u) {
+                found = hit_leaf(0u, lb[k], r, tmin, any_hit, best);
+                tb[k] = 1.0 / 0.0;
+            }
+        }
+        if (found) {
+            break;
+        }
+        // A child entered beyond the best hit so far (a leaf may have just made it)
+        // holds no closer hit.
+        ta = mix(ta, vec4(1.0 / 0.0), greaterThan(ta, vec4(best.t)));
+        tb = mix(tb, vec4(1.0 / 0.0), greaterThan(tb, vec4(best.t)));
+        WIDE8_ORDER(ta, la, 0, 1)
+        WIDE8_ORDER(ta, la, 2, 3)
+        WIDE8_ORDER(ta, la, 0, 2)
+        WIDE8_ORDER(ta, la, 1, 3)
+        WIDE8_ORDER(ta, la, 1, 2)
+        WIDE8_ORDER(tb, lb, 0, 1)
+        WIDE8_ORDER(tb, lb, 2, 3)
+        WIDE8_ORDER(tb, lb, 0, 2)
+        WIDE8_ORDER(tb, lb, 1, 3)
+        WIDE8_ORDER(tb, lb, 1, 2)
+        // Entered children first in each four: how many, and which four the nearest.
+        int na = int(dot(vec4(notEqual(ta, vec4(1.0 / 0.0))), vec4(1.0)));
+        int nb = int(dot(vec4(notEqual(tb, vec4(1.0 / 0.0))), vec4(1.0)));
+        if (na + nb == 0) {
+            if (!pop_node(node, sp, top)) {
+                break;
+            }
+            continue;
+        }
+        bool near_a = na > 0 && (nb == 0 || ta[0] <= tb[0]);
+        int ia = na - 1, ib = nb - 1;
+        int stop_a = near_a ? 1 : 0, stop_b = near_a ? 0 : 1;
+        for (int k = 0; k < int(WIDE8) - 1; ++k) {
+            bool more_a = ia >= stop_a, more_b = ib >= stop_b;
+            if (!more_a && !more_b) {
+                break;
+            }
+            bool take_a = more_a && (!more_b || ta[ia] > tb[ib]);
+            push_node(take_a ? la[ia] : lb[ib], sp, top, failed);
+            ia -= take_a ? 1 : 0;
+            ib -= take_a ? 0 : 1;
+        }
+        node = near_a ? la[0] : lb[0];
+    }
+}
+
 // Traces one ray through both BVHs (a BVH with 0 triangles is skipped). Returns the
 // closest hit, or with any_hit the first found; t = -1 if a walk failed (its stack
 // overflowed, or it overran its step bound: the tree is not what the walk expects).
@@ -369,7 +489,10 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
     if (static_tris != 0u) {
         // The static BVH's layout, as its compact nodes' header says (the same for
         // every ray: a uniform branch).
-        if (texelFetch(s_nodes, 0).w == WIDE) {
+        uint slots = texelFetch(s_nodes, 0).w;
+        if (slots == WIDE8) {
+            walk_wide8(origin, r, inv_dir, tmin, any_hit, static_tris, best, failed);
+        } else if (slots == WIDE) {
             walk_wide(origin, r, inv_dir, tmin, any_hit, static_tris, best, failed);
         } else {
             walk_bvh(0u, origin, r, inv_dir, tmin, any_hit, static_tris, best, failed);

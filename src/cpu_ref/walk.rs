@@ -7,10 +7,10 @@
 //! replay tests the exact boxes; the GPU's static walk tests them rounded outward to a
 //! 16-bit grid, and may enter a few more.
 
-use super::lbvh::wide_entries;
+use super::lbvh::{wide8_entries, wide_entries};
 use super::trace::intersect;
 use crate::gpu_types::{bvh_leaf, Hit, Ray, TraversalNode, TraversalTri};
-use crate::shader_defines::BVH_INVALID;
+use crate::shader_defines::{BVH_INVALID, WIDE8};
 use glam::Vec3;
 
 /// What one ray's walk did.
@@ -39,8 +39,8 @@ fn box_entry(lo: [f32; 3], hi: [f32; 3], o: Vec3, inv: Vec3, tmin: f32, tmax: f3
 }
 
 /// One ray's closest hit through the tree `nodes` (triangles `tris` in leaf order),
-/// walked as the binary walk (`slots` 2) or the wide one (`slots` `WIDE`), and what
-/// the walk did.
+/// walked as the binary walk (`slots` 2), the wide one (`slots` `WIDE`) or the
+/// compressed wide one (`slots` `WIDE8`; exact boxes), and what the walk did.
 pub fn replay(nodes: &[TraversalNode], tris: &[TraversalTri], ray: &Ray, slots: u32) -> (Hit, WalkCounts) {
     let o = Vec3::from(ray.origin);
     let d = Vec3::from(ray.dir);
@@ -75,11 +75,13 @@ pub fn replay(nodes: &[TraversalNode], tris: &[TraversalTri], ray: &Ray, slots: 
     loop {
         counts.steps += 1;
         // The node's children: (box entry, link), as the walk tests them.
-        let children: Vec<([f32; 3], [f32; 3], u32)> = if slots == 2 {
-            let n = &nodes[node as usize];
-            vec![(n.lo0, n.hi0, n.child0), (n.lo1, n.hi1, n.child1)]
-        } else {
-            wide_entries(nodes, node as usize)
+        let children: Vec<([f32; 3], [f32; 3], u32)> = match slots {
+            2 => {
+                let n = &nodes[node as usize];
+                vec![(n.lo0, n.hi0, n.child0), (n.lo1, n.hi1, n.child1)]
+            }
+            WIDE8 => wide8_entries(nodes, node as usize),
+            _ => wide_entries(nodes, node as usize),
         };
         let mut t: Vec<(f32, u32)> = children
             .iter()
@@ -94,10 +96,10 @@ pub fn replay(nodes: &[TraversalNode], tris: &[TraversalTri], ray: &Ray, slots: 
                 e.0 = f32::INFINITY;
             }
         }
-        let next = if slots == 2 {
-            binary_next(&t, &mut stack)
-        } else {
-            wide_next(t, best.t, &mut stack)
+        let next = match slots {
+            2 => binary_next(&t, &mut stack),
+            WIDE8 => wide8_next(t, best.t, &mut stack),
+            _ => wide_next(t, best.t, &mut stack),
         };
         if let Some(next) = next {
             node = next;
@@ -153,6 +155,46 @@ fn wide_next(mut t: Vec<(f32, u32)>, best_t: f32, stack: &mut Vec<u32>) -> Optio
     Some(t[0].1)
 }
 
+/// `walk_wide8`'s choice after a node's leaves: children entered beyond `best_t`
+/// dropped, each four ordered by `walk_wide`'s network, all but the nearest pushed far
+/// first, the two fours merged from their far ends (ties: the second four's pushed
+/// first); the nearest (ties: the first four's), or `None` to pop.
+fn wide8_next(mut t: Vec<(f32, u32)>, best_t: f32, stack: &mut Vec<u32>) -> Option<u32> {
+    t.resize(WIDE8 as usize, (f32::INFINITY, BVH_INVALID));
+    for e in t.iter_mut() {
+        if e.0 > best_t {
+            e.0 = f32::INFINITY;
+        }
+    }
+    for four in t.chunks_mut(4) {
+        for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+            if four[b].0 < four[a].0 {
+                four.swap(a, b);
+            }
+        }
+    }
+    let (a, b) = t.split_at(4);
+    let entered = |f: &[(f32, u32)]| f.iter().filter(|e| e.0 != f32::INFINITY).count();
+    let (na, nb) = (entered(a), entered(b));
+    if na + nb == 0 {
+        return None;
+    }
+    let near_a = na > 0 && (nb == 0 || a[0].0 <= b[0].0);
+    let (stop_a, stop_b) = if near_a { (1, 0) } else { (0, 1) };
+    let (mut ia, mut ib) = (na, nb);
+    while ia > stop_a || ib > stop_b {
+        let take_a = ia > stop_a && (ib <= stop_b || a[ia - 1].0 > b[ib - 1].0);
+        if take_a {
+            ia -= 1;
+            stack.push(a[ia].1);
+        } else {
+            ib -= 1;
+            stack.push(b[ib].1);
+        }
+    }
+    Some(if near_a { a[0].1 } else { b[0].1 })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -165,7 +207,7 @@ mod tests {
     /// visit at most the tree's nodes, and the wide walk takes about half the steps for
     /// four box tests a step; a miss far from the scene takes one step and no triangle.
     #[test]
-    fn both_replays_find_brute_force_hits_and_count_their_work() {
+    fn every_replay_finds_brute_force_hits_and_counts_its_work() {
         let n = 2000;
         let (v, i) = random_soup(n, 1.0, default_size(n), 5);
         let keys = morton_keys(&v, &i, 1);
@@ -180,11 +222,11 @@ mod tests {
             )
         };
         let rays: Vec<Ray> = (0..500).map(|_| Ray::through(r() * 2.0, r() * 0.5)).collect();
-        let mut totals = [WalkCounts::default(); 2];
+        let mut totals = [WalkCounts::default(); 3];
         let mut ties = 0;
         for ray in &rays {
             let want = brute_force(ray, &v, &i);
-            for (k, slots) in [2, crate::shader_defines::WIDE].into_iter().enumerate() {
+            for (k, slots) in [2, crate::shader_defines::WIDE, WIDE8].into_iter().enumerate() {
                 let (hit, c) = replay(&bvh.nodes, &bvh.tris, ray, slots);
                 assert_eq!(hit.t, want.t, "slots {slots}");
                 ties += (hit.prim != want.prim) as u32;
@@ -195,20 +237,25 @@ mod tests {
             }
         }
         assert!(ties <= 2, "{ties} ties");
-        let [binary, wide] = totals;
-        // Two levels a step: about half the steps, as many boxes (four a step).
+        let [binary, wide, wide8] = totals;
+        // Two levels a step: about half the steps, as many boxes (four a step); three
+        // levels: about a third.
         assert!(
             2 * wide.steps < 3 * binary.steps && wide.boxes < 2 * binary.boxes,
             "{binary:?} {wide:?}"
         );
-        assert!(binary.triangles > 0 && wide.triangles > 0);
+        assert!(
+            2 * wide8.steps < binary.steps && wide8.boxes < 3 * binary.boxes,
+            "{binary:?} {wide8:?}"
+        );
+        assert!(binary.triangles > 0 && wide.triangles > 0 && wide8.triangles > 0);
         let away = Ray {
             origin: [10.0, 10.0, 10.0],
             tmin: 0.0,
             dir: [1.0, 0.0, 0.0],
             tmax: f32::MAX,
         };
-        for slots in [2, crate::shader_defines::WIDE] {
+        for slots in [2, crate::shader_defines::WIDE, WIDE8] {
             let (hit, c) = replay(&bvh.nodes, &bvh.tris, &away, slots);
             assert_eq!((hit.prim, c.steps, c.triangles), (BVH_INVALID, 1, 0));
         }

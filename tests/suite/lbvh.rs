@@ -616,7 +616,8 @@ fn compact_nodes_match_cpu_and_hold_the_boxes() {
         assert_written(&got, &want, &format!("{what}, {layout:?}: compact nodes"));
         let place = cref::compact_places(&nodes, slots as u32).expect("a built tree is ordered");
         let placed = place.iter().filter(|&&p| p != BVH_INVALID).count();
-        assert_eq!(2 + slots * placed, want.len(), "{what}: the nodes placed are written");
+        let texels = layout.texels() as usize;
+        assert_eq!(2 + texels * placed, want.len(), "{what}: the nodes placed are written");
         let (g, st) = (Vec3::from_array(f32_3(got[0])), Vec3::from_array(f32_3(got[1])));
         // Every node placed holds its binary node's children (wide: each internal one
         // opened): each rounded box holds its exact box within two grid steps, with its
@@ -627,6 +628,37 @@ fn compact_nodes_match_cpu_and_hold_the_boxes() {
         };
         for (k, nd) in nodes.iter().enumerate() {
             if place[k] == BVH_INVALID {
+                continue;
+            }
+            if layout == StaticLayout::Wide8 {
+                // The compressed node holds binary node k's subtree opened three levels
+                // (in order), each box within two steps of the node's own grid.
+                let at = 2 + texels * place[k] as usize;
+                let node = &got[at..at + texels];
+                let h = node[0];
+                let st = Vec3::from_array([0, 8, 16].map(|s| f32::from_bits((h[3] >> s & 0xff) << 23)));
+                let entries = cref::wide8_entries(&nodes, k);
+                assert!(
+                    (2..=8).contains(&entries.len()),
+                    "{what}: node {k}: {} children",
+                    entries.len()
+                );
+                for (slot, (rounded, l)) in cref::wide8_boxes(node).into_iter().enumerate() {
+                    let Some(&(lo, hi, c)) = entries.get(slot) else {
+                        assert_eq!(l, BVH_INVALID, "{what}: node {k} slot {slot}: unused");
+                        continue;
+                    };
+                    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+                    let within = (lo - rounded.lo).cmpge(Vec3::ZERO).all()
+                        && (rounded.hi - hi).cmpge(Vec3::ZERO).all()
+                        && (lo - rounded.lo).cmple(2.0 * st).all()
+                        && (rounded.hi - hi).cmple(2.0 * st).all();
+                    assert!(
+                        within,
+                        "{what}: node {k} slot {slot}: {lo}..{hi} rounded to {rounded:?}"
+                    );
+                    assert_eq!(l, link(c), "{what}: node {k} slot {slot}: link");
+                }
                 continue;
             }
             let mut want = Vec::new();

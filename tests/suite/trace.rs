@@ -449,8 +449,9 @@ pub(crate) fn dynamic_bvh_matches_brute_force(
 /// 0 and 1), thirty-two copies each (three levels of nodes above eight leaves of four),
 /// build a chain 67 levels deep. Every box starts at x = -1, where a ray along x
 /// starts, so all entries tie at t = 0 and a walk holds a sibling at every level: 65
-/// pending subtrees for the binary walk, fewer for the wide one, within `TRACE_STACK`;
-/// with 63-bit and 30-bit keys the ray gets brute force's answer.
+/// pending subtrees for the binary walk, 96 for the wide one and 147 for the compressed
+/// wide one, within `TRACE_STACK`; with 63-bit and 30-bit keys the ray gets brute
+/// force's answer.
 #[test]
 fn the_deepest_built_tree_fits_the_stack() {
     let ctx = common::context();
@@ -514,7 +515,9 @@ fn the_deepest_built_tree_fits_the_stack() {
 /// unit's X and P, Z with Q and R, and P, Q, R each with two one-triangle leaves. The
 /// binary walks (static and dynamic) hold two pending nodes a unit (Z, P), the wide walk
 /// three (P, Q, R: the grandchildren of X but the next X). `units` of them overflow
-/// every walk's stack (t = -1); a third as many do not.
+/// every walk's stack (t = -1); a third as many do not. The compressed wide walk gets
+/// units of fourteen: X opened three levels to the next X and seven nodes of two
+/// leaves each, all seven held a unit.
 #[test]
 fn a_tree_deeper_than_the_stack_is_reported() {
     use speculum::gpu_types::{bvh_leaf_link, TraversalNode};
@@ -525,6 +528,8 @@ fn a_tree_deeper_than_the_stack_is_reported() {
     let (v, i) = random_soup(6 * units + 2, 1.0, default_size(1000), 17);
     let binary = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
     let wide = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, StaticLayout::Wide);
+    let wide8 = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, StaticLayout::Wide8);
+    let units8 = (TRACE_STACK / 7 + 2) as usize;
     let nodes: Vec<TraversalNode> = bytemuck::pod_collect_to_vec(&binary.bvh.tnodes.read().unwrap());
     let (lo, hi) = nodes.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), n| {
         (
@@ -561,6 +566,33 @@ fn a_tree_deeper_than_the_stack_is_reported() {
         planted[6 * units] = leaves();
         planted
     };
+    let plant8 = |units: usize| -> Vec<TraversalNode> {
+        let mut planted = nodes.clone();
+        let mut leaf = 0u32;
+        let mut leaves = || {
+            leaf += 2;
+            node(bvh_leaf_link(leaf - 2, 1), bvh_leaf_link(leaf - 1, 1))
+        };
+        for u in 0..units {
+            // X, A, B, C, D, E, F, then G1..G7: X -> (A, B), A -> (C, D), B -> (E, F),
+            // C -> (next X, G1), D -> (G2, G3), E -> (G4, G5), F -> (G6, G7).
+            let x = 14 * u as u32;
+            let next = x + 14;
+            let g = |k: u32| x + 6 + k;
+            planted[x as usize] = node(x + 1, x + 2);
+            planted[x as usize + 1] = node(x + 3, x + 4);
+            planted[x as usize + 2] = node(x + 5, x + 6);
+            planted[x as usize + 3] = node(next, g(1));
+            planted[x as usize + 4] = node(g(2), g(3));
+            planted[x as usize + 5] = node(g(4), g(5));
+            planted[x as usize + 6] = node(g(6), g(7));
+            for k in 1..8 {
+                planted[g(k) as usize] = leaves();
+            }
+        }
+        planted[14 * units] = leaves();
+        planted
+    };
     let center = 0.5 * (lo + hi);
     let ray = Ray {
         origin: (center - 2.0 * (hi - lo)).to_array(),
@@ -570,8 +602,9 @@ fn a_tree_deeper_than_the_stack_is_reported() {
     };
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     for (count, overflows) in [(units, true), (units / 3, false)] {
-        for built in [&binary, &wide] {
-            built.bvh.plant(&plant(count), None).unwrap();
+        let count8 = if overflows { units8 } else { units8 / 3 };
+        for (built, planted) in [(&binary, plant(count)), (&wide, plant(count)), (&wide8, plant8(count8))] {
+            built.bvh.plant(&planted, None).unwrap();
             let mut timer = GpuTimer::new(&ctx, 8).unwrap();
             ctx.one_shot(|cmd| {
                 timer.reset(cmd);
@@ -591,6 +624,13 @@ fn a_tree_deeper_than_the_stack_is_reported() {
                 "static wide",
                 TraceScene {
                     static_bvh: Some(wide.traceable()),
+                    dynamic_bvh: None,
+                },
+            ),
+            (
+                "static compressed wide",
+                TraceScene {
+                    static_bvh: Some(wide8.traceable()),
                     dynamic_bvh: None,
                 },
             ),

@@ -30,7 +30,7 @@ pub struct LbvhArgs {
     #[arg(long, num_args = 1.., default_values = ["lbvh", "ploc"], value_parser = crate::cli::choice(&BvhKind::ALL, BvhKind::name, BvhKind::about))]
     pub builder: Vec<BvhKind>,
     /// The static walk's layouts each tree is walked in (`lbvh.compact`).
-    #[arg(long, num_args = 1.., default_values = ["binary", "wide"], value_parser = crate::cli::choice(&StaticLayout::ALL, StaticLayout::name, StaticLayout::about))]
+    #[arg(long, num_args = 1.., default_values = ["binary", "wide", "wide8"], value_parser = crate::cli::choice(&StaticLayout::ALL, StaticLayout::name, StaticLayout::about))]
     pub layout: Vec<StaticLayout>,
     /// Timed repetitions of each build and trace (medians are reported).
     #[arg(long, default_value_t = 5)]

@@ -29,11 +29,22 @@ fn two_ulps(x: f32) -> f32 {
 /// origin `lo`, per axis the smallest power-of-two step whose 65,534 steps span the
 /// box, at least `two_ulps` of its largest coordinate. Returns (origin, step).
 pub fn compact_grid(lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+    grid_over(lo, hi, GRID16)
+}
+
+/// The last step of the compact nodes' 16-bit grid and of a compressed wide node's
+/// 8-bit one.
+const GRID16: u32 = 65535;
+const GRID8: u32 = 255;
+
+/// `compact_grid` with steps 0..=top (top - 1 of them span the box).
+fn grid_over(lo: Vec3, hi: Vec3, top: u32) -> (Vec3, Vec3) {
+    let span = (top - 1) as f32;
     let mut st = Vec3::ZERO;
     for a in 0..3 {
         let ext = hi[a] - lo[a];
-        let s = pow2_at_least(ext * (1.0 / 65536.0));
-        let s = if s * 65534.0 < ext { 2.0 * s } else { s };
+        let s = pow2_at_least(ext * (1.0 / (top + 1) as f32));
+        let s = if s * span < ext { 2.0 * s } else { s };
         st[a] = s.max(two_ulps(lo[a].abs().max(hi[a].abs())));
     }
     (lo, st)
@@ -50,9 +61,10 @@ fn grid_units(x: f32, g: f32, s: f32) -> f32 {
     (x - g) * f32::from_bits(0x7f00_0000 - s.to_bits())
 }
 
-/// `grid_down`: the largest q with `grid_at(q) <= x` (x in the grid's box).
-fn grid_down(x: f32, g: f32, s: f32) -> u32 {
-    let mut q = grid_units(x, g, s).floor().clamp(0.0, 65535.0) as u32;
+/// `grid_down`: the largest q with `grid_at(q) <= x` (x in the grid's box of steps
+/// 0..=top).
+fn grid_down(x: f32, g: f32, s: f32, top: u32) -> u32 {
+    let mut q = grid_units(x, g, s).floor().clamp(0.0, top as f32) as u32;
     for _ in 0..2 {
         if q > 0 && grid_at(q, g, s) > x {
             q -= 1;
@@ -65,16 +77,17 @@ fn grid_down(x: f32, g: f32, s: f32) -> u32 {
     }
 }
 
-/// `grid_up`: the smallest q with `grid_at(q) >= x` (x in the grid's box).
-fn grid_up(x: f32, g: f32, s: f32) -> u32 {
-    let mut q = grid_units(x, g, s).ceil().clamp(0.0, 65535.0) as u32;
+/// `grid_up`: the smallest q with `grid_at(q) >= x` (x in the grid's box of steps
+/// 0..=top).
+fn grid_up(x: f32, g: f32, s: f32, top: u32) -> u32 {
+    let mut q = grid_units(x, g, s).ceil().clamp(0.0, top as f32) as u32;
     for _ in 0..2 {
-        if q < 65535 && grid_at(q, g, s) < x {
+        if q < top && grid_at(q, g, s) < x {
             q += 1;
         }
     }
     if grid_at(q, g, s) < x {
-        65535
+        top
     } else {
         q
     }
@@ -83,8 +96,8 @@ fn grid_up(x: f32, g: f32, s: f32) -> u32 {
 /// `compact_half`: one half of a compact node, the box [lo, hi] rounded outward on
 /// the grid (g, st) and the child link.
 pub fn compact_half(lo: [f32; 3], hi: [f32; 3], child: u32, g: Vec3, st: Vec3) -> [u32; 4] {
-    let l: [u32; 3] = std::array::from_fn(|a| grid_down(lo[a], g[a], st[a]));
-    let h: [u32; 3] = std::array::from_fn(|a| grid_up(hi[a], g[a], st[a]));
+    let l: [u32; 3] = std::array::from_fn(|a| grid_down(lo[a], g[a], st[a], GRID16));
+    let h: [u32; 3] = std::array::from_fn(|a| grid_up(hi[a], g[a], st[a], GRID16));
     [l[0] | l[1] << 16, l[2] | h[0] << 16, h[1] | h[2] << 16, child]
 }
 
@@ -115,18 +128,102 @@ pub const WIDE: usize = 4;
 /// link), in that order (`wide_entries` in `glsl/lbvh_compact.comp`). Unused slots
 /// are not listed.
 pub fn wide_entries(nodes: &[TraversalNode], k: usize) -> Vec<([f32; 3], [f32; 3], u32)> {
+    opened_entries(nodes, k, 2)
+}
+
+/// The children of compressed wide node `k` (`StaticLayout::Wide8`): `wide_entries`
+/// opened once more, up to `WIDE8`, in that order.
+pub fn wide8_entries(nodes: &[TraversalNode], k: usize) -> Vec<([f32; 3], [f32; 3], u32)> {
+    opened_entries(nodes, k, 3)
+}
+
+/// Node `k`'s two children, each internal one opened into its two, `levels - 1` times.
+fn opened_entries(nodes: &[TraversalNode], k: usize, levels: u32) -> Vec<([f32; 3], [f32; 3], u32)> {
     let n = &nodes[k];
-    let mut out = Vec::with_capacity(WIDE);
-    for (lo, hi, c) in [(n.lo0, n.hi0, n.child0), (n.lo1, n.hi1, n.child1)] {
-        if crate::gpu_types::bvh_leaf(c).is_some() {
-            out.push((lo, hi, c));
-        } else {
-            let m = &nodes[c as usize];
-            out.push((m.lo0, m.hi0, m.child0));
-            out.push((m.lo1, m.hi1, m.child1));
-        }
+    let mut out = vec![(n.lo0, n.hi0, n.child0), (n.lo1, n.hi1, n.child1)];
+    for _ in 1..levels {
+        out = out
+            .into_iter()
+            .flat_map(|e| match crate::gpu_types::bvh_leaf(e.2) {
+                Some(_) => vec![e],
+                None => {
+                    let m = &nodes[e.2 as usize];
+                    vec![(m.lo0, m.hi0, m.child0), (m.lo1, m.hi1, m.child1)]
+                }
+            })
+            .collect();
     }
     out
+}
+
+/// A compressed wide node (`WIDE8_TEXELS` texels, `glsl/lbvh_compact.comp`) of
+/// `entries` (at most `WIDE8`; links as given): texel 0 the node's grid, its origin
+/// the entries' lower corner and each axis's power-of-two step as its exponent byte
+/// (`grid_over` with 255 steps); texels 1-3 each entry's box rounded outward to that
+/// grid, a byte a coordinate (entry j in byte j % 4 of word j / 4 of each axis's pair
+/// of words: lo x, lo y, lo z, hi x, hi y, hi z); texels 4-5 the links, `BVH_INVALID`
+/// for an unused slot (its box 0).
+pub fn wide8_node(entries: &[([f32; 3], [f32; 3], u32)]) -> [[u32; 4]; 6] {
+    let invalid = crate::shader_defines::BVH_INVALID;
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for e in entries {
+        lo = lo.min(Vec3::from(e.0));
+        hi = hi.max(Vec3::from(e.1));
+    }
+    let (g, st) = grid_over(lo, hi, GRID8);
+    let exp = |a: usize| st[a].to_bits() >> 23;
+    let mut words = [0u32; 12];
+    let mut links = [invalid; 8];
+    for (j, e) in entries.iter().enumerate() {
+        let q = [
+            grid_down(e.0[0], g.x, st.x, GRID8),
+            grid_down(e.0[1], g.y, st.y, GRID8),
+            grid_down(e.0[2], g.z, st.z, GRID8),
+            grid_up(e.1[0], g.x, st.x, GRID8),
+            grid_up(e.1[1], g.y, st.y, GRID8),
+            grid_up(e.1[2], g.z, st.z, GRID8),
+        ];
+        for (c, v) in q.into_iter().enumerate() {
+            words[2 * c + j / 4] |= v << (8 * (j % 4));
+        }
+        links[j] = e.2;
+    }
+    [
+        [
+            g.x.to_bits(),
+            g.y.to_bits(),
+            g.z.to_bits(),
+            exp(0) | exp(1) << 8 | exp(2) << 16,
+        ],
+        [words[0], words[1], words[2], words[3]],
+        [words[4], words[5], words[6], words[7]],
+        [words[8], words[9], words[10], words[11]],
+        [links[0], links[1], links[2], links[3]],
+        [links[4], links[5], links[6], links[7]],
+    ]
+}
+
+/// The boxes and links of a compressed wide node (`wide8_node`) as the walk decodes
+/// them, unused slots included.
+pub fn wide8_boxes(node: &[[u32; 4]]) -> [(Aabb, u32); 8] {
+    let h = node[0];
+    let g = Vec3::new(f32::from_bits(h[0]), f32::from_bits(h[1]), f32::from_bits(h[2]));
+    let st = Vec3::new(
+        f32::from_bits((h[3] & 0xff) << 23),
+        f32::from_bits((h[3] >> 8 & 0xff) << 23),
+        f32::from_bits((h[3] >> 16 & 0xff) << 23),
+    );
+    let words: Vec<u32> = node[1..4].iter().flatten().copied().collect();
+    std::array::from_fn(|j| {
+        let q = |c: usize| words[2 * c + j / 4] >> (8 * (j % 4)) & 0xff;
+        let at = |a: usize, c: usize| grid_at(q(c), g[a], st[a]);
+        let b = Aabb {
+            lo: Vec3::new(at(0, 0), at(1, 1), at(2, 2)),
+            hi: Vec3::new(at(0, 3), at(1, 4), at(2, 5)),
+        };
+        (b, node[4 + j / 4][j % 4])
+    })
 }
 
 /// An unused slot of a wide node: no box, the link `BVH_INVALID` (never entered).
@@ -178,7 +275,9 @@ pub fn order_counts(nodes: &[TraversalNode]) -> Option<Vec<[u32; 4]>> {
 /// Where `lbvh.compact` puts each of `nodes` (`glsl/shared/bvh_order.glsl`): its
 /// place in preorder from the root (a node, its first child's subtree, its second's),
 /// counting only the nodes the walk in a layout of `slots` children reaches (binary:
-/// the internal nodes outside leaves; wide: those at an even depth), `BVH_INVALID` for
+/// the internal nodes outside leaves; wide: those at an even depth; compressed wide:
+/// every internal node outside leaves, though only those at a depth divisible by
+/// three are reached), `BVH_INVALID` for
 /// the rest. None where the nodes from the root are not a tree whose every internal
 /// child links back to its parent's half (a cycle, a planted tree without parent
 /// links), which no builder makes.
@@ -191,7 +290,7 @@ pub fn compact_places(nodes: &[TraversalNode], slots: u32) -> Option<Vec<u32>> {
         if place[k] != invalid {
             return None;
         }
-        if slots == 2 || depth % 2 == 0 {
+        if slots != WIDE as u32 || depth % 2 == 0 {
             place[k] = next;
             next += 1;
         }
@@ -233,14 +332,27 @@ pub fn compact_nodes_placed(nodes: &[TraversalNode], slots: u32, place: &[u32]) 
         .iter()
         .filter(|&&p| p != crate::shader_defines::BVH_INVALID)
         .count();
-    let mut out = vec![[0u32; 4]; 2 + slots as usize * placed];
+    let texels = if slots == crate::shader_defines::WIDE8 {
+        crate::shader_defines::WIDE8_TEXELS as usize
+    } else {
+        slots as usize
+    };
+    let mut out = vec![[0u32; 4]; 2 + texels * placed];
     out[0] = [g.x.to_bits(), g.y.to_bits(), g.z.to_bits(), slots];
     out[1] = [st.x.to_bits(), st.y.to_bits(), st.z.to_bits(), 0];
     for (k, n) in nodes.iter().enumerate() {
         let Some(at) = place.get(k).filter(|&&p| p != crate::shader_defines::BVH_INVALID) else {
             continue;
         };
-        let base = 2 + slots as usize * *at as usize;
+        let base = 2 + texels * *at as usize;
+        if slots == crate::shader_defines::WIDE8 {
+            let entries: Vec<_> = wide8_entries(nodes, k)
+                .into_iter()
+                .map(|(lo, hi, c)| (lo, hi, link(c)))
+                .collect();
+            out[base..base + texels].copy_from_slice(&wide8_node(&entries));
+            continue;
+        }
         if slots == 2 {
             out[base] = compact_half(n.lo0, n.hi0, link(n.child0), g, st);
             out[base + 1] = compact_half(n.lo1, n.hi1, link(n.child1), g, st);

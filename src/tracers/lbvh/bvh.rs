@@ -13,8 +13,8 @@ use gpu_allocator::MemoryLocation;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
-/// The static walk's nodes (`lbvh.compact`; `glsl/shared/bvh.glsl`): 2 + slots x
-/// max(N-1, 1) texels of 16 bytes in `layout`, and the same as the walk reads them.
+/// The static walk's nodes (`lbvh.compact`; `glsl/shared/bvh.glsl`): 2 + texels x
+/// max(N-1, 1) texels of 16 bytes in `layout` (`StaticLayout::texels`), and the same as the walk reads them.
 pub struct CompactNodes {
     pub buffer: Buffer,
     pub texels: TexelView,
@@ -127,7 +127,7 @@ impl Bvh {
         let buffer = Buffer::new(
             ctx,
             "lbvh.compact",
-            (2 + layout.slots() as u64 * (tri_count as u64 - 1).max(1)) * 16,
+            (2 + layout.texels() as u64 * (tri_count as u64 - 1).max(1)) * 16,
             vk::BufferUsageFlags::STORAGE_BUFFER
                 | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
                 | vk::BufferUsageFlags::TRANSFER_DST
@@ -293,18 +293,30 @@ pub fn refit_order(bvh: &PackedBvh, tri_count: u32) -> (Vec<u32>, Vec<[u32; 2]>)
 /// need at most: along its worst path from the root, each wide node's internal
 /// children but one (a step pushes all but the nearest).
 pub fn wide_stack_need(nodes: &[TraversalNode]) -> u32 {
+    opened_stack_need(nodes, 2)
+}
+
+/// `wide_stack_need` for the compressed wide nodes (`StaticLayout::Wide8`).
+pub fn wide8_stack_need(nodes: &[TraversalNode]) -> u32 {
+    opened_stack_need(nodes, 3)
+}
+
+/// `wide_stack_need` for nodes made by opening a binary node `levels` levels down: a
+/// wide node's internal children are the internal nodes that many levels below it.
+fn opened_stack_need(nodes: &[TraversalNode], levels: u32) -> u32 {
     let internal = |c: u32| crate::gpu_types::bvh_leaf(c).is_none();
     let mut most = 0;
     let mut stack = vec![(0u32, 0u32)];
     while let Some((s, held)) = stack.pop() {
         most = most.max(held);
-        let nd = &nodes[s as usize];
-        let children: Vec<u32> = [nd.child0, nd.child1]
-            .into_iter()
-            .filter(|&c| internal(c))
-            .flat_map(|c| [nodes[c as usize].child0, nodes[c as usize].child1])
-            .filter(|&c| internal(c))
-            .collect();
+        let mut children = vec![s];
+        for _ in 0..levels {
+            children = children
+                .into_iter()
+                .flat_map(|c| [nodes[c as usize].child0, nodes[c as usize].child1])
+                .filter(|&c| internal(c))
+                .collect();
+        }
         let pushed = (children.len() as u32).saturating_sub(1);
         most = most.max(held + pushed);
         stack.extend(children.into_iter().map(|c| (c, held + pushed)));

@@ -11,6 +11,7 @@
 
 mod bvh;
 pub mod dynamic;
+mod layout;
 pub mod order;
 pub mod ploc;
 pub mod rigid;
@@ -29,7 +30,8 @@ use sort::RadixSort;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
-pub use bvh::{refit_order, stack_need, wide_stack_need, Bvh, CompactNodes, RefitSchedule};
+pub use bvh::{refit_order, stack_need, wide8_stack_need, wide_stack_need, Bvh, CompactNodes, RefitSchedule};
+pub use layout::StaticLayout;
 pub use triangles::{index_buffer, Geometry, TriangleTexels, UploadedTriangles, VERTEX_USAGE};
 
 pub const BOUNDS: &str = "lbvh.bounds";
@@ -47,11 +49,13 @@ const _: () = assert!(MAX_TRIANGLES <= 1 << crate::shader_defines::BVH_LEAF_COUN
 
 // A tree over one-word keys (32 bits) and MAX_TRIANGLES leaves is at most 32 +
 // ceil(log2 MAX_TRIANGLES) deep; the binary walk holds at most one pending child per
-// level, the wide walk WIDE - 1 per two levels: their stack can never overflow in the
+// level, the wide walk WIDE - 1 per two levels, the compressed one WIDE8 - 1 per
+// three: their stack can never overflow in the
 // frame (see TRACE_STACK).
 const MAX_DEPTH: u32 = 32 + (MAX_TRIANGLES - 1).ilog2() + 1;
 const _: () = assert!(MAX_DEPTH <= crate::shader_defines::TRACE_STACK);
 const _: () = assert!((crate::shader_defines::WIDE - 1) * MAX_DEPTH.div_ceil(2) <= crate::shader_defines::TRACE_STACK);
+const _: () = assert!((crate::shader_defines::WIDE8 - 1) * MAX_DEPTH.div_ceil(3) <= crate::shader_defines::TRACE_STACK);
 
 /// Morton code width: 30 bits (10 per axis, one word) or 63 bits (21 per axis, two
 /// words). 63-bit codes separate close centroids in large scenes at twice the sort time.
@@ -104,46 +108,6 @@ impl MortonBits {
 pub enum BvhKind {
     Lbvh,
     Ploc,
-}
-
-/// How the static walk reads a tree (`lbvh.compact` writes it; both with boxes rounded
-/// outward to a 16-bit grid over the root's box): binary nodes of two children (32
-/// bytes), or wide nodes of up to `WIDE` (64 bytes: a binary node's children, each
-/// internal one opened into its two), which take half the steps.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum StaticLayout {
-    #[default]
-    Binary,
-    Wide,
-}
-
-impl StaticLayout {
-    pub const ALL: [StaticLayout; 2] = [StaticLayout::Binary, StaticLayout::Wide];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            StaticLayout::Binary => "binary",
-            StaticLayout::Wide => "wide",
-        }
-    }
-
-    pub fn about(self) -> &'static str {
-        match self {
-            StaticLayout::Binary => "two children a node, 32 bytes: one level a step",
-            StaticLayout::Wide => {
-                "up to four children a node (a binary node's, internal ones opened), 64 bytes: two levels a step"
-            }
-        }
-    }
-
-    /// Children a node holds (the compact nodes' header says it to the walk).
-    pub fn slots(self) -> u32 {
-        match self {
-            StaticLayout::Binary => 2,
-            StaticLayout::Wide => crate::shader_defines::WIDE,
-        }
-    }
 }
 
 impl BvhKind {
@@ -339,6 +303,7 @@ impl LbvhBuilder {
             let nodes: Vec<TraversalNode> = bytemuck::pod_collect_to_vec(&bvh.tnodes.read()?);
             let need = match bvh.compact.as_ref().map(|c| c.layout) {
                 Some(StaticLayout::Wide) => wide_stack_need(&nodes),
+                Some(StaticLayout::Wide8) => wide8_stack_need(&nodes),
                 _ => stack_need(&nodes),
             };
             if need <= crate::shader_defines::TRACE_STACK {
@@ -593,7 +558,7 @@ impl LbvhBuilder {
 
 #[cfg(test)]
 mod tests {
-    use super::{lockstep_fit, stack_need, wide_stack_need};
+    use super::{lockstep_fit, stack_need, wide8_stack_need, wide_stack_need};
     use crate::gpu_types::{bvh_leaf_link, TraversalNode};
 
     /// A walk needs one stack entry per internal node on the longest path: a chain of
@@ -627,6 +592,15 @@ mod tests {
         deep.extend((0..4).map(|j| node(leaf(2 * j), leaf(2 * j + 1))));
         assert_eq!(stack_need(&deep), 3);
         assert_eq!(wide_stack_need(&deep), 3);
+        // The compressed wide walk opens three levels: `deep`'s are leaves; a tree of
+        // eight internal nodes three levels down pushes seven at the root.
+        assert_eq!(wide8_stack_need(&chain), 0);
+        assert_eq!(wide8_stack_need(&deep), 0);
+        let mut deeper = vec![node(1, 2), node(3, 4), node(5, 6)];
+        deeper.extend((0..4).map(|j| node(7 + 2 * j, 8 + 2 * j)));
+        deeper.extend((0..8).map(|j| node(leaf(2 * j), leaf(2 * j + 1))));
+        assert_eq!(wide8_stack_need(&deeper), 7);
+        assert_eq!(wide_stack_need(&deeper), 3);
     }
 
     #[test]

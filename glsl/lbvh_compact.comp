@@ -9,8 +9,8 @@
 //   node's own 8-bit grid (bvh.glsl), WIDE8_TEXELS texels a node.
 // Each node at its place in preorder (bvh_order.glsl: lbvh_order_* ran before), its
 // children's links to their places; nodes not placed (inside a leaf; wide: at an odd
-// depth, the opened children) are not written; compressed wide nodes are written for
-// every internal node (the binary order), of which the walk reaches a third. A tree whose root has no counts keeps
+// depth, the opened children; compressed wide: not at a depth divisible by three) are
+// not written. A tree whose root has no counts keeps
 // every node in its slot, as are the links.
 // One invocation per binary node; the first also writes the header, whose first texel's
 // w says `slots` to the walk. Mirrored by cpu_ref::lbvh::compact_nodes (tests/lbvh.rs).
@@ -38,7 +38,8 @@ uint place(uint i, bool ordered, bool odd_rounds) {
         return i;
     }
     uvec4 st = odd_rounds ? jump1[i] : jump0[i];
-    bool placed = (st.x == 0u || st.x == BVH_INVALID) && (st.w & ORDER_DEAD) == 0u && (pc.slots != WIDE || (st.w & ORDER_ODD) == 0u);
+    uint flags = st.w >> ORDER_FLAGS_SHIFT;
+    bool placed = (st.x == 0u || st.x == BVH_INVALID) && (flags & ORDER_DEAD) == 0u && (flags & ORDER_LEN) == 0u;
     return placed && st.y < pc.node_count ? st.y : BVH_INVALID;
 }
 
@@ -138,9 +139,9 @@ void main() {
     if (i >= pc.node_count) {
         return;
     }
-    uint height = counts[0].z;
+    uint height = order_height(counts[0]);
     bool ordered = height != 0u;
-    bool odd_rounds = (order_rounds(height) & 1u) != 0u;
+    bool odd_rounds = (order_tree_rounds(counts[0], pc.node_count) & 1u) != 0u;
     TraversalNode root = node_from_texels(nodes, 0u);
     vec3 g, st;
     compact_grid(min(root.lo0, root.lo1), max(root.hi0, root.hi1), g, st);

@@ -94,7 +94,7 @@ struct Climber {
     vec3 hi;
     float cost;
     uint ref;
-    uvec3 counts; // order counts (bvh_order.glsl): 0 for a leaf
+    uvec4 counts; // order counts (bvh_order.glsl): 0 for a leaf
     uint p;
     bool left;
 };
@@ -168,9 +168,9 @@ void unite(inout Climber c, uint link, uint other) {
     c.ref = leaf ? bvh_leaf_ref(c.l, count) : slot;
     if (pc.order != 0u) {
         uint sib = c.left ? tnodes[slot].child1 : tnodes[slot].child0;
-        uvec3 v = order_counts(c.counts, order_internal(sib) ? counts[sib].xyz : uvec3(0u));
-        counts[slot] = uvec4(v, 0u);
-        c.counts = leaf ? uvec3(0u) : v;
+        uvec4 v = order_counts(c.counts, order_internal(sib) ? counts[sib] : uvec4(0u));
+        counts[slot] = v;
+        c.counts = leaf ? uvec4(0u) : v;
     }
 }
 
@@ -187,7 +187,7 @@ uint start_leaf(uint j, int root_bit, out Climber c) {
     c.hi = max(a, max(b, v));
     c.cost = bvh_area(c.lo, c.hi);
     c.ref = bvh_leaf_ref(j, 1u);
-    c.counts = uvec3(0u);
+    c.counts = uvec4(0u);
     c.p = 0u;
     c.left = true;
     uint link = pc.n == 1u ? 0u : find_parent(c, root_bit);

@@ -1,11 +1,11 @@
 #version 460
 // lbvh.compact, its order's first step (bvh_order.glsl), after the builder's counts:
-// each node's jump state of one step, to its parent. A node after an internal first
-// sibling adds that sibling's subtree: binary and compressed wide, all its nodes (A + B); wide, at an even
-// depth its wide nodes (A) and at an odd one those of its children (B). Nothing when
-// the root has no counts (the nodes stay in place). The first invocation writes the
-// jump rounds' indirect arguments: the rounds the root's height needs get the groups,
-// the rest of those recorded none.
+// each node's jump state of one step, to its parent: for each depth it may sit at mod
+// P, 1 where that is 0 (the placed ancestor before it) plus, after an internal first
+// sibling, that sibling's placed nodes (order_placed). Nothing when the root has no
+// counts (the nodes stay in place). The first invocation writes the jump rounds'
+// indirect arguments: the rounds the root's height needs get the groups, the rest of
+// those recorded none.
 #include "bvh.glsl"
 #include "bvh_order.glsl"
 
@@ -19,7 +19,7 @@ layout(binding = 3, std430) writeonly buffer Args { uvec4 args[]; };
 
 layout(push_constant) uniform Push {
     uint node_count;
-    uint slots;  // 2: binary, WIDE: wide, WIDE8: compressed wide (placed as binary)
+    uint slots;  // 2: binary, WIDE: wide, WIDE8: compressed wide (order_phases)
     uint rounds; // recorded jump rounds
 } pc;
 
@@ -28,10 +28,10 @@ void main() {
     if (i >= pc.node_count) {
         return;
     }
-    uint height = counts[0].z;
+    uint height = order_height(counts[0]);
     if (i == 0u) {
         uint groups = (pc.node_count + LBVH_WG - 1u) / LBVH_WG;
-        uint rounds = order_rounds(height);
+        uint rounds = order_tree_rounds(counts[0], pc.node_count);
         for (uint r = 0u; r < pc.rounds; ++r) {
             args[r] = uvec4(r < rounds ? groups : 0u, 1u, 1u, 0u);
         }
@@ -48,15 +48,16 @@ void main() {
     uint side = n.parent & 1u;
     TraversalNode pn = node_from_texels(nodes, min(p, pc.node_count - 1u));
     if (n.parent == BVH_INVALID || p >= pc.node_count || (side == 0u ? pn.child0 : pn.child1) != i) {
-        jump[i] = uvec4(BVH_INVALID, 0u, 0u, ORDER_DEAD);
+        jump[i] = uvec4(BVH_INVALID, 0u, 0u, ORDER_DEAD << ORDER_FLAGS_SHIFT);
         return;
     }
+    uint phases = order_phases(pc.slots);
     uint sib = pn.child0;
-    uvec2 ab = uvec2(0u);
-    if (side == 1u && order_internal(sib)) {
-        ab = counts[sib].xy;
+    bool after = side == 1u && order_internal(sib);
+    uvec4 c = after ? counts[sib] : uvec4(0u);
+    uvec3 sum = uvec3(0u);
+    for (uint k = 0u; k < phases; ++k) {
+        sum[k] = (k == 0u ? 1u : 0u) + (after ? order_placed(c, phases, k) : 0u);
     }
-    uint even = 1u + (pc.slots != WIDE ? ab.x + ab.y : ab.x);
-    uint odd = pc.slots != WIDE ? even : ab.y;
-    jump[i] = uvec4(p, even, odd, ORDER_ODD);
+    jump[i] = uvec4(p, sum.x, sum.y, sum.z | ((1u % phases) << ORDER_FLAGS_SHIFT));
 }

@@ -13,6 +13,7 @@ layout(binding = 1, std430) writeonly buffer To { uvec4 to_state[]; };
 
 layout(push_constant) uniform Push {
     uint node_count;
+    uint slots; // the layout's (order_phases)
 } pc;
 
 void main() {
@@ -22,10 +23,19 @@ void main() {
     }
     uvec4 me = from_state[i];
     if (me.x != 0u && me.x != BVH_INVALID) {
+        uint p = order_phases(pc.slots);
         uvec4 t = from_state[me.x];
-        bool odd = (me.w & ORDER_ODD) != 0u;
-        me = uvec4(t.x, me.y + (odd ? t.z : t.y), me.z + (odd ? t.y : t.z),
-                   ((me.w ^ t.w) & ORDER_ODD) | ((me.w | t.w) & ORDER_DEAD));
+        uint lm = (me.w >> ORDER_FLAGS_SHIFT) & ORDER_LEN;
+        uint lt = (t.w >> ORDER_FLAGS_SHIFT) & ORDER_LEN;
+        // The target sits lm steps above: where this node's depth is k mod p, its is
+        // k - lm.
+        uvec3 ms = uvec3(me.yz, me.w & ORDER_SUM_MASK), ts = uvec3(t.yz, t.w & ORDER_SUM_MASK);
+        uvec3 sum = uvec3(0u);
+        for (uint k = 0u; k < p; ++k) {
+            sum[k] = ms[k] + ts[(k + p - lm) % p];
+        }
+        uint flags = ((lm + lt) % p) | (((me.w | t.w) >> ORDER_FLAGS_SHIFT) & ORDER_DEAD);
+        me = uvec4(t.x, sum.x, sum.y, sum.z | (flags << ORDER_FLAGS_SHIFT));
     }
     to_state[i] = me;
 }

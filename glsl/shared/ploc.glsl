@@ -108,9 +108,9 @@ layout(push_constant) uniform Push {
 // on the includer's `counts`.
 #define PLOC_WRITE_COUNTS(counts, slot, a, b)                                             \
     if (pc.order != 0u) {                                                                 \
-        uvec3 ca_ = order_internal(a.ref) ? counts[a.ref].xyz : uvec3(0u);                \
-        uvec3 cb_ = order_internal(b.ref) ? counts[b.ref].xyz : uvec3(0u);                \
-        counts[slot] = uvec4(order_counts(ca_, cb_), 0u);                                 \
+        uvec4 ca_ = order_internal(a.ref) ? counts[a.ref] : uvec4(0u);                    \
+        uvec4 cb_ = order_internal(b.ref) ? counts[b.ref] : uvec4(0u);                    \
+        counts[slot] = order_counts(ca_, cb_);                                            \
     }
 
 // The cluster `a` and `b` merge into at node `slot`: a leaf when their triangles are one

@@ -230,10 +230,11 @@ pub fn wide8_boxes(node: &[[u32; 4]]) -> [(Aabb, u32); 8] {
 pub const WIDE_EMPTY: [u32; 4] = [0, 0, 0, crate::shader_defines::BVH_INVALID];
 
 /// Each node's order counts, as the builders leave them (`Bvh::counts`,
-/// `glsl/shared/bvh_order.glsl`): its internal nodes below at an even and at an odd depth,
-/// itself included, and its height, `[A, B, H, 0]`, by its child links (a leaf counts
-/// 0), for every node, also one inside a leaf. None where the links are not a forest (a
-/// node reached twice, a cycle, a link past the nodes).
+/// `glsl/shared/bvh_order.glsl`): its internal nodes below at an even and at an odd depth
+/// (A, B) and at depths 0 and 1 mod 3 (M0, M1), itself at depth 0, and its height H,
+/// `[A, B, H | M0 << 8, M1]`, by its child links (a leaf counts 0), for every node, also
+/// one inside a leaf. None where the links are not a forest (a node reached twice, a
+/// cycle, a link past the nodes).
 pub fn order_counts(nodes: &[TraversalNode]) -> Option<Vec<[u32; 4]>> {
     let internal = |c: u32| crate::gpu_types::bvh_leaf(c).is_none();
     let mut counts = vec![None::<[u32; 4]>; nodes.len()];
@@ -265,7 +266,17 @@ pub fn order_counts(nodes: &[TraversalNode]) -> Option<Vec<[u32; 4]>> {
                     [0; 4]
                 }
             });
-            counts[k] = Some([1 + a[1] + b[1], a[0] + b[0], 1 + a[2].max(b[2]), 0]);
+            // A child's internal nodes at depths 0, 1, 2 mod 3 below it.
+            let thirds = |c: [u32; 4]| [c[2] >> 8, c[3], c[0] + c[1] - (c[2] >> 8) - c[3]];
+            let (ta, tb) = (thirds(a), thirds(b));
+            // The height stops at 255 (the GPU then runs a chain's jump rounds).
+            let height = (1 + (a[2] & 0xff).max(b[2] & 0xff)).min(255);
+            counts[k] = Some([
+                1 + a[1] + b[1],
+                a[0] + b[0],
+                height | (1 + ta[2] + tb[2]) << 8,
+                ta[0] + tb[0],
+            ]);
             stack.pop();
         }
     }
@@ -276,13 +287,17 @@ pub fn order_counts(nodes: &[TraversalNode]) -> Option<Vec<[u32; 4]>> {
 /// place in preorder from the root (a node, its first child's subtree, its second's),
 /// counting only the nodes the walk in a layout of `slots` children reaches (binary:
 /// the internal nodes outside leaves; wide: those at an even depth; compressed wide:
-/// every internal node outside leaves, though only those at a depth divisible by
-/// three are reached), `BVH_INVALID` for
+/// those at a depth divisible by three), `BVH_INVALID` for
 /// the rest. None where the nodes from the root are not a tree whose every internal
 /// child links back to its parent's half (a cycle, a planted tree without parent
 /// links), which no builder makes.
 pub fn compact_places(nodes: &[TraversalNode], slots: u32) -> Option<Vec<u32>> {
     let invalid = crate::shader_defines::BVH_INVALID;
+    let phases = match slots {
+        s if s == WIDE as u32 => 2,
+        crate::shader_defines::WIDE8 => 3,
+        _ => 1,
+    };
     let mut place = vec![invalid; nodes.len()];
     let mut next = 0;
     let mut stack = vec![(0usize, 0u32)];
@@ -290,7 +305,7 @@ pub fn compact_places(nodes: &[TraversalNode], slots: u32) -> Option<Vec<u32>> {
         if place[k] != invalid {
             return None;
         }
-        if slots != WIDE as u32 || depth % 2 == 0 {
+        if depth % phases == 0 {
             place[k] = next;
             next += 1;
         }

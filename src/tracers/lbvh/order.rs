@@ -2,7 +2,7 @@
 //! `glsl/shared/bvh_order.glsl`): each node's place in preorder from the root, so a
 //! walk going down reads the node after the one it left, and only the nodes a walk can
 //! reach take room (binary: the internal nodes outside leaves; wide: those at an even
-//! depth). Made on the GPU: the builders leave each node's subtree counts
+//! depth; compressed wide: at a depth divisible by three). Made on the GPU: the builders leave each node's subtree counts
 //! (`Bvh::counts`, written bottom-up as they make the tree), then each node's place by
 //! pointer jumping (`lbvh_order_init`, `lbvh_order_jump`), as many rounds as the tree's
 //! height asks (indirect dispatches). CPU reference: `cpu_ref::lbvh::compact_places`.
@@ -60,6 +60,16 @@ impl OrderScratch {
     }
 }
 
+/// Push constants of `lbvh_order_jump.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct JumpPush {
+    node_count: u32,
+    /// The layout's children a node (its depth phases).
+    slots: u32,
+}
+
+/// Push constants of `lbvh_order_init.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct InitPush {
@@ -80,7 +90,7 @@ impl OrderKernels {
         Ok(Self {
             ctx: ctx.clone(),
             init: Pipeline::compute::<InitPush>(ctx, "lbvh.order.init", shaders::LBVH_ORDER_INIT_COMP)?,
-            jump: Pipeline::compute::<u32>(ctx, "lbvh.order.jump", shaders::LBVH_ORDER_JUMP_COMP)?,
+            jump: Pipeline::compute::<JumpPush>(ctx, "lbvh.order.jump", shaders::LBVH_ORDER_JUMP_COMP)?,
         })
     }
 
@@ -124,7 +134,7 @@ impl OrderKernels {
                     ("from", Resource::Buffer(&s.jump[r % 2])),
                     ("to", Resource::Buffer(&s.jump[(r + 1) % 2])),
                 ],
-                &node_count,
+                &JumpPush { node_count, slots },
                 Groups::IndirectAt(&s.args, 16 * r as u64),
             );
         }

@@ -86,6 +86,8 @@ pub struct TimingsReport {
     /// With `static_ploc`: the static tree kept, PLOC's or the LBVH's, and what each
     /// took over the same rays (`renderer::static_tree`); `null` otherwise.
     pub static_tree: Option<crate::renderer::static_tree::StaticTreeChoice>,
+    /// With `static_layout = fastest`: the static nodes kept, each layout's price; or `null`.
+    pub static_layout: Option<crate::renderer::static_tree::StaticLayoutChoice>,
     /// The self-check of every measured frame, the reference's included (`vk::timing`).
     pub timing: TimingCheck,
 }
@@ -523,6 +525,7 @@ fn finish(
         visibility,
         shadow_ways,
         static_tree: renderer.static_tree.clone(),
+        static_layout: renderer.static_layout.clone(),
         timing: Timings::check_all(&[timings, ref_timings]),
     };
     Ok(Rendered {

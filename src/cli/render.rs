@@ -329,6 +329,9 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
     if let Some(t) = &r.static_tree {
         text.line(format_args!("  static tree: {}", t.summary()));
     }
+    if let Some(l) = &r.static_layout {
+        text.line(format_args!("  static nodes: {}", l.summary()));
+    }
     text.line(format_args!(
         "  {} shadows: lit pixels {}, shadow rays {} ({:.1}%)",
         r.shadows,

@@ -187,6 +187,7 @@ impl Demo {
             stats: self.stats.as_ref(),
             stages: &stages,
             static_tree: self.renderer.static_tree.as_ref(),
+            static_layout: self.renderer.static_layout.as_ref(),
             camera: self.camera.camera(),
             speed: self.camera.speed,
             dynamic: self.renderer.is_dynamic(),

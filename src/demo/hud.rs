@@ -6,7 +6,9 @@ use super::script::Action;
 use crate::headless::StageReport;
 use crate::reflection_maps::{FAIL_COLOURS, FAIL_REASONS, SSR_OK_COLOUR};
 use crate::scene::Camera;
-use crate::settings::{Applies, Field, Hud, HybridPolicy, Mode, Settings, Shadows, Tracer, Value, Visibility, FIELDS};
+use crate::settings::{
+    Applies, Field, Hud, HybridPolicy, Mode, Settings, Shadows, Tracer, Value, Visibility, WalkLayout, FIELDS,
+};
 use crate::vk::swapchain::present_mode_name;
 use ash::vk;
 use egui::{Color32, RichText};
@@ -34,6 +36,8 @@ pub struct HudInfo<'a> {
     pub stages: &'a (Option<StageReport>, Option<StageReport>),
     /// With `static_ploc`: the static tree kept and both trees' prices.
     pub static_tree: Option<&'a crate::renderer::static_tree::StaticTreeChoice>,
+    /// The measured choice of the static walk's nodes (`static_layout = fastest`).
+    pub static_layout: Option<&'a crate::renderer::static_tree::StaticLayoutChoice>,
     pub camera: Camera,
     pub speed: f32,
     pub dynamic: bool,
@@ -216,6 +220,16 @@ fn mode_panel(ui: &mut egui::Ui, info: &HudInfo<'_>, s: &mut Settings, out: &mut
     });
     if let Some(t) = info.static_tree {
         ui.label(format!("  static tree: {}", t.summary()));
+    }
+    ui.horizontal(|ui| {
+        ui.label("static nodes");
+        for l in WalkLayout::ALL {
+            ui.selectable_value(&mut s.static_layout, l, l.name())
+                .on_hover_text(l.about());
+        }
+    });
+    if let Some(l) = info.static_layout {
+        ui.label(format!("  {}", l.summary()));
     }
     ui.horizontal(|ui| {
         ui.label("hybrid");
@@ -457,6 +471,13 @@ mod tests {
             lbvh_ms: 1.5,
             rays: 16_384,
         };
+        let layout = crate::renderer::static_tree::StaticLayoutChoice {
+            kept: "binary",
+            binary_ms: 1.0,
+            wide_ms: 1.1,
+            wide8_ms: 1.4,
+            rays: 16_384,
+        };
         let info = HudInfo {
             scene: "room",
             device: "test",
@@ -471,6 +492,7 @@ mod tests {
             stats: None,
             stages: &stages,
             static_tree: Some(&tree),
+            static_layout: Some(&layout),
             camera,
             speed: 1.0,
             dynamic: true,

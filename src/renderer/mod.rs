@@ -114,6 +114,9 @@ pub struct Renderer {
     /// With `static_ploc`: PLOC's tree or the LBVH's, whichever walked `static_rays`
     /// faster (`static_tree`).
     pub static_tree: Option<static_tree::StaticTreeChoice>,
+    /// With `static_layout = fastest`: the static walk's nodes that walked
+    /// `static_rays` fastest (`static_tree::choose_layout`).
+    pub static_layout: Option<static_tree::StaticLayoutChoice>,
     /// The reflection and shadow rays of the scene camera's view at load, relative to
     /// the render origin (`static_tree::frame_rays`): what the choice of its tree
     /// times, again when the static BVH is rebuilt.
@@ -172,7 +175,7 @@ impl Renderer {
         // One trace kernel for the view's rays and the choice's rounds.
         let trace = TracePass::<crate::tracers::Lbvh>::new(ctx)?;
         let static_rays = static_tree::frame_rays(ctx, &trace, geom, &static_bvh, scene, settings, origin)?;
-        let (static_bvh, static_bvh_build, static_tree) = static_tree::choose(
+        let (static_bvh, static_bvh_build, static_tree, static_layout) = static_tree::choose(
             ctx,
             (&builder, &trace),
             geom,
@@ -204,6 +207,7 @@ impl Renderer {
             static_bvh,
             static_bvh_build,
             static_tree,
+            static_layout,
             static_rays,
             tracer,
             dynamic,
@@ -290,7 +294,12 @@ impl Renderer {
             let fresh = Bvh::new_static_in(&self.ctx, tris, MortonBits::Bits30, static_tree::layout(&settings))?;
             let geom = self.scene.mesh.triangles();
             let built = static_tree::build(&self.ctx, &self.builder, geom, fresh, &settings, &self.static_rays)?;
-            (self.static_bvh, self.static_bvh_build, self.static_tree) = built;
+            (
+                self.static_bvh,
+                self.static_bvh_build,
+                self.static_tree,
+                self.static_layout,
+            ) = built;
         }
         if !old.changed(&settings, Applies::Tracer).is_empty() {
             self.ctx.wait_idle()?;

@@ -14,9 +14,9 @@ use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::rt_trace::{TracePass, NAME};
 use crate::scene::{Camera, Scene};
-use crate::settings::Settings;
+use crate::settings::{Settings, WalkLayout};
 use crate::shader_defines::BVH_INVALID;
-use crate::tracers::lbvh::{Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, StaticLayout};
+use crate::tracers::lbvh::{Bvh, BvhKind, CompactNodes, Geometry, LbvhBuilder, MortonBits, StaticLayout, COMPACT};
 use crate::tracers::{Lbvh, TraceScene, Traceable};
 use crate::vk::{remeasure, Context};
 use ash::vk;
@@ -33,12 +33,13 @@ const RAYS_CPU: u32 = 16_384;
 /// round whose timestamps fail their self-check is measured again: `vk::remeasure`).
 const ROUNDS: usize = 3;
 
-/// How the static walk reads the static scene's BVH.
+/// How the static walk reads the static scene's BVH as it is built (`fastest`: binary
+/// first, then `choose_layout`).
 pub fn layout(settings: &Settings) -> StaticLayout {
-    if settings.static_wide {
-        StaticLayout::Wide
-    } else {
-        StaticLayout::Binary
+    match settings.static_layout {
+        WalkLayout::Binary | WalkLayout::Fastest => StaticLayout::Binary,
+        WalkLayout::Wide => StaticLayout::Wide,
+        WalkLayout::Wide8 => StaticLayout::Wide8,
     }
 }
 
@@ -70,6 +71,29 @@ impl StaticTreeChoice {
         format!(
             "{} kept (PLOC {:.3} ms, LBVH {:.3} ms for {} reflection and shadow rays)",
             self.kept, self.ploc_ms, self.lbvh_ms, self.rays
+        )
+    }
+}
+
+/// What the measured choice of the static walk's nodes found (`static_layout =
+/// fastest`): the layout kept and the same rays' GPU milliseconds through each
+/// (`rt.trace`, reflection and shadow rays added, medians of the timed rounds).
+#[derive(Clone, Debug, Serialize)]
+pub struct StaticLayoutChoice {
+    pub kept: &'static str,
+    pub binary_ms: f64,
+    pub wide_ms: f64,
+    pub wide8_ms: f64,
+    /// Rays a round, reflection and shadow rays together (`ChoiceRays`).
+    pub rays: u32,
+}
+
+impl StaticLayoutChoice {
+    /// One line of text: the layout kept and each one's price.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} nodes kept (binary {:.3} ms, wide {:.3} ms, wide8 {:.3} ms for {} reflection and shadow rays)",
+            self.kept, self.binary_ms, self.wide_ms, self.wide8_ms, self.rays
         )
     }
 }
@@ -279,11 +303,15 @@ pub fn frame_rays(
     Ok(rays)
 }
 
-/// A build's GPU milliseconds per stage and the kind built (`LbvhBuilder::build_now`).
-pub type Stages = (Vec<(&'static str, f64)>, BvhKind);
+/// GPU milliseconds per stage of a build, by timer scope.
+pub type Scopes = Vec<(&'static str, f64)>;
 
-/// The static tree kept, its build's GPU milliseconds per stage, and the choice.
-pub type Kept = (Bvh, Vec<(&'static str, f64)>, Option<StaticTreeChoice>);
+/// A build's GPU milliseconds per stage and the kind built (`LbvhBuilder::build_now`).
+pub type Stages = (Scopes, BvhKind);
+
+/// The static tree kept, its build's GPU milliseconds per stage, and the choices of
+/// its tree and its walk's nodes.
+pub type Kept = (Bvh, Scopes, Option<StaticTreeChoice>, Option<StaticLayoutChoice>);
 
 /// Builds the static scene's BVH over `geom` into `bvh` (`layout(settings)`) with the
 /// settings' builder, then `choose`. Returns the tree kept, its build's GPU
@@ -302,38 +330,39 @@ pub fn build(
 }
 
 /// After `bvh` was built over `geom` (`built`: its stages' GPU milliseconds and the
-/// kind built): with PLOC, also builds the LBVH's tree and keeps the one that walks
-/// `rays` faster through `tracer` (see the module). Returns the tree kept, its build's GPU milliseconds
-/// per stage, and the choice (`None` when the LBVH was asked for, when the PLOC tree
-/// was too deep for the walk and the LBVH was built instead, or without rays).
+/// kind built): the tree (`choose_tree`), then its walk's nodes (`choose_layout`).
 pub fn choose(
+    ctx: &Arc<Context>,
+    kernels: (&LbvhBuilder, &TracePass<Lbvh>),
+    geom: Geometry<'_>,
+    built: (Bvh, Stages),
+    settings: &Settings,
+    rays: &ChoiceRays,
+) -> Result<Kept> {
+    let (bvh, scopes, tree) = choose_tree(ctx, kernels, geom, built, settings, rays)?;
+    let (bvh, scopes, layout) = choose_layout(ctx, kernels, geom, (bvh, scopes), settings, rays)?;
+    Ok((bvh, scopes, tree, layout))
+}
+
+/// With PLOC built, also builds the LBVH's tree and keeps the one that walks `rays`
+/// faster through `tracer` (see the module). Returns the tree kept, its build's GPU
+/// milliseconds per stage, and the choice (`None` when the LBVH was asked for, when the
+/// PLOC tree was too deep for the walk and the LBVH was built instead, or without
+/// rays).
+fn choose_tree(
     ctx: &Arc<Context>,
     (builder, tracer): (&LbvhBuilder, &TracePass<Lbvh>),
     geom: Geometry<'_>,
     (bvh, (scopes, built)): (Bvh, Stages),
     settings: &Settings,
     rays: &ChoiceRays,
-) -> Result<Kept> {
+) -> Result<(Bvh, Scopes, Option<StaticTreeChoice>)> {
     if built != BvhKind::Ploc || rays.is_empty() {
         return Ok((bvh, scopes, None));
     }
     let lbvh = Bvh::new_static_in(ctx, geom.tri_count, MortonBits::Bits30, layout(settings))?;
     let (lbvh_scopes, _) = builder.build_now(geom, &lbvh, BvhKind::Lbvh)?;
-    let time = |tree: &Bvh| -> Result<f64> {
-        let scene = TraceScene {
-            static_bvh: Some(Traceable {
-                bvh: tree,
-                geometry: geom,
-            }),
-            dynamic_bvh: None,
-        };
-        let mut total = 0.0;
-        for (set, any_hit) in [(&rays.reflect, false), (&rays.shadow, true)] {
-            let (_, readout, _) = remeasure(|| tracer.trace(set, scene, any_hit))?;
-            total += readout.get(NAME).unwrap_or(0.0);
-        }
-        Ok(total)
-    };
+    let time = |tree: &Bvh| ray_ms(tracer, geom, tree, rays);
     let (mut ploc_ms, mut lbvh_ms) = (Vec::new(), Vec::new());
     for round in 0..=ROUNDS {
         let (p, l) = (time(&bvh)?, time(&lbvh)?);
@@ -355,6 +384,90 @@ pub fn choose(
     } else {
         (bvh, scopes, Some(choice))
     })
+}
+
+/// GPU milliseconds of `rays` through `tree` over `geom` (`rt.trace`: the reflection
+/// rays' closest hits and the shadow rays' any hits, added; each remeasured until its
+/// timestamps check).
+fn ray_ms(tracer: &TracePass<Lbvh>, geom: Geometry<'_>, tree: &Bvh, rays: &ChoiceRays) -> Result<f64> {
+    let scene = TraceScene {
+        static_bvh: Some(Traceable {
+            bvh: tree,
+            geometry: geom,
+        }),
+        dynamic_bvh: None,
+    };
+    let mut total = 0.0;
+    for (set, any_hit) in [(&rays.reflect, false), (&rays.shadow, true)] {
+        let (_, readout, _) = remeasure(|| tracer.trace(set, scene, any_hit))?;
+        total += readout.get(NAME).unwrap_or(0.0);
+    }
+    Ok(total)
+}
+
+/// With `static_layout = fastest`, after the static tree was kept (`choose`, binary):
+/// its walk's nodes made in every other layout too, the same `rays` timed through each
+/// in turn (`ROUNDS` after an untimed one), and the fastest kept, its `lbvh.compact`
+/// time in the build's stages. Returns the tree with the nodes kept and the choice
+/// (`None` for a fixed layout, or without rays).
+pub fn choose_layout(
+    ctx: &Arc<Context>,
+    (builder, tracer): (&LbvhBuilder, &TracePass<Lbvh>),
+    geom: Geometry<'_>,
+    (mut bvh, mut scopes): (Bvh, Scopes),
+    settings: &Settings,
+    rays: &ChoiceRays,
+) -> Result<(Bvh, Scopes, Option<StaticLayoutChoice>)> {
+    if settings.static_layout != WalkLayout::Fastest || rays.is_empty() {
+        return Ok((bvh, scopes, None));
+    }
+    let first = bvh.compact.as_ref().map(|c| c.layout);
+    let compact_ms = |s: &[(&'static str, f64)]| s.iter().find(|(n, _)| *n == COMPACT).map_or(0.0, |(_, ms)| *ms);
+    // Each layout's nodes (the first's are in the tree) and its compaction's time.
+    let mut made: Vec<(StaticLayout, Option<CompactNodes>, f64)> = Vec::new();
+    for layout in StaticLayout::ALL {
+        if Some(layout) == first {
+            made.push((layout, None, compact_ms(&scopes)));
+            continue;
+        }
+        let held = bvh.swap_compact(CompactNodes::new(ctx, geom.tri_count, layout)?);
+        let ms = compact_ms(&builder.compact_now(&bvh)?);
+        made.push((layout, Some(bvh.swap_compact(held)), ms));
+    }
+    let mut ms = vec![Vec::new(); made.len()];
+    for round in 0..=ROUNDS {
+        for (k, (_, nodes, _)) in made.iter_mut().enumerate() {
+            // Each layout's nodes in the tree in turn, then back in their place.
+            let held = nodes.take().map(|n| bvh.swap_compact(n));
+            let t = ray_ms(tracer, geom, &bvh, rays)?;
+            *nodes = held.map(|h| bvh.swap_compact(h));
+            if round > 0 {
+                ms[k].push(t);
+            }
+        }
+    }
+    let medians: Vec<f64> = ms.iter_mut().map(|m| median(m)).collect();
+    let best = (0..made.len())
+        .min_by(|&a, &b| medians[a].total_cmp(&medians[b]))
+        .expect("layouts to choose from");
+    let (layout, nodes, compact) = made.swap_remove(best);
+    if let Some(nodes) = nodes {
+        bvh.swap_compact(nodes);
+    }
+    for (name, t) in scopes.iter_mut() {
+        if *name == COMPACT {
+            *t = compact;
+        }
+    }
+    let at = |l: StaticLayout| medians[StaticLayout::ALL.iter().position(|&x| x == l).unwrap_or(0)];
+    let choice = StaticLayoutChoice {
+        kept: layout.name(),
+        binary_ms: at(StaticLayout::Binary),
+        wide_ms: at(StaticLayout::Wide),
+        wide8_ms: at(StaticLayout::Wide8),
+        rays: rays.len() as u32,
+    };
+    Ok((bvh, scopes, Some(choice)))
 }
 
 /// The median of `v` (not empty; NaN sorts last).

@@ -2,7 +2,7 @@
 //! HUD shows it, how a change applies, and its value as one type for generic code
 //! (validation, the HUD, the README's list).
 
-use super::{HybridPolicy, Mode, Settings, Shadows, Tracer, Visibility};
+use super::{HybridPolicy, Mode, Settings, Shadows, Tracer, Visibility, WalkLayout};
 
 /// One setting: everything the struct, validation, the renderer, the HUD, the CLI and
 /// the README need to know of it.
@@ -96,6 +96,7 @@ pub enum Value {
     Visibility(Visibility),
     Tracer(Tracer),
     HybridPolicy(HybridPolicy),
+    WalkLayout(WalkLayout),
 }
 
 /// The field's type back from a `Value` (`Field::set`); a value of another type is a
@@ -131,6 +132,7 @@ value_of!(Shadows, Shadows);
 value_of!(Visibility, Visibility);
 value_of!(Tracer, Tracer);
 value_of!(HybridPolicy, HybridPolicy);
+value_of!(WalkLayout, WalkLayout);
 
 impl std::fmt::Display for Value {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -143,6 +145,7 @@ impl std::fmt::Display for Value {
             Value::Visibility(v) => write!(f, "{}", v.name()),
             Value::Tracer(t) => write!(f, "{}", t.name()),
             Value::HybridPolicy(p) => write!(f, "{}", p.name()),
+            Value::WalkLayout(l) => write!(f, "{}", l.name()),
         }
     }
 }

@@ -117,6 +117,49 @@ impl Tracer {
     }
 }
 
+/// The nodes the static scene's BVH is walked through (`lbvh.compact`'s layouts), or
+/// whichever of them walks fastest on this device (`about` says what each is).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WalkLayout {
+    Binary,
+    Wide,
+    Wide8,
+    Fastest,
+}
+
+impl WalkLayout {
+    pub const ALL: [WalkLayout; 4] = [
+        WalkLayout::Binary,
+        WalkLayout::Wide,
+        WalkLayout::Wide8,
+        WalkLayout::Fastest,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            WalkLayout::Binary => "binary",
+            WalkLayout::Wide => "wide",
+            WalkLayout::Wide8 => "wide8",
+            WalkLayout::Fastest => "fastest",
+        }
+    }
+
+    /// What the layout is, in a line (the CLI's help, the HUD).
+    pub fn about(self) -> &'static str {
+        match self {
+            WalkLayout::Binary => "Binary nodes, 32 bytes: one level a step",
+            WalkLayout::Wide => "Up to four children a node, 64 bytes: two levels a step",
+            WalkLayout::Wide8 => {
+                "Up to eight children a node, 8-bit boxes on each node's grid, 96 bytes: three levels a step"
+            }
+            WalkLayout::Fastest => {
+                "Each layout made at load and the same reflection and shadow rays timed through each; the fastest kept"
+            }
+        }
+    }
+}
+
 /// How the `hybrid` mode chooses, tile by tile, between marching a pixel first and
 /// tracing it straight away (`about` says what each is).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -348,13 +391,15 @@ settings_table! {
     /// (measured at load, reported as `static_tree`). Dynamic geometry, rebuilt or
     /// refit per frame, always gets the LBVH.
     static_ploc: bool = true, Range::Any, Hud::Checkbox, StaticBvh;
-    /// Walk the static scene's BVH through wide nodes (up to four children, a binary
-    /// node's with each internal one opened: two levels a step, 64 bytes a node)
-    /// instead of binary ones (32 bytes, one level a step). On lavapipe the wide walk
-    /// is no faster (incoherent rays 0.89-1.07x, frames within noise) and its nodes
-    /// take 2-3x as long to make (docs/experiments.md); a GPU, where a node's four
-    /// texels load together, may favour them.
-    static_wide: bool = false, Range::Any, Hud::Checkbox, StaticBvh;
+    /// The nodes the static scene's BVH is walked through: binary (32 bytes, one level
+    /// a step), wide (up to four children, 64 bytes, two levels), wide8 (up to eight,
+    /// 8-bit boxes, 96 bytes, three levels), or `fastest`: each made at load from the
+    /// tree kept and the reflection and shadow rays of the scene camera's view timed
+    /// through each, the fastest kept (reported as `static_layout`). Fewer steps walk
+    /// fewer dependent loads but test more boxes: on lavapipe binary walks fastest
+    /// (wide 0.9-1.1x, wide8 0.6-0.8x); a GPU may favour the wide ones. Every layout
+    /// finds the same hits, so this moves time, never pixels.
+    static_layout: WalkLayout = WalkLayout::Fastest, Range::Any, Hud::Own, StaticBvh;
     /// Rebuild the dynamic BVH of a scene whose only dynamic geometry is cloth every
     /// frame instead of refitting it (refit is cheaper; its tree loosens as the cloth
     /// deforms).
@@ -493,6 +538,7 @@ pub fn markdown_table() -> String {
             (Range::Any, Value::Visibility(_)) => Visibility::ALL.map(Visibility::name).join(", "),
             (Range::Any, Value::Tracer(_)) => Tracer::ALL.map(Tracer::name).join(", "),
             (Range::Any, Value::HybridPolicy(_)) => HybridPolicy::ALL.map(HybridPolicy::name).join(", "),
+            (Range::Any, Value::WalkLayout(_)) => WalkLayout::ALL.map(WalkLayout::name).join(", "),
             (Range::Any, Value::Bool(_)) => "true, false".into(),
             (r, _) => r.describe(),
         };

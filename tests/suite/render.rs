@@ -328,7 +328,7 @@ fn live_settings_camera_and_fail_mask_view_match_a_fresh_renderer() {
         ssr_max_steps: 8,
         shadow_slope_bias: 0.5,
         static_ploc: !base.static_ploc,
-        static_wide: !base.static_wide,
+        static_layout: speculum::settings::WalkLayout::Wide8,
         ..base.clone()
     };
     assert!(!r.needs_new_renderer(&changed));

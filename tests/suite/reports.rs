@@ -191,6 +191,15 @@ fn render_report_follows_the_schema() {
     let (ploc, lbvh) = (t["ploc_ms"].as_f64().unwrap(), t["lbvh_ms"].as_f64().unwrap());
     assert!(ploc > 0.0 && lbvh > 0.0 && t["rays"].as_u64().unwrap() > 0, "{t}");
     assert_eq!(t["kept"], if lbvh < ploc { "lbvh" } else { "ploc" }, "{t}");
+    // The default `fastest` layout: the nodes kept are the cheapest walk's.
+    let l = &r["static_layout"];
+    let priced: Vec<(&str, f64)> = ["binary", "wide", "wide8"]
+        .into_iter()
+        .map(|k| (k, l[format!("{k}_ms")].as_f64().unwrap()))
+        .collect();
+    assert!(priced.iter().all(|(_, ms)| *ms > 0.0), "{l}");
+    let cheapest = priced.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap().0;
+    assert_eq!(l["kept"], cheapest, "{l}");
     assert_eq!(r["traced_pixels"], 0, "ssr mode traces nothing");
     assert_eq!(
         r["fail_reasons"].as_object().unwrap().len(),

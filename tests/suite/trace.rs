@@ -720,9 +720,10 @@ fn a_planted_cycle_ends_in_a_reported_overrun() {
 
 /// With `static_ploc` the static tree kept (`renderer::static_tree::build`) is the one
 /// the choice names, bit for bit a fresh build by its builder and not the other's, and
-/// the one whose rays' walk measured cheaper; its hits equal brute force. With the
-/// LBVH asked for, or without rays, nothing is measured and the LBVH (or PLOC) tree is
-/// as asked.
+/// the one whose rays' walk measured cheaper; with `static_layout = fastest` its nodes
+/// are the layout whose walk measured cheapest; its hits equal brute force. With the
+/// LBVH asked for, a layout asked for, or without rays, nothing is measured and the
+/// tree and nodes are as asked.
 #[test]
 fn the_static_tree_kept_is_the_one_that_walked_faster() {
     use speculum::renderer::static_tree;
@@ -753,8 +754,28 @@ fn the_static_tree_kept_is_the_one_that_walked_faster() {
     };
     let settings = Settings::default();
     assert!(settings.static_ploc);
-    let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &rays).unwrap();
+    let (kept, scopes, choice, layout) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &rays).unwrap();
     let choice = choice.expect("static_ploc measures");
+    // The default `fastest` layout: the nodes kept are the layout whose walk measured
+    // cheapest, made for the tree kept, their compaction's time the build's.
+    let layout = layout.expect("static_layout = fastest measures");
+    let priced = [
+        ("binary", layout.binary_ms),
+        ("wide", layout.wide_ms),
+        ("wide8", layout.wide8_ms),
+    ];
+    assert!(
+        priced.iter().all(|(_, ms)| *ms > 0.0) && layout.rays == 4096,
+        "{layout:?}"
+    );
+    let cheapest = priced.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap().0;
+    assert_eq!(layout.kept, cheapest, "{layout:?}");
+    let nodes = kept.compact.as_ref().expect("compact nodes");
+    assert_eq!(nodes.layout.name(), layout.kept);
+    assert!(kept.compact_current());
+    assert!(scopes
+        .iter()
+        .any(|(n, ms)| *n == speculum::tracers::lbvh::COMPACT && *ms > 0.0));
     assert_eq!(choice.rays, 4096);
     assert!(choice.ploc_ms > 0.0 && choice.lbvh_ms > 0.0, "{choice:?}");
     let want = if choice.lbvh_ms < choice.ploc_ms {
@@ -781,9 +802,17 @@ fn the_static_tree_kept_is_the_one_that_walked_faster() {
         static_ploc: false,
         ..settings.clone()
     };
-    let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &lbvh_only, &rays).unwrap();
+    let (kept, _, choice, _) = static_tree::build(&ctx, &b, geom, fresh(), &lbvh_only, &rays).unwrap();
     assert!(choice.is_none() && tree(&kept) == lbvh);
     let none = static_tree::ChoiceRays::default();
-    let (kept, _, choice) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &none).unwrap();
-    assert!(choice.is_none() && tree(&kept) == ploc);
+    let (kept, _, choice, layout) = static_tree::build(&ctx, &b, geom, fresh(), &settings, &none).unwrap();
+    assert!(choice.is_none() && layout.is_none() && tree(&kept) == ploc);
+    // A layout asked for is kept, unmeasured.
+    let wide8 = Settings {
+        static_layout: speculum::settings::WalkLayout::Wide8,
+        ..settings.clone()
+    };
+    let in_wide8 = Bvh::new_static_in(&ctx, n as u32, MortonBits::Bits30, StaticLayout::Wide8).unwrap();
+    let (kept, _, _, layout) = static_tree::build(&ctx, &b, geom, in_wide8, &wide8, &rays).unwrap();
+    assert!(layout.is_none() && kept.compact.as_ref().unwrap().layout == StaticLayout::Wide8);
 }

@@ -23,6 +23,29 @@ pub struct CompactNodes {
     pub order: super::order::OrderScratch,
 }
 
+impl CompactNodes {
+    /// Memory for the static walk's nodes of a tree of `tri_count` triangles in
+    /// `layout` (one node a binary node), and its order's scratch.
+    pub fn new(ctx: &Arc<Context>, tri_count: u32, layout: StaticLayout) -> Result<Self> {
+        let buffer = Buffer::new(
+            ctx,
+            "lbvh.compact",
+            (2 + layout.texels() as u64 * (tri_count as u64 - 1).max(1)) * 16,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
+        Ok(Self {
+            texels: TexelView::new(ctx, &buffer)?,
+            buffer,
+            layout,
+            order: super::order::OrderScratch::new(ctx, (tri_count - 1).max(1))?,
+        })
+    }
+}
+
 /// A BVH on the GPU and the scratch memory to rebuild it.
 pub struct Bvh {
     /// max(N-1, 1) `TraversalNode`s (written by the fit and the refit).
@@ -124,23 +147,19 @@ impl Bvh {
     /// `new_static` with the walk's nodes in `layout`.
     pub fn new_static_in(ctx: &Arc<Context>, tri_count: u32, bits: MortonBits, layout: StaticLayout) -> Result<Self> {
         let mut bvh = Self::alloc(ctx, tri_count, bits, true)?;
-        let buffer = Buffer::new(
-            ctx,
-            "lbvh.compact",
-            (2 + layout.texels() as u64 * (tri_count as u64 - 1).max(1)) * 16,
-            vk::BufferUsageFlags::STORAGE_BUFFER
-                | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_DST
-                | vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::GpuOnly,
-        )?;
-        bvh.compact = Some(CompactNodes {
-            texels: TexelView::new(ctx, &buffer)?,
-            buffer,
-            layout,
-            order: super::order::OrderScratch::new(ctx, (tri_count - 1).max(1))?,
-        });
+        bvh.compact = Some(CompactNodes::new(ctx, tri_count, layout)?);
         Ok(bvh)
+    }
+
+    /// Puts `nodes` in place of the static walk's nodes and returns those it had (a
+    /// static BVH's: `new_static`). Nodes made for this tree since its last build or
+    /// refit (`LbvhBuilder::compact_now`) stay current: the walk can be timed in several
+    /// layouts without making any twice. The GPU must be done with the nodes taken out
+    /// before they are dropped.
+    pub fn swap_compact(&mut self, nodes: CompactNodes) -> CompactNodes {
+        self.compact
+            .replace(nodes)
+            .expect("compact nodes of a BVH made by Bvh::new_static")
     }
 
     /// Bytes of the BVH itself (nodes, compact nodes if any, and triangles), without

@@ -317,9 +317,17 @@ impl LbvhBuilder {
                 (readout.scopes, BvhKind::Lbvh)
             }
         };
-        let compact = timer.one_shot(|cmd, timer| self.record_compact(cmd, timer, bvh))?;
-        scopes.extend(compact.scopes);
+        scopes.extend(self.compact_now(bvh)?);
         Ok((scopes, kind))
+    }
+
+    /// Records `lbvh.compact` into `bvh` now (submits and waits): its walk's nodes in
+    /// its layout, for the tree as built. Returns its GPU milliseconds, under its scope.
+    pub fn compact_now(&self, bvh: &Bvh) -> Result<Vec<(&'static str, f64)>> {
+        let mut timer = GpuTimer::new(&self.ctx, 2)?;
+        Ok(timer
+            .one_shot(|cmd, timer| self.record_compact(cmd, timer, bvh))?
+            .scopes)
     }
 
     /// Records what both builders start with, each under its timer scope: bounds,

@@ -276,9 +276,10 @@ void walk_bvh(uint bvh, vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool an
     }
 }
 
-// Orders slots a and b of a wide node's children by entry distance (walk_wide's
-// sorting network orders four: WIDE is 4, shader_defines.rs asserts it).
-#define WIDE_ORDER(a, b)                                                                   \
+// Orders slots a and b of four children (vectors t of entry distances, link of links)
+// by entry distance; WIDE_ORDER4 orders all four by a sorting network (walk_wide's
+// node: WIDE is 4, shader_defines.rs asserts it; walk_wide8's two halves).
+#define WIDE_ORDER(t, link, a, b)                                                          \
     if (t[b] < t[a]) {                                                                     \
         float tt = t[a];                                                                   \
         t[a] = t[b];                                                                       \
@@ -287,6 +288,12 @@ void walk_bvh(uint bvh, vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool an
         link[a] = link[b];                                                                 \
         link[b] = ll;                                                                      \
     }
+#define WIDE_ORDER4(t, link)                                                               \
+    WIDE_ORDER(t, link, 0, 1)                                                              \
+    WIDE_ORDER(t, link, 2, 3)                                                              \
+    WIDE_ORDER(t, link, 0, 2)                                                              \
+    WIDE_ORDER(t, link, 1, 3)                                                              \
+    WIDE_ORDER(t, link, 1, 2)
 
 // One ray's walk of the static BVH through its wide nodes (lbvh.compact): a step tests
 // a node's WIDE slots, the leaves among the hit ones at once, and goes on to the
@@ -336,11 +343,7 @@ void walk_wide(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, ui
                 t[k] = 1.0 / 0.0;
             }
         }
-        WIDE_ORDER(0, 1)
-        WIDE_ORDER(2, 3)
-        WIDE_ORDER(0, 2)
-        WIDE_ORDER(1, 3)
-        WIDE_ORDER(1, 2)
+        WIDE_ORDER4(t, link)
         if (t[0] != 1.0 / 0.0) {
             for (int k = int(WIDE) - 1; k > 0; --k) {
                 if (t[k] != 1.0 / 0.0) {
@@ -377,17 +380,6 @@ vec4 wide8_entries(uvec3 wlo, uvec3 whi, uvec4 link, vec3 g, vec3 st, vec3 o, ve
     bvec4 hit = bvec4(uvec4(lessThanEqual(enter, exit)) & uvec4(notEqual(link, uvec4(BVH_INVALID))));
     return mix(vec4(1.0 / 0.0), enter, hit);
 }
-
-// Orders slots a and b of four children (vectors t, link) by entry distance.
-#define WIDE8_ORDER(t, link, a, b)                                                           \
-    if (t[b] < t[a]) {                                                                     \
-        float tt = t[a];                                                                   \
-        t[a] = t[b];                                                                       \
-        t[b] = tt;                                                                         \
-        uint ll = link[a];                                                                 \
-        link[a] = link[b];                                                                 \
-        link[b] = ll;                                                                      \
-    }
 
 // One ray's walk of the static BVH through its compressed wide nodes (lbvh.compact):
 // a step tests a node's WIDE8 children (two vectors of four), the leaves among the
@@ -440,16 +432,8 @@ void walk_wide8(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, u
         // holds no closer hit.
         ta = mix(ta, vec4(1.0 / 0.0), greaterThan(ta, vec4(best.t)));
         tb = mix(tb, vec4(1.0 / 0.0), greaterThan(tb, vec4(best.t)));
-        WIDE8_ORDER(ta, la, 0, 1)
-        WIDE8_ORDER(ta, la, 2, 3)
-        WIDE8_ORDER(ta, la, 0, 2)
-        WIDE8_ORDER(ta, la, 1, 3)
-        WIDE8_ORDER(ta, la, 1, 2)
-        WIDE8_ORDER(tb, lb, 0, 1)
-        WIDE8_ORDER(tb, lb, 2, 3)
-        WIDE8_ORDER(tb, lb, 0, 2)
-        WIDE8_ORDER(tb, lb, 1, 3)
-        WIDE8_ORDER(tb, lb, 1, 2)
+        WIDE_ORDER4(ta, la)
+        WIDE_ORDER4(tb, lb)
         // Entered children first in each four: how many, and which four the nearest.
         int na = int(dot(vec4(notEqual(ta, vec4(1.0 / 0.0))), vec4(1.0)));
         int nb = int(dot(vec4(notEqual(tb, vec4(1.0 / 0.0))), vec4(1.0)));

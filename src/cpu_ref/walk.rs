@@ -139,11 +139,7 @@ fn wide_next(mut t: Vec<(f32, u32)>, best_t: f32, stack: &mut Vec<u32>) -> Optio
             e.0 = f32::INFINITY;
         }
     }
-    for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
-        if t[b].0 < t[a].0 {
-            t.swap(a, b);
-        }
-    }
+    order4(&mut t);
     if t[0].0 == f32::INFINITY {
         return None;
     }
@@ -153,6 +149,16 @@ fn wide_next(mut t: Vec<(f32, u32)>, best_t: f32, stack: &mut Vec<u32>) -> Optio
         }
     }
     Some(t[0].1)
+}
+
+/// Four children (entry distance, link) ordered by the walks' sorting network
+/// (`WIDE_ORDER4`: a swap only where the later is strictly nearer).
+fn order4(four: &mut [(f32, u32)]) {
+    for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+        if four[b].0 < four[a].0 {
+            four.swap(a, b);
+        }
+    }
 }
 
 /// `walk_wide8`'s choice after a node's leaves: children entered beyond `best_t`
@@ -167,11 +173,7 @@ fn wide8_next(mut t: Vec<(f32, u32)>, best_t: f32, stack: &mut Vec<u32>) -> Opti
         }
     }
     for four in t.chunks_mut(4) {
-        for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
-            if four[b].0 < four[a].0 {
-                four.swap(a, b);
-            }
-        }
+        order4(four);
     }
     let (a, b) = t.split_at(4);
     let entered = |f: &[(f32, u32)]| f.iter().filter(|e| e.0 != f32::INFINITY).count();

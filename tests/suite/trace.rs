@@ -546,7 +546,10 @@ fn a_tree_deeper_than_the_stack_is_reported() {
         hi1: hi.to_array(),
         ..nodes[0]
     };
-    let plant = |units: usize| -> Vec<TraversalNode> {
+    // `units` units planted from the root, each of its nodes `Some((c0, c1))` (links as
+    // offsets from the unit's first node; the unit's length is the next unit's) or
+    // `None` (two one-triangle leaves), then a node of two leaves.
+    let plant = |unit: &[Option<(u32, u32)>], units: usize| -> Vec<TraversalNode> {
         let mut planted = nodes.clone();
         let mut leaf = 0u32;
         let mut leaves = || {
@@ -554,45 +557,31 @@ fn a_tree_deeper_than_the_stack_is_reported() {
             node(bvh_leaf_link(leaf - 2, 1), bvh_leaf_link(leaf - 1, 1))
         };
         for u in 0..units {
-            let x = 6 * u as u32;
-            let next = x + 6;
-            planted[x as usize] = node(x + 1, x + 2);
-            planted[x as usize + 1] = node(next, x + 3);
-            planted[x as usize + 2] = node(x + 4, x + 5);
-            for k in 3..6 {
-                planted[(x + k) as usize] = leaves();
+            let x = (unit.len() * u) as u32;
+            for (k, links) in unit.iter().enumerate() {
+                planted[x as usize + k] = match links {
+                    Some((c0, c1)) => node(x + c0, x + c1),
+                    None => leaves(),
+                };
             }
         }
-        planted[6 * units] = leaves();
+        planted[unit.len() * units] = leaves();
         planted
     };
-    let plant8 = |units: usize| -> Vec<TraversalNode> {
-        let mut planted = nodes.clone();
-        let mut leaf = 0u32;
-        let mut leaves = || {
-            leaf += 2;
-            node(bvh_leaf_link(leaf - 2, 1), bvh_leaf_link(leaf - 1, 1))
-        };
-        for u in 0..units {
-            // X, A, B, C, D, E, F, then G1..G7: X -> (A, B), A -> (C, D), B -> (E, F),
-            // C -> (next X, G1), D -> (G2, G3), E -> (G4, G5), F -> (G6, G7).
-            let x = 14 * u as u32;
-            let next = x + 14;
-            let g = |k: u32| x + 6 + k;
-            planted[x as usize] = node(x + 1, x + 2);
-            planted[x as usize + 1] = node(x + 3, x + 4);
-            planted[x as usize + 2] = node(x + 5, x + 6);
-            planted[x as usize + 3] = node(next, g(1));
-            planted[x as usize + 4] = node(g(2), g(3));
-            planted[x as usize + 5] = node(g(4), g(5));
-            planted[x as usize + 6] = node(g(6), g(7));
-            for k in 1..8 {
-                planted[g(k) as usize] = leaves();
-            }
-        }
-        planted[14 * units] = leaves();
-        planted
-    };
+    // X -> (Y, Z), Y -> (next X, P), Z -> (Q, R); P, Q, R of two leaves.
+    let six = [Some((1, 2)), Some((6, 3)), Some((4, 5)), None, None, None];
+    // X -> (A, B), A -> (C, D), B -> (E, F), C -> (next X, G1), D -> (G2, G3),
+    // E -> (G4, G5), F -> (G6, G7); G1..G7 of two leaves.
+    let mut fourteen = vec![None; 14];
+    fourteen[..7].copy_from_slice(&[
+        Some((1, 2)),
+        Some((3, 4)),
+        Some((5, 6)),
+        Some((14, 7)),
+        Some((8, 9)),
+        Some((10, 11)),
+        Some((12, 13)),
+    ]);
     let center = 0.5 * (lo + hi);
     let ray = Ray {
         origin: (center - 2.0 * (hi - lo)).to_array(),
@@ -603,7 +592,11 @@ fn a_tree_deeper_than_the_stack_is_reported() {
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     for (count, overflows) in [(units, true), (units / 3, false)] {
         let count8 = if overflows { units8 } else { units8 / 3 };
-        for (built, planted) in [(&binary, plant(count)), (&wide, plant(count)), (&wide8, plant8(count8))] {
+        for (built, planted) in [
+            (&binary, plant(&six, count)),
+            (&wide, plant(&six, count)),
+            (&wide8, plant(&fourteen, count8)),
+        ] {
             built.bvh.plant(&planted, None).unwrap();
             let mut timer = GpuTimer::new(&ctx, 8).unwrap();
             ctx.one_shot(|cmd| {

@@ -473,9 +473,9 @@ mod tests {
         };
         let layout = crate::renderer::static_tree::StaticLayoutChoice {
             kept: "binary",
-            binary_ms: 1.0,
-            wide_ms: 1.1,
-            wide8_ms: 1.4,
+            binary_ms: Some(1.0),
+            wide_ms: Some(1.1),
+            wide8_ms: None,
             rays: 16_384,
         };
         let info = HudInfo {

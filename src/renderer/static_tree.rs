@@ -77,13 +77,14 @@ impl StaticTreeChoice {
 
 /// What the measured choice of the static walk's nodes found (`static_layout =
 /// fastest`): the layout kept and the same rays' GPU milliseconds through each
-/// (`rt.trace`, reflection and shadow rays added, medians of the timed rounds).
+/// (`rt.trace`, reflection and shadow rays added, medians of the timed rounds; `None`
+/// for a layout whose walk of the tree would not fit its stack, never made).
 #[derive(Clone, Debug, Serialize)]
 pub struct StaticLayoutChoice {
     pub kept: &'static str,
-    pub binary_ms: f64,
-    pub wide_ms: f64,
-    pub wide8_ms: f64,
+    pub binary_ms: Option<f64>,
+    pub wide_ms: Option<f64>,
+    pub wide8_ms: Option<f64>,
     /// Rays a round, reflection and shadow rays together (`ChoiceRays`).
     pub rays: u32,
 }
@@ -91,9 +92,14 @@ pub struct StaticLayoutChoice {
 impl StaticLayoutChoice {
     /// One line of text: the layout kept and each one's price.
     pub fn summary(&self) -> String {
+        let ms = |m: Option<f64>| m.map_or("too deep".into(), |m| format!("{m:.3} ms"));
         format!(
-            "{} nodes kept (binary {:.3} ms, wide {:.3} ms, wide8 {:.3} ms for {} reflection and shadow rays)",
-            self.kept, self.binary_ms, self.wide_ms, self.wide8_ms, self.rays
+            "{} nodes kept (binary {}, wide {}, wide8 {} for {} reflection and shadow rays)",
+            self.kept,
+            ms(self.binary_ms),
+            ms(self.wide_ms),
+            ms(self.wide8_ms),
+            self.rays
         )
     }
 }
@@ -406,9 +412,10 @@ fn ray_ms(tracer: &TracePass<Lbvh>, geom: Geometry<'_>, tree: &Bvh, rays: &Choic
 }
 
 /// With `static_layout = fastest`, after the static tree was kept (`choose`, binary):
-/// its walk's nodes made in every other layout too, the same `rays` timed through each
-/// in turn (`ROUNDS` after an untimed one), and the fastest kept, its `lbvh.compact`
-/// time in the build's stages. Returns the tree with the nodes kept and the choice
+/// its walk's nodes made in every other layout whose walk of the tree fits the stack
+/// (`StaticLayout::fits`: a deep PLOC tree may fit the binary walk's and not a wide
+/// one's), the same `rays` timed through each in turn (`ROUNDS` after an untimed one),
+/// and the fastest kept, its `lbvh.compact` time in the build's stages. Returns the tree with the nodes kept and the choice
 /// (`None` for a fixed layout, or without rays).
 pub fn choose_layout(
     ctx: &Arc<Context>,
@@ -423,11 +430,15 @@ pub fn choose_layout(
     }
     let first = bvh.compact.as_ref().map(|c| c.layout);
     let compact_ms = |s: &[(&'static str, f64)]| s.iter().find(|(n, _)| *n == COMPACT).map_or(0.0, |(_, ms)| *ms);
+    let nodes: Vec<crate::gpu_types::TraversalNode> = bytemuck::pod_collect_to_vec(&bvh.tnodes.read()?);
     // Each layout's nodes (the first's are in the tree) and its compaction's time.
     let mut made: Vec<(StaticLayout, Option<CompactNodes>, f64)> = Vec::new();
     for layout in StaticLayout::ALL {
         if Some(layout) == first {
             made.push((layout, None, compact_ms(&scopes)));
+            continue;
+        }
+        if !layout.fits(&nodes) {
             continue;
         }
         let held = bvh.swap_compact(CompactNodes::new(ctx, geom.tri_count, layout)?);
@@ -447,6 +458,12 @@ pub fn choose_layout(
         }
     }
     let medians: Vec<f64> = ms.iter_mut().map(|m| median(m)).collect();
+    let at = |l: StaticLayout| made.iter().position(|m| m.0 == l).map(|k| medians[k]);
+    let (binary_ms, wide_ms, wide8_ms) = (
+        at(StaticLayout::Binary),
+        at(StaticLayout::Wide),
+        at(StaticLayout::Wide8),
+    );
     let best = (0..made.len())
         .min_by(|&a, &b| medians[a].total_cmp(&medians[b]))
         .expect("layouts to choose from");
@@ -459,12 +476,11 @@ pub fn choose_layout(
             *t = compact;
         }
     }
-    let at = |l: StaticLayout| medians[StaticLayout::ALL.iter().position(|&x| x == l).unwrap_or(0)];
     let choice = StaticLayoutChoice {
         kept: layout.name(),
-        binary_ms: at(StaticLayout::Binary),
-        wide_ms: at(StaticLayout::Wide),
-        wide8_ms: at(StaticLayout::Wide8),
+        binary_ms,
+        wide_ms,
+        wide8_ms,
         rays: rays.len() as u32,
     };
     Ok((bvh, scopes, Some(choice)))

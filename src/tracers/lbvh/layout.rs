@@ -1,5 +1,7 @@
 //! How the static walk reads a tree: the layouts `lbvh.compact` writes.
 
+use crate::gpu_types::TraversalNode;
+
 /// How the static walk reads a tree (`lbvh.compact` writes it): binary nodes of two
 /// children (32 bytes), wide nodes of up to `WIDE` (64 bytes: a binary node's children,
 /// each internal one opened into its two), which take half the steps, both with boxes
@@ -45,6 +47,23 @@ impl StaticLayout {
             StaticLayout::Wide => crate::shader_defines::WIDE,
             StaticLayout::Wide8 => crate::shader_defines::WIDE8,
         }
+    }
+
+    /// Stack entries a walk of the tree `nodes` in this layout can need at most
+    /// (`stack_need`, `wide_stack_need`, `wide8_stack_need`).
+    pub fn stack_need(self, nodes: &[TraversalNode]) -> u32 {
+        match self {
+            StaticLayout::Binary => super::stack_need(nodes),
+            StaticLayout::Wide => super::wide_stack_need(nodes),
+            StaticLayout::Wide8 => super::wide8_stack_need(nodes),
+        }
+    }
+
+    /// Whether the walk of the tree `nodes` in this layout fits its stack
+    /// (`TRACE_STACK`): a tree of one-word keys always does (`tracers::lbvh` asserts
+    /// it); a PLOC tree is measured.
+    pub fn fits(self, nodes: &[TraversalNode]) -> bool {
+        self.stack_need(nodes) <= crate::shader_defines::TRACE_STACK
     }
 
     /// 16-byte texels a node takes.

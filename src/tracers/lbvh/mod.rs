@@ -301,12 +301,8 @@ impl LbvhBuilder {
             self.ploc
                 .finish(geom.tri_count, bvh, &scratch, ploc::first_rounds(geom.tri_count))?;
             let nodes: Vec<TraversalNode> = bytemuck::pod_collect_to_vec(&bvh.tnodes.read()?);
-            let need = match bvh.compact.as_ref().map(|c| c.layout) {
-                Some(StaticLayout::Wide) => wide_stack_need(&nodes),
-                Some(StaticLayout::Wide8) => wide8_stack_need(&nodes),
-                _ => stack_need(&nodes),
-            };
-            if need <= crate::shader_defines::TRACE_STACK {
+            let layout = bvh.compact.as_ref().map_or(StaticLayout::Binary, |c| c.layout);
+            if layout.fits(&nodes) {
                 built = Some((first.scopes, BvhKind::Ploc));
             }
         }
@@ -566,7 +562,7 @@ impl LbvhBuilder {
 
 #[cfg(test)]
 mod tests {
-    use super::{lockstep_fit, stack_need, wide8_stack_need, wide_stack_need};
+    use super::{lockstep_fit, stack_need, wide8_stack_need, wide_stack_need, StaticLayout};
     use crate::gpu_types::{bvh_leaf_link, TraversalNode};
 
     /// A walk needs one stack entry per internal node on the longest path: a chain of
@@ -609,6 +605,26 @@ mod tests {
         deeper.extend((0..8).map(|j| node(leaf(2 * j), leaf(2 * j + 1))));
         assert_eq!(wide8_stack_need(&deeper), 7);
         assert_eq!(wide_stack_need(&deeper), 3);
+        // Units of `deeper`'s shape whose first great-grandchild is the next unit: the
+        // compressed walk holds seven a unit where the binary one holds one a level, so
+        // 22 units (66 levels) fit the binary walk's stack and not the compressed one's.
+        let units = |n: u32| -> Vec<TraversalNode> {
+            let mut t = Vec::new();
+            for u in 0..n {
+                let x = 14 * u;
+                t.extend([node(x + 1, x + 2), node(x + 3, x + 4), node(x + 5, x + 6)]);
+                t.push(node(x + 14, x + 7));
+                t.extend((0..3).map(|j| node(x + 8 + 2 * j, x + 9 + 2 * j)));
+                t.extend((0..7).map(|j| node(leaf(2 * j), leaf(2 * j + 1))));
+            }
+            t.push(node(leaf(0), leaf(1)));
+            t
+        };
+        let deep = units(22);
+        assert_eq!(StaticLayout::Binary.stack_need(&deep), stack_need(&deep));
+        assert_eq!(StaticLayout::Wide8.stack_need(&deep), 7 * 22);
+        assert!(StaticLayout::Binary.fits(&deep) && StaticLayout::Wide.fits(&deep));
+        assert!(!StaticLayout::Wide8.fits(&deep) && StaticLayout::Wide8.fits(&units(21)));
     }
 
     #[test]

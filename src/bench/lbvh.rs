@@ -53,13 +53,20 @@ pub struct Options {
     pub khr_rays: u32,
 }
 
-/// Mean steps (nodes visited), box tests and triangle tests of a ray's walk.
+/// Mean steps (nodes visited), box tests and triangle tests of a ray's walk, and the
+/// share of lanes a SIMD group of 8 and of 32 keeps busy walking consecutive rays
+/// (`cpu_ref::walk::lockstep_busy`: the divergence a device of that width pays).
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct WalkPerRay {
     pub steps: f64,
     pub boxes: f64,
     pub triangles: f64,
+    pub lanes_busy_8: f64,
+    pub lanes_busy_32: f64,
 }
+
+/// Consecutive rays replayed together (`WalkPerRay::of`): the widest lockstep group.
+const REPLAY_RUN: usize = 32;
 
 impl WalkPerRay {
     /// `of` the coherent and the incoherent set, walked in `layout`.
@@ -67,23 +74,30 @@ impl WalkPerRay {
         sets.map(|rays| Self::of(packed, rays, sample, layout.slots()))
     }
 
-    /// The mean over `sample` evenly spaced rays of `rays` (as `check_hits` takes
-    /// them), walked through `packed` with `slots` children a node.
+    /// Over about `sample` rays of `rays`, in runs of `REPLAY_RUN` consecutive rays
+    /// evenly spaced through the set (a dispatch walks consecutive rays side by side),
+    /// walked through `packed` with `slots` children a node: the means, and the
+    /// lockstep shares within the runs.
     fn of(packed: &crate::gpu_types::PackedBvh, rays: &[Ray], sample: u32, slots: u32) -> Self {
-        let step = (rays.len() / sample.max(1) as usize).max(1);
-        let walked: Vec<_> = rays
-            .iter()
-            .step_by(step)
-            .take(sample as usize)
+        let run = REPLAY_RUN.min(rays.len()).max(1);
+        let runs = (sample as usize / run).clamp(1, (rays.len() / run).max(1));
+        let stride = rays.len() / runs;
+        let all: Vec<crate::cpu_ref::walk::WalkCounts> = (0..runs)
+            .flat_map(|k| &rays[k * stride..(k * stride + run).min(rays.len())])
             .map(|r| crate::cpu_ref::walk::replay(&packed.nodes, &packed.tris, r, slots).1)
             .collect();
         let mean = |f: fn(&crate::cpu_ref::walk::WalkCounts) -> u32| {
-            walked.iter().map(|c| f(c) as f64).sum::<f64>() / walked.len().max(1) as f64
+            all.iter().map(|c| f(c) as f64).sum::<f64>() / all.len().max(1) as f64
         };
+        // Runs of 32 (or one run): no group of 8 or 32 spans two runs.
+        let steps: Vec<u32> = all.iter().map(|c| c.steps).collect();
+        let busy = |width| crate::cpu_ref::walk::lockstep_busy(&steps, width);
         Self {
             steps: mean(|c| c.steps),
             boxes: mean(|c| c.boxes),
             triangles: mean(|c| c.triangles),
+            lanes_busy_8: busy(8),
+            lanes_busy_32: busy(32),
         }
     }
 }

@@ -197,6 +197,27 @@ fn wide8_next(mut t: Vec<(f32, u32)>, best_t: f32, stack: &mut Vec<u32>) -> Opti
     Some(if near_a { a[0].1 } else { b[0].1 })
 }
 
+/// The share of lanes busy when consecutive rays walk `width` at a time in lockstep, as
+/// a SIMD group (lavapipe's 8 lanes, a GPU's warp of 32) runs a dispatch's consecutive
+/// invocations: a group takes as many passes as its longest walk, so the share is the
+/// steps walked over each group's size times its longest walk, summed over the groups
+/// of `steps` (walk lengths in ray order). 1 when every group's walks are alike or
+/// there are none.
+pub fn lockstep_busy(steps: &[u32], width: usize) -> f64 {
+    let (walked, passes) = steps.chunks(width.max(1)).fold((0u64, 0u64), |(w, p), group| {
+        let longest = group.iter().copied().max().unwrap_or(0) as u64;
+        (
+            w + group.iter().map(|&s| s as u64).sum::<u64>(),
+            p + longest * group.len() as u64,
+        )
+    });
+    if passes == 0 {
+        1.0
+    } else {
+        walked as f64 / passes as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -261,5 +282,24 @@ mod tests {
             let (hit, c) = replay(&bvh.nodes, &bvh.tris, &away, slots);
             assert_eq!((hit.prim, c.steps, c.triangles), (BVH_INVALID, 1, 0));
         }
+    }
+
+    /// The lockstep share on walks of known lengths: alike walks keep every lane busy,
+    /// one long walk in a group idles the rest, and a wider group never does better.
+    #[test]
+    fn lockstep_busy_counts_the_idle_lanes() {
+        assert_eq!(lockstep_busy(&[5; 64], 8), 1.0);
+        assert_eq!(lockstep_busy(&[], 32), 1.0);
+        // A group of 8: one walk of 9 steps, seven of 1: 16 of 72 lane passes busy.
+        let mut steps = vec![1; 16];
+        steps[3] = 9;
+        assert_eq!(lockstep_busy(&steps, 8), (16.0 + 8.0) / (72.0 + 8.0));
+        assert_eq!(lockstep_busy(&steps, 16), 24.0 / 144.0);
+        // A partial last group counts only its lanes.
+        assert_eq!(lockstep_busy(&[2, 2, 2, 1, 3], 4), 10.0 / (8.0 + 3.0));
+        let mut rng = rand::rngs::StdRng::seed_from_u64(9);
+        let random: Vec<u32> = (0..320).map(|_| rng.random_range(1..100)).collect();
+        let (b8, b32) = (lockstep_busy(&random, 8), lockstep_busy(&random, 32));
+        assert!(0.0 < b32 && b32 <= b8 && b8 < 1.0, "{b8} {b32}");
     }
 }

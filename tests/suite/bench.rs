@@ -48,6 +48,10 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
             incoherent.steps >= 1.0 && incoherent.boxes >= 2.0 * incoherent.steps,
             "{incoherent:?}"
         );
+        // Lanes in lockstep: random rays' walks differ in length, and a wider group
+        // idles at least as many lanes.
+        let busy = (incoherent.lanes_busy_32, incoherent.lanes_busy_8);
+        assert!(0.0 < busy.0 && busy.0 <= busy.1 && busy.1 < 1.0, "{incoherent:?}");
         match layout {
             StaticLayout::Binary => binary_steps = incoherent.steps,
             StaticLayout::Wide => {

@@ -270,8 +270,8 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     ));
     let walk = |w: &speculum::bench::lbvh::WalkPerRay| {
         format!(
-            "{:.1} steps, {:.1} boxes, {:.1} triangles",
-            w.steps, w.boxes, w.triangles
+            "{:.1} steps, {:.1} boxes, {:.1} triangles, lanes busy {:.2} (8 wide) {:.2} (32 wide)",
+            w.steps, w.boxes, w.triangles, w.lanes_busy_8, w.lanes_busy_32
         )
     };
     text.line(format_args!(

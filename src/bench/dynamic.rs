@@ -14,6 +14,7 @@
 //! frame (the `tracer` setting is ignored: both run).
 
 use super::lbvh::{check_hits, incoherent_rays};
+use super::rays::Through;
 use crate::cpu_ref::trace::CpuBvh;
 use crate::error::Result;
 use crate::gpu_types::{Hit, Ray};
@@ -116,8 +117,8 @@ fn stat(samples: &[f64]) -> Stat {
     Stat::of(samples).expect("at least one frame")
 }
 
-/// The hits of `rays` through the dynamic BVH `t` alone (triangle ids without the
-/// dynamic bit, as the CPU BVH numbers them) and the median of three traversals' ms,
+/// The hits of `rays` through the dynamic BVH `t` alone (triangle ids with the dynamic
+/// BVH's bit) and the median of three traversals' ms,
 /// each self-checked against its wall clock.
 fn trace_median(
     tracer: &TracePass<Lbvh>,
@@ -138,7 +139,7 @@ fn trace_median(
         times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));
     }
     let ms = stat(&times).median;
-    Ok((hits.into_iter().map(Hit::without_bvh_bit).collect(), ms))
+    Ok((hits, ms))
 }
 
 /// Per measured frame, the figures `measure_frames` lists.
@@ -253,8 +254,9 @@ pub fn run_point(
     let (refit_hits, trace_refit_ms) = through(&aged)?;
     let cpu = CpuBvh::build(&vertices, &indices);
     let sample = rays.min(2000);
-    let (m1, _) = check_hits(&ray_set, &rebuilt_hits, &cpu, &vertices, &indices, sample);
-    let (m2, _) = check_hits(&ray_set, &refit_hits, &cpu, &vertices, &indices, sample);
+    // Hits through the dynamic BVH: their ids carry its bit.
+    let check = |hits: &[Hit]| check_hits(&ray_set, hits, &cpu, &vertices, &indices, (sample, Through::Dynamic)).0;
+    let (m1, m2) = (check(&rebuilt_hits), check(&refit_hits));
     let [sim, transform, cloth, skin, rebuild, refit, rt_reflect, frame, ratio, skin_ratio] = series;
     let mismatches = m1 + m2;
     let frame_ms = stat(&frame);

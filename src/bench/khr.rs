@@ -4,7 +4,7 @@
 //! traced through a one-instance top level with the ray-tracing pipeline, the hits
 //! checked against the CPU as the LBVH's are.
 
-use super::rays::{time_rays, CpuCheck, RaySetReport};
+use super::rays::{time_rays, CpuCheck, RaySetReport, Through};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Ray};
 use crate::passes::rt_trace::TracePass;
@@ -77,7 +77,14 @@ pub(super) fn reports(
     let mut lbvh_hits: [Vec<crate::gpu_types::Hit>; 3] = Default::default();
     for (k, set) in sets.iter().enumerate() {
         if let Some(rays) = set {
-            let (r, hits) = time_rays(lbvh.0, lbvh.1, &subset(rays), repeats, cpu, &mut lbvh_timing)?;
+            let (r, hits) = time_rays(
+                lbvh.0,
+                (lbvh.1, Through::Static),
+                &subset(rays),
+                repeats,
+                cpu,
+                &mut lbvh_timing,
+            )?;
             lbvh_same[k] = Some(r.mrays_per_s);
             lbvh_hits[k] = hits.into_iter().map(crate::gpu_types::Hit::without_bvh_bit).collect();
         }
@@ -117,7 +124,14 @@ pub(super) fn reports(
         let tracing = scene.trace(triangles.geometry(), None);
         let mut agreement = [None; 3];
         let mut set = |k: usize, rays: &[Ray]| {
-            let (r, hits) = time_rays(&tracer, tracing, &subset(rays), repeats, cpu, &mut timing)?;
+            let (r, hits) = time_rays(
+                &tracer,
+                (tracing, Through::Static),
+                &subset(rays),
+                repeats,
+                cpu,
+                &mut timing,
+            )?;
             agreement[k] = Some(super::anchor::agreement(&hits, &lbvh_hits[k]));
             Ok::<_, crate::Error>(r)
         };

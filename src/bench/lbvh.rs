@@ -9,7 +9,7 @@
 
 use super::anchor::{AnchorReport, AnchorSet};
 pub(crate) use super::rays::check_hits;
-use super::rays::time_rays;
+use super::rays::{time_rays, Through};
 pub use super::rays::{CpuCheck, RaySetReport};
 use crate::cpu_ref::lbvh::{check_bvh, sah_cost};
 use crate::error::Result;
@@ -150,6 +150,10 @@ pub struct CaseReport {
     pub cpu_sah_build_ms: f64,
     pub coherent: RaySetReport,
     pub incoherent: RaySetReport,
+    /// The coherent and the incoherent set through the tree's own 64-byte nodes, as
+    /// the dynamic BVH's walk reads them (no `lbvh.compact`); on each builder's first
+    /// layout's case (the tree is the same in each), `None` on the others.
+    pub exact_nodes: Option<[RaySetReport; 2]>,
     /// The rays of `--rays-file`, when given.
     pub file: Option<RaySetReport>,
     /// Embree 3 on the same triangles and rays, LOW then MEDIUM (built with the cargo
@@ -401,7 +405,8 @@ pub fn run_case(
         dynamic_bvh: None,
     };
     let scene_box = crate::cpu_ref::lbvh::bounds(v, i).1;
-    let mut ray_set = |rays: &[Ray]| time_rays(&tracer, scene, rays, opts.repeats, &cpu, &mut timing);
+    let mut ray_set =
+        |rays: &[Ray]| time_rays(&tracer, (scene, Through::Static), rays, opts.repeats, &cpu, &mut timing);
     let coherent_set = coherent_rays(scene_box.lo, scene_box.hi, opts.rays);
     let (coherent, coherent_hits) = ray_set(&coherent_set)?;
     let incoherent_set = incoherent_rays(scene_box.lo, scene_box.hi, opts.rays, 7);
@@ -418,6 +423,28 @@ pub fn run_case(
             .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
     ];
     let embree = anchor((v, i), &sets, opts.repeats, (build_ms.median, built.compact_ms.median))?;
+    // The same rays through the tree's own nodes, as the dynamic BVH's walk reads
+    // them, once per builder (the first layout's case: the tree is the same in each).
+    let exact_nodes = if opts.layouts.first() == Some(&layout) {
+        let exact = TraceScene {
+            static_bvh: None,
+            dynamic_bvh: Some(Traceable { bvh: &bvh, geometry }),
+        };
+        let mut set = |rays: &[Ray]| {
+            time_rays(
+                &tracer,
+                (exact, Through::Dynamic),
+                rays,
+                opts.repeats,
+                &cpu,
+                &mut timing,
+            )
+            .map(|r| r.0)
+        };
+        Some([set(&coherent_set)?, set(&incoherent_set)?])
+    } else {
+        None
+    };
     let walk_per_ray = WalkPerRay::both(&packed, [&coherent_set, &incoherent_set], opts.check_rays, layout);
     let khr_case = (v, i, [&coherent_set[..], &incoherent_set[..]]);
     let khr = vendor_tracer(ctx, (opts, kind, layout), khr_case, &cpu, (&tracer, scene))?;
@@ -432,6 +459,7 @@ pub fn run_case(
         && sound(&coherent)
         && sound(&incoherent)
         && file.as_ref().is_none_or(sound)
+        && exact_nodes.iter().flatten().all(sound)
         && khr.iter().flatten().all(super::khr::KhrReport::sound)
         && build_ms.median.is_finite()
         && built.rounds_check.settled();
@@ -458,6 +486,7 @@ pub fn run_case(
         cpu_sah_build_ms,
         coherent,
         incoherent,
+        exact_nodes,
         file,
         embree,
         khr,

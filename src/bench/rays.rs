@@ -34,20 +34,35 @@ pub struct RaySetReport {
     pub failed_walks: u32,
 }
 
-/// Checks `sample` evenly spaced rays against the CPU BVH: (mismatches, ties).
+/// Which BVH a set's hits come through: their triangle ids carry the dynamic BVH's bit
+/// (bit 31) exactly when it is `Dynamic`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Through {
+    Static,
+    Dynamic,
+}
+
+/// Checks `sample` evenly spaced rays against the CPU BVH: (mismatches, ties). A hit
+/// whose id lacks the bit `through` gives it, or has it where it should not, is a
+/// mismatch.
 pub(crate) fn check_hits(
     rays: &[Ray],
     gpu: &[Hit],
     cpu: &CpuBvh,
     v: &[GpuVertex],
     i: &[u32],
-    sample: u32,
+    (sample, through): (u32, Through),
 ) -> (u32, u32) {
     let step = (rays.len() / sample.max(1) as usize).max(1);
     let (mut mismatches, mut ties) = (0, 0);
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
     for k in (0..rays.len()).step_by(step).take(sample as usize) {
-        let (g, c) = (gpu[k], cpu.trace(&rays[k], v, i));
+        let bit_set = gpu[k].prim != BVH_INVALID && gpu[k].prim & 0x8000_0000 != 0;
+        if bit_set != (through == Through::Dynamic && gpu[k].prim != BVH_INVALID) {
+            mismatches += 1;
+            continue;
+        }
+        let (g, c) = (gpu[k].without_bvh_bit(), cpu.trace(&rays[k], v, i));
         if g.prim == c.prim && (g.prim == BVH_INVALID || close(g.t, c.t)) {
             continue;
         }
@@ -92,10 +107,12 @@ impl<'a> CpuCheck<'a> {
 
 /// Traces `rays` through `scene` once untimed and `repeats` times timed (each readout
 /// re-measured while it fails its self-check, a repeat beyond 2x the median traced
-/// again: `super::measure_rounds`), and checks a sample of the hits against the CPU.
+/// again: `super::measure_rounds`), and checks a sample of the hits against the CPU
+/// (`through` the BVH `scene` holds: its hits' ids carry its bit, which the hits
+/// returned keep).
 pub fn time_rays<T: Tracer>(
     tracer: &TracePass<T>,
-    scene: T::Scene<'_>,
+    (scene, through): (T::Scene<'_>, Through),
     rays: &[Ray],
     repeats: u32,
     cpu: &CpuCheck<'_>,
@@ -114,7 +131,7 @@ pub fn time_rays<T: Tracer>(
         timing.add_measured(readout.problem.as_deref(), *discarded);
     }
     let trace_ms = Stat::of(&times).expect("repeats > 0");
-    let (mismatches, ties) = check_hits(rays, &hits, &cpu.bvh, cpu.vertices, cpu.indices, cpu.rays);
+    let (mismatches, ties) = check_hits(rays, &hits, &cpu.bvh, cpu.vertices, cpu.indices, (cpu.rays, through));
     let report = RaySetReport {
         rays: rays.len() as u32,
         trace_ms,

@@ -48,6 +48,18 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
             incoherent.steps >= 1.0 && incoherent.boxes >= 2.0 * incoherent.steps,
             "{incoherent:?}"
         );
+        // The exact nodes' walk (the dynamic BVH's) on each builder's first layout,
+        // every checked hit the CPU's, with the dynamic BVH's id bit.
+        match (&c.exact_nodes, layout == opts.layouts[0]) {
+            (Some(sets), true) => {
+                for s in sets {
+                    assert!(s.checked > 0 && s.mismatches == 0 && s.failed_walks == 0, "{s:?}");
+                    assert!(s.mrays_per_s > 0.0 && s.hit_fraction > 0.0, "{s:?}");
+                }
+            }
+            (None, false) => {}
+            (e, _) => panic!("{layout:?}: exact nodes {e:?}"),
+        }
         // Lanes in lockstep: random rays' walks differ in length, and a wider group
         // idles at least as many lanes.
         let busy = (incoherent.lanes_busy_32, incoherent.lanes_busy_8);

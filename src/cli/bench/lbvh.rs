@@ -280,6 +280,20 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
         walk(&case.walk_per_ray[0]),
         walk(&case.walk_per_ray[1])
     ));
+    if let Some([c, i]) = &case.exact_nodes {
+        let ratio = |e: f64, compact: f64| e / compact.max(1e-12);
+        text.line(format_args!(
+            "{:<14} exact nodes (the dynamic BVH's walk, no compact): coherent {:.2} Mrays/s ({:.2}x), incoherent {:.2} Mrays/s ({:.2}x); {} and {} checked differ, {} failed walks",
+            "",
+            c.mrays_per_s,
+            ratio(c.mrays_per_s, case.coherent.mrays_per_s),
+            i.mrays_per_s,
+            ratio(i.mrays_per_s, case.incoherent.mrays_per_s),
+            c.mismatches,
+            i.mismatches,
+            c.failed_walks + i.failed_walks
+        ));
+    }
     if let Some(f) = &case.file {
         text.line(format_args!(
             "{:<14} rays file: {} rays, {} ({:.1} Mrays/s), {:.1}% hit, {} of {} checked differ, {} failed walks",

@@ -130,10 +130,7 @@ fn trace_median(
     let mut hits = Vec::new();
     for _ in 0..3 {
         let (readout, discarded);
-        let scene = TraceScene {
-            static_bvh: None,
-            dynamic_bvh: Some(t),
-        };
+        let scene = TraceScene::of_dynamic(t.bvh, t.geometry);
         (hits, readout, discarded) = remeasure(|| tracer.trace(rays, scene, false))?;
         timing.add_measured(readout.problem.as_deref(), discarded);
         times.push(readout.get(crate::passes::rt_trace::NAME).unwrap_or(f64::NAN));

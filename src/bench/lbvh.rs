@@ -20,7 +20,7 @@ use crate::tracers::lbvh::ploc::{first_rounds, PlocScratch};
 use crate::tracers::lbvh::{
     Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule, StaticLayout, UploadedTriangles,
 };
-use crate::tracers::{Lbvh, TraceScene, Traceable};
+use crate::tracers::{Lbvh, TraceScene};
 use crate::vk::{remeasure, remeasure_readout, Context, GpuTimer, TimerReadout, TimingCheck, Timings};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
@@ -371,6 +371,42 @@ fn vendor_tracer(
     super::khr::reports(ctx, (v, i), sets, (opts.repeats, opts.khr_rays, cpu), (tracer, scene))
 }
 
+/// The coherent and the incoherent set through the tree's own nodes, as the dynamic
+/// BVH's walk reads them, once per builder (on the first layout's case: the tree is
+/// the same in each; `None` on the others).
+fn exact_walk(
+    (opts, layout): (&Options, StaticLayout),
+    (tracer, bvh, geometry): (&TracePass<Lbvh>, &Bvh, Geometry<'_>),
+    sets: [&[Ray]; 2],
+    cpu: &CpuCheck<'_>,
+    timing: &mut TimingCheck,
+) -> Result<Option<[RaySetReport; 2]>> {
+    if opts.layouts.first() != Some(&layout) {
+        return Ok(None);
+    }
+    let exact = TraceScene::of_dynamic(bvh, geometry);
+    let mut walk =
+        |rays: &[Ray]| time_rays(tracer, (exact, Through::Dynamic), rays, opts.repeats, cpu, timing).map(|r| r.0);
+    Ok(Some([walk(sets[0])?, walk(sets[1])?]))
+}
+
+impl CaseReport {
+    /// Whether the case is sound: the tree's invariants hold, every ray set's checked
+    /// hits are the CPU's with no failed walk and settled rounds, and so are the
+    /// vendor tracer's, and the builds settled.
+    fn sound(&self) -> bool {
+        let sound = |r: &RaySetReport| r.mismatches == 0 && r.failed_walks == 0 && r.rounds_check.settled();
+        self.invariants_ok
+            && sound(&self.coherent)
+            && sound(&self.incoherent)
+            && self.file.as_ref().is_none_or(sound)
+            && self.exact_nodes.iter().flatten().all(sound)
+            && self.khr.iter().flatten().all(super::khr::KhrReport::sound)
+            && self.build_ms.median.is_finite()
+            && self.build_rounds_check.settled()
+    }
+}
+
 /// Benchmarks one triangle set with one builder, walked in one static layout.
 pub fn run_case(
     ctx: &Arc<Context>,
@@ -400,10 +436,7 @@ pub fn run_case(
     let sah_cpu = cpu.bvh.sah_cost();
 
     let tracer = TracePass::<Lbvh>::new(ctx)?;
-    let scene = TraceScene {
-        static_bvh: Some(Traceable { bvh: &bvh, geometry }),
-        dynamic_bvh: None,
-    };
+    let scene = TraceScene::of_static(&bvh, geometry);
     let scene_box = crate::cpu_ref::lbvh::bounds(v, i).1;
     let mut ray_set =
         |rays: &[Ray]| time_rays(&tracer, (scene, Through::Static), rays, opts.repeats, &cpu, &mut timing);
@@ -423,28 +456,13 @@ pub fn run_case(
             .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
     ];
     let embree = anchor((v, i), &sets, opts.repeats, (build_ms.median, built.compact_ms.median))?;
-    // The same rays through the tree's own nodes, as the dynamic BVH's walk reads
-    // them, once per builder (the first layout's case: the tree is the same in each).
-    let exact_nodes = if opts.layouts.first() == Some(&layout) {
-        let exact = TraceScene {
-            static_bvh: None,
-            dynamic_bvh: Some(Traceable { bvh: &bvh, geometry }),
-        };
-        let mut set = |rays: &[Ray]| {
-            time_rays(
-                &tracer,
-                (exact, Through::Dynamic),
-                rays,
-                opts.repeats,
-                &cpu,
-                &mut timing,
-            )
-            .map(|r| r.0)
-        };
-        Some([set(&coherent_set)?, set(&incoherent_set)?])
-    } else {
-        None
-    };
+    let exact_nodes = exact_walk(
+        (opts, layout),
+        (&tracer, &bvh, geometry),
+        [&coherent_set, &incoherent_set],
+        &cpu,
+        &mut timing,
+    )?;
     let walk_per_ray = WalkPerRay::both(&packed, [&coherent_set, &incoherent_set], opts.check_rays, layout);
     let khr_case = (v, i, [&coherent_set[..], &incoherent_set[..]]);
     let khr = vendor_tracer(ctx, (opts, kind, layout), khr_case, &cpu, (&tracer, scene))?;
@@ -453,17 +471,7 @@ pub fn run_case(
         None => (None, opts.keep_hits.then_some((incoherent_set, incoherent_hits))),
     };
 
-    let invariants_ok = invariants.is_ok();
-    let sound = |r: &RaySetReport| r.mismatches == 0 && r.failed_walks == 0 && r.rounds_check.settled();
-    let valid = invariants_ok
-        && sound(&coherent)
-        && sound(&incoherent)
-        && file.as_ref().is_none_or(sound)
-        && exact_nodes.iter().flatten().all(sound)
-        && khr.iter().flatten().all(super::khr::KhrReport::sound)
-        && build_ms.median.is_finite()
-        && built.rounds_check.settled();
-    Ok(CaseReport {
+    let mut report = CaseReport {
         name: name.into(),
         builder: kind,
         layout,
@@ -491,11 +499,13 @@ pub fn run_case(
         embree,
         khr,
         kept,
-        invariants_ok,
+        invariants_ok: invariants.is_ok(),
         invariant_error: invariants.err(),
         timing,
-        valid,
-    })
+        valid: false,
+    };
+    report.valid = report.sound();
+    Ok(report)
 }
 
 /// Timer scope of a whole build.

@@ -17,7 +17,7 @@ use crate::scene::{Camera, Scene};
 use crate::settings::{Settings, WalkLayout};
 use crate::shader_defines::BVH_INVALID;
 use crate::tracers::lbvh::{Bvh, BvhKind, CompactNodes, Geometry, LbvhBuilder, MortonBits, StaticLayout, COMPACT};
-use crate::tracers::{Lbvh, TraceScene, Traceable};
+use crate::tracers::{Lbvh, TraceScene};
 use crate::vk::{remeasure, Context};
 use ash::vk;
 use glam::Vec3;
@@ -286,13 +286,7 @@ pub fn frame_rays(
     let count = ray_count(ctx.device_type);
     let aspect = settings.width as f32 / settings.height as f32;
     let view = view_rays(&scene.camera, aspect, origin, count);
-    let scene_tree = TraceScene {
-        static_bvh: Some(Traceable {
-            bvh: tree,
-            geometry: geom,
-        }),
-        dynamic_bvh: None,
-    };
+    let scene_tree = TraceScene::of_static(tree, geom);
     let (hits, _) = tracer.trace(&view, scene_tree, false)?;
     let (lo, hi) = scene.bounds();
     let tmin = 1e-4 * (hi - lo).length();
@@ -396,13 +390,7 @@ fn choose_tree(
 /// rays' closest hits and the shadow rays' any hits, added; each remeasured until its
 /// timestamps check).
 fn ray_ms(tracer: &TracePass<Lbvh>, geom: Geometry<'_>, tree: &Bvh, rays: &ChoiceRays) -> Result<f64> {
-    let scene = TraceScene {
-        static_bvh: Some(Traceable {
-            bvh: tree,
-            geometry: geom,
-        }),
-        dynamic_bvh: None,
-    };
+    let scene = TraceScene::of_static(tree, geom);
     let mut total = 0.0;
     for (set, any_hit) in [(&rays.reflect, false), (&rays.shadow, true)] {
         let (_, readout, _) = remeasure(|| tracer.trace(set, scene, any_hit))?;

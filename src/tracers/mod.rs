@@ -214,6 +214,23 @@ pub struct TraceScene<'a> {
 }
 
 impl<'a> TraceScene<'a> {
+    /// The static BVH `bvh` over `geometry` alone.
+    pub fn of_static(bvh: &'a Bvh, geometry: Geometry<'a>) -> Self {
+        Self {
+            static_bvh: Some(Traceable { bvh, geometry }),
+            dynamic_bvh: None,
+        }
+    }
+
+    /// `bvh` over `geometry` alone, walked as the dynamic BVH (its own nodes; hits
+    /// carry the dynamic BVH's id bit).
+    pub fn of_dynamic(bvh: &'a Bvh, geometry: Geometry<'a>) -> Self {
+        Self {
+            static_bvh: None,
+            dynamic_bvh: Some(Traceable { bvh, geometry }),
+        }
+    }
+
     /// The traversal bindings of `glsl/shared/traverse.glsl` (the static and dynamic
     /// compact nodes, vertices, indices and triangles in leaf order) and the two
     /// triangle counts. A missing BVH is bound to the other's buffers with a triangle

@@ -268,6 +268,41 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
         case.coherent.mrays_per_s,
         case.incoherent.mrays_per_s,
     ));
+    print_walks(text, case);
+    print_khr(text, case);
+    for a in case.embree.iter().flatten() {
+        let sets = [
+            ("coherent", Some(&a.coherent)),
+            ("incoherent", Some(&a.incoherent)),
+            ("file", a.file.as_ref()),
+        ];
+        let rays: Vec<String> = sets
+            .iter()
+            .filter_map(|(name, r)| {
+                r.map(|r| {
+                    format!(
+                        "{name} {:.2} Mrays/s (Speculum {:.2}x; hits {} agree, {} ties, {} differ)",
+                        r.mrays_per_s, r.speed_ratio, r.agree, r.ties, r.disagree
+                    )
+                })
+            })
+            .collect();
+        text.line(format_args!(
+            "{:<14} Embree {} ({} CPU threads, wall ms): build {} (Speculum {:.2}x its time, {:.2}x with lbvh.compact); {}",
+            "",
+            a.quality.to_uppercase(),
+            a.threads,
+            cell(Some(a.build_ms)),
+            a.build_ratio,
+            a.static_build_ratio,
+            rays.join(", ")
+        ));
+    }
+}
+
+/// A case's walk lines: the CPU replay's counts, the exact nodes' walk and the rays
+/// file's trace, each where the case has it.
+fn print_walks(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     let walk = |w: &speculum::bench::lbvh::WalkPerRay| {
         format!(
             "{:.1} steps, {:.1} boxes, {:.1} triangles, lanes busy {:.2} (8 wide) {:.2} (32 wide)",
@@ -306,35 +341,6 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
             f.checked,
             f.failed_walks
         ))
-    }
-    print_khr(text, case);
-    for a in case.embree.iter().flatten() {
-        let sets = [
-            ("coherent", Some(&a.coherent)),
-            ("incoherent", Some(&a.incoherent)),
-            ("file", a.file.as_ref()),
-        ];
-        let rays: Vec<String> = sets
-            .iter()
-            .filter_map(|(name, r)| {
-                r.map(|r| {
-                    format!(
-                        "{name} {:.2} Mrays/s (Speculum {:.2}x; hits {} agree, {} ties, {} differ)",
-                        r.mrays_per_s, r.speed_ratio, r.agree, r.ties, r.disagree
-                    )
-                })
-            })
-            .collect();
-        text.line(format_args!(
-            "{:<14} Embree {} ({} CPU threads, wall ms): build {} (Speculum {:.2}x its time, {:.2}x with lbvh.compact); {}",
-            "",
-            a.quality.to_uppercase(),
-            a.threads,
-            cell(Some(a.build_ms)),
-            a.build_ratio,
-            a.static_build_ratio,
-            rays.join(", ")
-        ));
     }
 }
 

@@ -89,9 +89,11 @@ const _: () = assert!(SORT_WG_GPU.is_multiple_of(16) && SORT_WG_CPU.is_multiple_
 pub const RT_LIST_WG: u32 = 256;
 
 /// PLOC's search radius (`lbvh.ploc`): each cluster looks for its nearest among this
-/// many clusters on either side (Meister & Bittner 2018 use 16; fewer is faster and
-/// worse).
-pub const PLOC_RADIUS: u32 = 16;
+/// many clusters on either side. Meister & Bittner 2018 use 16; 8 makes trees that
+/// walk in as few steps or fewer on the models measured but two (`spheres` 1.06x, a
+/// 200K-triangle surface 1.01x), for half the search and its scratch
+/// (docs/experiments.md).
+pub const PLOC_RADIUS: u32 = 8;
 /// Workgroup of PLOC's per-round scan of tile counts (one workgroup).
 pub const PLOC_SCAN_WG: u32 = 256;
 /// Clusters at most which PLOC's last rounds run in one workgroup (`ploc_tail.comp`),

@@ -100,7 +100,7 @@ impl DenoisePass {
             sampler: Sampler::nearest_clamp(ctx, "denoise.sampler")?,
             out: Image::storage(ctx, "denoise.out", extent, FORMAT)?,
             history: Self::pair(ctx, "denoise.history", extent)?,
-            meta: Self::pair(ctx, "denoise.meta", extent)?,
+            meta: Self::meta_pair(ctx, extent)?,
             parity: 0,
             past: None,
         })
@@ -113,10 +113,38 @@ impl DenoisePass {
         ])
     }
 
+    /// The history's meta images, cleared to a stamp no frame writes (-1): a pixel no
+    /// frame of this pass has written is never taken for last frame's, whatever the
+    /// memory held before (another renderer's history, on the same allocator, made
+    /// frames differ between runs of one process).
+    fn meta_pair(ctx: &Arc<Context>, extent: vk::Extent2D) -> Result<[Image; 2]> {
+        let meta = Self::pair(ctx, "denoise.meta", extent)?;
+        let never = vk::ClearColorValue {
+            float32: [0.0, 0.0, -1.0, 0.0],
+        };
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(1);
+        ctx.one_shot(|cmd| {
+            for m in &meta {
+                // SAFETY: `cmd` is recording; the image is in `GENERAL` (`Image::storage`)
+                // and nothing else uses it yet.
+                unsafe {
+                    ctx.device
+                        .cmd_clear_color_image(cmd, m.raw, vk::ImageLayout::GENERAL, &never, &[range])
+                };
+            }
+            // RAW: the temporal step's reads of the meta come after the clear.
+            barrier::global(&ctx.device, cmd, access::TRANSFER_WRITE, access::COMPUTE_ANY);
+        })?;
+        Ok(meta)
+    }
+
     pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
         self.out = Image::storage(&self.ctx, "denoise.out", extent, FORMAT)?;
         self.history = Self::pair(&self.ctx, "denoise.history", extent)?;
-        self.meta = Self::pair(&self.ctx, "denoise.meta", extent)?;
+        self.meta = Self::meta_pair(&self.ctx, extent)?;
         self.past = None;
         Ok(())
     }

@@ -354,6 +354,24 @@ fn read(img: &Image) -> Vec<[f32; 4]> {
     bytemuck::pod_collect_to_vec(&img.read(vk::ImageLayout::GENERAL).unwrap())
 }
 
+/// A new denoiser's history holds no frame's stamp, whatever its memory held before (a
+/// renderer made on the same allocator after another gets that one's memory, and its
+/// frames read a stamp they had not written, made a frame of `drop` differ by a unit in
+/// three pixels between two runs of one process): every texel of its meta reads -1,
+/// which no frame writes.
+#[test]
+fn a_new_denoisers_history_holds_no_frame() {
+    let ctx = common::context();
+    let extent = vk::Extent2D { width: 37, height: 23 };
+    for _ in 0..2 {
+        let pass = DenoisePass::new(&ctx, extent).unwrap();
+        let meta = read(pass.history().1);
+        assert_eq!(meta.len(), 37 * 23);
+        let bad = meta.iter().filter(|m| m[2] != -1.0).count();
+        assert_eq!(bad, 0, "texels of a new history with a stamp");
+    }
+}
+
 /// The temporal step equals the CPU's over three frames of random G-buffers: the first
 /// without history, the second from the same camera (the history kept where nothing
 /// moved; the moved patches reprojected by their motion), the third from a moved camera

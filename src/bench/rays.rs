@@ -57,8 +57,8 @@ pub(crate) fn check_hits(
     let (mut mismatches, mut ties) = (0, 0);
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
     for k in (0..rays.len()).step_by(step).take(sample as usize) {
-        let bit_set = gpu[k].prim != BVH_INVALID && gpu[k].prim & 0x8000_0000 != 0;
-        if bit_set != (through == Through::Dynamic && gpu[k].prim != BVH_INVALID) {
+        let hit = gpu[k].prim != BVH_INVALID;
+        if hit && (gpu[k].prim & 0x8000_0000 != 0) != (through == Through::Dynamic) {
             mismatches += 1;
             continue;
         }

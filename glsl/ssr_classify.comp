@@ -88,7 +88,7 @@ void main() {
             }
             if (!march && pc.trace_min_weight > 0.0) {
                 vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
-                if (!traced_for_block(p) && view_reflection_weight(r, nr.xyz, base, texelFetch(gb_motion, p, 0).w, nr.w) < pc.trace_min_weight) {
+                if (untraced_for_block(p, r, nr.xyz, base, texelFetch(gb_motion, p, 0).w, nr.w, pc.trace_min_weight)) {
                     fail |= FAIL_UNTRACED;
                     sky = untraced_sky(r);
                 }

@@ -463,11 +463,18 @@ void main() {
             }
         }
     }
-    // A probe of a rays-only tile measured SSR for the tile; its pixel is traced like
-    // the tile's others, so the tile has one source and no seam inside it.
+    // A probe of a rays-only tile measured SSR for the tile; its pixel then ends as the
+    // tile's others (ssr.classify's skipped pixels): traced, or left untraced for its
+    // block, so the tile has one source, no seam inside it, and which pixels a frame
+    // probes does not show.
     if (count_in_tile(p, fail == 0u)) {
         fail = FAIL_SKIPPED;
         color = vec3(0.0);
+        SsrRay first = ssr_ray(p, depth, nr.xyz, roughness, 0u);
+        if (untraced_for_block(p, first, nr.xyz, base, metallic, nr.w, pc.trace_min_weight)) {
+            fail |= FAIL_UNTRACED;
+            color = untraced_sky(first);
+        }
     }
     bool kept = fail == 0u || fail == FAIL_BLEND;
     imageStore(ssr_out, p, vec4(color, kept ? confidence : 0.0));

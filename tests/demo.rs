@@ -155,12 +155,16 @@ fn json(path: &Path) -> serde_json::Value {
 
 /// A window shot (the swapchain image copied out after the blit) with the HUD hidden
 /// is the frame itself, pixel for pixel: the blit at the same size copies, and the
-/// copy's channel order is undone; with the HUD shown it differs. Glossy reflections
-/// are off: their samples change every frame, and the window shot is the frame after.
+/// copy's channel order is undone; with the HUD shown it differs. The window shot is
+/// the frame after, so what changes from frame to frame is fixed: glossy reflections
+/// are off (their samples change every frame), the G-buffer rasterized and the hybrid
+/// SSR-first (the adaptive stages' pricing frames and the adaptive hybrid's probe
+/// frames and tile flips follow this run's timings).
 fn window_shot_is_the_frame(display: &Display, dir: &Path) {
     let d = dir.display();
     let text = format!(
-        "set glossy false\nwait 2\nwindow-shot {d}/with_hud.png\nwait 1\nkey h\nwait 2\nscreenshot {d}/frame.png\n\
+        "set glossy false\nset visibility raster\nset hybrid_policy ssr_first\nwait 2\n\
+         window-shot {d}/with_hud.png\nwait 1\nkey h\nwait 2\nscreenshot {d}/frame.png\n\
          window-shot {d}/window.png\nwait 2\n"
     );
     scripted(

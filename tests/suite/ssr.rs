@@ -200,15 +200,20 @@ fn gpu_class(listed: bool, mask: u32, want: Class) -> (Class, bool) {
 /// tiles the pixels the CPU's classification marches are skipped (`FAIL_SKIPPED`, not
 /// listed) but for the frame's probes (`tile_probe`), elsewhere listed as ever; then
 /// `ssr.trace` counts each tile's marched pixels and those SSR answered as the fail
-/// mask says, and sends the probes to the ray tracer too (`FAIL_SKIPPED`). Pixels on
-/// the heading threshold as in the test below.
+/// mask says, and ends each probe as the tile's other pixels (`FAIL_SKIPPED`: traced,
+/// or untraced for its 2x2 block where its reflection weighs little, the sky kept), so
+/// which pixels a frame probes does not show. Pixels on the heading and weight
+/// thresholds as in the test below.
 #[test]
 fn adaptive_tiles_match_cpu() {
     use speculum::passes::ssr_trace::{tile_count, TileSequence};
     use speculum::shader_defines::{TILE_FLIPS_MAX, TILE_FLIPS_SHIFT, TILE_KNOWN, TILE_ONE};
     use speculum::shader_defines::{TILE_RAYS_ONLY, TILE_WORDS};
     let ctx = common::context();
-    let f = Fixture::new(&ctx, 91, 157, 83, |_| {});
+    let mut f = Fixture::new(&ctx, 91, 157, 83, |_| {});
+    // Probes at odd x and y (phase 3, 1), off their 2x2 blocks' traced corners.
+    f.frame.frame_index = 7;
+    f.ubo = common::frame_ubo(&ctx, &f.frame);
     let (w, h) = (f.settings.width as usize, f.settings.height as usize);
     let extent = vk::Extent2D {
         width: w as u32,
@@ -249,13 +254,14 @@ fn adaptive_tiles_match_cpu() {
     let mask: Vec<u32> = bytemuck::pod_collect_to_vec(&out.mask.read(vk::ImageLayout::GENERAL).unwrap());
     let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_args.read().unwrap());
     let list: Vec<u32> = bytemuck::pod_collect_to_vec(&out.march_list.read().unwrap());
+    let color: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&out.color.read(vk::ImageLayout::GENERAL).unwrap());
     let mut listed = vec![false; w * h];
     for &e in &list[..args[3] as usize] {
         listed[(e >> 16) as usize * w + (e & 0xffff) as usize] = true;
     }
     let words = TILE_WORDS as usize;
     let mut want_counts = vec![[0u32; 2]; tiles];
-    let (mut skipped, mut probes, mut borderline, mut flipped) = (0, 0, 0, 0);
+    let (mut skipped, mut probes, mut borderline, mut flipped, mut untraced) = (0, 0, 0, 0, 0);
     for t in 0..tiles {
         let want = ssr::tile_update(last[words * t], last[words * t + 1], last[words * t + 2], rate);
         assert_eq!(got[words * t], want, "tile {t}");
@@ -294,9 +300,26 @@ fn adaptive_tiles_match_cpu() {
         if listed[i] {
             want_counts[t][0] += 1;
             want_counts[t][1] += (mask[i] == 0) as u32;
-            // A probe is traced too: its tile has one source.
+            // A probe ends as its tile's other pixels do (the classification skipping
+            // it): traced, or left untraced for its 2x2 block where its reflection
+            // weighs little, so the tile has one source whichever pixels are probed.
             if rays_only {
-                assert_eq!(mask[i], FAIL_SKIPPED, "probe {p}");
+                let (other, [_, weight]) = ssr::classify_in_tile(&f.frame, p, texel, surface, &params, (false, true));
+                let Class::Done(m, sky) = other else {
+                    panic!("probe {p}: a skipped pixel is not marched")
+                };
+                if mask[i] != m && (weight - params.trace_min_weight).abs() < 1e-4 {
+                    borderline += 1;
+                    continue;
+                }
+                assert_eq!(mask[i], m, "probe {p}: as its tile's other pixels");
+                let close = (0..3).all(|k| (color[i][k] - sky[k]).abs() <= 1e-4 * (1.0 + sky[k].abs()));
+                assert!(
+                    close && color[i][3] == 0.0,
+                    "probe {p}: SSR colour {:?}, want {sky:?}",
+                    color[i]
+                );
+                untraced += (m & FAIL_UNTRACED != 0) as usize;
             }
         }
     }
@@ -319,6 +342,7 @@ fn adaptive_tiles_match_cpu() {
         "{rays_only} of {tiles} tiles rays-only"
     );
     assert!(skipped > 1000 && probes > 50, "{skipped} skipped, {probes} probes");
+    assert!(untraced > 5, "{untraced} probes left untraced for their blocks");
     assert_eq!(ctx.validation_messages(), 0);
 }
 

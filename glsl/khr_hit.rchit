@@ -1,6 +1,6 @@
 #version 460
 // The vendor tracer's closest hit (trace_khr.glsl): the triangle's id in its
-// geometry's numbering (bit 31 for the dynamic geometry), the distance and the
+// geometry's numbering (HIT_DYNAMIC for the dynamic geometry), the distance and the
 // barycentrics, as traverse.glsl's walk reports them.
 #extension GL_EXT_ray_tracing : require
 #include "hit.glsl"
@@ -12,7 +12,7 @@ void main() {
     uint c = gl_InstanceCustomIndexEXT;
     uint prim = (c & KHR_FIRST_TRIANGLE) + uint(gl_PrimitiveID);
     if ((c & KHR_DYNAMIC_INSTANCE) != 0u) {
-        prim |= 0x80000000u;
+        prim |= HIT_DYNAMIC;
     }
     payload = Hit(gl_HitTEXT, prim, bary.x, bary.y);
 }

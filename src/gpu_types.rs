@@ -229,7 +229,7 @@ impl Ray {
 pub struct Hit {
     /// Hit distance; `tmax` on a miss; -1 if the traversal stack overflowed.
     pub t: f32,
-    /// Triangle id with bit 31 set for the dynamic BVH; `BVH_INVALID` on a miss.
+    /// Triangle id with `HIT_DYNAMIC` set for the dynamic BVH; `BVH_INVALID` on a miss.
     pub prim: u32,
     /// Barycentric weights of the triangle's second and third corners.
     pub u: f32,
@@ -244,7 +244,7 @@ impl Hit {
             prim: if self.prim == crate::shader_defines::BVH_INVALID {
                 self.prim
             } else {
-                self.prim & 0x7fff_ffff
+                self.prim & !crate::shader_defines::HIT_DYNAMIC
             },
             ..self
         }

@@ -120,6 +120,10 @@ pub const BVH_LEAF_MAX: u32 = 4;
 const _: () = assert!(BVH_LEAF_MAX - 1 < 1 << (31 - BVH_LEAF_COUNT_SHIFT));
 /// "No node / no primitive" (parent of the root, the primitive of a miss).
 pub const BVH_INVALID: u32 = 0xffff_ffff;
+/// Set in a hit's triangle id when the triangle is the dynamic geometry's (numbered in
+/// the dynamic BVH's own buffers). A miss's `BVH_INVALID` has it set too: a hit is told
+/// from a miss first.
+pub const HIT_DYNAMIC: u32 = 0x8000_0000;
 /// Children of a wide node of the static walk (`lbvh.compact`): a binary node's two,
 /// each internal one opened into its own two.
 pub const WIDE: u32 = 4;
@@ -308,6 +312,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BVH_LEAF_COUNT_SHIFT", BVH_LEAF_COUNT_SHIFT),
     ("BVH_LEAF_MAX", BVH_LEAF_MAX),
     ("BVH_INVALID", BVH_INVALID),
+    ("HIT_DYNAMIC", HIT_DYNAMIC),
     ("TRACE_STACK", TRACE_STACK),
     ("WIDE", WIDE),
     ("WIDE8", WIDE8),

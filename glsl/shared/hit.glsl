@@ -4,7 +4,7 @@
 #define HIT_GLSL
 struct Hit {
     float t;    // distance along dir (in units of |dir|); tmax on a miss
-    uint prim;  // triangle id, bit 31 set for the dynamic geometry; BVH_INVALID on a miss
+    uint prim;  // triangle id, HIT_DYNAMIC set for the dynamic geometry; BVH_INVALID on a miss
     float u;    // barycentric weight of corner b
     float v;    // barycentric weight of corner c
 };

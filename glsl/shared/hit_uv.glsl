@@ -7,10 +7,10 @@
 layout(binding = 16, std430) readonly buffer StaticUvs { vec2 s_uvs[]; };
 layout(binding = 17, std430) readonly buffer DynamicUvs { vec2 d_uvs[]; };
 
-// Corner `k` (0..2)'s texture coordinates of hit triangle `prim` (bit 31: dynamic).
+// Corner `k` (0..2)'s texture coordinates of hit triangle `prim` (HIT_DYNAMIC: dynamic).
 vec2 hit_uv(uint prim, uint k) {
-    uint t = prim & 0x7fffffffu;
-    if ((prim & 0x80000000u) == 0u) {
+    uint t = prim & ~HIT_DYNAMIC;
+    if ((prim & HIT_DYNAMIC) == 0u) {
         return s_uvs[s_indices[3u * t + k]];
     }
     return d_uvs[d_indices[3u * t + k]];

@@ -89,8 +89,8 @@ void primary_pixel(ivec2 p) {
         }
     }
     vec3 motion = vec3(0.0);
-    if ((h.prim & 0x80000000u) != 0u) {
-        uint t = h.prim & 0x7fffffffu;
+    if ((h.prim & HIT_DYNAMIC) != 0u) {
+        uint t = h.prim & ~HIT_DYNAMIC;
         vec3 was = w * d_previous[d_indices[3u * t]].position + h.u * d_previous[d_indices[3u * t + 1u]].position
             + h.v * d_previous[d_indices[3u * t + 2u]].position;
         motion = was - (w * a.position + h.u * b.position + h.v * c.position);

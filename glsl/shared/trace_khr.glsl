@@ -28,10 +28,10 @@ layout(binding = TRAVERSE_BINDING + 5, std430) readonly buffer DynamicIndices { 
 
 layout(location = 0) rayPayloadEXT Hit khr_payload;
 
-// Vertex `k` (0..2) of hit triangle `prim` (bit 31: dynamic geometry).
+// Vertex `k` (0..2) of hit triangle `prim` (HIT_DYNAMIC: dynamic geometry).
 Vertex hit_vertex(uint prim, uint k) {
-    uint t = prim & 0x7fffffffu;
-    if ((prim & 0x80000000u) == 0u) {
+    uint t = prim & ~HIT_DYNAMIC;
+    if ((prim & HIT_DYNAMIC) == 0u) {
         return s_vertices[s_indices[3u * t + k]];
     }
     return d_vertices[d_indices[3u * t + k]];
@@ -47,7 +47,7 @@ Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, u
         traceRayEXT(scene_tlas, flags, mask, 0, 0, 0, origin, tmin, dir, tmax, 0);
     }
     Hit h = khr_payload;
-    if (h.prim < 0x80000000u) { // a static hit (BVH_INVALID has bit 31 set)
+    if ((h.prim & HIT_DYNAMIC) == 0u) { // a static hit (BVH_INVALID has the bit set)
         h.prim = s_perm[h.prim];
     }
     return h;

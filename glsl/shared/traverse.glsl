@@ -153,7 +153,7 @@ bool hit_triangle(uint bvh, uint k, TriRay r, float tmin, inout Hit best) {
     fetch_triangle(bvh, k, a, b, c, t);
     float th, u, v;
     bool inside = tri_hit(r, a, b, c, th, u, v);
-    uint id = t | (bvh << 31);
+    uint id = bvh == 0u ? t : t | HIT_DYNAMIC;
     bool closer = th < best.t || (th == best.t && id < best.prim);
     if (inside && th > tmin && closer) {
         best = Hit(th, id, u, v);
@@ -175,10 +175,10 @@ bool hit_leaf(uint bvh, uint ref, TriRay r, float tmin, bool any_hit, inout Hit 
     return false;
 }
 
-// Vertex `k` (0..2) of hit triangle `prim` (bit 31: dynamic BVH).
+// Vertex `k` (0..2) of hit triangle `prim` (HIT_DYNAMIC: the dynamic BVH's).
 Vertex hit_vertex(uint prim, uint k) {
-    uint t = prim & 0x7fffffffu;
-    if ((prim & 0x80000000u) == 0u) {
+    uint t = prim & ~HIT_DYNAMIC;
+    if ((prim & HIT_DYNAMIC) == 0u) {
         return s_vertices[s_indices[3u * t + k]];
     }
     return d_vertices[d_indices[3u * t + k]];

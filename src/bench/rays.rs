@@ -8,7 +8,7 @@ use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::rt_trace::TracePass;
 use crate::report::Stat;
-use crate::shader_defines::BVH_INVALID;
+use crate::shader_defines::{BVH_INVALID, HIT_DYNAMIC};
 use crate::tracers::Tracer;
 use crate::vk::{remeasure, TimingCheck};
 use serde::Serialize;
@@ -35,7 +35,7 @@ pub struct RaySetReport {
 }
 
 /// Which BVH a set's hits come through: their triangle ids carry the dynamic BVH's bit
-/// (bit 31) exactly when it is `Dynamic`.
+/// (`HIT_DYNAMIC`) exactly when it is `Dynamic`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Through {
     Static,
@@ -58,7 +58,7 @@ pub(crate) fn check_hits(
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0);
     for k in (0..rays.len()).step_by(step).take(sample as usize) {
         let hit = gpu[k].prim != BVH_INVALID;
-        if hit && (gpu[k].prim & 0x8000_0000 != 0) != (through == Through::Dynamic) {
+        if hit && (gpu[k].prim & HIT_DYNAMIC != 0) != (through == Through::Dynamic) {
             mismatches += 1;
             continue;
         }

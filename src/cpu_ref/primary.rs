@@ -8,7 +8,7 @@ use super::reflect::Triangles;
 use super::shading;
 use super::texture::{self, TextureArray};
 use crate::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex, Hit, Ray};
-use crate::shader_defines::{BVH_INVALID, MATERIAL_NONE, TEXTURE_NONE};
+use crate::shader_defines::{BVH_INVALID, HIT_DYNAMIC, MATERIAL_NONE, TEXTURE_NONE};
 use glam::{IVec2, Vec2, Vec3, Vec4, Vec4Swizzles};
 
 /// What the primary rays see: the static triangles, the dynamic ones of this frame with
@@ -68,7 +68,7 @@ impl Texel {
 }
 
 /// `trace_ray` from `origin` along `dir` for 0 < t < 1 through the static, then the
-/// dynamic triangles (a dynamic hit with bit 31).
+/// dynamic triangles (a dynamic hit with `HIT_DYNAMIC`).
 fn trace(s: &PrimaryScene<'_>, origin: Vec3, dir: Vec3) -> Hit {
     let ray = Ray {
         origin: origin.into(),
@@ -85,7 +85,7 @@ fn trace(s: &PrimaryScene<'_>, origin: Vec3, dir: Vec3) -> Hit {
     match dh.prim {
         BVH_INVALID => hit,
         prim => Hit {
-            prim: prim | 0x8000_0000,
+            prim: prim | HIT_DYNAMIC,
             ..dh
         },
     }
@@ -100,12 +100,12 @@ pub fn gbuffer_texel(s: &PrimaryScene<'_>, p: IVec2) -> Texel {
     if h.prim == BVH_INVALID {
         return Texel::MISS;
     }
-    let (tris, previous) = match (h.prim & 0x8000_0000 != 0, &s.dynamic) {
+    let (tris, previous) = match (h.prim & HIT_DYNAMIC != 0, &s.dynamic) {
         (false, _) => (s.statics, None),
         (true, Some((d, previous))) => (*d, Some(*previous)),
         (true, None) => unreachable!("a dynamic hit without dynamic triangles"),
     };
-    let t = (h.prim & 0x7fff_ffff) as usize;
+    let t = (h.prim & !HIT_DYNAMIC) as usize;
     let corner = |k: usize| tris.indices[3 * t + k] as usize;
     let [a, b, c] = [0, 1, 2].map(|k| tris.vertices[corner(k)]);
     let w = 1.0 - h.u - h.v;

@@ -7,7 +7,7 @@ use super::texture::{self, TextureArray};
 use super::trace::CpuBvh;
 use crate::gpu_types::{FrameUniforms, GpuMaterial, GpuVertex, Hit, Ray};
 use crate::settings::Shadows;
-use crate::shader_defines::BVH_INVALID;
+use crate::shader_defines::{BVH_INVALID, HIT_DYNAMIC};
 use glam::{IVec2, Vec2, Vec3, Vec4Swizzles};
 
 /// Triangles with their BVH and texture coordinates: the static scene, or the dynamic
@@ -35,7 +35,7 @@ pub struct PathScene<'a> {
     /// How the visible surface and the hits are shadowed (the `shadows` setting).
     pub shadows: Shadows,
     /// The dynamic triangles, traced after the static ones (a tie goes to the static
-    /// triangle, as in the kernel); their hits carry bit 31.
+    /// triangle, as in the kernel); their hits carry `HIT_DYNAMIC`.
     pub dynamic: Option<Triangles<'a>>,
 }
 
@@ -45,7 +45,7 @@ pub fn offset_scale(frame: &FrameUniforms, pos: Vec3) -> f32 {
 }
 
 /// `trace_ray` through the static then the dynamic triangles: the closest hit, a
-/// dynamic one with bit 31 set.
+/// dynamic one with `HIT_DYNAMIC` set.
 pub fn trace_scene(s: &PathScene<'_>, origin: Vec3, dir: Vec3) -> Hit {
     let ray = Ray {
         origin: origin.into(),
@@ -62,7 +62,7 @@ pub fn trace_scene(s: &PathScene<'_>, origin: Vec3, dir: Vec3) -> Hit {
                 hit
             } else {
                 Hit {
-                    prim: dh.prim | 0x8000_0000,
+                    prim: dh.prim | HIT_DYNAMIC,
                     ..dh
                 }
             }
@@ -150,12 +150,12 @@ fn trace_path(
         if bounce == 0 {
             first = h.t;
         }
-        let tris = if h.prim & 0x8000_0000 != 0 {
+        let tris = if h.prim & HIT_DYNAMIC != 0 {
             s.dynamic.expect("a dynamic hit needs dynamic triangles")
         } else {
             statics
         };
-        let prim = (h.prim & 0x7fff_ffff) as usize;
+        let prim = (h.prim & !HIT_DYNAMIC) as usize;
         let index = |k: usize| tris.indices[3 * prim + k] as usize;
         let corner = |k: usize| &tris.vertices[index(k)];
         let (a, b, c) = (corner(0), corner(1), corner(2));

@@ -15,7 +15,7 @@ use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::rt_trace::{TracePass, NAME};
 use crate::scene::{Camera, Scene};
 use crate::settings::{Settings, WalkLayout};
-use crate::shader_defines::BVH_INVALID;
+use crate::shader_defines::{BVH_INVALID, HIT_DYNAMIC};
 use crate::tracers::lbvh::{Bvh, BvhKind, CompactNodes, Geometry, LbvhBuilder, MortonBits, StaticLayout, COMPACT};
 use crate::tracers::{Lbvh, TraceScene};
 use crate::vk::{remeasure, Context};
@@ -235,7 +235,7 @@ pub fn frame_rays_from(
 ) -> ChoiceRays {
     let mut out = ChoiceRays::default();
     for (r, h) in rays.iter().zip(hits) {
-        if h.prim == BVH_INVALID || h.prim & 0x8000_0000 != 0 || h.t.is_nan() || h.t <= 0.0 {
+        if h.prim == BVH_INVALID || h.prim & HIT_DYNAMIC != 0 || h.t.is_nan() || h.t <= 0.0 {
             continue;
         }
         let t = h.prim as usize;

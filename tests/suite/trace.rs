@@ -11,7 +11,7 @@ use speculum::cpu_ref::trace::{brute_force, intersect, CpuBvh};
 use speculum::gpu_types::{GpuVertex, Hit, Ray};
 use speculum::passes::rt_trace::TracePass;
 use speculum::scene::soup::{default_size, random_soup};
-use speculum::shader_defines::{BVH_INVALID, BVH_LEAF_MAX};
+use speculum::shader_defines::{BVH_INVALID, BVH_LEAF_MAX, HIT_DYNAMIC};
 use speculum::tracers::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits, StaticLayout, UploadedTriangles};
 use speculum::tracers::{Lbvh, TraceScene, Traceable};
 use speculum::vk::{Context, GpuTimer};
@@ -235,7 +235,7 @@ fn rays_at_triangle_corners_hit_through_rounded_boxes() {
 }
 
 /// Static and dynamic BVHs traced together equal brute force over both triangle sets
-/// (dynamic ids carry bit 31).
+/// (dynamic ids carry `HIT_DYNAMIC`).
 #[test]
 fn static_and_dynamic_bvhs_together() {
     let ctx = common::context();
@@ -255,7 +255,7 @@ fn static_and_dynamic_bvhs_together() {
         .map(|r| {
             let mut h = brute_force(r, &all_v, &all_i);
             if h.prim != BVH_INVALID && h.prim >= 2000 {
-                h.prim = (h.prim - 2000) | 0x8000_0000;
+                h.prim = (h.prim - 2000) | HIT_DYNAMIC;
             }
             h
         })
@@ -266,8 +266,8 @@ fn static_and_dynamic_bvhs_together() {
     };
     let (gpu, _) = tracer.trace(&rays, scene, false).unwrap();
     let tri_of = |p: u32| {
-        if p & 0x8000_0000 != 0 {
-            triangle(&dv, &di, (p & 0x7fff_ffff) as usize)
+        if p & HIT_DYNAMIC != 0 {
+            triangle(&dv, &di, (p & !HIT_DYNAMIC) as usize)
         } else {
             triangle(&sv, &si, p as usize)
         }
@@ -275,11 +275,11 @@ fn static_and_dynamic_bvhs_together() {
     let ties = compare(&gpu, &cpu, &rays, tri_of);
     assert!(ties <= 10, "{ties} ties");
     assert!(
-        gpu.iter().any(|h| h.prim != BVH_INVALID && h.prim & 0x8000_0000 != 0),
+        gpu.iter().any(|h| h.prim != BVH_INVALID && h.prim & HIT_DYNAMIC != 0),
         "some hits are dynamic"
     );
     assert!(
-        gpu.iter().any(|h| h.prim != BVH_INVALID && h.prim & 0x8000_0000 == 0),
+        gpu.iter().any(|h| h.prim != BVH_INVALID && h.prim & HIT_DYNAMIC == 0),
         "some hits are static"
     );
 }
@@ -372,7 +372,7 @@ fn refit_traces_like_a_fresh_build() {
 /// After `drop`'s bodies have moved for 30 frames, the renderer's dynamic BVH (rebuilt
 /// in the frame over the vertices `sim.transform` moved) traces like brute force over
 /// those vertices: rays aimed at random dynamic triangles from around the room, and
-/// random ones; dynamic hits carry bit 31.
+/// random ones; dynamic hits carry `HIT_DYNAMIC`.
 #[test]
 fn the_moved_dynamic_bvh_equals_brute_force() {
     let ctx = common::context();
@@ -410,7 +410,7 @@ fn the_moved_dynamic_bvh_equals_brute_force() {
 /// The renderer's dynamic BVH over world-space vertices `v` (read back) and triangles
 /// `i` traces like brute force over them: 8,000 rays from a box of half-size 1.5
 /// `scale` around the origin, half aimed at random triangles (`random_rays`); dynamic
-/// hits carry bit 31; over 3,000 hits, ties under one in a thousand.
+/// hits carry `HIT_DYNAMIC`; over 3,000 hits, ties under one in a thousand.
 pub(crate) fn dynamic_bvh_matches_brute_force(
     ctx: &Arc<Context>,
     r: &speculum::Renderer,
@@ -427,7 +427,7 @@ pub(crate) fn dynamic_bvh_matches_brute_force(
                 h
             } else {
                 Hit {
-                    prim: h.prim | 0x8000_0000,
+                    prim: h.prim | HIT_DYNAMIC,
                     ..h
                 }
             }
@@ -439,7 +439,7 @@ pub(crate) fn dynamic_bvh_matches_brute_force(
         dynamic_bvh: r.dynamic_traceable(),
     };
     let (gpu, _) = tracer.trace(&rays, scene_bvhs, false).unwrap();
-    let ties = compare(&gpu, &cpu, &rays, |p| triangle(v, i, (p & 0x7fff_ffff) as usize));
+    let ties = compare(&gpu, &cpu, &rays, |p| triangle(v, i, (p & !HIT_DYNAMIC) as usize));
     let hits = gpu.iter().filter(|h| h.prim != BVH_INVALID).count();
     assert!(hits > 3000 && ties <= rays.len() / 1000, "{hits} hits, {ties} ties");
 }

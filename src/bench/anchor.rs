@@ -66,3 +66,68 @@ pub fn agreement(a: &[Hit], b: &[Hit]) -> (u32, u32, u32) {
     }
     (agree, ties, disagree)
 }
+
+/// Embree's runs of one case, made once and reported against each builder and layout
+/// of the case (the same triangles and rays): per build quality, its build times and,
+/// per ray set (coherent, incoherent, the file's), its hits and trace times.
+#[derive(Clone, Debug)]
+pub struct AnchorRuns {
+    /// The case's name and its sets' ray counts, which a later report must match.
+    pub case: (String, [Option<usize>; 3]),
+    pub qualities: Vec<QualityRuns>,
+}
+
+/// One Embree build quality's runs on a case.
+#[derive(Clone, Debug)]
+pub struct QualityRuns {
+    pub quality: &'static str,
+    pub threads: u32,
+    pub build_ms: Stat,
+    pub sets: [Option<(Vec<Hit>, Stat)>; 3],
+}
+
+impl AnchorRuns {
+    /// The reports against one builder's and layout's `sets` (Speculum's hits and
+    /// Mrays/s of the same rays) and its (build, compaction) milliseconds.
+    pub fn report(&self, sets: &[Option<AnchorSet<'_>>; 3], (build_ms, compact_ms): (f64, f64)) -> Vec<AnchorReport> {
+        self.qualities
+            .iter()
+            .map(|q| {
+                let traced: Vec<Option<AnchorRays>> = q
+                    .sets
+                    .iter()
+                    .zip(sets)
+                    .map(|(runs, set)| {
+                        let ((hits, trace_ms), (rays, theirs, speculum_mrays, _)) = (runs.as_ref()?, set.as_ref()?);
+                        let mrays_per_s = rays.len() as f64 / (trace_ms.median * 1e3);
+                        let (agree, ties, disagree) = agreement(hits, theirs);
+                        Some(AnchorRays {
+                            trace_ms: *trace_ms,
+                            mrays_per_s,
+                            speed_ratio: speculum_mrays / mrays_per_s,
+                            agree,
+                            ties,
+                            disagree,
+                        })
+                    })
+                    .collect();
+                let [coherent, incoherent, file]: [Option<AnchorRays>; 3] = traced.try_into().expect("three sets");
+                AnchorReport {
+                    quality: q.quality,
+                    threads: q.threads,
+                    build_ms: q.build_ms,
+                    build_ratio: build_ms / q.build_ms.median,
+                    static_build_ratio: (build_ms + compact_ms) / q.build_ms.median,
+                    coherent: coherent.expect("a coherent set"),
+                    incoherent: incoherent.expect("an incoherent set"),
+                    file,
+                }
+            })
+            .collect()
+    }
+
+    /// Whether these runs are of `case` with these sets' ray counts.
+    pub fn of(&self, case: &str, sets: &[Option<AnchorSet<'_>>; 3]) -> bool {
+        self.case.0 == case && self.case.1 == sets.each_ref().map(|s| s.as_ref().map(|s| s.0.len()))
+    }
+}

@@ -9,7 +9,7 @@
 //! Only `rtcCommitScene` is timed. Traversal: `rtcIntersect1` per ray, the rays split
 //! into one contiguous chunk per thread.
 
-use super::anchor::{agreement, AnchorRays, AnchorReport, AnchorSet};
+use super::anchor::{AnchorRuns, AnchorSet, QualityRuns};
 use crate::error::{Error, Result};
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::report::Stat;
@@ -224,53 +224,39 @@ impl Drop for Scene<'_> {
     }
 }
 
-/// Embree LOW and MEDIUM on a case: each built `repeats` times after a warm-up, each
-/// of `sets` (coherent, incoherent, the file's; `None` where absent) traced `repeats`
-/// times after a warm-up and compared with Speculum's hits; Speculum's build and
-/// compaction milliseconds for the build ratios.
-pub fn anchor_reports(
-    vertices: &[GpuVertex],
-    indices: &[u32],
+/// Embree LOW and MEDIUM on case `case`: each built `repeats` times after a warm-up,
+/// each of `sets` (coherent, incoherent, the file's; `None` where absent) traced
+/// `repeats` times after a warm-up; `AnchorRuns::report` compares them with each
+/// builder's and layout's.
+pub fn anchor_runs(
+    case: &str,
+    (vertices, indices): (&[GpuVertex], &[u32]),
     sets: &[Option<AnchorSet<'_>>; 3],
     repeats: u32,
-    (speculum_build_ms, compact_ms): (f64, f64),
-) -> Result<Vec<AnchorReport>> {
+) -> Result<AnchorRuns> {
     let anchor = Anchor::new()?;
-    let mut reports = Vec::new();
+    let mut qualities = Vec::new();
     for quality in Quality::ALL {
         let (scene, build_ms) = repeated(repeats, || anchor.build(vertices, indices, quality))?;
         let mut traced = Vec::new();
         for set in sets {
             traced.push(match *set {
-                Some((rays, theirs, speculum_mrays, coherent)) => {
-                    let (hits, trace_ms) = repeated(repeats, || Ok(scene.trace(rays, coherent)))?;
-                    let mrays_per_s = rays.len() as f64 / (trace_ms.median * 1e3);
-                    let (agree, ties, disagree) = agreement(&hits, theirs);
-                    Some(AnchorRays {
-                        trace_ms,
-                        mrays_per_s,
-                        speed_ratio: speculum_mrays / mrays_per_s,
-                        agree,
-                        ties,
-                        disagree,
-                    })
-                }
+                Some((rays, _, _, coherent)) => Some(repeated(repeats, || Ok(scene.trace(rays, coherent)))?),
                 None => None,
             });
         }
-        let [coherent, incoherent, file]: [Option<AnchorRays>; 3] = traced.try_into().expect("three sets");
-        reports.push(AnchorReport {
+        qualities.push(QualityRuns {
             quality: quality.name(),
             threads: anchor.threads as u32,
             build_ms,
-            build_ratio: speculum_build_ms / build_ms.median,
-            static_build_ratio: (speculum_build_ms + compact_ms) / build_ms.median,
-            coherent: coherent.expect("a coherent set"),
-            incoherent: incoherent.expect("an incoherent set"),
-            file,
+            sets: traced.try_into().expect("three sets"),
         });
     }
-    Ok(reports)
+    let counts = sets.each_ref().map(|s| s.as_ref().map(|s| s.0.len()));
+    Ok(AnchorRuns {
+        case: (case.to_string(), counts),
+        qualities,
+    })
 }
 
 /// `run` once to warm up, then `repeats` times timed: the last run's output and the

@@ -7,7 +7,7 @@
 //! incoherent (random) rays. Checked in the same run: the BVH invariants after the
 //! timed builds, and a sample of each ray set against the CPU SAH BVH's hits.
 
-use super::anchor::{AnchorReport, AnchorSet};
+use super::anchor::{AnchorReport, AnchorRuns, AnchorSet};
 pub(crate) use super::rays::check_hits;
 use super::rays::{time_rays, Through};
 pub use super::rays::{CpuCheck, RaySetReport};
@@ -338,18 +338,24 @@ fn time_builds(
     })
 }
 
-/// The Embree anchor of a case's ray sets: (rays, Speculum's hits, its Mrays/s,
+/// The Embree anchor of case `name`'s ray sets: (rays, Speculum's hits, its Mrays/s,
 /// coherent) per set, against its (build, compaction) milliseconds (cargo feature
-/// `embree`; `None` without it).
+/// `embree`; `None` without it). Embree runs once a case: `runs` keeps its runs for
+/// the case's other builders and layouts, and is made anew for another case.
 #[cfg_attr(not(feature = "embree"), allow(unused_variables))]
 fn anchor(
-    (v, i): (&[GpuVertex], &[u32]),
+    (name, v, i): (&str, &[GpuVertex], &[u32]),
     sets: &[Option<AnchorSet<'_>>; 3],
-    repeats: u32,
+    (repeats, runs): (u32, &mut Option<AnchorRuns>),
     build_ms: (f64, f64),
 ) -> Result<Option<Vec<AnchorReport>>> {
     #[cfg(feature = "embree")]
-    return Ok(Some(super::embree::anchor_reports(v, i, sets, repeats, build_ms)?));
+    {
+        if !runs.as_ref().is_some_and(|r| r.of(name, sets)) {
+            *runs = Some(super::embree::anchor_runs(name, (v, i), sets, repeats)?);
+        }
+        Ok(runs.as_ref().map(|r| r.report(sets, build_ms)))
+    }
     #[cfg(not(feature = "embree"))]
     Ok(None)
 }
@@ -407,7 +413,9 @@ impl CaseReport {
     }
 }
 
-/// Benchmarks one triangle set with one builder, walked in one static layout.
+/// Benchmarks one triangle set with one builder, walked in one static layout; its
+/// Embree anchor's runs are `anchor_runs`' where they are this case's (the case's
+/// other builders and layouts), else made and kept there.
 pub fn run_case(
     ctx: &Arc<Context>,
     name: &str,
@@ -415,7 +423,7 @@ pub fn run_case(
     i: &[u32],
     opts: &Options,
     (kind, layout): (BvhKind, StaticLayout),
-    tick: super::Tick<'_>,
+    (anchor_runs, tick): (&mut Option<AnchorRuns>, super::Tick<'_>),
 ) -> Result<CaseReport> {
     let n = (i.len() / 3) as u32;
     let triangles = UploadedTriangles::new(ctx, "bench", v, i)?;
@@ -455,7 +463,8 @@ pub fn run_case(
             .as_ref()
             .map(|((r, h), rays)| (&rays[..], &h[..], r.mrays_per_s, false)),
     ];
-    let embree = anchor((v, i), &sets, opts.repeats, (build_ms.median, built.compact_ms.median))?;
+    let ms = (build_ms.median, built.compact_ms.median);
+    let embree = anchor((name, v, i), &sets, (opts.repeats, anchor_runs), ms)?;
     let exact_nodes = exact_walk(
         (opts, layout),
         (&tracer, &bvh, geometry),

@@ -36,10 +36,30 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
     // Each builder in every layout; the vendor tracer with the first of each.
     let cases = BvhKind::ALL.into_iter().flat_map(|k| StaticLayout::ALL.map(|l| (k, l)));
     let (mut binary_steps, mut wide_steps) = (0.0, 0.0);
+    // Embree runs once for the case: every builder and layout reads the same runs.
+    let (mut anchor, mut first_anchor) = (None, None);
     for (kind, layout) in cases {
-        let c = run_case(&ctx, "soup-5000", &v, &i, &opts, (kind, layout), &mut || {}).unwrap();
+        let c = run_case(
+            &ctx,
+            "soup-5000",
+            &v,
+            &i,
+            &opts,
+            (kind, layout),
+            (&mut anchor, &mut || {}),
+        )
+        .unwrap();
         assert!(c.valid, "{c:?}");
         assert_eq!(c.layout, layout);
+        let embree_ms = c
+            .embree
+            .as_ref()
+            .map(|e| e.iter().map(|q| q.build_ms.median).collect::<Vec<_>>());
+        assert_eq!(
+            *first_anchor.get_or_insert(embree_ms.clone()),
+            embree_ms,
+            "{kind:?} {layout:?}"
+        );
         // A walk's work per ray, replayed on the CPU: the wide layout takes fewer steps
         // than the binary one for the same tree (the builds are deterministic), the
         // compressed wide one fewer still.
@@ -146,6 +166,8 @@ fn lbvh_benchmark_anchors_against_embree() {
     };
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);
     let room = speculum::scene::builtin::room().unwrap();
+    // One anchor for both cases: the second is measured anew (its hits agree with room's).
+    let mut anchor = None;
     for (name, v, i) in [("soup-3000", &v, &i), ("room", &room.vertices, &room.indices)] {
         let c = run_case(
             &ctx,
@@ -154,7 +176,7 @@ fn lbvh_benchmark_anchors_against_embree() {
             i,
             &opts,
             (BvhKind::Lbvh, StaticLayout::Binary),
-            &mut || {},
+            (&mut anchor, &mut || {}),
         )
         .unwrap();
         assert!(c.valid, "{name}: {c:?}");

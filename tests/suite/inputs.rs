@@ -260,6 +260,12 @@ fn small_defects_give_clear_lines() {
     std::fs::write(d.join("sweep.toml"), "scenes = [\"room\"]\n[axes\nx = 1\n").unwrap();
     assert_refused(&["tune", "sweep.toml"], d, &["sweep file", "line 2"]);
     assert_refused(&["bench", "lbvh", "--tris", "100", "--rays", "0"], d, &["--rays"]);
+    // Past a rays file's bound: refused before 1.3 GB of rays a set are made.
+    assert_refused(
+        &["bench", "lbvh", "--tris", "100", "--rays", "40000000"],
+        d,
+        &["--rays 40000000", "1 to 33554432"],
+    );
     assert_refused(&["bench", "lbvh", "--tris", "0"], d, &["--tris 0", "1 to"]);
     assert_refused(&["bench", "lbvh", "--surface", "17"], d, &["--surface 17", "18 to"]);
     // A ray with tmin > tmax says so.

@@ -35,9 +35,12 @@ pub struct LbvhArgs {
     /// Timed repetitions of each build and trace (medians are reported).
     #[arg(long, default_value_t = 5)]
     pub repeats: u32,
-    /// Rays per ray set (coherent and incoherent).
-    #[arg(long, default_value_t = 262144)]
-    pub rays: u32,
+    /// Rays per ray set (coherent and incoherent), at most 33,554,432 (a rays file's
+    /// bound) [default: 2,097,152 on a GPU, about eight waves of a large GPU's resident
+    /// threads (an H200 holds 270,336), so a set's time is the walk's throughput and not
+    /// one wave's slowest rays; 262,144 on a CPU device]
+    #[arg(long)]
+    pub rays: Option<u32>,
     /// Rays of each set checked against the CPU reference.
     #[arg(long, default_value_t = 2000)]
     pub check_rays: u32,
@@ -66,17 +69,23 @@ pub struct LbvhArgs {
 
 /// The vendor tracer's rays per set on a CPU device, without `--khr-rays`.
 const KHR_RAYS_ON_A_CPU: u32 = 512;
+/// Rays per set without `--rays`: on a GPU, and on a CPU device.
+const RAYS_ON_A_GPU: u32 = 1 << 21;
+const RAYS_ON_A_CPU: u32 = 1 << 18;
+/// The most rays a set may have (what a rays file may hold).
+const MAX_RAYS: u64 = speculum::error::bounds::RAYS / 32;
 
 /// A benchmark case's triangles: its name, vertices and indices.
 type Case = (String, Vec<speculum::gpu_types::GpuVertex>, Vec<u32>);
 
-pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
-    let c = &args.common;
+/// The options `args` give, checked (their device-dependent defaults are filled once
+/// the device is known), and the rays file read: before any GPU work.
+fn lbvh_options(args: &LbvhArgs) -> Result<Options> {
     check_count("--repeats", args.repeats, 1)?;
-    if args.rays == 0 {
-        anyhow::bail!(speculum::Error::Input(
-            "--rays 0: each ray set needs at least one ray".into()
-        ));
+    if let Some(n) = args.rays.filter(|&n| n == 0 || n as u64 > MAX_RAYS) {
+        anyhow::bail!(speculum::Error::Input(format!(
+            "--rays {n}: each ray set needs 1 to {MAX_RAYS} rays"
+        )));
     }
     let file_rays = match &args.rays_file {
         Some(p) => {
@@ -94,9 +103,9 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
         }
         speculum::output::check(p, Kind::Json)?;
     }
-    let opts = Options {
+    Ok(Options {
         repeats: args.repeats,
-        rays: args.rays,
+        rays: args.rays.unwrap_or(RAYS_ON_A_CPU),
         check_rays: args.check_rays,
         bits: args.bits,
         builders: args.builder.clone(),
@@ -104,7 +113,13 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
         file_rays,
         keep_hits: dumping,
         khr_rays: args.khr_rays.unwrap_or(0),
-    };
+    })
+}
+
+pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
+    let c = &args.common;
+    let opts = lbvh_options(&args)?;
+    let dumping = opts.keep_hits;
     let mut inputs = vec![("--rays-file", args.rays_file.as_deref())];
     inputs.extend(args.scene.iter().map(|s| ("--scene", crate::cli::input_file(s))));
     check_outputs(
@@ -125,10 +140,9 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = c.gpu.context()?;
     let mut opts = opts;
-    opts.khr_rays = args.khr_rays.unwrap_or(match ctx.device_type {
-        ash::vk::PhysicalDeviceType::CPU => KHR_RAYS_ON_A_CPU,
-        _ => opts.rays,
-    });
+    let cpu = ctx.device_type == ash::vk::PhysicalDeviceType::CPU;
+    opts.rays = args.rays.unwrap_or(if cpu { RAYS_ON_A_CPU } else { RAYS_ON_A_GPU });
+    opts.khr_rays = args.khr_rays.unwrap_or(if cpu { KHR_RAYS_ON_A_CPU } else { opts.rays });
     text.line(format_args!(
         "LBVH on {} ({}-bit Morton, median (p10–p90) of {} runs, GPU ms)",
         ctx.device_name,
@@ -139,9 +153,19 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
     let bar = progress(runs * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
     let mut results = Vec::new();
     for (name, v, i) in &cases {
+        // Embree's runs of the case, made for its first builder and layout.
+        let mut anchor = None;
         for &kind in &opts.builders {
             for &layout in &opts.layouts {
-                let case = run_case(&ctx, name, v, i, &opts, (kind, layout), &mut || bar.inc(1))?;
+                let case = run_case(
+                    &ctx,
+                    name,
+                    v,
+                    i,
+                    &opts,
+                    (kind, layout),
+                    (&mut anchor, &mut || bar.inc(1)),
+                )?;
                 bar.suspend(|| print_lbvh_case(&text, &case));
                 results.push(case);
             }

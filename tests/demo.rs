@@ -329,11 +329,13 @@ fn settings_change_the_image(display: &Display, dir: &Path) {
 /// A dynamic scene: paused it holds still, `.` steps it once, Backspace restarts it
 /// (glossy reflections off: their samples change every frame, paused or not; the
 /// SSR-first hybrid: the adaptive one's probe frames march where its other frames may
-/// not, a change of a few pixels).
+/// not, a change of a few pixels; the G-buffer rasterized: the adaptive visibility's
+/// pricing frames, which trace it, last as long as their timings fail their
+/// self-check, longer on a loaded machine, and move a few edge pixels).
 fn animation_controls(display: &Display, dir: &Path) {
     let d = dir.display();
     let text = format!(
-        "set glossy false\nset hybrid_policy ssr_first\nwait 4\nkey space\nwait 2\nscreenshot {d}/a.png\nwait 2\nscreenshot {d}/b.png\nkey .\nwait 2\n\
+        "set glossy false\nset hybrid_policy ssr_first\nset visibility raster\nwait 4\nkey space\nwait 2\nscreenshot {d}/a.png\nwait 2\nscreenshot {d}/b.png\nkey .\nwait 2\n\
          screenshot {d}/c.png\nkey backspace\nwait 2\nscreenshot {d}/d.png\n"
     );
     scripted(

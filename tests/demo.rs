@@ -46,54 +46,41 @@ fn display_works(name: &str) -> bool {
     Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
 }
 
-/// Whether the X lock file `lock` names a live process (its first line is the pid).
-fn lock_alive(lock: &str) -> bool {
-    std::fs::read_to_string(lock)
-        .ok()
-        .and_then(|s| s.trim().parse::<u32>().ok())
-        .is_some_and(|pid| Path::new(&format!("/proc/{pid}")).exists())
-}
-
 fn find_display() -> Result<Display, String> {
     if let Ok(name) = std::env::var("DISPLAY") {
         if display_works(&name) {
             return Ok(Display { name, xvfb: None });
         }
     }
-    for n in 90..110 {
-        let name = format!(":{n}");
-        let (lock, socket) = (format!("/tmp/.X{n}-lock"), format!("/tmp/.X11-unix/X{n}"));
-        if lock_alive(&lock) {
-            continue;
+    // Xvfb chooses a free number itself and writes it to its stdout once it accepts
+    // connections (`-displayfd`): two test binaries at once each get their own server
+    // (a number chosen here by its lock file was raced: both took one, and the first
+    // to finish killed the other's server).
+    let mut child = Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("cannot start Xvfb ({e}); install xvfb"))?;
+    let stdout = child.stdout.take().expect("piped");
+    let (send, receive) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        let _ = std::io::BufRead::read_line(&mut std::io::BufReader::new(stdout), &mut line);
+        let _ = send.send(line);
+    });
+    let mut display = Display {
+        name: String::new(),
+        xvfb: Some(child),
+    };
+    match receive.recv_timeout(Duration::from_secs(10)) {
+        Ok(line) if line.trim().parse::<u32>().is_ok() => {
+            display.name = format!(":{}", line.trim());
+            Ok(display)
         }
-        if Path::new(&lock).exists() {
-            // A server killed without cleaning up left its lock and socket: both stale,
-            // the number is free (Xvfb would refuse a live lock, not a dead one).
-            let _ = std::fs::remove_file(&lock);
-            let _ = std::fs::remove_file(&socket);
-        } else if display_works(&name) {
-            continue;
-        }
-        let child = Command::new("Xvfb")
-            .args([name.as_str(), "-screen", "0", "1280x720x24", "-nolisten", "tcp"])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .map_err(|e| format!("cannot start Xvfb ({e}); install xvfb"))?;
-        let display = Display {
-            name: name.clone(),
-            xvfb: Some(child),
-        };
-        let start = Instant::now();
-        while start.elapsed() < Duration::from_secs(10) {
-            if display_works(&name) {
-                return Ok(display);
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        return Err(format!("Xvfb {name} did not start within 10 s"));
+        Ok(line) => Err(format!("Xvfb did not start (it said {line:?})")),
+        Err(_) => Err("Xvfb did not start within 10 s".into()),
     }
-    Err("no free X display number in :90..:109".into())
 }
 
 struct Run {

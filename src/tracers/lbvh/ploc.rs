@@ -12,7 +12,7 @@
 //! CPU reference: `cpu_ref::lbvh::ploc` (tests/suite/lbvh.rs).
 
 use super::{Bvh, Geometry};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::shader_defines::{LBVH_WG, PLOC_RADIUS, PLOC_TAIL_CAP};
 use crate::shaders;
 use crate::vk::barrier::{self, access};
@@ -274,13 +274,24 @@ impl PlocBuilder {
 
     /// After a submitted `record` of `rounds` rounds: records and submits more rounds
     /// (each time with the tail) until one cluster is left. Returns the rounds of four
-    /// dispatches recorded in all.
+    /// dispatches recorded in all. Every round merges at least the closest pair in
+    /// reach (each is the other's nearest), so a submission that leaves as many
+    /// clusters as it found is a defect, said as an error rather than a build that
+    /// never ends.
     pub fn finish(&self, n: u32, bvh: &Bvh, s: &PlocScratch, mut rounds: u32) -> Result<u32> {
-        while s.clusters_left(rounds)? > 1 {
+        let mut left = s.clusters_left(rounds)?;
+        while left > 1 {
             bvh.reshaped();
             self.ctx
                 .one_shot(|cmd| self.record_rounds(cmd, n, bvh, s, rounds, MORE_ROUNDS))?;
             rounds += MORE_ROUNDS;
+            let now = s.clusters_left(rounds)?;
+            if now >= left {
+                return Err(Error::Bvh(format!(
+                    "PLOC's build of {n} triangles stopped merging: {now} clusters left after {rounds} rounds"
+                )));
+            }
+            left = now;
         }
         Ok(rounds)
     }

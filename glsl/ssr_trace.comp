@@ -37,6 +37,9 @@ layout(binding = 10, std430) readonly buffer Pyramid { float pyramid[]; };
 layout(binding = 11, r32f) uniform writeonly image2D hit_distance;
 // This frame's tile state and counts (TILE_WORDS a tile; ssr.classify zeroed the counts).
 layout(binding = 12, std430) buffer Tiles { uint tiles[]; };
+// Word 1: the marched pixels outside rays-only tiles that SSR answered (ssr.classify
+// zeroed it; word 0 is its count of SSR-first marches).
+layout(binding = 13, std430) buffer SsrFirst { uint ssr_first_marches; uint ssr_first_answered; };
 
 // true: the hierarchical march through the pyramid; false: the linear DDA.
 layout(constant_id = 0) const bool HIZ = true;
@@ -51,6 +54,7 @@ layout(push_constant) uniform Push {
     float recursion_min;  // hits whose own reflection, as the pixel shows it, weighs more fail
     uint hiz_top;         // the pyramid's last (1x1) level
     float trace_min_weight; // failed pixels whose own reflection weighs less are not traced
+    uint measure_only;      // 1: every marched pixel ends as a rays-only tile's probe
 } pc;
 
 // View-space z (negative in front of the camera) of G-buffer depth d.
@@ -466,8 +470,14 @@ void main() {
     // A probe of a rays-only tile measured SSR for the tile; its pixel then ends as the
     // tile's others (ssr.classify's skipped pixels): traced, or left untraced for its
     // block, so the tile has one source, no seam inside it, and which pixels a frame
-    // probes does not show.
-    if (count_in_tile(p, fail == 0u)) {
+    // probes does not show. A frame that only measures (the adaptive hybrid's probe
+    // frame while idle) ends every marched pixel so: its image is the idle path's.
+    bool rays_only = count_in_tile(p, fail == 0u);
+    uint answered = subgroupAdd(!rays_only && fail == 0u ? 1u : 0u);
+    if (subgroupElect() && answered > 0u) {
+        atomicAdd(ssr_first_answered, answered);
+    }
+    if (rays_only || pc.measure_only != 0u) {
         fail = FAIL_SKIPPED;
         color = vec3(0.0);
         SsrRay first = ssr_ray(p, depth, nr.xyz, roughness, 0u);

@@ -113,12 +113,15 @@ pub struct HybridSplit {
     pub most_tile_flips: u64,
     /// The path the frames until the next probe frame take (`renderer::exchange::Path`:
     /// `march`, `skip_march` or `trace_all`), and every path's frames since the first
-    /// frame, with its measured reflection rows (`ssr.hiz` to `reflect.denoise`, ms, a
-    /// running mean) when the paths are priced (a measured exchange rate).
+    /// frame (the path each frame's image is), with its measured reflection rows
+    /// (`ssr.hiz` to `reflect.denoise`, ms, a running mean; the marching path's includes
+    /// the probe frames' estimates) when the paths are priced (a measured exchange rate).
     pub path: String,
     pub paths: Vec<PathReport>,
-    /// While idle, one frame in this many is a probe frame (it marches).
+    /// While idle, one frame in this many is a probe frame: it marches to measure the
+    /// tiles and shows the idle path; `probe_frames` of the idle frames were.
     pub probe_every: u32,
+    pub probe_frames: u64,
 }
 
 /// One path of the adaptive hybrid in `HybridSplit`.
@@ -588,6 +591,7 @@ pub(crate) fn hybrid_split(renderer: &Renderer, settings: &Settings) -> Result<O
         most_tile_flips: tiles.most_flips,
         path: paths.next.name().to_string(),
         probe_every: paths.probe_every,
+        probe_frames: paths.probes,
         paths: crate::renderer::exchange::Path::ALL
             .iter()
             .map(|&p| PathReport {

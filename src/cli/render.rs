@@ -311,10 +311,11 @@ fn print_report(text: &Text, r: &speculum::headless::TimingsReport, device: &str
                 .map(|p| speculum::headless::frames_and_price(&p.path, p.frames, p.ms))
                 .collect();
             text.line(format_args!(
-                "    paths: {} (next: {}, probe frames 1 in {}); tile flips {} (most in one tile {})",
+                "    paths: {} (next: {}, probe frames 1 in {}, {} so far); tile flips {} (most in one tile {})",
                 paths.join("; "),
                 h.path,
                 h.probe_every,
+                h.probe_frames,
                 h.tile_flips,
                 h.most_tile_flips
             ));

@@ -65,6 +65,7 @@ struct MarchPush {
     recursion_min: f32,
     hiz_top: u32,
     trace_min_weight: f32,
+    measure_only: u32,
 }
 
 pub struct SsrOutputs {
@@ -86,7 +87,8 @@ pub struct SsrOutputs {
     /// The adaptive hybrid's tiles (`TILE_WORDS` words each: state, marched, answered),
     /// two buffers in turn: a frame reads the last one's and writes the other.
     pub tiles: [Buffer; 2],
-    /// Word 0: pixels the classification listed in SSR-first tiles (probes aside).
+    /// Word 0: pixels the classification listed in SSR-first tiles (probes aside); word
+    /// 1: those of the marched pixels outside rays-only tiles that SSR answered.
     pub ssr_first_marches: Buffer,
 }
 
@@ -323,6 +325,7 @@ impl SsrPass {
                 ("pyramid", Resource::Buffer(&hiz.buffer)),
                 ("hit_distance", Resource::StorageImage(&out.hit_distance)),
                 ("tiles", Resource::Buffer(self.tiles_written())),
+                ("ssr_first", Resource::Buffer(&out.ssr_first_marches)),
             ],
             &MarchPush {
                 max_steps: params.max_steps,
@@ -334,6 +337,7 @@ impl SsrPass {
                 recursion_min: params.recursion_min,
                 hiz_top: hiz.levels.len() as u32 - 1,
                 trace_min_weight: params.trace_min_weight,
+                measure_only: params.measure_only as u32,
             },
             Groups::Indirect(&out.march_args),
         );

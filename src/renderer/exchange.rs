@@ -15,7 +15,10 @@
 //! marching at all has a price of its own — the pyramid, the classification's SSR
 //! work, the seams' blur — that no tile sees. So the frames' reflection rows are timed
 //! on both paths, marching with the tiles and idle (every tile rays-only, without
-//! probes: no pyramid, no march), and the frames take the cheaper.
+//! probes: no pyramid, no march), and the frames take the cheaper. While idle, a
+//! probe frame marches with the tiles to measure them and ends every marched pixel as
+//! the idle path would (`FramePath::measures_only`): its image is the idle path's, and
+//! the marching path's price is estimated from it (`march_estimate`).
 
 use crate::error::Result;
 use crate::shader_defines::TILE_ONE;
@@ -91,9 +94,10 @@ pub fn probe_interval(extra_ms: f64, frame_ms: f64) -> u32 {
 
 /// Takes a finished frame into the exchange rate and the paths' prices, as `recorded`
 /// says it ran: a frame whose timings passed their self-check prices its path (the sum
-/// of `reflection_scopes`); a marching one whose marches were mostly the SSR-first
-/// tiles' prices a march in rays (the rays-only tiles' probes, a sixteenth of their
-/// pixels scattered over the screen, march dearer than whole tiles do).
+/// of `reflection_scopes`), a probe frame that only measured prices the marching path
+/// by `march_estimate`; a marching one whose marches were mostly the SSR-first tiles'
+/// prices a march in rays (the rays-only tiles' probes, a sixteenth of their pixels
+/// scattered over the screen, march dearer than whole tiles do).
 pub fn take_frame<'a>(
     (exchange, paths): (&mut ExchangeRate, &mut Paths),
     recorded: Recorded,
@@ -106,17 +110,54 @@ pub fn take_frame<'a>(
         paths.frame_ms = Some(running_mean(paths.frame_ms, ms));
     }
     match recorded {
-        Recorded::March { rate, priced, counts } => {
-            let [marched, rays, ssr_first] = counts;
-            paths.marched(ssr_first, reflection_ms, rate, priced);
+        Recorded::March {
+            rate,
+            priced,
+            shows,
+            counts,
+        } => {
+            let [marched, rays, ssr_first, answered] = counts;
+            let ms = |name| times.get(name).unwrap_or(0.0);
+            let (rt_ms, merge_ms) = (
+                ms(crate::passes::rt_reflect::NAME),
+                ms(crate::passes::reflect_merge::NAME),
+            );
+            let march_ms = match shows {
+                Path::March => {
+                    if reflection_ms.is_some() {
+                        paths.merge_ms = Some(running_mean(paths.merge_ms, merge_ms));
+                    }
+                    reflection_ms
+                }
+                _ => {
+                    if let Some(ms) = reflection_ms {
+                        paths.probe_ms = Some(running_mean(paths.probe_ms, ms));
+                    }
+                    reflection_ms.map(|r| march_estimate(r, (rt_ms, rays, answered), (merge_ms, paths.merge_ms)))
+                }
+            };
+            paths.marched(ssr_first, march_ms, rate, priced);
             if checked && 2 * ssr_first as u64 >= marched as u64 {
-                let ms = |name| times.get(name).unwrap_or(0.0);
                 let ssr = (ms(crate::passes::ssr_trace::NAME), marched);
-                exchange.add(ssr, (ms(crate::passes::rt_reflect::NAME), rays));
+                exchange.add(ssr, (rt_ms, rays));
             }
         }
         Recorded::Idle(path) => paths.idled(path, reflection_ms),
     }
+}
+
+/// The marching path's reflection rows (ms) from a probe frame that only measured
+/// (`reflection_ms`): it traced every pixel its SSR-first tiles marched, the marching
+/// path traces none that SSR answered (`answered` of its `rays`, at the frame's mean
+/// cost a ray), and it blurred no seams (its `reflect.merge`, `merge.0`, replaced by
+/// the marching frames' mean, `merge.1`, where there is one).
+pub fn march_estimate(reflection_ms: f64, (rt_ms, rays, answered): (f64, u32, u32), merge: (f64, Option<f64>)) -> f64 {
+    let saved = if rays > 0 {
+        rt_ms * answered.min(rays) as f64 / rays as f64
+    } else {
+        0.0
+    };
+    (reflection_ms - saved - merge.0 + merge.1.unwrap_or(merge.0)).max(0.0)
 }
 
 /// The paths' running means: `mean` joined by `sample` one part in four (the sample
@@ -152,9 +193,35 @@ impl Path {
     }
 }
 
+/// The path a frame runs and the one its image is: the same but for a probe frame while
+/// idle, which runs the marching path to measure the tiles and shows the idle path
+/// (every pixel its tiles marched ends as on that path: traced, or left untraced for
+/// its block on `SkipMarch`; no seams blurred).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FramePath {
+    pub runs: Path,
+    pub shows: Path,
+}
+
+impl FramePath {
+    /// A frame that shows the path it runs.
+    pub const fn plain(path: Path) -> Self {
+        Self {
+            runs: path,
+            shows: path,
+        }
+    }
+
+    /// A probe frame while idle: it marches only to measure.
+    pub fn measures_only(self) -> bool {
+        self.runs != self.shows
+    }
+}
+
 /// Which path the adaptive hybrid's frames take, and what each has cost. On an idle
 /// path (`SkipMarch`, `TraceAll`) frames run it until the next probe frame (one in
-/// `probe_every`), which marches with the tiles and chooses anew.
+/// `probe_every`), which marches with the tiles, shows the idle path (`FramePath`)
+/// and chooses anew.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Paths {
     /// The path of the frames until the next probe frame.
@@ -164,8 +231,17 @@ pub struct Paths {
     /// `march_rate` (a new rate splits the tiles anew: its mean starts again).
     pub ms: [Option<f64>; 3],
     pub march_rate: u32,
-    /// Frames recorded on each path since the last reset, in `Path::ALL` order.
+    /// Frames recorded on each path since the last reset, in `Path::ALL` order (the
+    /// path each frame showed), and the probe frames among the idle ones (they ran the
+    /// marching path to measure).
     pub frames: [u64; 3],
+    pub probes: u64,
+    /// The marching frames' `reflect.merge`, ms, a running mean (one part in four): its
+    /// seams' blur, which a probe frame that only measures does not run.
+    pub merge_ms: Option<f64>,
+    /// The probe frames' reflection rows while idle, ms, a running mean (one part in
+    /// four): what a probe frame costs (it marches and traces every pixel).
+    pub probe_ms: Option<f64>,
     /// Frames between probe frames while idle (`probe_interval`), and the whole
     /// frame's ms, a running mean (one part in four), it is measured against.
     pub probe_every: u32,
@@ -179,6 +255,9 @@ impl Default for Paths {
             ms: [None; 3],
             march_rate: 0,
             frames: [0; 3],
+            probes: 0,
+            merge_ms: None,
+            probe_ms: None,
             probe_every: PROBE_EVERY,
             frame_ms: None,
         }
@@ -189,20 +268,31 @@ impl Paths {
     /// The path of frame `index`; `priced`: chosen by the paths' costs (a measured
     /// exchange rate), else idle only while no SSR-first tile marches. While marching,
     /// a priced frame in `RECHECK_EVERY` takes an idle path (each in turn), so their
-    /// prices stay current.
-    pub fn frame_path(&self, index: u32, priced: bool) -> Path {
+    /// prices stay current. While idle, a frame in `probe_every` is a probe frame: it
+    /// runs the marching path and shows the idle one.
+    pub fn frame_path(&self, index: u32, priced: bool) -> FramePath {
         match self.next {
             Path::March if priced && index % RECHECK_EVERY == RECHECK_EVERY - 1 => {
-                [Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize]
+                FramePath::plain([Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize])
             }
-            Path::March => Path::March,
-            _ if index.is_multiple_of(self.probe_every) => Path::March,
-            idle => idle,
+            Path::March => FramePath::plain(Path::March),
+            idle if index.is_multiple_of(self.probe_every) => FramePath {
+                runs: Path::March,
+                shows: idle,
+            },
+            idle => FramePath::plain(idle),
         }
     }
 
+    /// Counts a frame on `path` among the paths taken.
+    pub fn count(&mut self, path: FramePath) {
+        self.frames[path.shows as usize] += 1;
+        self.probes += path.measures_only() as u64;
+    }
+
     /// After a marching frame at exchange rate `rate`: the pixels its SSR-first tiles
-    /// marched, and its reflection rows' ms if its timings passed their self-check.
+    /// marched, and its reflection rows' ms (a probe frame's estimate of them) if its
+    /// timings passed their self-check.
     /// Not priced: `SkipMarch` when no SSR-first tile marched, else `March`. Priced:
     /// an idle path not priced yet is tried (until the next probe frame; `TraceAll`
     /// first), else the cheapest path is taken (an idle one when no SSR-first tile
@@ -233,11 +323,13 @@ impl Paths {
                 .min_by(|&a, &b| cost(a).total_cmp(&cost(b)))
                 .expect("two idle paths")
         };
-        // Idle and priced: probe frames no more often than their cost allows.
-        self.probe_every = match (self.next, self.price(Path::March), self.frame_ms) {
+        // Idle and priced: probe frames no more often than their cost allows (a probe
+        // frame's own, where one has been measured, else the marching path's).
+        let probe = self.probe_ms.or(self.price(Path::March));
+        self.probe_every = match (self.next, probe, self.frame_ms) {
             (Path::March, ..) => PROBE_EVERY,
-            (idle, Some(march), Some(frame)) if priced => {
-                probe_interval(march - self.price(idle).unwrap_or(march), frame)
+            (idle, Some(probe), Some(frame)) if priced => {
+                probe_interval(probe - self.price(idle).unwrap_or(probe), frame)
             }
             _ => PROBE_EVERY,
         };
@@ -261,15 +353,22 @@ impl Paths {
 /// What a frame slot's last frame was, for the adaptive hybrid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Recorded {
-    /// A marching hybrid frame at exchange rate `rate`, `priced` by the paths' costs;
-    /// `counts`: pixels marched, rays traced, pixels marched in SSR-first tiles.
-    March { rate: u32, priced: bool, counts: [u32; 3] },
+    /// A marching hybrid frame at exchange rate `rate`, `priced` by the paths' costs,
+    /// showing path `shows` (`Path::March`, or an idle path: a probe frame that only
+    /// measured); `counts`: pixels marched, rays traced, pixels marched in SSR-first
+    /// tiles and those of them SSR answered.
+    March {
+        rate: u32,
+        priced: bool,
+        shows: Path,
+        counts: [u32; 4],
+    },
     /// A frame of the adaptive hybrid on an idle path.
     Idle(Path),
 }
 
 /// One frame slot's counts, read back after its frame: pixels marched, rays traced,
-/// pixels marched in SSR-first tiles (the rest were probes).
+/// pixels marched in SSR-first tiles (the rest were probes), and those SSR answered.
 pub struct FrameCounts {
     buffer: Buffer,
     /// What the slot's last frame recorded (`counts` still to read).
@@ -280,7 +379,7 @@ impl FrameCounts {
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
         let usage = vk::BufferUsageFlags::TRANSFER_DST;
         Ok(Self {
-            buffer: Buffer::new(ctx, "frame.counts", 12, usage, MemoryLocation::GpuToCpu)?,
+            buffer: Buffer::new(ctx, "frame.counts", 16, usage, MemoryLocation::GpuToCpu)?,
             recorded: None,
         })
     }
@@ -291,18 +390,19 @@ impl FrameCounts {
     }
 
     /// Records the copies of the march list's length (word 3 of `march_args`), the ray
-    /// list's (word 3 of `ray_args`) and the SSR-first tiles' marches (word 0 of
-    /// `ssr_first`), after the passes that wrote them; the words end free for the next
-    /// frame's writers and visible to the host.
+    /// list's (word 3 of `ray_args`), the SSR-first tiles' marches and answers (words 0
+    /// and 1 of `ssr_first`), after the passes that wrote them; the words end free for
+    /// the next frame's writers and visible to the host. `shows`: the path the frame's
+    /// image is.
     pub fn record(
         &mut self,
         (device, cmd): (&ash::Device, vk::CommandBuffer),
         [march_args, ray_args, ssr_first]: [&Buffer; 3],
-        (rate, priced): (u32, bool),
+        (rate, priced, shows): (u32, bool, Path),
     ) {
         barrier::global(device, cmd, access::COMPUTE_WRITE, access::TRANSFER_READ);
-        for (src, from, at) in [(march_args, 12, 0), (ray_args, 12, 4), (ssr_first, 0, 8)] {
-            let region = vk::BufferCopy::default().src_offset(from).dst_offset(at).size(4);
+        for (src, from, at, size) in [(march_args, 12, 0, 4), (ray_args, 12, 4, 4), (ssr_first, 0, 8, 8)] {
+            let region = vk::BufferCopy::default().src_offset(from).dst_offset(at).size(size);
             // SAFETY: both buffers are live and large enough; the barrier above orders the copy.
             unsafe { device.cmd_copy_buffer(cmd, src.raw, self.buffer.raw, &[region]) };
         }
@@ -318,17 +418,25 @@ impl FrameCounts {
         self.recorded = Some(Recorded::March {
             rate,
             priced,
-            counts: [0; 3],
+            shows,
+            counts: [0; 4],
         });
     }
 
     /// What the slot's finished frame recorded, its counts read.
     pub fn take(&mut self) -> Option<Recorded> {
         match self.recorded.take()? {
-            Recorded::March { rate, priced, .. } => {
-                let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.buffer.mapped()?[..12]);
-                let counts = [words[0], words[1], words[2]];
-                Some(Recorded::March { rate, priced, counts })
+            Recorded::March {
+                rate, priced, shows, ..
+            } => {
+                let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.buffer.mapped()?[..16]);
+                let counts = [words[0], words[1], words[2], words[3]];
+                Some(Recorded::March {
+                    rate,
+                    priced,
+                    shows,
+                    counts,
+                })
             }
             idle => Some(idle),
         }
@@ -356,9 +464,19 @@ mod tests {
         };
         p.marched(500, None, 0, true);
         assert_eq!((p.next, p.probe_every), (Path::SkipMarch, 15));
-        assert!(p.frame_path(15, true) == Path::March && p.frame_path(7, true) == Path::SkipMarch);
+        let probe = FramePath {
+            runs: Path::March,
+            shows: Path::SkipMarch,
+        };
+        assert!(p.frame_path(15, true) == probe && p.frame_path(7, true) == FramePath::plain(Path::SkipMarch));
+        assert!(probe.measures_only() && !FramePath::plain(Path::March).measures_only());
         p.marched(500, None, 0, false);
         assert_eq!((p.next, p.probe_every), (Path::March, PROBE_EVERY));
+        // A probe frame's own cost, once measured, sets the interval: 70 ms against
+        // SkipMarch's 45 is 25 frames of 1%.
+        p.probe_ms = Some(70.0);
+        p.marched(500, None, 0, true);
+        assert_eq!((p.next, p.probe_every), (Path::SkipMarch, 25));
     }
 
     /// Priced, the paths are tried (`TraceAll` first, each until the next probe frame)
@@ -368,12 +486,18 @@ mod tests {
     #[test]
     fn the_paths_are_tried_then_the_cheapest_taken() {
         let mut p = Paths::default();
-        assert_eq!(p.frame_path(1, true), Path::March);
+        assert_eq!(p.frame_path(1, true).runs, Path::March);
         p.marched(500, Some(30.0), 64, true);
         assert_eq!(p.next, Path::TraceAll, "untried: the rt mode's path first");
         assert_eq!(
-            (p.frame_path(1, true), p.frame_path(PROBE_EVERY, true)),
-            (Path::TraceAll, Path::March)
+            (p.frame_path(1, true).runs, p.frame_path(PROBE_EVERY, true)),
+            (
+                Path::TraceAll,
+                FramePath {
+                    runs: Path::March,
+                    shows: Path::TraceAll
+                }
+            )
         );
         p.idled(Path::TraceAll, Some(20.0));
         p.marched(500, Some(30.0), 64, true);
@@ -388,10 +512,15 @@ mod tests {
         p.marched(500, Some(5.0), 64, true);
         assert_eq!(p.next, Path::March, "{p:?}");
         let recheck = RECHECK_EVERY - 1;
-        assert_eq!(p.frame_path(recheck - 1, true), Path::March);
-        assert_ne!(p.frame_path(recheck, true), p.frame_path(recheck + RECHECK_EVERY, true));
-        assert!([p.frame_path(recheck, true), p.frame_path(recheck + RECHECK_EVERY, true)].contains(&Path::SkipMarch));
-        assert_eq!(p.frame_path(recheck, false), Path::March, "not priced: no recheck");
+        let path = |k| p.frame_path(k, true).runs;
+        assert_eq!(path(recheck - 1), Path::March);
+        assert_ne!(path(recheck), path(recheck + RECHECK_EVERY));
+        assert!([path(recheck), path(recheck + RECHECK_EVERY)].contains(&Path::SkipMarch));
+        assert!(
+            !p.frame_path(recheck, true).measures_only(),
+            "a recheck shows its idle path"
+        );
+        assert_eq!(p.frame_path(recheck, false).runs, Path::March, "not priced: no recheck");
         // No SSR-first tile marched: idle, however cheap marching was.
         p.marched(0, Some(5.0), 64, true);
         assert_eq!(p.next, Path::TraceAll);
@@ -406,7 +535,30 @@ mod tests {
         q.marched(500, None, 0, false);
         assert_eq!(q.next, Path::March);
         q.marched(0, None, 0, false);
-        assert_eq!((q.next, q.frame_path(1, false)), (Path::SkipMarch, Path::SkipMarch));
+        assert_eq!(
+            (q.next, q.frame_path(1, false).runs),
+            (Path::SkipMarch, Path::SkipMarch)
+        );
+    }
+
+    /// A probe frame that only measured prices the marching path without the rays
+    /// SSR would have answered (at the frame's mean cost a ray) and with the marching
+    /// frames' merge (their seams' blur) for its own.
+    #[test]
+    fn a_probe_frame_estimates_the_march() {
+        // 40 ms of rows, 20 of them 10,000 rays, 2,500 of which SSR answered: 5 ms.
+        assert_eq!(march_estimate(40.0, (20.0, 10_000, 2_500), (1.0, None)), 35.0);
+        assert_eq!(march_estimate(40.0, (20.0, 10_000, 2_500), (1.0, Some(3.0))), 37.0);
+        assert_eq!(march_estimate(40.0, (20.0, 0, 0), (1.0, None)), 40.0, "no rays");
+        assert_eq!(march_estimate(4.0, (20.0, 100, 900), (1.0, None)), 0.0, "never below 0");
+        // Counted as the idle path it showed, and as a probe.
+        let mut p = Paths::default();
+        p.count(FramePath {
+            runs: Path::March,
+            shows: Path::TraceAll,
+        });
+        p.count(FramePath::plain(Path::March));
+        assert_eq!((p.frames, p.probes), ([1, 0, 1], 1));
     }
 
     /// The rate follows the samples' running mean, holds within an eighth of it, and

@@ -5,7 +5,7 @@
 //! this file only does what spans passes: the uniform upload, and which inputs each
 //! row reads.
 
-use super::exchange::{FrameCounts, Path};
+use super::exchange::{FrameCounts, FramePath, Path};
 use super::gpu_scene::DynamicGeometry;
 use super::plan::{FramePlan, Motion, Previous, Ways};
 use super::stages::Taken;
@@ -137,10 +137,10 @@ impl Renderer {
         let hybrid = Hybrid::of(&self.settings);
         let path = match hybrid.adaptive() {
             true => self.paths.frame_path(self.frame_index, hybrid.priced()),
-            false => Path::March,
+            false => FramePath::plain(Path::March),
         };
         if hybrid.adaptive() {
-            self.paths.frames[path as usize] += 1;
+            self.paths.count(path);
         }
         let (visibility, shadows, taken) = self.stages.frame_ways(&self.settings, self.frame_index);
         let ways = Ways {
@@ -345,9 +345,18 @@ fn record_reflections<'a, T: Tracer>(
     } = r;
     let (hiz, ssr, compact, rt, merge) = (&*hiz, &*ssr, &*compact, &*rt, &*merge);
     let (ubo, g, st) = (i.ubo, &l.gbuffer.out, i.st);
+    // A probe frame that shows the `rt` mode's path traces every reflective pixel.
+    let all_traced = plan.measures_only() && plan.shows == Path::TraceAll;
+    let from_settings = SsrParams::from_settings(st);
     let params = SsrParams {
         tile_rate: plan.tile_rate,
-        ..SsrParams::from_settings(st)
+        measure_only: plan.measures_only(),
+        trace_min_weight: if all_traced {
+            0.0
+        } else {
+            from_settings.trace_min_weight
+        },
+        ..from_settings
     };
     if plan.runs(Row::SsrHiz) {
         f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
@@ -383,7 +392,7 @@ fn record_reflections<'a, T: Tracer>(
     if plan.counts {
         let o = &ssr.out;
         let lists = [&o.march_args, &compact.out.indirect, &o.ssr_first_marches];
-        counts.record((d, cmd), lists, (plan.tile_rate, plan.hybrid.priced()));
+        counts.record((d, cmd), lists, (plan.tile_rate, plan.hybrid.priced(), plan.shows));
     }
     if plan.runs(Row::ReflectMerge) {
         let inputs = MergeInputs {

@@ -493,6 +493,7 @@ impl Renderer {
         self.paths = Paths {
             next: Path::March,
             frames: [0; 3],
+            probes: 0,
             probe_every: exchange::PROBE_EVERY,
             ..self.paths
         };

@@ -5,7 +5,7 @@
 //! `Renderer::record_frame` reads it as a table; nothing here touches the GPU, so
 //! every decision is unit-tested on the CPU.
 
-use super::exchange::Path;
+use super::exchange::{FramePath, Path};
 use super::table::Row;
 use crate::passes::compose::ComposeMode;
 use crate::passes::reflect_merge::BlurParams;
@@ -46,8 +46,11 @@ pub struct FramePlan {
     pub motion: Motion,
     pub previous: Previous,
     pub hybrid: Hybrid,
-    /// The adaptive hybrid's path this frame (`Path::March` for every other frame).
+    /// The adaptive hybrid's path this frame (`Path::March` for every other frame), and
+    /// the path its image is (`shows`: another only on a probe frame while idle, which
+    /// marches to measure and ends every marched pixel as on the idle path).
     pub path: Path,
+    pub shows: Path,
     /// SSR marches this frame.
     pub marches: bool,
     /// The classification of the pixels a march could answer (`None`: no reflections).
@@ -69,13 +72,14 @@ pub struct FramePlan {
     traces: bool,
 }
 
-/// The ways the adaptive stages chose for a frame: the hybrid's path (read where
+/// The ways the adaptive stages chose for a frame: the hybrid's path and the one it
+/// shows (read where
 /// `Hybrid::of(st)` is adaptive), the G-buffer's (read where `visibility` is adaptive;
 /// raster or rays) and the shadows' (read where `shadows` is adaptive; one of
 /// `Shadows::ADAPTIVE`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Ways {
-    pub path: Path,
+    pub path: FramePath,
     pub visibility: Visibility,
     pub shadows: Shadows,
 }
@@ -105,7 +109,11 @@ impl FramePlan {
             "an adaptive frame's shadows are one source"
         );
         let hybrid = Hybrid::of(st);
-        let path = if hybrid.adaptive() { path } else { Path::March };
+        let FramePath { runs: path, shows } = if hybrid.adaptive() {
+            path
+        } else {
+            FramePath::plain(Path::March)
+        };
         let idle = path != Path::March;
         let marches = mode.marches() && !idle;
         let classify = mode.reflects().then_some(match (marches, path) {
@@ -132,14 +140,19 @@ impl FramePlan {
             previous,
             hybrid,
             path,
+            shows,
             marches,
             classify,
             tile_rate,
             counts: marches && mode.traces(),
             // Seams exist only where both sources do (not on the adaptive hybrid's idle
-            // paths, where SSR answers nothing).
+            // paths, nor on a probe frame that shows one: SSR answers nothing there).
             blur: BlurParams {
-                radius: if mode.has_seams() && !idle { st.blur_radius } else { 0 },
+                radius: if mode.has_seams() && shows == Path::March {
+                    st.blur_radius
+                } else {
+                    0
+                },
                 band: st.blur_band,
             },
             denoise: mode.reflects() && st.glossy && (st.denoise_radius > 0 || st.denoise_history > 1),
@@ -156,6 +169,12 @@ impl FramePlan {
             hiz: marches && st.ssr_hiz,
             traces: mode.traces(),
         }
+    }
+
+    /// A probe frame while idle: it marches with the tiles to measure them and ends
+    /// every marched pixel as the idle path `shows` does.
+    pub fn measures_only(&self) -> bool {
+        self.path != self.shows
     }
 
     /// Whether the frame records `row`.
@@ -208,7 +227,7 @@ mod tests {
     /// Ways no fixed setting reads.
     fn ways(path: Path) -> Ways {
         Ways {
-            path,
+            path: FramePath::plain(path),
             visibility: Visibility::Raster,
             shadows: Shadows::Hybrid,
         }
@@ -286,6 +305,30 @@ mod tests {
         assert!(!skip.runs(SsrHiz) && !skip.runs(SsrTrace) && skip.runs(RtReflect));
         let all = plan(&st, STILL, Path::TraceAll);
         assert_eq!(all.classify, Some(Classify::MaskOnly));
+        // A probe frame while idle: the marching path's rows and counts, no seams.
+        for idle in [Path::SkipMarch, Path::TraceAll] {
+            let runs = FramePath {
+                runs: Path::March,
+                shows: idle,
+            };
+            let probe = FramePlan::new(
+                &st,
+                STILL,
+                Ways {
+                    path: runs,
+                    ..ways(idle)
+                },
+                37,
+                false,
+            );
+            assert_eq!(probe.rows(), march.rows(), "{idle:?}");
+            assert_eq!(
+                (probe.classify, probe.counts, probe.shows),
+                (march.classify, true, idle)
+            );
+            assert!(probe.measures_only() && !march.measures_only());
+            assert_eq!(probe.blur.radius, 0, "{idle:?}: no seams shown");
+        }
         let fixed = Settings {
             exchange_rate: 0.5,
             ..st.clone()

@@ -765,6 +765,9 @@ pub struct SsrParams {
     /// The adaptive hybrid's exchange rate in 1/`TILE_ONE` (a march's cost in rays),
     /// or 0: every tile SSR-first (the SSR-first policy, and the `ssr` mode).
     pub tile_rate: u32,
+    /// The march only measures the tiles: every marched pixel ends as a rays-only
+    /// tile's probe does (the adaptive hybrid's probe frame while idle).
+    pub measure_only: bool,
 }
 
 impl SsrParams {
@@ -786,6 +789,7 @@ impl SsrParams {
                 Hybrid::Fixed(rate) => rate,
                 Hybrid::None | Hybrid::Measured => 0,
             },
+            measure_only: false,
         }
     }
 }

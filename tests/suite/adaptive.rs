@@ -212,6 +212,63 @@ fn probes_do_not_show_in_the_frame() {
     assert_eq!(ctx.validation_messages(), 0);
 }
 
+/// While the frames take an idle path, a probe frame marches with the tiles to measure
+/// them and ends every marched pixel as the idle path does (traced, or on `SkipMarch`
+/// left untraced for its block): with glossy off on a still view it is the idle frame
+/// before it, byte for byte, on both idle paths, though SSR-first tiles marched in it.
+/// Before, it showed SSR's answers there: a pulse at every probe frame (`room` at
+/// 960x540, about 100,000 pixels changed, 105 of them by 32 of 255 or more).
+#[test]
+fn a_probe_frame_while_idle_shows_the_idle_path() {
+    use speculum::renderer::exchange::Path;
+    use speculum::renderer::PROBE_EVERY;
+    // The paths are priced by frames whose timings pass their self-check: alone.
+    let _alone = common::alone();
+    let ctx = common::context();
+    let scene = speculum::scene::builtin::room().unwrap();
+    let st = Settings {
+        glossy: false,
+        ..settings(HybridPolicy::Adaptive, 0.0)
+    };
+    let mut r = Renderer::new(&ctx, &scene, &st).unwrap();
+    // Each frame: the path it shows (the paths' next before it), whether it marched,
+    // its image, and the SSR-first tiles after it.
+    let mut frames = Vec::new();
+    for _ in 0..=2 * PROBE_EVERY {
+        let shows = r.hybrid_paths().next;
+        let marched = r.render_frame().unwrap().get("ssr.trace").is_some();
+        frames.push((
+            shows,
+            marched,
+            r.read_output().unwrap(),
+            r.tile_census().unwrap().ssr_first,
+        ));
+    }
+    let mut compared = Vec::new();
+    for k in 2..frames.len() {
+        let ((before, marched_before, a, _), (shows, marched, b, ssr_first)) = (&frames[k - 1], &frames[k]);
+        if *marched && !*marched_before && shows == before && *shows != Path::March {
+            assert!(*ssr_first > 0, "frame {k}: no SSR-first tile marched");
+            assert!(
+                a == b,
+                "frame {k}, a probe frame showing {shows:?}, differs from frame {}",
+                k - 1
+            );
+            compared.push(*shows);
+        }
+    }
+    assert!(
+        compared.contains(&Path::TraceAll) && compared.contains(&Path::SkipMarch),
+        "probe frames compared: {compared:?}"
+    );
+    let p = r.hybrid_paths();
+    assert!(
+        p.probes >= 2 && p.frames.iter().sum::<u64>() == frames.len() as u64,
+        "{p:?}"
+    );
+    assert_eq!(ctx.validation_messages(), 0);
+}
+
 /// `exchange_rate = 0`: the renderer prices a march in rays from its hybrid frames'
 /// timings and counts, and its tiles follow that price; `render`'s report gives the
 /// split.
@@ -351,8 +408,13 @@ fn measured_paths_are_tried_and_the_cheapest_taken() {
         }
     }
     let p = r.hybrid_paths();
-    let idle = PROBE_EVERY as u64 - 1;
-    assert_eq!(p.frames, [3, idle, idle], "{p:?}");
+    // Frame 0 marches; the probe frames 7 and 14 march to measure and show the idle
+    // path of the frames before them.
+    assert_eq!(
+        (p.frames, p.probes),
+        ([1, PROBE_EVERY as u64, PROBE_EVERY as u64], 2),
+        "{p:?}"
+    );
     let prices: Vec<f64> = Path::ALL.iter().map(|&q| p.price(q).expect("priced")).collect();
     // Marching is a choice only while an SSR-first tile marches.
     let marching = r.tile_census().unwrap().ssr_first > 0;

@@ -111,15 +111,11 @@ pub struct HybridSplit {
     /// changed most.
     pub tile_flips: u64,
     pub most_tile_flips: u64,
-    /// The path the frames until the next probe frame take (`renderer::exchange::Path`:
-    /// `march`, `skip_march` or `trace_all`), and every path's frames since the first
-    /// frame (the path each frame's image is), with its measured reflection rows
-    /// (`ssr.hiz` to `reflect.denoise`, ms, a running mean; the marching path's includes
-    /// the probe frames' estimates) when the paths are priced (a measured exchange rate).
+    /// The path until the next probe frame (`march`, `skip_march`, `trace_all`), each
+    /// path's frames (by the path shown) and priced reflection rows (ms, running mean);
+    /// idle, a frame in `probe_every` probes (marches to measure, shows the idle path).
     pub path: String,
     pub paths: Vec<PathReport>,
-    /// While idle, one frame in this many is a probe frame: it marches to measure the
-    /// tiles and shows the idle path; `probe_frames` of the idle frames were.
     pub probe_every: u32,
     pub probe_frames: u64,
 }

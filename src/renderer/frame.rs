@@ -24,7 +24,7 @@ use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_trace::MarchInputs;
 use crate::passes::{SceneGeometry, Surfaces};
-use crate::settings::{Hybrid, Settings, SsrParams};
+use crate::settings::{Hybrid, Settings};
 use crate::tracers::khr::KhrScene;
 use crate::tracers::lbvh::LbvhBuilder;
 use crate::tracers::{TraceScene, Traceable, Tracer};
@@ -345,19 +345,7 @@ fn record_reflections<'a, T: Tracer>(
     } = r;
     let (hiz, ssr, compact, rt, merge) = (&*hiz, &*ssr, &*compact, &*rt, &*merge);
     let (ubo, g, st) = (i.ubo, &l.gbuffer.out, i.st);
-    // A probe frame that shows the `rt` mode's path traces every reflective pixel.
-    let all_traced = plan.measures_only() && plan.shows == Path::TraceAll;
-    let from_settings = SsrParams::from_settings(st);
-    let params = SsrParams {
-        tile_rate: plan.tile_rate,
-        measure_only: plan.measures_only(),
-        trace_min_weight: if all_traced {
-            0.0
-        } else {
-            from_settings.trace_min_weight
-        },
-        ..from_settings
-    };
+    let params = plan.ssr_params(st);
     if plan.runs(Row::SsrHiz) {
         f.row(Row::SsrHiz, || hiz.record(cmd, &g.depth));
     }

@@ -10,7 +10,7 @@ use super::table::Row;
 use crate::passes::compose::ComposeMode;
 use crate::passes::reflect_merge::BlurParams;
 use crate::passes::ssr_trace::Classify;
-use crate::settings::{Hybrid, Mode, Settings, Shadows, Visibility};
+use crate::settings::{Hybrid, Mode, Settings, Shadows, SsrParams, Visibility};
 
 /// What moves in the scene, as the frame steps it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -177,6 +177,24 @@ impl FramePlan {
         self.path != self.shows
     }
 
+    /// The frame's SSR parameters: the settings', the tiles' rate, and on a probe frame
+    /// that only measures, its end of every marched pixel (`trace_min_weight` 0 where
+    /// it shows the `rt` mode's path, which traces every reflective pixel).
+    pub fn ssr_params(&self, st: &Settings) -> SsrParams {
+        let from_settings = SsrParams::from_settings(st);
+        let all_traced = self.measures_only() && self.shows == Path::TraceAll;
+        SsrParams {
+            tile_rate: self.tile_rate,
+            measure_only: self.measures_only(),
+            trace_min_weight: if all_traced {
+                0.0
+            } else {
+                from_settings.trace_min_weight
+            },
+            ..from_settings
+        }
+    }
+
     /// Whether the frame records `row`.
     pub fn runs(&self, row: Row) -> bool {
         let m = self.motion;
@@ -296,6 +314,8 @@ mod tests {
             (Some(Classify::Tiles), 37, true)
         );
         assert_eq!(march.blur.radius, st.blur_radius);
+        let params = march.ssr_params(&st);
+        assert!(!params.measure_only && params.trace_min_weight == st.trace_min_weight && params.tile_rate == 37);
         let skip = plan(&st, STILL, Path::SkipMarch);
         assert_eq!(
             (skip.classify, skip.marches, skip.counts),
@@ -328,6 +348,16 @@ mod tests {
             );
             assert!(probe.measures_only() && !march.measures_only());
             assert_eq!(probe.blur.radius, 0, "{idle:?}: no seams shown");
+            let params = probe.ssr_params(&st);
+            let weight = if idle == Path::TraceAll {
+                0.0
+            } else {
+                st.trace_min_weight
+            };
+            assert_eq!(
+                (params.measure_only, params.trace_min_weight, params.tile_rate),
+                (true, weight, 37)
+            );
         }
         let fixed = Settings {
             exchange_rate: 0.5,

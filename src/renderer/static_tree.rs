@@ -25,9 +25,12 @@ use rand::{Rng, SeedableRng};
 use serde::Serialize;
 use std::sync::Arc;
 
-/// Rays each tree walks per timed round: on a GPU enough to fill it; on a CPU device
-/// (lavapipe walks 0.3-30 Mrays/s) few, so a load stays short.
+/// Rays each tree walks per timed round: on a GPU the frame's pixels, as a frame traces
+/// them, within `RAYS_GPU` (an H200 holds 270,336 invocations at once: fewer rays time
+/// one wave's slowest walks, not the walk's throughput) and `RAYS_GPU_MAX` (eight such
+/// waves); on a CPU device (lavapipe walks 0.3-30 Mrays/s) few, so a load stays short.
 const RAYS_GPU: u32 = 262_144;
+const RAYS_GPU_MAX: u32 = 2_097_152;
 const RAYS_CPU: u32 = 16_384;
 /// Timed rounds of each tree, the two alternating, after one untimed round each (a
 /// round whose timestamps fail their self-check is measured again: `vk::remeasure`).
@@ -104,12 +107,12 @@ impl StaticLayoutChoice {
     }
 }
 
-/// Rays for the choice on a device of `device_type`.
-pub fn ray_count(device_type: vk::PhysicalDeviceType) -> u32 {
+/// Rays for the choice on a device of `device_type`, for frames of `pixels`.
+pub fn ray_count(device_type: vk::PhysicalDeviceType, pixels: u64) -> u32 {
     if device_type == vk::PhysicalDeviceType::CPU {
         RAYS_CPU
     } else {
-        RAYS_GPU
+        pixels.clamp(RAYS_GPU as u64, RAYS_GPU_MAX as u64) as u32
     }
 }
 
@@ -283,7 +286,7 @@ pub fn frame_rays(
     settings: &Settings,
     origin: Vec3,
 ) -> Result<ChoiceRays> {
-    let count = ray_count(ctx.device_type);
+    let count = ray_count(ctx.device_type, settings.width as u64 * settings.height as u64);
     let aspect = settings.width as f32 / settings.height as f32;
     let view = view_rays(&scene.camera, aspect, origin, count);
     let scene_tree = TraceScene::of_static(tree, geom);
@@ -483,6 +486,17 @@ fn median(v: &mut [f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A GPU times the frame's pixels (at least a wave's worth, at most eight); a CPU
+    /// device few, whatever the frame.
+    #[test]
+    fn the_choice_traces_a_frame_of_rays_on_a_gpu() {
+        let gpu = vk::PhysicalDeviceType::DISCRETE_GPU;
+        assert_eq!(ray_count(gpu, 1920 * 1080), 2_073_600);
+        assert_eq!(ray_count(gpu, 320 * 180), RAYS_GPU);
+        assert_eq!(ray_count(gpu, 3840 * 2160), RAYS_GPU_MAX);
+        assert_eq!(ray_count(vk::PhysicalDeviceType::CPU, 1920 * 1080), RAYS_CPU);
+    }
 
     /// The rays start on the triangles, less the origin, and point away from their
     /// triangle's plane (on either side); the same seed gives the same rays; a scene

@@ -9,12 +9,22 @@
 // consecutive slots in input order, counted again in registers: the sort is stable
 // (LSD radix sort needs it). No shared-memory read-modify-write per key (a per-lane
 // scatter is the slow step on a CPU driver, which runs lanes as SIMD vectors).
+//
+// LOCAL_ORDER (a candidate for GPUs, whose tiles are SORT_BINS keys a thread): the
+// tile's pairs are first put in their output order in shared memory, then written by
+// consecutive invocations to consecutive slots. The direct scatter's stores land a
+// key or two in each of the 16 digits' runs per 32 lanes, so a memory sector is
+// written a few words at a time over the tile's 16 store rounds: merged in a GPU's
+// L2 while the output fits in it (1M keys), maybe read and written back per store
+// beyond it (the H200's sort of 10M keys took 36x its 1M sort). Same slots, same
+// result; tests/suite/lbvh.rs sorts with both.
 // CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
 #include "radix.glsl"
 #define WG_SCAN_SIZE SORT_WG
 #include "wg_scan.glsl"
 
 layout(local_size_x_id = 1) in;
+layout(constant_id = 2) const bool LOCAL_ORDER = false;
 
 layout(binding = 0) uniform utextureBuffer keys_in;
 layout(binding = 1) uniform utextureBuffer values_in;
@@ -24,6 +34,65 @@ layout(binding = 4, std430) readonly buffer Offsets { uint offsets[]; };
 
 shared uint s_counts[SORT_BINS * SORT_WG];
 shared uint s_base[SORT_BINS];
+// LOCAL_ORDER: where each digit's keys start in the tile's output order.
+shared uint s_first[SORT_BINS];
+
+// LOCAL_ORDER: word `w` of every pair of the tile (the key's words, then the value)
+// into its place in the tile's output order, s_counts reused for it (SORT_ITEMS ==
+// SORT_BINS: as many words as the tile has keys); `start`: this invocation's first
+// place of each digit.
+void stage_word(uint w, uint base, uint start[SORT_BINS]) {
+    uvec4 h = uvec4(0u);
+    for (uint k = 0u; k < SORT_ITEMS; k += 4u) {
+        uint i = base + k;
+        if (i < pc.n) {
+            uvec4 lo, hi;
+            load_quad(keys_in, i, lo, hi);
+            uvec4 d = quad_digits(lo, hi);
+            uvec4 word = w == pc.key_words ? texelFetch(values_in, int(i >> 2u)) : (w == 0u ? lo : hi);
+            for (uint c = 0u; c < 4u; ++c) {
+                if (i + c < pc.n) {
+                    s_counts[start[d[c]] + digit_count(h, d[c])] = word[c];
+                    h += digit_one(d[c]);
+                }
+            }
+        }
+    }
+}
+
+// LOCAL_ORDER: the tile's pairs written out in order, a word of each at a time, each
+// invocation taking every SORT_WG-th place: neighbours store to neighbouring slots.
+void scatter_local(uint base, uint tile_keys) {
+    uint l = gl_LocalInvocationID.x;
+    uint start[SORT_BINS];
+    for (uint d = 0u; d < SORT_BINS; ++d) {
+        start[d] = s_counts[d * SORT_WG + l];
+    }
+    barrier(); // every column read before s_counts holds the staged words
+    for (uint w = 0u; w <= pc.key_words; ++w) {
+        stage_word(w, base, start);
+        barrier();
+        for (uint j = 0u; j < SORT_ITEMS; ++j) {
+            uint at = j * SORT_WG + l;
+            if (at < tile_keys) {
+                uint d = 0u;
+                for (uint e = 1u; e < SORT_BINS; ++e) {
+                    d = s_first[e] <= at ? e : d;
+                }
+                uint slot = at + s_base[d];
+                uint word = s_counts[at];
+                if (w == pc.key_words) {
+                    values_out[slot] = word;
+                } else if (pc.key_words == 1u) {
+                    keys_out[slot] = word;
+                } else {
+                    keys_out[2u * slot + w] = word;
+                }
+            }
+        }
+        barrier(); // every staged word written out before the next word is staged
+    }
+}
 
 void main() {
     uint l = gl_LocalInvocationID.x;
@@ -58,8 +127,13 @@ void main() {
     // count and scan kernels do not run).
     if (l < SORT_BINS) {
         s_base[l] = pc.num_tiles == 1u ? 0u : offsets[l * pc.num_tiles + tile] - s_counts[l * SORT_WG];
+        s_first[l] = s_counts[l * SORT_WG];
     }
     barrier();
+    if (LOCAL_ORDER && SORT_ITEMS == SORT_BINS) {
+        scatter_local(base, min(SORT_TILE, pc.n - tile * SORT_TILE));
+        return;
+    }
     for (uint d = 0u; d < SORT_BINS; ++d) {
         s_counts[d * SORT_WG + l] += s_base[d]; // own column only
     }

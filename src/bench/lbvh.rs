@@ -51,6 +51,9 @@ pub struct Options {
     /// Rays of each set the vendor tracer traces (the first of them; 0: no vendor
     /// tracer), on the first builder's case (`bench::khr`).
     pub khr_rays: u32,
+    /// The sort's scatter writes its tiles out in order (`sort::SortTile::local`;
+    /// `--local-sort-scatter` on a GPU).
+    pub local_sort_scatter: bool,
 }
 
 /// Mean steps (nodes visited), box tests and triangle tests of a ray's walk, and the

@@ -30,12 +30,16 @@ pub struct GpuArgs {
 
 impl GpuArgs {
     pub fn context(&self) -> Result<std::sync::Arc<Context>> {
-        let validation = self.validation || validation_from_env();
-        Ok(Context::new(&ContextDesc {
-            validation,
+        Ok(Context::new(&self.desc())?)
+    }
+
+    /// The context these flags ask for.
+    pub fn desc(&self) -> ContextDesc {
+        ContextDesc {
+            validation: self.validation || validation_from_env(),
             device: self.device.clone(),
             ..Default::default()
-        })?)
+        }
     }
 }
 

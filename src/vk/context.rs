@@ -37,6 +37,9 @@ pub struct ContextDesc {
     /// Make the LBVH fit climb in lockstep (the variant lavapipe before Mesa 25 needs)
     /// or freely, whatever the driver (`Context::lockstep_fit`). `None`: as the driver needs.
     pub lockstep_fit: Option<bool>,
+    /// The sort's scatter writes a GPU tile's pairs out in order
+    /// (`sort::SortTile::local`), a candidate `bench lbvh --sort-scatter local` measures.
+    pub local_sort_scatter: bool,
     /// Leave the vendor tracer's extensions off, as on a device without them
     /// (`Context::ray_tracing` is `None`, `ray_tracing_missing` says so): how the tests
     /// reach `tracer = khr`'s error on a device that has them.
@@ -81,6 +84,8 @@ pub struct Context {
     pub kernels_for: vk::PhysicalDeviceType,
     /// `ContextDesc::lockstep_fit`: the fit's climb chosen by the caller, if it chose.
     pub lockstep_fit: Option<bool>,
+    /// `ContextDesc::local_sort_scatter`.
+    pub local_sort_scatter: bool,
     /// Vulkan version the device supports (`vk::make_api_version` encoding).
     pub api_version: u32,
     /// The driver's raw version number (its encoding is the vendor's).
@@ -426,6 +431,7 @@ impl Context {
             device_type: props.device_type,
             kernels_for: desc.kernels_for.unwrap_or(props.device_type),
             lockstep_fit: desc.lockstep_fit,
+            local_sort_scatter: desc.local_sort_scatter,
             api_version: props.api_version,
             driver_version: props.driver_version,
             driver_name,

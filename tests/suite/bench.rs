@@ -32,6 +32,7 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         file_rays: None,
         keep_hits: false,
         khr_rays: 512,
+        local_sort_scatter: false,
     };
     // Each builder in every layout; the vendor tracer with the first of each.
     let cases = BvhKind::ALL.into_iter().flat_map(|k| StaticLayout::ALL.map(|l| (k, l)));
@@ -163,6 +164,7 @@ fn lbvh_benchmark_anchors_against_embree() {
         file_rays: None,
         keep_hits: false,
         khr_rays: 0,
+        local_sort_scatter: false,
     };
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);
     let room = speculum::scene::builtin::room().unwrap();

@@ -162,6 +162,22 @@ fn bounds_morton_and_sort_match_cpu_exactly() {
     }
 }
 
+/// `local_sort_scatter` (`bench lbvh --local-sort-scatter`) gives the sort written out
+/// in order where the tiles are a GPU's, and leaves a CPU device's tiles direct.
+#[test]
+fn the_local_sort_scatter_takes_gpu_tiles_only() {
+    use ash::vk::PhysicalDeviceType as Kind;
+    for (kind, expected) in [(Kind::DISCRETE_GPU, SortTile::GPU_LOCAL), (Kind::CPU, SortTile::CPU)] {
+        let ctx = common::context_with(speculum::vk::ContextDesc {
+            kernels_for: Some(kind),
+            local_sort_scatter: true,
+            ..Default::default()
+        });
+        assert_eq!(RadixSort::new(&ctx).unwrap().tile(), expected, "{kind:?}");
+        assert_eq!(ctx.validation_messages(), 0);
+    }
+}
+
 /// The radix sort alone on random keys with many duplicates (few distinct values and
 /// full-range values), random payloads, 1- and 2-word keys, with each tile size a
 /// device can get and the largest allowed: equal to a stable sort.
@@ -171,18 +187,22 @@ fn radix_sort_is_a_stable_sort() {
     let mut rng = common::rng(7);
     let shapes = [
         SortTile::GPU,
+        SortTile::GPU_LOCAL,
         SortTile::CPU,
         SortTile {
             wg: SORT_WG_GPU,
             items: SORT_ITEMS_MAX,
+            local: false,
         },
         SortTile {
             wg: SORT_WG_CPU,
             items: SORT_ITEMS_MAX,
+            local: false,
         },
         SortTile {
             wg: SORT_WG_CPU,
             items: 64,
+            local: false,
         },
     ];
     for tile in shapes {

@@ -63,6 +63,12 @@ pub struct LbvhArgs {
     /// triangulation), a miss as (+inf, 0xFFFFFFFF); needs a single case.
     #[arg(long)]
     pub dump_hits: Option<PathBuf>,
+    /// The sort's scatter puts each tile's pairs in order in shared memory and writes
+    /// them out by consecutive invocations, on a GPU (its tiles of 16 keys a thread):
+    /// a candidate against the direct scatter's scattered stores (lavapipe's tiles
+    /// keep the direct one).
+    #[arg(long)]
+    pub local_sort_scatter: bool,
     #[command(flatten)]
     pub common: Common,
 }
@@ -113,6 +119,7 @@ fn lbvh_options(args: &LbvhArgs) -> Result<Options> {
         file_rays,
         keep_hits: dumping,
         khr_rays: args.khr_rays.unwrap_or(0),
+        local_sort_scatter: false,
     })
 }
 
@@ -138,17 +145,31 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
         )));
     }
     let text = Text::new(&[c.json.as_deref()], c.quiet);
-    let ctx = c.gpu.context()?;
+    let ctx = speculum::vk::Context::new(&speculum::vk::ContextDesc {
+        local_sort_scatter: args.local_sort_scatter,
+        ..c.gpu.desc()
+    })?;
     let mut opts = opts;
+    opts.local_sort_scatter = speculum::tracers::lbvh::sort::SortTile::of_context(&ctx).local;
     let cpu = ctx.device_type == ash::vk::PhysicalDeviceType::CPU;
     opts.rays = args.rays.unwrap_or(if cpu { RAYS_ON_A_CPU } else { RAYS_ON_A_GPU });
     opts.khr_rays = args.khr_rays.unwrap_or(if cpu { KHR_RAYS_ON_A_CPU } else { opts.rays });
     text.line(format_args!(
-        "LBVH on {} ({}-bit Morton, median (p10–p90) of {} runs, GPU ms)",
+        "LBVH on {} ({}-bit Morton{}, median (p10–p90) of {} runs, GPU ms)",
         ctx.device_name,
         args.bits.bits(),
+        if opts.local_sort_scatter {
+            ", sort written out in order"
+        } else {
+            ""
+        },
         opts.repeats
     ));
+    if args.local_sort_scatter && !opts.local_sort_scatter {
+        text.line(format_args!(
+            "  (--local-sort-scatter: this device's sort tiles keep the direct scatter)"
+        ));
+    }
     let runs = (cases.len() * opts.builders.len() * opts.layouts.len()) as u64;
     let bar = progress(runs * (opts.repeats as u64 + 1), "bench lbvh", c.quiet);
     let mut results = Vec::new();

@@ -88,6 +88,11 @@ pub struct SortTile {
     pub wg: u32,
     /// Keys per thread (SORT_ITEMS).
     pub items: u32,
+    /// The scatter puts a tile's pairs in order in shared memory first and writes them
+    /// out by consecutive invocations to consecutive slots (`radix_scatter.comp`'s
+    /// LOCAL_ORDER; tiles of `SORT_BINS` keys a thread), where it writes each key to
+    /// its slot from the invocation that read it.
+    pub local: bool,
 }
 
 impl SortTile {
@@ -95,12 +100,20 @@ impl SortTile {
     pub const GPU: Self = Self {
         wg: SORT_WG_GPU,
         items: SORT_ITEMS_GPU,
+        local: false,
+    };
+    /// A GPU's, written out in order (`SortTile::local`): a candidate for large sorts,
+    /// for a GPU run to measure (`bench lbvh --sort-scatter local`).
+    pub const GPU_LOCAL: Self = Self {
+        local: true,
+        ..Self::GPU
     };
     /// A CPU device's: fewer and longer tiles, each of fewer SIMD batches, whose cost is
     /// per tile (ranking, barriers).
     pub const CPU: Self = Self {
         wg: SORT_WG_CPU,
         items: SORT_ITEMS_CPU,
+        local: false,
     };
 
     pub fn for_device(kind: vk::PhysicalDeviceType) -> Self {
@@ -109,6 +122,15 @@ impl SortTile {
         } else {
             Self::GPU
         }
+    }
+
+    /// The tile `RadixSort::new` makes on `ctx`: the device's (`Context::kernels_for`),
+    /// written out in order where `Context::local_sort_scatter` asks and the tile allows
+    /// (a GPU's).
+    pub fn of_context(ctx: &Context) -> Self {
+        let tile = Self::for_device(ctx.kernels_for);
+        let local = ctx.local_sort_scatter && tile.items == SORT_BINS;
+        Self { local, ..tile }
     }
 
     /// Keys per tile.
@@ -126,10 +148,9 @@ pub struct RadixSort {
 }
 
 impl RadixSort {
-    /// The kernels with the tile shape for this device (`SortTile::for_device` of
-    /// `Context::kernels_for`).
+    /// The kernels with the tile shape for this context (`SortTile::of_context`).
     pub fn new(ctx: &Arc<Context>) -> Result<Self> {
-        Self::with_tile(ctx, SortTile::for_device(ctx.kernels_for))
+        Self::with_tile(ctx, SortTile::of_context(ctx))
     }
 
     /// The tile shape the kernels were made for.
@@ -139,23 +160,32 @@ impl RadixSort {
 
     /// The kernels with this tile shape, whatever the device (tests run every shape on
     /// one device): SORT_WG_GPU or SORT_WG_CPU threads, `SORT_ITEMS_GPU..=SORT_ITEMS_MAX`
-    /// keys each (a multiple of 4), at least MIN_TILE keys a tile.
+    /// keys each (a multiple of 4), at least MIN_TILE keys a tile; written out in order
+    /// (`local`) only with SORT_BINS keys a thread (the staging reuses the scatter's
+    /// SORT_BINS x SORT_WG counts).
     pub fn with_tile(ctx: &Arc<Context>, tile: SortTile) -> Result<Self> {
         assert!(
             (tile.wg == SORT_WG_GPU || tile.wg == SORT_WG_CPU)
                 && (SORT_ITEMS_GPU..=SORT_ITEMS_MAX).contains(&tile.items)
                 && tile.items.is_multiple_of(4)
-                && tile.keys() >= MIN_TILE,
+                && tile.keys() >= MIN_TILE
+                && (!tile.local || tile.items == SORT_BINS),
             "sort tile {tile:?}"
         );
         let c = [tile.items, tile.wg];
         let kernel = |name, shader| Pipeline::compute_specialized::<SortPush>(ctx, name, shader, &c);
+        let scatter = [tile.items, tile.wg, tile.local as u32];
         Ok(Self {
             ctx: ctx.clone(),
             tile,
             count: kernel("lbvh.sort.count", shaders::RADIX_COUNT_COMP)?,
             scan: kernel("lbvh.sort.scan", shaders::RADIX_SCAN_COMP)?,
-            scatter: kernel("lbvh.sort.scatter", shaders::RADIX_SCATTER_COMP)?,
+            scatter: Pipeline::compute_specialized::<SortPush>(
+                ctx,
+                "lbvh.sort.scatter",
+                shaders::RADIX_SCATTER_COMP,
+                &scatter,
+            )?,
         })
     }
 

@@ -16,7 +16,9 @@ use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
 use crate::passes::rt_trace::TracePass;
 use crate::report::{Header, PassTimes, Stat};
+use crate::shader_defines::SORT_RADIX_BITS;
 use crate::tracers::lbvh::ploc::{first_rounds, PlocScratch};
+use crate::tracers::lbvh::sort::STEPS;
 use crate::tracers::lbvh::{
     Bvh, BvhKind, Geometry, LbvhBuilder, MortonBits, RefitSchedule, StaticLayout, UploadedTriangles,
 };
@@ -116,6 +118,9 @@ pub struct CaseReport {
     pub morton_bits: u32,
     /// Stage → GPU milliseconds, in build order.
     pub stages_ms: PassTimes,
+    /// The sort's steps (`lbvh.sort.count`, `.scan`, `.scatter`), each summed over the
+    /// passes (a sort of one tile: the scatter alone, the others null).
+    pub sort_steps_ms: PassTimes,
     /// GPU milliseconds of a whole build (for PLOC, its first submission:
     /// `first_rounds` rounds and the tail).
     pub build_ms: Stat,
@@ -272,6 +277,27 @@ pub fn timed_ploc_build(
     let first = first_rounds(geometry.tri_count);
     let rounds = builder.ploc.finish(geometry.tri_count, bvh, scratch, first)?;
     Ok((readout, rounds - first))
+}
+
+/// The sort's steps (`sort::STEPS`, each summed over its passes) in `repeats` LBVH
+/// builds of `geometry` into `bvh`, each timed step by step (`time_sort_steps`; a
+/// readout that fails its self-check measured again).
+fn time_sort_steps(
+    ctx: &Arc<Context>,
+    builder: &mut LbvhBuilder,
+    geometry: Geometry<'_>,
+    bvh: &Bvh,
+    repeats: u32,
+) -> Result<PassTimes> {
+    let mut timer = GpuTimer::new(ctx, 8 + 3 * 64 / SORT_RADIX_BITS)?;
+    builder.time_sort_steps = true;
+    let mut steps = Timings::default();
+    for _ in 0..repeats {
+        let (readout, discarded) = remeasure_readout(|| timed_build(&mut timer, builder, geometry, bvh))?;
+        steps.add_measured(&readout, discarded);
+    }
+    builder.time_sort_steps = false;
+    Ok(PassTimes::of_scopes(&steps, &STEPS))
 }
 
 /// What the timed builds of one case measured: per-stage samples, and the refit and
@@ -431,8 +457,15 @@ pub fn run_case(
     let n = (i.len() / 3) as u32;
     let triangles = UploadedTriangles::new(ctx, "bench", v, i)?;
     let geometry = triangles.geometry();
-    let builder = LbvhBuilder::new(ctx)?;
+    let mut builder = LbvhBuilder::new(ctx)?;
     let bvh = Bvh::new_static_in(ctx, n, opts.bits, layout)?;
+    // The sort's steps, in builds of their own before the timed ones (the steps' stamps
+    // and barriers would add to those): once a case, with its first builder and layout.
+    let first = (kind, layout) == (opts.builders[0], opts.layouts[0]);
+    let sort_steps_ms = match first {
+        true => time_sort_steps(ctx, &mut builder, geometry, &bvh, opts.repeats)?,
+        false => PassTimes::of_scopes(&Timings::default(), &STEPS),
+    };
     let scratch = (kind == BvhKind::Ploc).then(|| PlocScratch::new(ctx, n)).transpose()?;
     let built = time_builds(ctx, (&builder, geometry, &bvh), scratch.as_ref(), opts.repeats, tick)?;
     let mut timing = built.timing;
@@ -490,6 +523,7 @@ pub fn run_case(
         triangles: n,
         morton_bits: opts.bits.bits(),
         stages_ms,
+        sort_steps_ms,
         build_ms,
         untimed_rounds: built.untimed_rounds,
         build_rounds_check: built.rounds_check.clone(),

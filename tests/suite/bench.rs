@@ -119,6 +119,17 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
             (k, _) => panic!("{kind:?}: khr {k:?}"),
         }
         assert_eq!((c.triangles, c.builder), (5000, kind));
+        // The sort's steps, timed apart on the case's first builder and layout: a sort
+        // of one tile (lavapipe's 8,192 keys) runs the scatter alone.
+        use speculum::tracers::lbvh::sort::{SortTile, COUNT, SCAN, SCATTER, STEPS};
+        let steps = |s| c.sort_steps_ms.get(s).map(|t| t.median);
+        if (kind, layout) == (BvhKind::ALL[0], StaticLayout::ALL[0]) {
+            let tiles = 5000 > SortTile::of_context(&ctx).keys();
+            assert!(steps(SCATTER).is_some_and(|ms| ms > 0.0), "{:?}", c.sort_steps_ms);
+            assert_eq!((steps(COUNT).is_some(), steps(SCAN).is_some()), (tiles, tiles));
+        } else {
+            assert!(STEPS.iter().all(|&s| steps(s).is_none()), "{kind:?} {layout:?}");
+        }
         for s in kind.stages() {
             assert!(c.stages_ms.median(s) > 0.0, "{kind:?}: stage {s} timed");
         }

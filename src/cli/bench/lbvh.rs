@@ -271,11 +271,26 @@ fn lbvh_cases(args: &LbvhArgs) -> Result<Vec<Case>> {
 /// One case's lines: the build and its stages, tree quality and trace rates with the
 /// checks, and the rays file's trace when there is one.
 fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
+    let steps: Vec<String> = (case.sort_steps_ms.0.iter())
+        .filter_map(|(s, stat)| {
+            Some(format!(
+                "{} {:.3}",
+                s.trim_start_matches("lbvh.sort."),
+                stat.as_ref()?.median
+            ))
+        })
+        .collect();
     let stages: Vec<String> = case
         .builder
         .stages()
         .iter()
-        .map(|s| format!("{} {:.3}", s.trim_start_matches("lbvh."), case.stages_ms.median(s)))
+        .map(|&s| {
+            let ms = format!("{} {:.3}", s.trim_start_matches("lbvh."), case.stages_ms.median(s));
+            match s == speculum::tracers::lbvh::SORT && !steps.is_empty() {
+                true => format!("{ms} (timed apart: {})", steps.join(", ")),
+                false => ms,
+            }
+        })
         .collect();
     let untimed = match case.untimed_rounds {
         0 => String::new(),

@@ -191,6 +191,9 @@ pub struct LbvhBuilder {
     bounds: Pipeline,
     morton: Pipeline,
     pub sort: RadixSort,
+    /// The sort's steps each timed under its scope (`sort::STEPS`, `bench lbvh`): a
+    /// timestamp and its barrier between each of a build's dispatches of the sort.
+    pub time_sort_steps: bool,
     fit: Pipeline,
     refit_leaves: Pipeline,
     refit_level: Pipeline,
@@ -225,6 +228,7 @@ impl LbvhBuilder {
             bounds: Pipeline::compute::<u32>(ctx, BOUNDS, shaders::LBVH_BOUNDS_COMP)?,
             morton: Pipeline::compute::<KeyPush>(ctx, MORTON, shaders::LBVH_MORTON_COMP)?,
             sort: RadixSort::new(ctx)?,
+            time_sort_steps: false,
             fit: Pipeline::compute_specialized::<FitPush>(ctx, FIT, shaders::LBVH_FIT_COMP, &[lockstep as u32])?,
             refit_leaves: Pipeline::compute::<u32>(ctx, REFIT, shaders::LBVH_REFIT_LEAVES_COMP)?,
             refit_level: Pipeline::compute::<RangePush>(ctx, REFIT, shaders::LBVH_REFIT_LEVEL_COMP)?,
@@ -337,7 +341,11 @@ impl LbvhBuilder {
         self.record_morton(cmd, geom, bvh);
         timer.end(cmd, MORTON);
         timer.begin(cmd, SORT);
-        self.sort.record(cmd, &bvh.sort, geom.tri_count);
+        if self.time_sort_steps {
+            self.sort.record_timed(cmd, &bvh.sort, geom.tri_count, timer);
+        } else {
+            self.sort.record(cmd, &bvh.sort, geom.tri_count);
+        }
         timer.end(cmd, SORT);
     }
 

@@ -10,11 +10,18 @@ use crate::shader_defines::{
 };
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Groups, Pipeline, Resource, TexelView};
+use crate::vk::{Buffer, Context, GpuTimer, Groups, Pipeline, Resource, TexelView};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
+
+/// The sort's steps, each under its scope in every pass where the sort is timed step
+/// by step (`RadixSort::record_timed`: `bench lbvh`), summed over the passes.
+pub const COUNT: &str = "lbvh.sort.count";
+pub const SCAN: &str = "lbvh.sort.scan";
+pub const SCATTER: &str = "lbvh.sort.scatter";
+pub const STEPS: [&str; 3] = [COUNT, SCAN, SCATTER];
 
 /// The fewest keys per tile (one workgroup of the count and scatter kernels) a sort
 /// takes (`RadixSort::with_tile`): the counts buffer is sized for that many tiles.
@@ -193,6 +200,20 @@ impl RadixSort {
     /// visible to compute reads; the result is left in `keys[0]`/`values[0]`, visible
     /// to compute reads.
     pub fn record(&self, cmd: vk::CommandBuffer, b: &SortBuffers, n: u32) {
+        self.record_steps(cmd, b, n, None);
+    }
+
+    /// `record`, each step of each pass under its scope in `timer` (`STEPS`; a sort of
+    /// one tile runs its scatter alone).
+    pub fn record_timed(&self, cmd: vk::CommandBuffer, b: &SortBuffers, n: u32, timer: &mut GpuTimer) {
+        self.record_steps(cmd, b, n, Some(timer));
+    }
+
+    fn record_steps(&self, cmd: vk::CommandBuffer, b: &SortBuffers, n: u32, mut timer: Option<&mut GpuTimer>) {
+        let mut step = |name, record: &mut dyn FnMut()| match timer.as_deref_mut() {
+            Some(t) => t.scope(cmd, name, record),
+            None => record(),
+        };
         assert!(n <= b.capacity, "sorting {n} keys in buffers for {}", b.capacity);
         if n <= 1 {
             return;
@@ -217,13 +238,17 @@ impl RadixSort {
                     ("keys", Resource::Texels(&b.key_texels[i])),
                     ("counts", Resource::Buffer(&b.counts)),
                 ];
-                self.count.dispatch(cmd, &count, &push, tiles);
-                // RAW: the scan reads the histograms just written.
-                barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+                step(COUNT, &mut || {
+                    self.count.dispatch(cmd, &count, &push, tiles);
+                    // RAW: the scan reads the histograms just written.
+                    barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+                });
                 let scan = [("counts", Resource::Buffer(&b.counts))];
-                self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
-                // RAW: the scatter reads the scanned offsets.
-                barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+                step(SCAN, &mut || {
+                    self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
+                    // RAW: the scatter reads the scanned offsets.
+                    barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+                });
             }
             let scatter = [
                 ("keys_in", Resource::Texels(&b.key_texels[i])),
@@ -232,10 +257,12 @@ impl RadixSort {
                 ("values_out", Resource::Buffer(&b.values[o])),
                 ("offsets", Resource::Buffer(&b.counts)),
             ];
-            self.scatter.dispatch(cmd, &scatter, &push, tiles);
-            // RAW: the next pass (or the caller) reads the scattered pairs; WAR: the
-            // next pass's count overwrites the offsets the scatter read.
-            barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+            step(SCATTER, &mut || {
+                self.scatter.dispatch(cmd, &scatter, &push, tiles);
+                // RAW: the next pass (or the caller) reads the scattered pairs; WAR:
+                // the next pass's count overwrites the offsets the scatter read.
+                barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+            });
         }
     }
 }

@@ -279,20 +279,24 @@ pub fn timed_ploc_build(
     Ok((readout, rounds - first))
 }
 
-/// The sort's steps (`sort::STEPS`, each summed over its passes) in `repeats` LBVH
-/// builds of `geometry` into `bvh`, each timed step by step (`time_sort_steps`; a
-/// readout that fails its self-check measured again).
+/// The sort's steps (`sort::STEPS`, each summed over its passes) in `opts.repeats`
+/// LBVH builds of `geometry` into `bvh`, each timed step by step (`time_sort_steps`; a
+/// readout that fails its self-check measured again), in builds of their own before
+/// the timed ones (the steps' stamps and barriers would add to those): once a case,
+/// with its first builder and layout (`kind`, `layout`; others get nulls).
 fn time_sort_steps(
     ctx: &Arc<Context>,
-    builder: &mut LbvhBuilder,
-    geometry: Geometry<'_>,
-    bvh: &Bvh,
-    repeats: u32,
+    (builder, geometry, bvh): (&mut LbvhBuilder, Geometry<'_>, &Bvh),
+    opts: &Options,
+    (kind, layout): (BvhKind, StaticLayout),
 ) -> Result<PassTimes> {
+    let mut steps = Timings::default();
+    if (kind, layout) != (opts.builders[0], opts.layouts[0]) {
+        return Ok(PassTimes::of_scopes(&steps, &STEPS));
+    }
     let mut timer = GpuTimer::new(ctx, 8 + 3 * 64 / SORT_RADIX_BITS)?;
     builder.time_sort_steps = true;
-    let mut steps = Timings::default();
-    for _ in 0..repeats {
+    for _ in 0..opts.repeats {
         let (readout, discarded) = remeasure_readout(|| timed_build(&mut timer, builder, geometry, bvh))?;
         steps.add_measured(&readout, discarded);
     }
@@ -445,6 +449,8 @@ impl CaseReport {
 /// Benchmarks one triangle set with one builder, walked in one static layout; its
 /// Embree anchor's runs are `anchor_runs`' where they are this case's (the case's
 /// other builders and layouts), else made and kept there.
+// Long: the case's measurements in order (sort steps, builds, checks, ray sets, Embree,
+// exact nodes, the vendor tracer), each a call, then the report's fields, one a line.
 pub fn run_case(
     ctx: &Arc<Context>,
     name: &str,
@@ -459,13 +465,7 @@ pub fn run_case(
     let geometry = triangles.geometry();
     let mut builder = LbvhBuilder::new(ctx)?;
     let bvh = Bvh::new_static_in(ctx, n, opts.bits, layout)?;
-    // The sort's steps, in builds of their own before the timed ones (the steps' stamps
-    // and barriers would add to those): once a case, with its first builder and layout.
-    let first = (kind, layout) == (opts.builders[0], opts.layouts[0]);
-    let sort_steps_ms = match first {
-        true => time_sort_steps(ctx, &mut builder, geometry, &bvh, opts.repeats)?,
-        false => PassTimes::of_scopes(&Timings::default(), &STEPS),
-    };
+    let sort_steps_ms = time_sort_steps(ctx, (&mut builder, geometry, &bvh), opts, (kind, layout))?;
     let scratch = (kind == BvhKind::Ploc).then(|| PlocScratch::new(ctx, n)).transpose()?;
     let built = time_builds(ctx, (&builder, geometry, &bvh), scratch.as_ref(), opts.repeats, tick)?;
     let mut timing = built.timing;
@@ -488,10 +488,11 @@ pub fn run_case(
     let (coherent, coherent_hits) = ray_set(&coherent_set)?;
     let incoherent_set = incoherent_rays(scene_box.lo, scene_box.hi, opts.rays, 7);
     let (incoherent, incoherent_hits) = ray_set(&incoherent_set)?;
-    let file_set = match &opts.file_rays {
-        Some(rays) => Some((ray_set(rays)?, rays)),
-        None => None,
-    };
+    let file_set = opts
+        .file_rays
+        .as_ref()
+        .map(|rays| Ok::<_, crate::Error>((ray_set(rays)?, rays)));
+    let file_set = file_set.transpose()?;
     let sets = [
         Some((&coherent_set[..], &coherent_hits[..], coherent.mrays_per_s, true)),
         Some((&incoherent_set[..], &incoherent_hits[..], incoherent.mrays_per_s, false)),

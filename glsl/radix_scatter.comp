@@ -68,6 +68,18 @@ void scatter_local(uint base, uint tile_keys) {
     for (uint d = 0u; d < SORT_BINS; ++d) {
         start[d] = s_counts[d * SORT_WG + l];
     }
+    // The output slot of each place this invocation writes (SORT_ITEMS == SORT_BINS of
+    // them), found once for every word of the pair: the place's digit is the last whose
+    // first place it reaches.
+    uint slots[SORT_BINS];
+    for (uint j = 0u; j < SORT_ITEMS; ++j) {
+        uint at = j * SORT_WG + l;
+        uint d = 0u;
+        for (uint e = 1u; e < SORT_BINS; ++e) {
+            d = s_first[e] <= at ? e : d;
+        }
+        slots[j] = at + s_base[d];
+    }
     barrier(); // every column read before s_counts holds the staged words
     for (uint w = 0u; w <= pc.key_words; ++w) {
         stage_word(w, base, start);
@@ -75,11 +87,7 @@ void scatter_local(uint base, uint tile_keys) {
         for (uint j = 0u; j < SORT_ITEMS; ++j) {
             uint at = j * SORT_WG + l;
             if (at < tile_keys) {
-                uint d = 0u;
-                for (uint e = 1u; e < SORT_BINS; ++e) {
-                    d = s_first[e] <= at ? e : d;
-                }
-                uint slot = at + s_base[d];
+                uint slot = slots[j];
                 uint word = s_counts[at];
                 if (w == pc.key_words) {
                     values_out[slot] = word;

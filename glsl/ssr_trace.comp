@@ -37,8 +37,8 @@ layout(binding = 10, std430) readonly buffer Pyramid { float pyramid[]; };
 layout(binding = 11, r32f) uniform writeonly image2D hit_distance;
 // This frame's tile state and counts (TILE_WORDS a tile; ssr.classify zeroed the counts).
 layout(binding = 12, std430) buffer Tiles { uint tiles[]; };
-// Word 1: the marched pixels outside rays-only tiles that SSR answered (ssr.classify
-// zeroed it; word 0 is its count of SSR-first marches).
+// Word 1: on a frame that only measures, the marched pixels outside rays-only tiles
+// that SSR answered (ssr.classify zeroed it; word 0 is its count of SSR-first marches).
 layout(binding = 13, std430) buffer SsrFirst { uint ssr_first_marches; uint ssr_first_answered; };
 
 // true: the hierarchical march through the pyramid; false: the linear DDA.
@@ -473,9 +473,12 @@ void main() {
     // probes does not show. A frame that only measures (the adaptive hybrid's probe
     // frame while idle) ends every marched pixel so: its image is the idle path's.
     bool rays_only = count_in_tile(p, fail == 0u);
-    uint answered = subgroupAdd(!rays_only && fail == 0u ? 1u : 0u);
-    if (subgroupElect() && answered > 0u) {
-        atomicAdd(ssr_first_answered, answered);
+    if (pc.measure_only != 0u) {
+        // What the marching path would not have traced (exchange::march_estimate).
+        uint answered = subgroupAdd(!rays_only && fail == 0u ? 1u : 0u);
+        if (subgroupElect() && answered > 0u) {
+            atomicAdd(ssr_first_answered, answered);
+        }
     }
     if (rays_only || pc.measure_only != 0u) {
         fail = FAIL_SKIPPED;

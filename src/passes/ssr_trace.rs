@@ -88,7 +88,8 @@ pub struct SsrOutputs {
     /// two buffers in turn: a frame reads the last one's and writes the other.
     pub tiles: [Buffer; 2],
     /// Word 0: pixels the classification listed in SSR-first tiles (probes aside); word
-    /// 1: those of the marched pixels outside rays-only tiles that SSR answered.
+    /// 1: on a frame that only measures, the marched pixels outside rays-only tiles
+    /// that SSR answered.
     pub ssr_first_marches: Buffer,
 }
 

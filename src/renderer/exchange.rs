@@ -130,8 +130,8 @@ pub fn take_frame<'a>(
                     reflection_ms
                 }
                 _ => {
-                    if let Some(ms) = reflection_ms {
-                        paths.probe_ms = Some(running_mean(paths.probe_ms, ms));
+                    if let Some(probe) = reflection_ms {
+                        paths.probe_ms = Some(running_mean(paths.probe_ms, probe));
                     }
                     reflection_ms.map(|r| march_estimate(r, (rt_ms, rays, answered), (merge_ms, paths.merge_ms)))
                 }

@@ -110,7 +110,7 @@ impl SortTile {
         local: false,
     };
     /// A GPU's, written out in order (`SortTile::local`): a candidate for large sorts,
-    /// for a GPU run to measure (`bench lbvh --sort-scatter local`).
+    /// for a GPU run to measure (`bench lbvh --local-sort-scatter`).
     pub const GPU_LOCAL: Self = Self {
         local: true,
         ..Self::GPU

@@ -10,13 +10,13 @@
 // are appended to the march list, whose length sets ssr.trace's indirect dispatch. So
 // the march and everything around it run only where they can give a reflection:
 // lavapipe pays a full-screen kernel's whole straight-line code on every pixel, taken
-// branch or not. Pixels listed here get their SSR colour and fail mask from ssr.trace;
-// the rest get them here. Mirrored by cpu_ref::ssr::classify.
+// branch or not. Pixels listed here get their SSR colour and fail mask from ssr.trace,
+// but for those marched only to measure (below); the rest get them here. Mirrored by cpu_ref::ssr::classify.
 // The adaptive hybrid: each workgroup is a tile (TILE_* in shader_defines.rs), whose
 // state for this frame ssr_tiles.comp has just written; in a rays-only tile a pixel that would
 // be marched is not (FAIL_SKIPPED: straight to the ray tracer) unless it is a probe
-// (tile_probe), which keeps measuring the tile's success (ssr.trace counts it, then
-// sends it to the ray tracer too). Mirrored by
+// (tile_probe), which keeps measuring the tile's success (ssr.trace counts it; its
+// outputs are written here, as the tile's skipped pixels'). Mirrored by
 // cpu_ref::ssr::tile_update and tile_probe. With skip_all (the adaptive hybrid's idle
 // path) every tile is treated as rays-only with no probe: nothing is listed.
 #include "ssr.glsl"
@@ -57,6 +57,7 @@ layout(push_constant) uniform Push {
     float trace_min_weight; // failed pixels whose own reflection weighs less are not traced
     uint tile_history; // 0: no last frame (the first after a reset or resize)
     uint skip_all; // 1: as if every tile were rays-only without probes (tiles not read)
+    uint measure_only; // 1: every marched pixel ends as a rays-only tile's probe
 } pc;
 
 void main() {
@@ -65,6 +66,7 @@ void main() {
     bool inside = all(lessThan(p, res));
     uint fail = 0u;
     bool march = false;
+    bool ends_skipped = false;
     bool glossy = false;
     vec3 sky = vec3(0.0);
     bool skip_all = pc.skip_all != 0u;
@@ -86,7 +88,16 @@ void main() {
                 march = false;
                 fail = FAIL_SKIPPED;
             }
-            if (!march && pc.trace_min_weight > 0.0) {
+            // A rays-only tile's probe, and every marched pixel of a frame that only
+            // measures, is marched to measure SSR and then ends as the tile's skipped
+            // pixels: decided and written here, by the same instructions as theirs, so
+            // no device's rounding can tell a probe from its neighbours (ssr.trace
+            // writes nothing for it).
+            ends_skipped = march && (rays_only || pc.measure_only != 0u);
+            if (ends_skipped) {
+                fail = FAIL_SKIPPED;
+            }
+            if ((!march || ends_skipped) && pc.trace_min_weight > 0.0) {
                 vec3 base = srgb_decode(texelFetch(gb_albedo, p, 0).rgb);
                 if (untraced_for_block(p, r, nr.xyz, base, texelFetch(gb_motion, p, 0).w, nr.w, pc.trace_min_weight)) {
                     fail |= FAIL_UNTRACED;
@@ -94,7 +105,7 @@ void main() {
                 }
             }
         }
-        if (!march) {
+        if (!march || ends_skipped) {
             imageStore(ssr_out, p, vec4(sky, 0.0));
             imageStore(fail_mask, p, uvec4(fail));
             imageStore(hit_distance, p, vec4(HIT_FAR));

@@ -472,6 +472,7 @@ void main() {
     // block, so the tile has one source, no seam inside it, and which pixels a frame
     // probes does not show. A frame that only measures (the adaptive hybrid's probe
     // frame while idle) ends every marched pixel so: its image is the idle path's.
+    // ssr.classify wrote those pixels' outputs, as it writes the skipped ones'.
     bool rays_only = count_in_tile(p, fail == 0u);
     if (pc.measure_only != 0u) {
         // What the marching path would not have traced (exchange::march_estimate).
@@ -481,13 +482,7 @@ void main() {
         }
     }
     if (rays_only || pc.measure_only != 0u) {
-        fail = FAIL_SKIPPED;
-        color = vec3(0.0);
-        SsrRay first = ssr_ray(p, depth, nr.xyz, roughness, 0u);
-        if (untraced_for_block(p, first, nr.xyz, base, metallic, nr.w, pc.trace_min_weight)) {
-            fail |= FAIL_UNTRACED;
-            color = untraced_sky(first);
-        }
+        return;
     }
     bool kept = fail == 0u || fail == FAIL_BLEND;
     imageStore(ssr_out, p, vec4(color, kept ? confidence : 0.0));

@@ -69,8 +69,8 @@ vec3 untraced_sky(SsrRay r) {
 // Whether a pixel sent to the ray tracer unmarched (its heading too low, or a rays-only
 // tile's) is left untraced: its first ray's reflection weighs less than `min_weight`
 // (0: every one traced) and another pixel of its 2x2 block is traced for it.
-// ssr.classify decides its pixels by it and ssr.trace a rays-only tile's probes, so a
-// probe ends as the tile's other pixels (cpu_ref::ssr::classify_in_tile).
+// ssr.classify decides by it for its pixels and for a rays-only tile's probes alike, so
+// a probe ends as the tile's other pixels (cpu_ref::ssr::classify_in_tile).
 bool untraced_for_block(ivec2 p, SsrRay r, vec3 n_world, vec3 base, float metallic, float reflectivity, float min_weight) {
     return min_weight > 0.0 && !traced_for_block(p) && view_reflection_weight(r, n_world, base, metallic, reflectivity) < min_weight;
 }

@@ -35,6 +35,7 @@ struct ClassifyPush {
     trace_min_weight: f32,
     tile_history: u32,
     skip_all: u32,
+    measure_only: u32,
 }
 
 /// What `SsrPass::classify` does with the pixels a march could answer.
@@ -281,6 +282,7 @@ impl SsrPass {
                 trace_min_weight: params.trace_min_weight,
                 tile_history: (seq.frames > 0) as u32,
                 skip_all: (kind == Classify::SkipAll) as u32,
+                measure_only: params.measure_only as u32,
             },
             Groups::Cover([e.width, e.height, 1]),
         );

@@ -372,6 +372,7 @@ pub fn render_frames(
                 dynamic_triangles: renderer.dynamic_triangles(),
                 rt_pixel_fraction: renderer.reflection_stats()?.rt_pixel_fraction(),
                 vs_rt,
+                plan: renderer.last_plan().expect("a frame was rendered"),
             })?;
         }
     }

@@ -213,6 +213,20 @@ pub struct FrameLine {
     /// Why the frame's timings failed their self-check (`vk::timing`); `null` when
     /// they passed.
     pub timing_problem: Option<String>,
+    /// How its G-buffer was made (`raster` or `rays`) and where its shadows came from
+    /// (`map`, `rays` or `hybrid`): with an adaptive stage, the way the frame took.
+    pub visibility: crate::settings::Visibility,
+    pub shadows: crate::settings::Shadows,
+    /// The adaptive hybrid's path: the one the frame ran and the one its image is
+    /// (another only on a probe frame while idle); `null` for every other mode.
+    pub path: Option<PathLine>,
+}
+
+/// A frame's adaptive hybrid path, by name (`march`, `skip_march`, `trace_all`).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct PathLine {
+    pub runs: &'static str,
+    pub shows: &'static str,
 }
 
 impl FrameLine {
@@ -228,6 +242,12 @@ impl FrameLine {
             ssim: r.vs_rt.map(|c| c.ssim),
             rmse: r.vs_rt.map(|c| c.rmse),
             timing_problem: r.timing_problem.map(str::to_string),
+            visibility: r.plan.visibility,
+            shadows: r.plan.shadows,
+            path: r.plan.hybrid.adaptive().then_some(PathLine {
+                runs: r.plan.path.name(),
+                shows: r.plan.shows.name(),
+            }),
         }
     }
 }
@@ -245,6 +265,8 @@ pub struct FrameRecord<'a> {
     pub rt_pixel_fraction: f64,
     /// With a reference: SSIM and RMSE against the same frame in `rt` mode.
     pub vs_rt: Option<crate::metrics::Comparison>,
+    /// What the frame's plan decided (its adaptive stages' ways).
+    pub plan: crate::renderer::plan::FramePlan,
 }
 
 /// A report as pretty JSON with a trailing newline.

@@ -80,6 +80,11 @@ pub const PROBE_EVERY_MAX: u32 = 31;
 /// What staying ready to march again may cost while idle: 1% of a frame.
 pub const PROBE_BUDGET: f64 = 0.01;
 
+/// The part of its price by which another path must undercut the frames' path to
+/// take over: paths priced within the noise do not alternate (each change of path
+/// changes the image), at a cost of at most 3% of the reflection rows.
+pub const PATH_HOLD: f64 = 0.03;
+
 /// Frames between probe frames (odd, `PROBE_EVERY` to `PROBE_EVERY_MAX`) for a probe
 /// frame costing `extra_ms` more than an idle one, in frames of `frame_ms`.
 pub fn probe_interval(extra_ms: f64, frame_ms: f64) -> u32 {
@@ -246,6 +251,9 @@ pub struct Paths {
     /// frame's ms, a running mean (one part in four), it is measured against.
     pub probe_every: u32,
     pub frame_ms: Option<f64>,
+    /// The index of the last frame that ran the march (a probe frame's included):
+    /// while idle, the next probe frame comes `probe_every` frames after it.
+    pub last_march: u32,
 }
 
 impl Default for Paths {
@@ -260,6 +268,7 @@ impl Default for Paths {
             probe_ms: None,
             probe_every: PROBE_EVERY,
             frame_ms: None,
+            last_march: 0,
         }
     }
 }
@@ -268,15 +277,15 @@ impl Paths {
     /// The path of frame `index`; `priced`: chosen by the paths' costs (a measured
     /// exchange rate), else idle only while no SSR-first tile marches. While marching,
     /// a priced frame in `RECHECK_EVERY` takes an idle path (each in turn), so their
-    /// prices stay current. While idle, a frame in `probe_every` is a probe frame: it
-    /// runs the marching path and shows the idle one.
+    /// prices stay current. While idle, the frame `probe_every` frames after the last
+    /// that marched is a probe frame: it runs the marching path and shows the idle one.
     pub fn frame_path(&self, index: u32, priced: bool) -> FramePath {
         match self.next {
             Path::March if priced && index % RECHECK_EVERY == RECHECK_EVERY - 1 => {
                 FramePath::plain([Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize])
             }
             Path::March => FramePath::plain(Path::March),
-            idle if index.is_multiple_of(self.probe_every) => FramePath {
+            idle if index.wrapping_sub(self.last_march) >= self.probe_every => FramePath {
                 runs: Path::March,
                 shows: idle,
             },
@@ -284,10 +293,13 @@ impl Paths {
         }
     }
 
-    /// Counts a frame on `path` among the paths taken.
-    pub fn count(&mut self, path: FramePath) {
+    /// Counts frame `index`, on `path`, among the paths taken.
+    pub fn count(&mut self, path: FramePath, index: u32) {
         self.frames[path.shows as usize] += 1;
         self.probes += path.measures_only() as u64;
+        if path.runs == Path::March {
+            self.last_march = index;
+        }
     }
 
     /// After a marching frame at exchange rate `rate`: the pixels its SSR-first tiles
@@ -296,7 +308,8 @@ impl Paths {
     /// Not priced: `SkipMarch` when no SSR-first tile marched, else `March`. Priced:
     /// an idle path not priced yet is tried (until the next probe frame; `TraceAll`
     /// first), else the cheapest path is taken (an idle one when no SSR-first tile
-    /// marched).
+    /// marched), but the frames' path is kept while the cheapest undercuts it by no
+    /// more than `PATH_HOLD` of its price.
     pub fn marched(&mut self, ssr_first: u32, ms: Option<f64>, rate: u32, priced: bool) {
         if let Some(ms) = ms {
             let mean = self.ms[0].filter(|_| self.march_rate == rate);
@@ -317,11 +330,18 @@ impl Paths {
             // The `rt` mode's path first: trying it costs nothing against `rt`.
             unpriced
         } else {
-            let candidates = Path::ALL.into_iter().filter(|&p| !(idle_only && p == Path::March));
+            let allowed = |p: Path| !(idle_only && p == Path::March);
             let cost = |p: Path| self.price(p).unwrap_or(f64::INFINITY);
-            candidates
+            let cheapest = (Path::ALL.into_iter().filter(|&p| allowed(p)))
                 .min_by(|&a, &b| cost(a).total_cmp(&cost(b)))
-                .expect("two idle paths")
+                .expect("two idle paths");
+            let current = self.next;
+            let holds = allowed(current) && cost(cheapest) >= (1.0 - PATH_HOLD) * cost(current);
+            if holds {
+                current
+            } else {
+                cheapest
+            }
         };
         // Idle and priced: probe frames no more often than their cost allows (a probe
         // frame's own, where one has been measured, else the marching path's).
@@ -541,6 +561,51 @@ mod tests {
         );
     }
 
+    /// While idle, a probe frame comes `probe_every` frames after the last frame that
+    /// marched, however the interval changed: two probe frames never come closer (by
+    /// the frame index's multiples, a probe frame at 25 that set the interval to 27
+    /// was followed by one at 27).
+    #[test]
+    fn probe_frames_come_an_interval_after_the_last_march() {
+        let mut p = Paths {
+            next: Path::SkipMarch,
+            probe_every: 27,
+            ..Paths::default()
+        };
+        let probe = FramePath {
+            runs: Path::March,
+            shows: Path::SkipMarch,
+        };
+        p.count(probe, 25);
+        let probes: Vec<u32> = (26..60).filter(|&k| p.frame_path(k, true).measures_only()).collect();
+        assert_eq!(probes.first(), Some(&52));
+        p.count(FramePath::plain(Path::SkipMarch), 26);
+        assert_eq!(p.last_march, 25, "an idle frame does not count");
+    }
+
+    /// The frames' path is kept while another undercuts it by `PATH_HOLD` of its
+    /// price or less, so paths priced within the noise do not alternate; a path it may
+    /// not take (marching without an SSR-first tile) holds nothing.
+    #[test]
+    fn a_path_is_kept_until_another_undercuts_it_by_the_hold() {
+        let priced = |next, ms| Paths {
+            next,
+            ms,
+            ..Paths::default()
+        };
+        let mut p = priced(Path::SkipMarch, [Some(120.0), Some(100.0), Some(97.5)]);
+        p.marched(500, None, 0, true);
+        assert_eq!(p.next, Path::SkipMarch, "TraceAll 2.5% cheaper: held");
+        p.ms[2] = Some(96.9);
+        p.marched(500, None, 0, true);
+        assert_eq!(p.next, Path::TraceAll, "3.1% cheaper: taken");
+        let mut q = priced(Path::March, [Some(100.0), Some(98.0), Some(99.0)]);
+        q.marched(500, None, 0, true);
+        assert_eq!(q.next, Path::March, "the march held against 2%");
+        q.marched(0, None, 0, true);
+        assert_eq!(q.next, Path::SkipMarch, "no march to pay for: the cheapest idle path");
+    }
+
     /// A probe frame that only measured prices the marching path without the rays
     /// SSR would have answered (at the frame's mean cost a ray) and with the marching
     /// frames' merge (their seams' blur) for its own.
@@ -553,11 +618,14 @@ mod tests {
         assert_eq!(march_estimate(4.0, (20.0, 100, 900), (1.0, None)), 0.0, "never below 0");
         // Counted as the idle path it showed, and as a probe.
         let mut p = Paths::default();
-        p.count(FramePath {
-            runs: Path::March,
-            shows: Path::TraceAll,
-        });
-        p.count(FramePath::plain(Path::March));
+        p.count(
+            FramePath {
+                runs: Path::March,
+                shows: Path::TraceAll,
+            },
+            7,
+        );
+        p.count(FramePath::plain(Path::March), 8);
         assert_eq!((p.frames, p.probes), ([1, 0, 1], 1));
     }
 

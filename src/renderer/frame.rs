@@ -17,13 +17,14 @@ use crate::passes::compose::ComposeInputs;
 use crate::passes::gbuffer_trace::PrimaryInputs;
 use crate::passes::light_direct::Sun;
 use crate::passes::reflect_denoise::{DenoiseInputs, DenoiseParams};
-use crate::passes::reflect_merge::{MergeInputs, MergeParams};
-use crate::passes::rt_reflect::ReflectInputs;
+use crate::passes::reflect_merge::{MergeInputs, MergeParams, MergePass};
+use crate::passes::rt_reflect::{ReflectInputs, RtReflectPass};
 use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
-use crate::passes::ssr_trace::MarchInputs;
-use crate::passes::{SceneGeometry, Surfaces};
+use crate::passes::ssr_compact::CompactPass;
+use crate::passes::ssr_trace::{MarchInputs, SsrPass};
+use crate::passes::{GBuffer, SceneGeometry, Surfaces};
 use crate::settings::{Hybrid, Settings};
 use crate::tracers::khr::KhrScene;
 use crate::tracers::lbvh::LbvhBuilder;
@@ -322,8 +323,9 @@ fn record_lighting<'a, T: Tracer>(
     f.row(Row::LightDirect, || l.light.record(cmd, ubo, g, sun));
 }
 
-/// `ssr.hiz` to `reflect.denoise`, as `plan` says; a marching hybrid frame's counts
-/// into `counts` (they price the march in rays: `exchange`).
+/// `ssr.hiz` to `reflect.denoise`, as `plan` says (after its recheck, if any); a
+/// marching hybrid frame's counts into `counts` (they price the march in rays:
+/// `exchange`).
 fn record_reflections<'a, T: Tracer>(
     f: &mut FrameRecorder<'_>,
     plan: &FramePlan,
@@ -344,6 +346,10 @@ fn record_reflections<'a, T: Tracer>(
         denoise,
     } = r;
     let (hiz, ssr, compact, rt, merge) = (&*hiz, &*ssr, &*compact, &*rt, &*merge);
+    if let Some(idle) = plan.recheck_plan() {
+        let sources = (ssr, compact, rt, merge);
+        f.row(Row::ReflectRecheck, || record_recheck(&idle, cmd, l, sources, i, t));
+    }
     let (ubo, g, st) = (i.ubo, &l.gbuffer.out, i.st);
     let params = plan.ssr_params(st);
     if plan.runs(Row::SsrHiz) {
@@ -363,15 +369,7 @@ fn record_reflections<'a, T: Tracer>(
     }
     if plan.runs(Row::RtReflect) {
         f.row(Row::SsrCompact, || compact.record(cmd, &ssr.out.mask));
-        let inputs = ReflectInputs {
-            frame: ubo,
-            gbuffer: g,
-            surfaces: i.surfaces,
-            shadow_map: &l.shadow.out,
-            list: &compact.out,
-            scene: t.scene,
-            hit_distance: &ssr.out.hit_distance,
-        };
+        let inputs = reflect_inputs(l, (ssr, compact), i, t);
         let kernel = &t.kernels.reflect;
         f.row(Row::RtReflect, || {
             rt.record(cmd, kernel, &inputs, st.max_bounces, plan.shadows)
@@ -380,22 +378,16 @@ fn record_reflections<'a, T: Tracer>(
     if plan.counts {
         let o = &ssr.out;
         let lists = [&o.march_args, &compact.out.indirect, &o.ssr_first_marches];
-        counts.record((d, cmd), lists, (plan.tile_rate, plan.hybrid.priced(), plan.shows));
+        let path = FramePath {
+            runs: plan.path,
+            shows: plan.shows,
+            rechecks: plan.recheck,
+        };
+        counts.record((d, cmd), lists, (plan.tile_rate, plan.hybrid.priced(), path));
     }
     if plan.runs(Row::ReflectMerge) {
-        let inputs = MergeInputs {
-            frame: ubo,
-            gbuffer: g,
-            fail_mask: &ssr.out.mask,
-            ssr: &ssr.out.color,
-            rt: &rt.out,
-        };
-        let params = MergeParams {
-            rt_enabled: plan.runs(Row::RtReflect),
-            reflective_min: st.reflective_min,
-            blur: plan.blur,
-        };
-        f.row(Row::ReflectMerge, || merge.record(cmd, &inputs, params));
+        let inputs = merge_inputs(g, (ssr, rt), i);
+        f.row(Row::ReflectMerge, || merge.record(cmd, &inputs, merge_params(plan, st)));
     }
     if plan.denoise {
         let inputs = DenoiseInputs {
@@ -412,6 +404,72 @@ fn record_reflections<'a, T: Tracer>(
             reflective_min: st.reflective_min,
         };
         f.row(Row::ReflectDenoise, || denoise.record(cmd, &inputs, params, i.uniforms));
+    }
+}
+
+/// A marching frame's recheck (`idle`: `FramePlan::recheck_plan`): the idle path's
+/// classification, rays and merge, recorded as an idle frame records them but under one
+/// scope (`reflect.recheck`); the marching path that follows writes every output again
+/// (each pass's own barriers order it after these as after the frame before), so the
+/// frame shows it. The idle path's price is this row with the frame's
+/// `reflect.denoise`, which every path runs alike (`exchange::take_frame`).
+fn record_recheck<'a, T: Tracer>(
+    idle: &FramePlan,
+    cmd: vk::CommandBuffer,
+    l: &'a Lighting,
+    (ssr, compact, rt, merge): (&'a SsrPass, &'a CompactPass, &'a RtReflectPass, &'a MergePass),
+    i: &FrameInputs<'a>,
+    t: &Traced<'a, T>,
+) {
+    let (ubo, g, st) = (i.ubo, &l.gbuffer.out, i.st);
+    let kind = idle.classify.expect("an idle path classifies");
+    ssr.classify(cmd, (ubo, g), &idle.ssr_params(st), kind);
+    compact.record(cmd, &ssr.out.mask);
+    let inputs = reflect_inputs(l, (ssr, compact), i, t);
+    rt.record(cmd, &t.kernels.reflect, &inputs, st.max_bounces, idle.shadows);
+    let inputs = merge_inputs(g, (ssr, rt), i);
+    merge.record(cmd, &inputs, merge_params(idle, st));
+}
+
+/// What `rt.reflect` reads: the ray list `compact` made of `ssr`'s fail mask.
+fn reflect_inputs<'a, T: Tracer>(
+    l: &'a Lighting,
+    (ssr, compact): (&'a SsrPass, &'a CompactPass),
+    i: &FrameInputs<'a>,
+    t: &Traced<'a, T>,
+) -> ReflectInputs<'a, T> {
+    ReflectInputs {
+        frame: i.ubo,
+        gbuffer: &l.gbuffer.out,
+        surfaces: i.surfaces,
+        shadow_map: &l.shadow.out,
+        list: &compact.out,
+        scene: t.scene,
+        hit_distance: &ssr.out.hit_distance,
+    }
+}
+
+/// What `reflect.merge` reads: SSR's and the rays' colours by the fail mask.
+fn merge_inputs<'a>(
+    g: &'a GBuffer,
+    (ssr, rt): (&'a SsrPass, &'a RtReflectPass),
+    i: &FrameInputs<'a>,
+) -> MergeInputs<'a> {
+    MergeInputs {
+        frame: i.ubo,
+        gbuffer: g,
+        fail_mask: &ssr.out.mask,
+        ssr: &ssr.out.color,
+        rt: &rt.out,
+    }
+}
+
+/// How `plan`'s merge merges (its seams' blur).
+fn merge_params(plan: &FramePlan, st: &Settings) -> MergeParams {
+    MergeParams {
+        rt_enabled: plan.runs(Row::RtReflect),
+        reflective_min: st.reflective_min,
+        blur: plan.blur,
     }
 }
 

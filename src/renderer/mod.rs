@@ -19,6 +19,7 @@
 //! The screen-sized images are shared by all slots: each pass's entry barriers order
 //! a frame after the one submitted before it on the queue.
 
+mod adaptive;
 pub mod exchange;
 mod frame;
 mod gpu_scene;
@@ -32,7 +33,7 @@ mod tracer;
 mod view;
 
 pub use exchange::PROBE_EVERY;
-pub use table::{Row, FRAME, SCOPES, SIM_RIGID, UNIFORMS};
+pub use table::{Row, FRAME, RECHECK, SCOPES, SIM_RIGID, UNIFORMS};
 pub use view::{frame_uniforms, render_origin, View};
 
 use crate::error::Result;
@@ -43,7 +44,7 @@ use crate::passes::sim_cloth::ClothPass;
 use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::scene::{Camera, Scene};
-use crate::settings::{self, Applies, Mode, Settings, Shadows};
+use crate::settings::{self, Applies, Mode, Settings};
 use crate::tracers::lbvh::{Bvh, LbvhBuilder, MortonBits};
 use crate::tracers::Traceable;
 use crate::vk::{Buffer, Context, GpuTimer, TimerReadout, Wall};
@@ -403,45 +404,6 @@ impl Renderer {
     /// animated model.
     pub fn animation_time(&self) -> Option<f32> {
         self.dynamic.as_ref().and_then(|d| d.animation_time())
-    }
-
-    /// The adaptive hybrid's measured exchange rate and the one in use.
-    pub fn exchange_rate(&self) -> ExchangeRate {
-        self.exchange
-    }
-
-    /// The adaptive hybrid's paths: which one the frames take, and their prices.
-    pub fn hybrid_paths(&self) -> Paths {
-        self.paths
-    }
-
-    /// The plan of the last frame recorded (`None` before the first): the path its
-    /// reflections ran and showed, its G-buffer's and its shadows' ways.
-    pub fn last_plan(&self) -> Option<FramePlan> {
-        self.last_plan
-    }
-
-    /// The adaptive stages (`visibility`, `shadows`): each one's ways (in
-    /// `Visibility::FIXED` and `Shadows::ADAPTIVE` order), which one the frames take,
-    /// and their prices.
-    pub fn stages(&self) -> Stages {
-        self.stages
-    }
-
-    /// Whether a stage of the settings is adaptive (`visibility` or `shadows`).
-    pub fn adaptive_stages(&self) -> bool {
-        self.settings.visibility == settings::Visibility::Adaptive || self.settings.shadows == Shadows::Adaptive
-    }
-
-    /// Whether every adaptive stage of the settings is priced.
-    pub fn stages_priced(&self) -> bool {
-        self.stages.priced(&self.settings)
-    }
-
-    /// Forgets the adaptive stages' prices: the next frames price every way again (at
-    /// the clocks of now, after a warm-up).
-    pub fn reprice_stages(&mut self) {
-        self.stages = Stages::default();
     }
 
     /// The index of the next frame to be recorded.

@@ -51,6 +51,9 @@ pub struct FramePlan {
     /// marches to measure and ends every marched pixel as on the idle path).
     pub path: Path,
     pub shows: Path,
+    /// A marching frame's recheck: the idle path it also runs, to price it, before its
+    /// own (`recheck_plan`; `Row::ReflectRecheck`).
+    pub recheck: Option<Path>,
     /// SSR marches this frame.
     pub marches: bool,
     /// The classification of the pixels a march could answer (`None`: no reflections).
@@ -109,7 +112,11 @@ impl FramePlan {
             "an adaptive frame's shadows are one source"
         );
         let hybrid = Hybrid::of(st);
-        let FramePath { runs: path, shows } = if hybrid.adaptive() {
+        let FramePath {
+            runs: path,
+            shows,
+            rechecks,
+        } = if hybrid.adaptive() {
             path
         } else {
             FramePath::plain(Path::March)
@@ -141,6 +148,7 @@ impl FramePlan {
             hybrid,
             path,
             shows,
+            recheck: rechecks.filter(|_| marches && mode.traces()),
             marches,
             classify,
             tile_rate,
@@ -177,6 +185,27 @@ impl FramePlan {
         self.path != self.shows
     }
 
+    /// The plan of a marching frame's recheck (`None`: no recheck): the idle path's
+    /// classification, rays and merge, as an idle frame records them (no pyramid, no
+    /// march, no seams), whose outputs the marching path then writes again.
+    pub fn recheck_plan(&self) -> Option<FramePlan> {
+        let idle = self.recheck?;
+        Some(FramePlan {
+            path: idle,
+            shows: idle,
+            recheck: None,
+            marches: false,
+            hiz: false,
+            counts: false,
+            classify: Some(match idle {
+                Path::SkipMarch => Classify::SkipAll,
+                _ => Classify::MaskOnly,
+            }),
+            blur: BlurParams { radius: 0, ..self.blur },
+            ..*self
+        })
+    }
+
     /// The frame's SSR parameters: the settings', the tiles' rate, and on a probe frame
     /// that only measures, its end of every marched pixel (`trace_min_weight` 0 where
     /// it shows the `rt` mode's path, which traces every reflective pixel).
@@ -211,6 +240,7 @@ impl FramePlan {
             Row::DynamicAccel => steps && m.vendor,
             Row::ShadowMap => self.shadow_map,
             Row::ShadowClassify | Row::ShadowCompact | Row::ShadowTrace => self.shadow_rays,
+            Row::ReflectRecheck => self.recheck.is_some(),
             Row::SsrHiz => self.hiz,
             Row::SsrClassify | Row::ReflectMerge => self.classify.is_some(),
             Row::SsrTrace => self.marches,
@@ -327,10 +357,7 @@ mod tests {
         assert_eq!(all.classify, Some(Classify::MaskOnly));
         // A probe frame while idle: the marching path's rows and counts, no seams.
         for idle in [Path::SkipMarch, Path::TraceAll] {
-            let runs = FramePath {
-                runs: Path::March,
-                shows: idle,
-            };
+            let runs = FramePath::probe(idle);
             let probe = FramePlan::new(
                 &st,
                 STILL,

@@ -20,6 +20,9 @@ pub const FRAME: &str = "frame";
 pub const UNIFORMS: &str = "uniforms";
 /// The rigid bodies' time step on the CPU (wall clock, while the frame is recorded).
 pub const SIM_RIGID: &str = "sim.rigid";
+/// Timer scope of the adaptive hybrid's recheck: an idle path's classification, rays
+/// and merge, run on a marching frame to price that path without showing it.
+pub const RECHECK: &str = "reflect.recheck";
 
 /// The rows the adaptive hybrid's paths are priced by (`exchange::Paths`): those that
 /// differ between them, `ssr.hiz` to `reflect.denoise`.
@@ -50,6 +53,9 @@ pub enum Row {
     ShadowCompact,
     ShadowTrace,
     LightDirect,
+    /// The adaptive hybrid's recheck of an idle path on a marching frame (one in
+    /// `RECHECK_EVERY`), before the marching path writes every output again.
+    ReflectRecheck,
     SsrHiz,
     SsrClassify,
     SsrTrace,
@@ -64,7 +70,7 @@ pub enum Row {
 
 impl Row {
     /// Every row, in frame order.
-    pub const ALL: [Row; 22] = [
+    pub const ALL: [Row; 23] = [
         Row::Uniforms,
         Row::SimRigid,
         Row::SimTransform,
@@ -79,6 +85,7 @@ impl Row {
         Row::ShadowCompact,
         Row::ShadowTrace,
         Row::LightDirect,
+        Row::ReflectRecheck,
         Row::SsrHiz,
         Row::SsrClassify,
         Row::SsrTrace,
@@ -107,6 +114,7 @@ impl Row {
             Row::ShadowCompact => &[shadow_trace::COMPACT_NAME],
             Row::ShadowTrace => &[shadow_trace::NAME],
             Row::LightDirect => &[light_direct::NAME],
+            Row::ReflectRecheck => &[RECHECK],
             Row::SsrHiz => &[ssr_hiz::NAME],
             Row::SsrClassify => &[ssr_trace::CLASSIFY_NAME],
             Row::SsrTrace => &[ssr_trace::NAME],

@@ -66,9 +66,10 @@ impl ExchangeRate {
     }
 }
 
-/// On the marching path, one frame in this many also runs an idle path (in turn) to
-/// price it, so that path's price stays current; the frame shows the marching path
-/// (it pays for both, 1/64 of an idle frame's reflections more a frame on average).
+/// One priced frame in this many also runs an idle path (marching, each in turn;
+/// idle, the other) to price it, so the idle paths' prices stay current; the frame
+/// shows its own path (it pays for both: 1/64 of an idle path's reflection rows more a
+/// frame on average).
 pub const RECHECK_EVERY: u32 = 64;
 
 /// The adaptive hybrid's probe frames while the frames take an idle path: one frame
@@ -115,21 +116,21 @@ pub fn take_frame<'a>(
     if let Some(ms) = times.get(frame_scope).filter(|_| checked) {
         paths.frame_ms = Some(running_mean(paths.frame_ms, ms));
     }
+    // A recheck priced an idle path (its rows and the frame's glossy filter, which
+    // every path runs alike) before the choice below.
+    if let Some(idle) = recorded.rechecks() {
+        let denoise = times.get(crate::passes::reflect_denoise::NAME).unwrap_or(0.0);
+        let recheck = times.get(crate::renderer::table::RECHECK).filter(|_| checked);
+        paths.idled(idle, recheck.map(|ms| ms + denoise));
+    }
     match recorded {
         Recorded::March {
             rate,
             priced,
             shows,
-            rechecks,
             counts,
+            ..
         } => {
-            // A recheck priced an idle path (its rows and the frame's glossy filter,
-            // which every path runs alike) before the choice below.
-            if let Some(idle) = rechecks {
-                let denoise = times.get(crate::passes::reflect_denoise::NAME).unwrap_or(0.0);
-                let recheck = times.get(crate::renderer::table::RECHECK).filter(|_| checked);
-                paths.idled(idle, recheck.map(|ms| ms + denoise));
-            }
             let [marched, rays, ssr_first, answered] = counts;
             let ms = |name| times.get(name).unwrap_or(0.0);
             let (rt_ms, merge_ms) = (
@@ -156,7 +157,7 @@ pub fn take_frame<'a>(
                 exchange.add(ssr, (rt_ms, rays));
             }
         }
-        Recorded::Idle(path) => paths.idled(path, reflection_ms),
+        Recorded::Idle { path, .. } => paths.idled(path, reflection_ms),
     }
 }
 
@@ -239,11 +240,11 @@ impl FramePath {
         }
     }
 
-    /// A marching frame that also runs idle path `idle` to price it.
-    pub const fn recheck(idle: Path) -> Self {
+    /// A frame on `path` that also runs idle path `idle` first, to price it.
+    pub const fn recheck(path: Path, idle: Path) -> Self {
         Self {
             rechecks: Some(idle),
-            ..Self::plain(Path::March)
+            ..Self::plain(path)
         }
     }
 
@@ -305,17 +306,22 @@ impl Default for Paths {
 
 impl Paths {
     /// The path of frame `index`; `priced`: chosen by the paths' costs (a measured
-    /// exchange rate), else idle only while no SSR-first tile marches. While marching,
-    /// a priced frame in `RECHECK_EVERY` also runs an idle path (each in turn) before
-    /// its own, so their prices stay current, and shows the marching path. While idle, the frame `probe_every` frames after the last
+    /// exchange rate), else idle only while no SSR-first tile marches. Priced, a frame
+    /// in `RECHECK_EVERY` also runs an idle path before its own, so the idle paths'
+    /// prices stay current, and shows its own: marching, each idle path in turn; idle,
+    /// the other idle path (the marching path is priced by the probe frames). While idle, the frame `probe_every` frames after the last
     /// that marched is a probe frame: it runs the marching path and shows the idle one.
     pub fn frame_path(&self, index: u32, priced: bool) -> FramePath {
+        let recheck = priced && index % RECHECK_EVERY == RECHECK_EVERY - 1;
         match self.next {
-            Path::March if priced && index % RECHECK_EVERY == RECHECK_EVERY - 1 => {
-                FramePath::recheck([Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize])
-            }
+            Path::March if recheck => FramePath::recheck(
+                Path::March,
+                [Path::SkipMarch, Path::TraceAll][(index / RECHECK_EVERY % 2) as usize],
+            ),
             Path::March => FramePath::plain(Path::March),
             idle if index.wrapping_sub(self.last_march) >= self.probe_every => FramePath::probe(idle),
+            Path::SkipMarch if recheck => FramePath::recheck(Path::SkipMarch, Path::TraceAll),
+            Path::TraceAll if recheck => FramePath::recheck(Path::TraceAll, Path::SkipMarch),
             idle => FramePath::plain(idle),
         }
     }
@@ -411,8 +417,18 @@ pub enum Recorded {
         rechecks: Option<Path>,
         counts: [u32; 4],
     },
-    /// A frame of the adaptive hybrid on an idle path.
-    Idle(Path),
+    /// A frame of the adaptive hybrid on an idle path, having rechecked the other
+    /// (`rechecks`).
+    Idle { path: Path, rechecks: Option<Path> },
+}
+
+impl Recorded {
+    /// The idle path the frame rechecked, if it did.
+    pub fn rechecks(&self) -> Option<Path> {
+        match *self {
+            Recorded::March { rechecks, .. } | Recorded::Idle { rechecks, .. } => rechecks,
+        }
+    }
 }
 
 /// One frame slot's counts, read back after its frame: pixels marched, rays traced,
@@ -432,9 +448,12 @@ impl FrameCounts {
         })
     }
 
-    /// Notes a frame on idle path `path` (nothing to copy).
-    pub fn record_idle(&mut self, path: Path) {
-        self.recorded = Some(Recorded::Idle(path));
+    /// Notes a frame on idle path `path.runs` (nothing to copy), and its recheck.
+    pub fn record_idle(&mut self, path: FramePath) {
+        self.recorded = Some(Recorded::Idle {
+            path: path.runs,
+            rechecks: path.rechecks,
+        });
     }
 
     /// Records the copies of the march list's length (word 3 of `march_args`), the ray
@@ -609,6 +628,26 @@ mod tests {
         assert_eq!(probes.first(), Some(&52));
         p.count(FramePath::plain(Path::SkipMarch), 26);
         assert_eq!(p.last_march, 25, "an idle frame does not count");
+    }
+
+    /// Priced, an idle frame in `RECHECK_EVERY` rechecks the other idle path (a probe
+    /// frame due comes first); a marching one each idle path in turn; not priced, none.
+    #[test]
+    fn idle_frames_recheck_the_other_idle_path() {
+        let recheck = RECHECK_EVERY - 1;
+        for (idle, other) in [(Path::SkipMarch, Path::TraceAll), (Path::TraceAll, Path::SkipMarch)] {
+            let p = Paths {
+                next: idle,
+                probe_every: PROBE_EVERY_MAX,
+                last_march: recheck - 2,
+                ..Paths::default()
+            };
+            assert_eq!(p.frame_path(recheck, true), FramePath::recheck(idle, other));
+            assert_eq!(p.frame_path(recheck, false), FramePath::plain(idle));
+            assert_eq!(p.frame_path(recheck - 1, true), FramePath::plain(idle));
+            let due = Paths { last_march: 0, ..p };
+            assert_eq!(due.frame_path(recheck, true), FramePath::probe(idle), "the probe first");
+        }
     }
 
     /// The frames' path is kept while another undercuts it by `PATH_HOLD` of its

@@ -273,7 +273,11 @@ fn record_shading<'a, T: Tracer>(
 ) {
     record_lighting(f, plan, cmd, lighting, frame, &traced);
     if plan.path != Path::March {
-        counts.record_idle(plan.path);
+        counts.record_idle(FramePath {
+            runs: plan.path,
+            shows: plan.shows,
+            rechecks: plan.recheck,
+        });
     }
     record_reflections(f, plan, (d, cmd), (lighting, reflections), frame, &traced, counts);
 }
@@ -407,9 +411,9 @@ fn record_reflections<'a, T: Tracer>(
     }
 }
 
-/// A marching frame's recheck (`idle`: `FramePlan::recheck_plan`): the idle path's
+/// The frame's recheck (`idle`: `FramePlan::recheck_plan`): the idle path's
 /// classification, rays and merge, recorded as an idle frame records them but under one
-/// scope (`reflect.recheck`); the marching path that follows writes every output again
+/// scope (`reflect.recheck`); the frame's own path that follows writes every output again
 /// (each pass's own barriers order it after these as after the frame before), so the
 /// frame shows it. The idle path's price is this row with the frame's
 /// `reflect.denoise`, which every path runs alike (`exchange::take_frame`).

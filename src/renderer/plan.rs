@@ -51,8 +51,8 @@ pub struct FramePlan {
     /// marches to measure and ends every marched pixel as on the idle path).
     pub path: Path,
     pub shows: Path,
-    /// A marching frame's recheck: the idle path it also runs, to price it, before its
-    /// own (`recheck_plan`; `Row::ReflectRecheck`).
+    /// The adaptive hybrid's recheck: the idle path the frame also runs, to price it,
+    /// before its own (`recheck_plan`; `Row::ReflectRecheck`).
     pub recheck: Option<Path>,
     /// SSR marches this frame.
     pub marches: bool,
@@ -148,7 +148,7 @@ impl FramePlan {
             hybrid,
             path,
             shows,
-            recheck: rechecks.filter(|_| marches && mode.traces()),
+            recheck: rechecks.filter(|_| mode.traces()),
             marches,
             classify,
             tile_rate,
@@ -185,7 +185,7 @@ impl FramePlan {
         self.path != self.shows
     }
 
-    /// The plan of a marching frame's recheck (`None`: no recheck): the idle path's
+    /// The plan of the frame's recheck (`None`: no recheck): the idle path's
     /// classification, rays and merge, as an idle frame records them (no pyramid, no
     /// march, no seams), whose outputs the marching path then writes again.
     pub fn recheck_plan(&self) -> Option<FramePlan> {

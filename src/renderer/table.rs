@@ -21,7 +21,7 @@ pub const UNIFORMS: &str = "uniforms";
 /// The rigid bodies' time step on the CPU (wall clock, while the frame is recorded).
 pub const SIM_RIGID: &str = "sim.rigid";
 /// Timer scope of the adaptive hybrid's recheck: an idle path's classification, rays
-/// and merge, run on a marching frame to price that path without showing it.
+/// and merge, run before the frame's own path to price it without showing it.
 pub const RECHECK: &str = "reflect.recheck";
 
 /// The rows the adaptive hybrid's paths are priced by (`exchange::Paths`): those that
@@ -53,8 +53,8 @@ pub enum Row {
     ShadowCompact,
     ShadowTrace,
     LightDirect,
-    /// The adaptive hybrid's recheck of an idle path on a marching frame (one in
-    /// `RECHECK_EVERY`), before the marching path writes every output again.
+    /// The adaptive hybrid's recheck of an idle path (one frame in `RECHECK_EVERY`),
+    /// before the frame's own path writes every output again.
     ReflectRecheck,
     SsrHiz,
     SsrClassify,

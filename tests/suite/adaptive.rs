@@ -325,6 +325,58 @@ fn a_recheck_prices_an_idle_path_and_shows_the_march() {
     assert_eq!(ctx.validation_messages(), 0);
 }
 
+/// While the frames take an idle path, the frame in `RECHECK_EVERY` prices the other
+/// idle path under `reflect.recheck` before its own, and shows its own: byte for byte
+/// the idle frame before it. Before, the idle path not taken kept the price of its
+/// trial (the first frames) however the view changed.
+#[test]
+fn an_idle_frame_rechecks_the_other_idle_path() {
+    use speculum::renderer::exchange::{Path, Paths, RECHECK_EVERY};
+    // A recheck prices its path where its timings pass their self-check: alone.
+    let _alone = common::alone();
+    let ctx = common::context();
+    let scene = speculum::scene::builtin::spheres().unwrap();
+    let st = Settings {
+        glossy: false,
+        ..settings(HybridPolicy::Adaptive, 0.0)
+    };
+    let mut r = Renderer::new(&ctx, &scene, &st).unwrap();
+    // `trace_all` priced far below the others, and no probe frame (they could choose
+    // anew): the frames stay on `trace_all`.
+    let far = 1e9;
+    r.set_hybrid_paths(Paths {
+        next: Path::TraceAll,
+        ms: [Some(far), Some(far), Some(1.0)],
+        probe_every: u32::MAX,
+        ..Paths::default()
+    });
+    let mut frames = Vec::new();
+    for k in 0..RECHECK_EVERY {
+        let times = r.render_frame().unwrap();
+        let plan = r.last_plan().unwrap();
+        assert_eq!(
+            times.get("reflect.recheck").is_some(),
+            plan.recheck.is_some(),
+            "frame {k}"
+        );
+        assert!(times.get("ssr.trace").is_none(), "frame {k} does not march");
+        if k >= RECHECK_EVERY - 2 {
+            frames.push((plan, r.read_output().unwrap()));
+        }
+    }
+    let [(before, a), (recheck, b)] = <[_; 2]>::try_from(frames).unwrap();
+    assert_eq!((before.shows, before.recheck), (Path::TraceAll, None), "{before:?}");
+    assert_eq!(
+        (recheck.path, recheck.shows, recheck.recheck),
+        (Path::TraceAll, Path::TraceAll, Some(Path::SkipMarch)),
+        "{recheck:?}"
+    );
+    assert!(a == b, "the recheck frame differs from the idle frame before it");
+    let price = r.hybrid_paths().price(Path::SkipMarch).unwrap();
+    assert!(price < far && price > 0.0, "skip_march priced {price}");
+    assert_eq!(ctx.validation_messages(), 0);
+}
+
 /// `exchange_rate = 0`: the renderer prices a march in rays from its hybrid frames'
 /// timings and counts, and its tiles follow that price; `render`'s report gives the
 /// split.

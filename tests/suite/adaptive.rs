@@ -277,19 +277,31 @@ fn a_probe_frame_while_idle_shows_the_idle_path() {
 /// in turn) runs it under `reflect.recheck` before the marching path, and shows the
 /// marching path: byte for byte the marching frame before it on a still view with
 /// glossy off. Before, it showed the idle path (every pixel traced where SSR answered
-/// the frames around it): a pulse one frame in 64.
+/// the frames around it): a pulse one frame in 64. Through either tracer (the
+/// driver's runs its ray-tracing pipeline twice in the recheck frame).
 #[test]
 fn a_recheck_prices_an_idle_path_and_shows_the_march() {
-    use speculum::renderer::exchange::{Path, Paths, RECHECK_EVERY};
     // A recheck prices its path where its timings pass their self-check: alone.
     let _alone = common::alone();
     let ctx = common::context();
+    use speculum::settings::Tracer;
+    // Lavapipe 25 has the driver's ray tracing; a GPU without it runs the LBVH alone.
+    assert!(ctx.ray_tracing.is_some() || ctx.driver_name != "llvmpipe");
+    let khr = ctx.ray_tracing.is_some().then_some(Tracer::Khr);
+    for tracer in std::iter::once(Tracer::Lbvh).chain(khr) {
+        recheck_while_marching(&ctx, tracer);
+    }
+}
+
+fn recheck_while_marching(ctx: &std::sync::Arc<speculum::vk::Context>, tracer: speculum::settings::Tracer) {
+    use speculum::renderer::exchange::{Path, Paths, RECHECK_EVERY};
     let scene = speculum::scene::builtin::room().unwrap();
     let st = Settings {
         glossy: false,
+        tracer,
         ..settings(HybridPolicy::Adaptive, 0.0)
     };
-    let mut r = Renderer::new(&ctx, &scene, &st).unwrap();
+    let mut r = Renderer::new(ctx, &scene, &st).unwrap();
     // Marching priced far below the idle paths: the frames march, rechecks aside.
     let far = 1e9;
     r.set_hybrid_paths(Paths {
@@ -301,28 +313,31 @@ fn a_recheck_prices_an_idle_path_and_shows_the_march() {
     for k in 0..2 * RECHECK_EVERY {
         let times = r.render_frame().unwrap();
         let recheck = k % RECHECK_EVERY == RECHECK_EVERY - 1;
-        assert_eq!(times.get("reflect.recheck").is_some(), recheck, "frame {k}");
-        assert!(times.get("ssr.trace").is_some(), "frame {k} marches");
+        assert_eq!(times.get("reflect.recheck").is_some(), recheck, "{tracer:?} frame {k}");
+        assert!(times.get("ssr.trace").is_some(), "{tracer:?} frame {k} marches");
         if recheck || (k + 1) % RECHECK_EVERY == RECHECK_EVERY - 1 {
             let image = r.read_output().unwrap();
             if recheck {
                 let p = r.hybrid_paths();
                 let idle = [Path::SkipMarch, Path::TraceAll][(k / RECHECK_EVERY) as usize];
                 let price = p.price(idle).unwrap();
-                assert!(price < far && price > 0.0, "frame {k}: {idle:?} priced {price}");
+                assert!(
+                    price < far && price > 0.0,
+                    "{tracer:?} frame {k}: {idle:?} priced {price}"
+                );
                 assert!(
                     before.as_ref() == Some(&image),
-                    "frame {k}, a recheck of {idle:?}, differs from the marching frame before it"
+                    "{tracer:?} frame {k}, a recheck of {idle:?}, differs from the marching frame before it"
                 );
                 checked.push(idle);
             }
             before = Some(image);
         }
     }
-    assert_eq!(checked, [Path::SkipMarch, Path::TraceAll]);
+    assert_eq!(checked, [Path::SkipMarch, Path::TraceAll], "{tracer:?}");
     let p = r.hybrid_paths();
     assert_eq!((p.next, p.frames[0]), (Path::March, 2 * RECHECK_EVERY as u64), "{p:?}");
-    assert_eq!(ctx.validation_messages(), 0);
+    assert_eq!(ctx.validation_messages(), 0, "{tracer:?}");
 }
 
 /// While the frames take an idle path, the frame in `RECHECK_EVERY` prices the other

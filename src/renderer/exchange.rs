@@ -212,8 +212,8 @@ impl Path {
 /// idle, which runs the marching path to measure the tiles and shows the idle path
 /// (every pixel its tiles marched ends as on that path: traced, or left untraced for
 /// its block on `SkipMarch`; no seams blurred).
-/// A marching frame may also run an idle path beside its own, to price it without
-/// showing it (`rechecks`).
+/// A frame may also run an idle path before its own, to price it without showing it
+/// (`rechecks`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FramePath {
     pub runs: Path,
@@ -309,8 +309,9 @@ impl Paths {
     /// exchange rate), else idle only while no SSR-first tile marches. Priced, a frame
     /// in `RECHECK_EVERY` also runs an idle path before its own, so the idle paths'
     /// prices stay current, and shows its own: marching, each idle path in turn; idle,
-    /// the other idle path (the marching path is priced by the probe frames). While idle, the frame `probe_every` frames after the last
-    /// that marched is a probe frame: it runs the marching path and shows the idle one.
+    /// the other idle path (the marching path is priced by the probe frames). While
+    /// idle, the frame `probe_every` frames after the last that marched is a probe
+    /// frame: it runs the marching path and shows the idle one.
     pub fn frame_path(&self, index: u32, priced: bool) -> FramePath {
         let recheck = priced && index % RECHECK_EVERY == RECHECK_EVERY - 1;
         match self.next {

@@ -273,11 +273,7 @@ fn record_shading<'a, T: Tracer>(
 ) {
     record_lighting(f, plan, cmd, lighting, frame, &traced);
     if plan.path != Path::March {
-        counts.record_idle(FramePath {
-            runs: plan.path,
-            shows: plan.shows,
-            rechecks: plan.recheck,
-        });
+        counts.record_idle(plan.frame_path());
     }
     record_reflections(f, plan, (d, cmd), (lighting, reflections), frame, &traced, counts);
 }
@@ -382,11 +378,7 @@ fn record_reflections<'a, T: Tracer>(
     if plan.counts {
         let o = &ssr.out;
         let lists = [&o.march_args, &compact.out.indirect, &o.ssr_first_marches];
-        let path = FramePath {
-            runs: plan.path,
-            shows: plan.shows,
-            rechecks: plan.recheck,
-        };
+        let path = plan.frame_path();
         counts.record((d, cmd), lists, (plan.tile_rate, plan.hybrid.priced(), path));
     }
     if plan.runs(Row::ReflectMerge) {

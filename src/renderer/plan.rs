@@ -179,6 +179,15 @@ impl FramePlan {
         }
     }
 
+    /// The adaptive hybrid's path as the frame runs, shows and rechecks it.
+    pub fn frame_path(&self) -> FramePath {
+        FramePath {
+            runs: self.path,
+            shows: self.shows,
+            rechecks: self.recheck,
+        }
+    }
+
     /// A probe frame while idle: it marches with the tiles to measure them and ends
     /// every marched pixel as the idle path `shows` does.
     pub fn measures_only(&self) -> bool {
@@ -187,7 +196,7 @@ impl FramePlan {
 
     /// The plan of the frame's recheck (`None`: no recheck): the idle path's
     /// classification, rays and merge, as an idle frame records them (no pyramid, no
-    /// march, no seams), whose outputs the marching path then writes again.
+    /// march, no seams), whose outputs the frame's own path then writes again.
     pub fn recheck_plan(&self) -> Option<FramePlan> {
         let idle = self.recheck?;
         Some(FramePlan {
@@ -385,6 +394,30 @@ mod tests {
                 (params.measure_only, params.trace_min_weight, params.tile_rate),
                 (true, weight, 37)
             );
+        }
+        // A recheck: the frame's own rows after `reflect.recheck`, whose plan is the
+        // idle path's (its classification, no march, no seams, no counts).
+        for (runs, idle) in [(Path::March, Path::SkipMarch), (Path::SkipMarch, Path::TraceAll)] {
+            let ways = Ways {
+                path: FramePath::recheck(runs, idle),
+                ..ways(runs)
+            };
+            let frame = FramePlan::new(&st, STILL, ways, 37, false);
+            let own = plan(&st, STILL, runs);
+            let mut rows = own.rows();
+            rows.insert(
+                rows.iter().position(|&r| r == SsrHiz || r == SsrClassify).unwrap(),
+                ReflectRecheck,
+            );
+            assert_eq!(frame.rows(), rows, "{runs:?} rechecking {idle:?}");
+            assert_eq!(frame.frame_path(), FramePath::recheck(runs, idle));
+            let r = frame.recheck_plan().unwrap();
+            let want = plan(&st, STILL, idle);
+            assert_eq!(
+                (r.classify, r.marches, r.counts, r.blur.radius, r.rows()),
+                (want.classify, false, false, 0, want.rows())
+            );
+            assert_eq!(own.recheck_plan(), None);
         }
         let fixed = Settings {
             exchange_rate: 0.5,

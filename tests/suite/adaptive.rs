@@ -276,9 +276,10 @@ fn a_probe_frame_while_idle_shows_the_idle_path() {
 /// While the frames march, the frame in `RECHECK_EVERY` that prices an idle path (each
 /// in turn) runs it under `reflect.recheck` before the marching path, and shows the
 /// marching path: byte for byte the marching frame before it on a still view with
-/// glossy off. Before, it showed the idle path (every pixel traced where SSR answered
-/// the frames around it): a pulse one frame in 64. Through either tracer (the
-/// driver's runs its ray-tracing pipeline twice in the recheck frame).
+/// glossy off, wherever the tiles kept their class. Before, it showed the idle path
+/// (every pixel traced where SSR answered the frames around it): a pulse one frame in
+/// 64 (11,180 of the 56,320 pixels here, with the idle path shown). Through either
+/// tracer (the driver's runs its ray-tracing pipeline twice in the recheck frame).
 #[test]
 fn a_recheck_prices_an_idle_path_and_shows_the_march() {
     // A recheck prices its path where its timings pass their self-check: alone.
@@ -316,7 +317,7 @@ fn recheck_while_marching(ctx: &std::sync::Arc<speculum::vk::Context>, tracer: s
         assert_eq!(times.get("reflect.recheck").is_some(), recheck, "{tracer:?} frame {k}");
         assert!(times.get("ssr.trace").is_some(), "{tracer:?} frame {k} marches");
         if recheck || (k + 1) % RECHECK_EVERY == RECHECK_EVERY - 1 {
-            let image = r.read_output().unwrap();
+            let frame = (r.read_output().unwrap(), tile_classes(&r));
             if recheck {
                 let p = r.hybrid_paths();
                 let idle = [Path::SkipMarch, Path::TraceAll][(k / RECHECK_EVERY) as usize];
@@ -325,19 +326,56 @@ fn recheck_while_marching(ctx: &std::sync::Arc<speculum::vk::Context>, tracer: s
                     price < far && price > 0.0,
                     "{tracer:?} frame {k}: {idle:?} priced {price}"
                 );
+                let (compared, differ) = equal_where_tiles_held(before.as_ref().unwrap(), &frame);
                 assert!(
-                    before.as_ref() == Some(&image),
-                    "{tracer:?} frame {k}, a recheck of {idle:?}, differs from the marching frame before it"
+                    differ == 0 && 2 * compared >= (W * H) as usize,
+                    "{tracer:?} frame {k}, a recheck of {idle:?}: {differ} of {compared} pixels differ from the marching frame before it"
                 );
                 checked.push(idle);
             }
-            before = Some(image);
+            before = Some(frame);
         }
     }
     assert_eq!(checked, [Path::SkipMarch, Path::TraceAll], "{tracer:?}");
     let p = r.hybrid_paths();
     assert_eq!((p.next, p.frames[0]), (Path::March, 2 * RECHECK_EVERY as u64), "{p:?}");
     assert_eq!(ctx.validation_messages(), 0, "{tracer:?}");
+}
+
+/// Each tile's class after the last frame (known, rays-only), the rest of its state
+/// (success, flips) cleared.
+fn tile_classes(r: &Renderer) -> Vec<u32> {
+    tile_states(r)
+        .into_iter()
+        .map(|s| s & (TILE_KNOWN | TILE_RAYS_ONLY))
+        .collect()
+}
+
+/// Two frames' images compared where their tiles kept their class (a marching frame
+/// with a measured rate may turn a tile whose success lies near it; that tile and the
+/// tiles around it, which its seams' blur reaches, are left out): the pixels compared
+/// and those of them that differ.
+fn equal_where_tiles_held((a, ta): &(Vec<u8>, Vec<u32>), (b, tb): &(Vec<u8>, Vec<u32>)) -> (usize, usize) {
+    let tiles_x = W.div_ceil(8) as i64;
+    let tiles_y = H.div_ceil(8) as i64;
+    let turned = |tx: i64, ty: i64| {
+        (-1..=1).any(|dy| {
+            (-1..=1).any(|dx| {
+                let (x, y) = (tx + dx, ty + dy);
+                let t = (y * tiles_x + x) as usize;
+                (0..tiles_x).contains(&x) && (0..tiles_y).contains(&y) && ta[t] != tb[t]
+            })
+        })
+    };
+    let (mut compared, mut differ) = (0, 0);
+    for (i, (pa, pb)) in a.chunks(4).zip(b.chunks(4)).enumerate() {
+        let (x, y) = ((i % W as usize) as i64, (i / W as usize) as i64);
+        if !turned(x / 8, y / 8) {
+            compared += 1;
+            differ += (pa != pb) as usize;
+        }
+    }
+    (compared, differ)
 }
 
 /// While the frames take an idle path, the frame in `RECHECK_EVERY` prices the other

@@ -11,7 +11,8 @@
 // the march and everything around it run only where they can give a reflection:
 // lavapipe pays a full-screen kernel's whole straight-line code on every pixel, taken
 // branch or not. Pixels listed here get their SSR colour and fail mask from ssr.trace,
-// but for those marched only to measure (below); the rest get them here. Mirrored by cpu_ref::ssr::classify.
+// but for those marched only to measure (below); the rest get them here. Mirrored by
+// cpu_ref::ssr::classify.
 // The adaptive hybrid: each workgroup is a tile (TILE_* in shader_defines.rs), whose
 // state for this frame ssr_tiles.comp has just written; in a rays-only tile a pixel that would
 // be marched is not (FAIL_SKIPPED: straight to the ray tracer) unless it is a probe

@@ -118,7 +118,7 @@ pub fn take_frame<'a>(
     }
     // A recheck priced an idle path (its rows and the frame's glossy filter, which
     // every path runs alike) before the choice below.
-    if let Some(idle) = recorded.rechecks() {
+    if let Some(idle) = recorded.path().rechecks {
         let denoise = times.get(crate::passes::reflect_denoise::NAME).unwrap_or(0.0);
         let recheck = times.get(crate::renderer::table::RECHECK).filter(|_| checked);
         paths.idled(idle, recheck.map(|ms| ms + denoise));
@@ -127,9 +127,8 @@ pub fn take_frame<'a>(
         Recorded::March {
             rate,
             priced,
-            shows,
+            path,
             counts,
-            ..
         } => {
             let [marched, rays, ssr_first, answered] = counts;
             let ms = |name| times.get(name).unwrap_or(0.0);
@@ -137,7 +136,7 @@ pub fn take_frame<'a>(
                 ms(crate::passes::rt_reflect::NAME),
                 ms(crate::passes::reflect_merge::NAME),
             );
-            let march_ms = match shows {
+            let march_ms = match path.shows {
                 Path::March => {
                     if reflection_ms.is_some() {
                         paths.merge_ms = Some(running_mean(paths.merge_ms, merge_ms));
@@ -157,7 +156,7 @@ pub fn take_frame<'a>(
                 exchange.add(ssr, (rt_ms, rays));
             }
         }
-        Recorded::Idle { path, .. } => paths.idled(path, reflection_ms),
+        Recorded::Idle(path) => paths.idled(path.runs, reflection_ms),
     }
 }
 
@@ -408,26 +407,25 @@ impl Paths {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Recorded {
     /// A marching hybrid frame at exchange rate `rate`, `priced` by the paths' costs,
-    /// showing path `shows` (`Path::March`, or an idle path: a probe frame that only
-    /// measured), having rechecked an idle path (`rechecks`); `counts`: pixels marched,
-    /// rays traced, pixels marched in SSR-first tiles and those of them SSR answered.
+    /// on `path` (it shows `Path::March`, or an idle path: a probe frame that only
+    /// measured; it may have rechecked an idle path); `counts`: pixels marched, rays
+    /// traced, pixels marched in SSR-first tiles and those of them SSR answered.
     March {
         rate: u32,
         priced: bool,
-        shows: Path,
-        rechecks: Option<Path>,
+        path: FramePath,
         counts: [u32; 4],
     },
-    /// A frame of the adaptive hybrid on an idle path, having rechecked the other
-    /// (`rechecks`).
-    Idle { path: Path, rechecks: Option<Path> },
+    /// A frame of the adaptive hybrid on an idle path (`runs`), perhaps having
+    /// rechecked the other.
+    Idle(FramePath),
 }
 
 impl Recorded {
-    /// The idle path the frame rechecked, if it did.
-    pub fn rechecks(&self) -> Option<Path> {
+    /// The path the frame ran, showed and rechecked.
+    pub fn path(&self) -> FramePath {
         match *self {
-            Recorded::March { rechecks, .. } | Recorded::Idle { rechecks, .. } => rechecks,
+            Recorded::March { path, .. } | Recorded::Idle(path) => path,
         }
     }
 }
@@ -451,10 +449,7 @@ impl FrameCounts {
 
     /// Notes a frame on idle path `path.runs` (nothing to copy), and its recheck.
     pub fn record_idle(&mut self, path: FramePath) {
-        self.recorded = Some(Recorded::Idle {
-            path: path.runs,
-            rechecks: path.rechecks,
-        });
+        self.recorded = Some(Recorded::Idle(path));
     }
 
     /// Records the copies of the march list's length (word 3 of `march_args`), the ray
@@ -486,8 +481,7 @@ impl FrameCounts {
         self.recorded = Some(Recorded::March {
             rate,
             priced,
-            shows: path.shows,
-            rechecks: path.rechecks,
+            path,
             counts: [0; 4],
         });
     }
@@ -495,20 +489,13 @@ impl FrameCounts {
     /// What the slot's finished frame recorded, its counts read.
     pub fn take(&mut self) -> Option<Recorded> {
         match self.recorded.take()? {
-            Recorded::March {
-                rate,
-                priced,
-                shows,
-                rechecks,
-                ..
-            } => {
+            Recorded::March { rate, priced, path, .. } => {
                 let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.buffer.mapped()?[..16]);
                 let counts = [words[0], words[1], words[2], words[3]];
                 Some(Recorded::March {
                     rate,
                     priced,
-                    shows,
-                    rechecks,
+                    path,
                     counts,
                 })
             }

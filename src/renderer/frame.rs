@@ -24,7 +24,7 @@ use crate::passes::sim_skin::SimSkinPass;
 use crate::passes::sim_transform::SimTransformPass;
 use crate::passes::ssr_compact::CompactPass;
 use crate::passes::ssr_trace::{MarchInputs, SsrPass};
-use crate::passes::{GBuffer, SceneGeometry, Surfaces};
+use crate::passes::{SceneGeometry, Surfaces};
 use crate::settings::{Hybrid, Settings};
 use crate::tracers::khr::KhrScene;
 use crate::tracers::lbvh::LbvhBuilder;
@@ -382,7 +382,7 @@ fn record_reflections<'a, T: Tracer>(
         counts.record((d, cmd), lists, (plan.tile_rate, plan.hybrid.priced(), path));
     }
     if plan.runs(Row::ReflectMerge) {
-        let inputs = merge_inputs(g, (ssr, rt), i);
+        let inputs = merge_inputs(l, (ssr, rt), i);
         f.row(Row::ReflectMerge, || merge.record(cmd, &inputs, merge_params(plan, st)));
     }
     if plan.denoise {
@@ -423,7 +423,7 @@ fn record_recheck<'a, T: Tracer>(
     compact.record(cmd, &ssr.out.mask);
     let inputs = reflect_inputs(l, (ssr, compact), i, t);
     rt.record(cmd, &t.kernels.reflect, &inputs, st.max_bounces, idle.shadows);
-    let inputs = merge_inputs(g, (ssr, rt), i);
+    let inputs = merge_inputs(l, (ssr, rt), i);
     merge.record(cmd, &inputs, merge_params(idle, st));
 }
 
@@ -447,13 +447,13 @@ fn reflect_inputs<'a, T: Tracer>(
 
 /// What `reflect.merge` reads: SSR's and the rays' colours by the fail mask.
 fn merge_inputs<'a>(
-    g: &'a GBuffer,
+    l: &'a Lighting,
     (ssr, rt): (&'a SsrPass, &'a RtReflectPass),
     i: &FrameInputs<'a>,
 ) -> MergeInputs<'a> {
     MergeInputs {
         frame: i.ubo,
-        gbuffer: g,
+        gbuffer: &l.gbuffer.out,
         fail_mask: &ssr.out.mask,
         ssr: &ssr.out.color,
         rt: &rt.out,

@@ -42,6 +42,21 @@ fn rt_settings() -> Settings {
     }
 }
 
+/// The adaptive hybrid with a measured rate and glossy off (a still view renders the
+/// same image again where the tiles keep their class) on `scene`, through `tracer`.
+fn glossy_off(
+    ctx: &std::sync::Arc<speculum::vk::Context>,
+    scene: &speculum::scene::Scene,
+    tracer: speculum::settings::Tracer,
+) -> Renderer {
+    let st = Settings {
+        glossy: false,
+        tracer,
+        ..settings(HybridPolicy::Adaptive, 0.0)
+    };
+    Renderer::new(ctx, scene, &st).unwrap()
+}
+
 /// The tiles' state words after the last frame.
 fn tile_states(r: &Renderer) -> Vec<u32> {
     let words: Vec<u32> = bytemuck::pod_collect_to_vec(&r.reflections.ssr.tiles_written().read().unwrap());
@@ -226,11 +241,7 @@ fn a_probe_frame_while_idle_shows_the_idle_path() {
     let _alone = common::alone();
     let ctx = common::context();
     let scene = speculum::scene::builtin::room().unwrap();
-    let st = Settings {
-        glossy: false,
-        ..settings(HybridPolicy::Adaptive, 0.0)
-    };
-    let mut r = Renderer::new(&ctx, &scene, &st).unwrap();
+    let mut r = glossy_off(&ctx, &scene, speculum::settings::Tracer::Lbvh);
     // Each frame: the path it shows (the paths' next before it), whether it marched,
     // its image, and the SSR-first tiles after it.
     let mut frames = Vec::new();
@@ -297,12 +308,7 @@ fn a_recheck_prices_an_idle_path_and_shows_the_march() {
 fn recheck_while_marching(ctx: &std::sync::Arc<speculum::vk::Context>, tracer: speculum::settings::Tracer) {
     use speculum::renderer::exchange::{Path, Paths, RECHECK_EVERY};
     let scene = speculum::scene::builtin::room().unwrap();
-    let st = Settings {
-        glossy: false,
-        tracer,
-        ..settings(HybridPolicy::Adaptive, 0.0)
-    };
-    let mut r = Renderer::new(ctx, &scene, &st).unwrap();
+    let mut r = glossy_off(ctx, &scene, tracer);
     // Marching priced far below the idle paths: the frames march, rechecks aside.
     let far = 1e9;
     r.set_hybrid_paths(Paths {
@@ -389,11 +395,7 @@ fn an_idle_frame_rechecks_the_other_idle_path() {
     let _alone = common::alone();
     let ctx = common::context();
     let scene = speculum::scene::builtin::spheres().unwrap();
-    let st = Settings {
-        glossy: false,
-        ..settings(HybridPolicy::Adaptive, 0.0)
-    };
-    let mut r = Renderer::new(&ctx, &scene, &st).unwrap();
+    let mut r = glossy_off(&ctx, &scene, speculum::settings::Tracer::Lbvh);
     // `trace_all` priced far below the others, and no probe frame (they could choose
     // anew): the frames stay on `trace_all`.
     let far = 1e9;

@@ -220,13 +220,56 @@ bool pop_node(inout uint node, inout uint sp, inout uint top) {
     return true;
 }
 
+// One step of a ray's walk of BVH `bvh` through binary nodes (0: the static BVH's
+// binary compact nodes on the grid g, st; 1: the dynamic BVH's): visits `node`, tests
+// the triangles of the leaves among its hit children and goes on to the nearer
+// internal child (the farther pushed), else pops. True when the walk has ended: the
+// stack is empty, or with `any_hit` a triangle was hit. `failed` as in push_node.
+bool walk_bvh_step(uint bvh, inout uint node, inout uint sp, inout uint top, vec3 g, vec3 st, vec3 origin,
+                   TriRay r, vec3 inv_dir, float tmin, bool any_hit, inout Hit best, inout bool failed) {
+    TraversalNode nd = fetch_node(bvh, node, g, st);
+    float t0 = box_entry(nd.lo0, nd.hi0, origin, inv_dir, tmin, best.t);
+    float t1 = box_entry(nd.lo1, nd.hi1, origin, inv_dir, tmin, best.t);
+    bool hit0 = t0 != 1.0 / 0.0;
+    bool hit1 = t1 != 1.0 / 0.0;
+    bool found = false;
+    if (hit0 && (nd.child0 & BVH_LEAF_BIT) != 0u) {
+        found = hit_leaf(bvh, nd.child0, r, tmin, any_hit, best);
+        hit0 = false;
+    }
+    if (hit1 && !found && (nd.child1 & BVH_LEAF_BIT) != 0u) {
+        found = hit_leaf(bvh, nd.child1, r, tmin, any_hit, best);
+        hit1 = false;
+    }
+    if (found) {
+        return true;
+    }
+    if (hit0 && hit1) {
+        uint near = t0 <= t1 ? nd.child0 : nd.child1;
+        uint far = t0 <= t1 ? nd.child1 : nd.child0;
+        push_node(far, sp, top, failed);
+        node = near;
+        return false;
+    } else if (hit0 || hit1) {
+        node = hit0 ? nd.child0 : nd.child1;
+        return false;
+    }
+    return !pop_node(node, sp, top);
+}
+
+// The static BVH's compact grid (origin, step), from its header.
+void static_grid(out vec3 g, out vec3 st) {
+    g = uintBitsToFloat(texelFetch(s_nodes, 0).xyz);
+    st = uintBitsToFloat(texelFetch(s_nodes, 1).xyz);
+}
+
 // One ray's walk of BVH `bvh` through binary nodes (0: the static BVH's binary compact
-// nodes, 1: the dynamic BVH's). Called with a constant `bvh`, so each call compiles to
-// the fetches of its own BVH only. Sets `failed` when a push
-// would pass TRACE_STACK (the push is dropped), or when the walk would take more than
-// `max_steps` steps: a step visits one internal node, and a walk of a valid tree visits
-// each of its N-1 nodes at most once, so a walk past N steps is in a cycle (a
-// corrupted tree) and stops instead of hanging the device.
+// nodes, 1: the dynamic BVH's), a step at a time (walk_bvh_step). Called with a
+// constant `bvh`, so each call compiles to the fetches of its own BVH only. Sets
+// `failed` when a push would pass TRACE_STACK (the push is dropped), or when the walk
+// would take more than `max_steps` steps: a step visits one internal node, and a walk
+// of a valid tree visits each of its N-1 nodes at most once, so a walk past N steps is
+// in a cycle (a corrupted tree) and stops instead of hanging the device.
 void walk_bvh(uint bvh, vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, uint max_steps,
               inout Hit best, inout bool failed) {
     uint sp = 0u;
@@ -235,42 +278,15 @@ void walk_bvh(uint bvh, vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool an
     uint node = 0u; // the root, an internal node (or two links to the single leaf)
     vec3 grid_origin = vec3(0.0), grid_step = vec3(0.0);
     if (bvh == 0u) {
-        grid_origin = uintBitsToFloat(texelFetch(s_nodes, 0).xyz);
-        grid_step = uintBitsToFloat(texelFetch(s_nodes, 1).xyz);
+        static_grid(grid_origin, grid_step);
     }
     while (true) {
         if (++steps > max_steps) {
             failed = true;
             break;
         }
-        TraversalNode nd = fetch_node(bvh, node, grid_origin, grid_step);
-        float t0 = box_entry(nd.lo0, nd.hi0, origin, inv_dir, tmin, best.t);
-        float t1 = box_entry(nd.lo1, nd.hi1, origin, inv_dir, tmin, best.t);
-        bool hit0 = t0 != 1.0 / 0.0;
-        bool hit1 = t1 != 1.0 / 0.0;
-        bool found = false;
-        if (hit0 && (nd.child0 & BVH_LEAF_BIT) != 0u) {
-            found = hit_leaf(bvh, nd.child0, r, tmin, any_hit, best);
-            hit0 = false;
-        }
-        if (hit1 && !found && (nd.child1 & BVH_LEAF_BIT) != 0u) {
-            found = hit_leaf(bvh, nd.child1, r, tmin, any_hit, best);
-            hit1 = false;
-        }
-        if (found) {
-            break;
-        }
-        if (hit0 && hit1) {
-            uint near = t0 <= t1 ? nd.child0 : nd.child1;
-            uint far = t0 <= t1 ? nd.child1 : nd.child0;
-            push_node(far, sp, top, failed);
-            node = near;
-            continue;
-        } else if (hit0 || hit1) {
-            node = hit0 ? nd.child0 : nd.child1;
-            continue;
-        }
-        if (!pop_node(node, sp, top)) {
+        if (walk_bvh_step(bvh, node, sp, top, grid_origin, grid_step, origin, r, inv_dir, tmin, any_hit, best,
+                          failed)) {
             break;
         }
     }
@@ -308,8 +324,8 @@ void walk_wide(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, ui
     uint steps = 0u;
     uint top = BVH_INVALID; // when set, the top of the sp entries; the array holds the rest
     uint node = 0u;         // the root's wide node
-    vec3 g = uintBitsToFloat(texelFetch(s_nodes, 0).xyz);
-    vec3 st = uintBitsToFloat(texelFetch(s_nodes, 1).xyz);
+    vec3 g, st;
+    static_grid(g, st);
     while (true) {
         if (++steps > max_steps) {
             failed = true;
@@ -460,13 +476,17 @@ void walk_wide8(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, u
     }
 }
 
+// The inverse of a ray's direction for the box tests: a zero component becomes a huge
+// finite inverse (not inf: 0 * inf = NaN).
+vec3 ray_inv_dir(vec3 dir) {
+    return 1.0 / mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
+}
+
 // Traces one ray through both BVHs (a BVH with 0 triangles is skipped). Returns the
 // closest hit, or with any_hit the first found; t = -1 if a walk failed (its stack
 // overflowed, or it overran its step bound: the tree is not what the walk expects).
 Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint static_tris, uint dynamic_tris, bool any_hit) {
-    // A zero direction component becomes a huge finite inverse (not inf: 0 * inf = NaN).
-    vec3 safe_dir = mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
-    vec3 inv_dir = 1.0 / safe_dir;
+    vec3 inv_dir = ray_inv_dir(dir);
     Hit best = Hit(tmax, BVH_INVALID, 0.0, 0.0);
     bool failed = false;
     TriRay r = tri_ray(origin, dir);

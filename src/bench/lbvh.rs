@@ -56,6 +56,9 @@ pub struct Options {
     /// The sort's scatter writes its tiles out in order (`sort::SortTile::local`;
     /// `--local-sort-scatter` on a GPU).
     pub local_sort_scatter: bool,
+    /// Also trace both sets through the walk with its lanes refilled
+    /// (`TracePass::refilled`), on the binary layout's cases.
+    pub refilled: bool,
 }
 
 /// Mean steps (nodes visited), box tests and triangle tests of a ray's walk, and the
@@ -162,6 +165,10 @@ pub struct CaseReport {
     /// the dynamic BVH's walk reads them (no `lbvh.compact`); on each builder's first
     /// layout's case (the tree is the same in each), `None` on the others.
     pub exact_nodes: Option<[RaySetReport; 2]>,
+    /// The coherent and the incoherent set through the walk with its lanes refilled
+    /// (`TracePass::refilled`: the same tree and layout, each invocation taking a new
+    /// ray when its walk ends), where `Options::refilled` and the layout is binary.
+    pub refilled: Option<[RaySetReport; 2]>,
     /// The rays of `--rays-file`, when given.
     pub file: Option<RaySetReport>,
     /// Embree 3 on the same triangles and rays, LOW then MEDIUM (built with the cargo
@@ -429,6 +436,25 @@ fn exact_walk(
     Ok(Some([walk(sets[0])?, walk(sets[1])?]))
 }
 
+/// The coherent and the incoherent set through the walk with its lanes refilled, where
+/// asked and the case's layout is the binary one it walks.
+fn refilled_walk(
+    ctx: &Arc<Context>,
+    (opts, layout): (&Options, StaticLayout),
+    scene: TraceScene<'_>,
+    sets: [&[Ray]; 2],
+    cpu: &CpuCheck<'_>,
+    timing: &mut TimingCheck,
+) -> Result<Option<[RaySetReport; 2]>> {
+    if !opts.refilled || layout != StaticLayout::Binary {
+        return Ok(None);
+    }
+    let tracer = TracePass::<Lbvh>::refilled(ctx)?;
+    let mut walk =
+        |rays: &[Ray]| time_rays(&tracer, (scene, Through::Static), rays, opts.repeats, cpu, timing).map(|r| r.0);
+    Ok(Some([walk(sets[0])?, walk(sets[1])?]))
+}
+
 impl CaseReport {
     /// Whether the case is sound: the tree's invariants hold, every ray set's checked
     /// hits are the CPU's with no failed walk and settled rounds, and so are the
@@ -439,7 +465,7 @@ impl CaseReport {
             && sound(&self.coherent)
             && sound(&self.incoherent)
             && self.file.as_ref().is_none_or(sound)
-            && self.exact_nodes.iter().flatten().all(sound)
+            && self.exact_nodes.iter().chain(&self.refilled).flatten().all(sound)
             && self.khr.iter().flatten().all(super::khr::KhrReport::sound)
             && self.build_ms.median.is_finite()
             && self.build_rounds_check.settled()
@@ -509,6 +535,8 @@ pub fn run_case(
         &cpu,
         &mut timing,
     )?;
+    let sets = [&coherent_set[..], &incoherent_set[..]];
+    let refilled = refilled_walk(ctx, (opts, layout), scene, sets, &cpu, &mut timing)?;
     let walk_per_ray = WalkPerRay::both(&packed, [&coherent_set, &incoherent_set], opts.check_rays, layout);
     let khr_case = (v, i, [&coherent_set[..], &incoherent_set[..]]);
     let khr = vendor_tracer(ctx, (opts, kind, layout), khr_case, &cpu, (&tracer, scene))?;
@@ -542,6 +570,7 @@ pub fn run_case(
         coherent,
         incoherent,
         exact_nodes,
+        refilled,
         file,
         embree,
         khr,

@@ -10,7 +10,7 @@
 use crate::error::{Error, Result};
 use crate::gpu_types::{Hit, Ray};
 use crate::shaders;
-use crate::tracers::{Rays, TraceKernel, Tracer};
+use crate::tracers::{Lbvh, Rays, TraceKernel, Tracer};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GpuTimer, Resource, TimerReadout};
 use ash::vk;
@@ -19,6 +19,10 @@ use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub const NAME: &str = "rt.trace";
+
+/// Rays an invocation of the refilled walk (`TracePass::<Lbvh>::refilled`) takes on
+/// average: its dispatch covers the rays over this many.
+pub const RAYS_PER_LANE: u32 = 4;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -44,6 +48,9 @@ pub struct RayBatch<'a> {
 pub struct TracePass<T: Tracer> {
     ctx: Arc<Context>,
     kernel: TraceKernel<T>,
+    /// The refilled walk's queue head (`TracePass::<Lbvh>::refilled`); `None`: one ray
+    /// an invocation.
+    queue: Option<Buffer>,
 }
 
 impl<T: Tracer> TracePass<T> {
@@ -52,24 +59,36 @@ impl<T: Tracer> TracePass<T> {
         Ok(Self {
             ctx: ctx.clone(),
             kernel: TraceKernel::new::<TracePush>(ctx, NAME, comp, rgen)?,
+            queue: None,
         })
     }
 
     /// Records the traversal of a batch of rays. At least one BVH (or geometry) must be
     /// given; rays, nodes and geometry must be visible to the kernel's reads
-    /// (`T::RUNS`).
+    /// (`T::RUNS`). The refilled walk also clears its queue, after any earlier trace
+    /// of this pass has used it.
     pub fn record(&self, cmd: vk::CommandBuffer, batch: RayBatch<'_>, scene: T::Scene<'_>) {
-        let own = [
-            ("rays", Resource::Buffer(batch.rays)),
-            ("hits", Resource::Buffer(batch.hits)),
-        ];
         let push = |static_tris, dynamic_tris| TracePush {
             ray_count: batch.count,
             static_tris,
             dynamic_tris,
             any_hit: batch.any_hit as u32,
         };
-        self.kernel.run(cmd, &own, &scene, push, Rays::Count(batch.count));
+        let (rays, hits) = (Resource::Buffer(batch.rays), Resource::Buffer(batch.hits));
+        let Some(queue) = &self.queue else {
+            let own = [("rays", rays), ("hits", hits)];
+            return self.kernel.run(cmd, &own, &scene, push, Rays::Count(batch.count));
+        };
+        let device = &self.ctx.device;
+        // WAR: an earlier trace's atomics on the queue before the clear.
+        barrier::record(device, cmd, &[barrier::memory(T::RUNS, access::TRANSFER_WRITE)], &[]);
+        // SAFETY: `cmd` is recording; the queue lives as long as the pass.
+        unsafe { device.cmd_fill_buffer(cmd, queue.raw, 0, vk::WHOLE_SIZE, 0) };
+        // RAW: the kernel's atomics read the cleared head.
+        barrier::record(device, cmd, &[barrier::memory(access::TRANSFER_WRITE, T::RUNS)], &[]);
+        let own = [("rays", rays), ("hits", hits), ("queue", Resource::Buffer(queue))];
+        let lanes = batch.count.div_ceil(RAYS_PER_LANE);
+        self.kernel.run(cmd, &own, &scene, push, Rays::Count(lanes));
     }
 
     /// Uploads `rays`, traces them, and returns the hits and the GPU time of the
@@ -123,5 +142,29 @@ impl<T: Tracer> TracePass<T> {
             timer.end(cmd, NAME);
         })?;
         Ok((bytemuck::pod_collect_to_vec(&hits_buf.read()?), readout))
+    }
+}
+
+impl TracePass<Lbvh> {
+    /// The walk with its lanes refilled (`glsl/rt_trace_refill.comp`): each invocation
+    /// walks a step a pass and takes a new ray from a queue when its walk ends, so a
+    /// SIMD group's lanes do not idle behind its longest walk. The same hits as `new`'s,
+    /// bit for bit. It walks the static BVH alone in its binary layout; a trace with a
+    /// dynamic BVH, or a static one in a wide layout, returns every ray as a failed walk
+    /// (t = -1).
+    pub fn refilled(ctx: &Arc<Context>) -> Result<Self> {
+        let (comp, rgen) = (shaders::RT_TRACE_REFILL_COMP, shaders::RT_TRACE_RGEN);
+        let queue = Buffer::new(
+            ctx,
+            "trace.queue",
+            4,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        Ok(Self {
+            ctx: ctx.clone(),
+            kernel: TraceKernel::new::<TracePush>(ctx, NAME, comp, rgen)?,
+            queue: Some(queue),
+        })
     }
 }

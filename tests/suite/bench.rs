@@ -33,6 +33,7 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         keep_hits: false,
         khr_rays: 512,
         local_sort_scatter: false,
+        refilled: true,
     };
     // Each builder in every layout; the vendor tracer with the first of each.
     let cases = BvhKind::ALL.into_iter().flat_map(|k| StaticLayout::ALL.map(|l| (k, l)));
@@ -71,15 +72,22 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         );
         // The exact nodes' walk (the dynamic BVH's) on each builder's first layout,
         // every checked hit the CPU's, with the dynamic BVH's id bit.
-        match (&c.exact_nodes, layout == opts.layouts[0]) {
-            (Some(sets), true) => {
-                for s in sets {
-                    assert!(s.checked > 0 && s.mismatches == 0 && s.failed_walks == 0, "{s:?}");
-                    assert!(s.mrays_per_s > 0.0 && s.hit_fraction > 0.0, "{s:?}");
-                }
+        let sound = |sets: &[speculum::bench::rays::RaySetReport; 2]| {
+            for s in sets {
+                assert!(s.checked > 0 && s.mismatches == 0 && s.failed_walks == 0, "{s:?}");
+                assert!(s.mrays_per_s > 0.0 && s.hit_fraction > 0.0, "{s:?}");
             }
+        };
+        match (&c.exact_nodes, layout == opts.layouts[0]) {
+            (Some(sets), true) => sound(sets),
             (None, false) => {}
             (e, _) => panic!("{layout:?}: exact nodes {e:?}"),
+        }
+        // The walk with its lanes refilled, asked for: on the binary layout's cases.
+        match (&c.refilled, layout == StaticLayout::Binary) {
+            (Some(sets), true) => sound(sets),
+            (None, false) => {}
+            (r, _) => panic!("{layout:?}: refilled {r:?}"),
         }
         // Lanes in lockstep: random rays' walks differ in length, and a wider group
         // idles at least as many lanes.
@@ -176,6 +184,7 @@ fn lbvh_benchmark_anchors_against_embree() {
         keep_hits: false,
         khr_rays: 0,
         local_sort_scatter: false,
+        refilled: false,
     };
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);
     let room = speculum::scene::builtin::room().unwrap();

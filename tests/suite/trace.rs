@@ -194,6 +194,58 @@ fn closest_hits_equal_brute_force() {
     }
 }
 
+/// The walk with its lanes refilled (`TracePass::refilled`: each invocation takes a new
+/// ray from a queue when its walk ends) gives rt.trace's hits bit for bit, closest and
+/// any hit, on trees of both builders (rays of a count that no subgroup or workgroup
+/// divides, so the queue's last take is partial), and the rays' hits are brute force's;
+/// a tree it does not walk (a wide layout, a dynamic BVH) fails every ray (t = -1)
+/// rather than answering wrongly.
+#[test]
+fn the_refilled_walk_gives_rt_traces_hits() {
+    use speculum::tracers::lbvh::BvhKind;
+    let ctx = common::context();
+    let b = LbvhBuilder::new(&ctx).unwrap();
+    let [tracer, refilled] = [TracePass::<Lbvh>::new(&ctx), TracePass::<Lbvh>::refilled(&ctx)].map(Result::unwrap);
+    let n = 3000;
+    let (v, i) = random_soup(n, 1.0, default_size(n), 61);
+    let rays = random_rays(12_345, &v, &i, 1.0, 62);
+    let shadow: Vec<Ray> = rays.iter().map(|r| Ray { tmax: 0.9, ..*r }).collect();
+    let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
+    let built = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
+    for kind in BvhKind::ALL {
+        let (_, made) = b.build_now(built.geometry(), &built.bvh, kind).unwrap();
+        assert_eq!(made, kind);
+        let [(_, scene), _] = built.both_walks();
+        for (set, any_hit) in [(&rays, false), (&shadow, true)] {
+            let (want, _) = tracer.trace(set, scene, any_hit).unwrap();
+            let (got, _) = refilled.trace(set, scene, any_hit).unwrap();
+            let differ = want.iter().zip(&got).filter(|(a, b)| a != b).count();
+            assert_eq!(
+                differ,
+                0,
+                "{kind:?}, any hit {any_hit}: {differ} of {} hits differ",
+                set.len()
+            );
+            let hits = got.iter().filter(|h| h.prim != BVH_INVALID).count();
+            assert!(
+                hits > set.len() / 5 && hits < set.len(),
+                "{kind:?}: a mix of hits and misses ({hits})"
+            );
+            if !any_hit {
+                let ties = compare(&got, &cpu, set, |p| triangle(&v, &i, p as usize));
+                assert!(ties <= set.len() / 1000, "{ties} ties");
+            }
+        }
+    }
+    let wide = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, StaticLayout::Wide);
+    let [wide_static, _] = wide.both_walks();
+    for (walk, scene) in [wide_static, built.both_walks()[1]] {
+        let (got, _) = refilled.trace(&rays[..100], scene, false).unwrap();
+        assert!(got.iter().all(|h| h.t == -1.0), "{walk}: {:?}", got[0]);
+    }
+    assert_eq!(ctx.validation_messages(), 0);
+}
+
 /// Rays aimed at points a hair inside each triangle's corners (where the triangle meets
 /// its leaf's box, within a grid step of it: the compact nodes round boxes outward by
 /// less than two) hit as brute force says, through the static walk's compact nodes and
@@ -590,6 +642,7 @@ fn a_tree_deeper_than_the_stack_is_reported() {
         tmax: f32::MAX,
     };
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
+    let refilled = TracePass::<Lbvh>::refilled(&ctx).unwrap();
     for (count, overflows) in [(units, true), (units / 3, false)] {
         let count8 = if overflows { units8 } else { units8 / 3 };
         for (built, planted) in [
@@ -643,6 +696,13 @@ fn a_tree_deeper_than_the_stack_is_reported() {
                 hits[0]
             );
         }
+        // The walk with its lanes refilled (static, binary) reports it alike.
+        let scene = TraceScene {
+            static_bvh: Some(binary.traceable()),
+            dynamic_bvh: None,
+        };
+        let (hits, _) = refilled.trace(&[ray], scene, false).unwrap();
+        assert_eq!(hits[0].t == -1.0, overflows, "{count} units, refilled: {:?}", hits[0]);
     }
     assert_eq!(ctx.validation_messages(), 0);
 }
@@ -651,8 +711,8 @@ fn a_tree_deeper_than_the_stack_is_reported() {
 /// itself (its half box the scene's, so every ray entering the scene takes it; its
 /// second half a speck in a corner), a walk would circle the root forever without a
 /// push. Bounded by the triangle count, it stops and reports t = -1, in the static walk
-/// (compact nodes made from the planted tree) and the dynamic one alike; a ray that
-/// misses the scene's box still misses.
+/// (compact nodes made from the planted tree), the dynamic one and the static walk
+/// with its lanes refilled alike; a ray that misses the scene's box still misses.
 #[test]
 fn a_planted_cycle_ends_in_a_reported_overrun() {
     let ctx = common::context();
@@ -694,8 +754,11 @@ fn a_planted_cycle_ends_in_a_reported_overrun() {
         dir: [1.0, 0.0, 0.0],
         ..through
     };
-    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
-    for (_, scene) in built.both_walks() {
+    let [tracer, refilled] = [TracePass::<Lbvh>::new(&ctx), TracePass::<Lbvh>::refilled(&ctx)].map(Result::unwrap);
+    let [as_static, as_dynamic] = built.both_walks();
+    // The walk with its lanes refilled walks the static BVH alone.
+    let walks = [(&tracer, as_static), (&tracer, as_dynamic), (&refilled, as_static)];
+    for (tracer, (_, scene)) in walks {
         let (hits, _) = tracer.trace(&[through, past], scene, false).unwrap();
         assert_eq!(
             (hits[0].t, hits[0].prim),

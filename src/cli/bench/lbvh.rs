@@ -69,6 +69,11 @@ pub struct LbvhArgs {
     /// keep the direct one).
     #[arg(long)]
     pub local_sort_scatter: bool,
+    /// Also trace both ray sets of each binary-layout case through the walk with its
+    /// lanes refilled (a candidate for wide SIMD groups: an invocation takes a new ray
+    /// when its walk ends, so its group's lanes do not idle behind the longest walk)
+    #[arg(long)]
+    pub refilled: bool,
     #[command(flatten)]
     pub common: Common,
 }
@@ -120,6 +125,7 @@ fn lbvh_options(args: &LbvhArgs) -> Result<Options> {
         keep_hits: dumping,
         khr_rays: args.khr_rays.unwrap_or(0),
         local_sort_scatter: false,
+        refilled: args.refilled,
     })
 }
 
@@ -360,8 +366,8 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     }
 }
 
-/// A case's walk lines: the CPU replay's counts, the exact nodes' walk and the rays
-/// file's trace, each where the case has it.
+/// A case's walk lines: the CPU replay's counts, the exact nodes' walk, the refilled
+/// walk and the rays file's trace, each where the case has it.
 fn print_walks(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     let walk = |w: &speculum::bench::lbvh::WalkPerRay| {
         format!(
@@ -375,10 +381,11 @@ fn print_walks(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
         walk(&case.walk_per_ray[0]),
         walk(&case.walk_per_ray[1])
     ));
-    if let Some([c, i]) = &case.exact_nodes {
+    // Both sets through another walk of the tree, against the case's own.
+    let other_walk = |label: &str, [c, i]: &[speculum::bench::rays::RaySetReport; 2]| {
         let ratio = |e: f64, compact: f64| e / compact.max(1e-12);
         text.line(format_args!(
-            "{:<14} exact nodes (the dynamic BVH's walk, no compact): coherent {:.2} Mrays/s ({:.2}x), incoherent {:.2} Mrays/s ({:.2}x); {} and {} checked differ, {} failed walks",
+            "{:<14} {label}: coherent {:.2} Mrays/s ({:.2}x), incoherent {:.2} Mrays/s ({:.2}x); {} and {} checked differ, {} failed walks",
             "",
             c.mrays_per_s,
             ratio(c.mrays_per_s, case.coherent.mrays_per_s),
@@ -388,6 +395,12 @@ fn print_walks(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
             i.mismatches,
             c.failed_walks + i.failed_walks
         ));
+    };
+    if let Some(sets) = &case.exact_nodes {
+        other_walk("exact nodes (the dynamic BVH's walk, no compact)", sets);
+    }
+    if let Some(sets) = &case.refilled {
+        other_walk("lanes refilled (binary walk)", sets);
     }
     if let Some(f) = &case.file {
         text.line(format_args!(

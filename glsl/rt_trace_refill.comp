@@ -1,0 +1,98 @@
+#version 460
+// rt.trace with its lanes refilled (a candidate walk for wide SIMD groups; issue 52):
+// closest-hit or any-hit traversal of the static BVH's binary compact nodes for a list
+// of rays, each ray's walk rt.trace's (walk_bvh_step), so its hit is rt.trace's bit for
+// bit. Where rt.trace gives each invocation one ray, and a SIMD group then takes as many
+// passes as its longest walk while its finished lanes idle, here an invocation walks
+// one step a pass, and when a quarter of its subgroup's lanes (or all) hold no ray,
+// those lanes take the next rays of a queue: one atomic a subgroup, each lane its place
+// by ballot (after Aila & Laine 2009, persistent threads with dynamic fetch). Each
+// invocation walks RAYS_PER_LANE rays on average (the dispatch's size, tracers).
+// Mirrored by cpu_ref::trace (tests/suite/trace.rs: hits equal rt.trace's).
+#extension GL_KHR_shader_subgroup_ballot : require
+#define TRAVERSE_BINDING 3
+#include "traverse.glsl"
+
+layout(local_size_x = LBVH_WG) in;
+
+struct Ray {
+    vec3 origin;
+    float tmin;
+    vec3 dir;
+    float tmax;
+};
+
+layout(binding = 0, std430) readonly buffer Rays { Ray rays[]; };
+layout(binding = 1, std430) writeonly buffer Hits { Hit hits[]; };
+// The queue's head: the next ray no lane has taken (0 before the dispatch).
+layout(binding = 2, std430) coherent buffer Queue { uint next_ray; };
+
+layout(push_constant) uniform Push {
+    uint ray_count;
+    uint static_tris;  // > 0: the static BVH, binary layout
+    uint dynamic_tris; // 0: no dynamic BVH walked here
+    uint any_hit;      // 1: stop at the first hit (shadow rays)
+} pc;
+
+void main() {
+    bool any_hit = pc.any_hit != 0u;
+    // What this walk reads: the static BVH alone, in binary compact nodes (2 slots).
+    bool walkable = pc.static_tris != 0u && pc.dynamic_tris == 0u && texelFetch(s_nodes, 0).w == 2u;
+    vec3 g, st;
+    static_grid(g, st);
+    // The lane's ray and its walk.
+    bool walking = false;
+    uint ray = 0u, node = 0u, sp = 0u, top = BVH_INVALID, steps = 0u;
+    vec3 origin = vec3(0.0), inv_dir = vec3(0.0);
+    float tmin = 0.0;
+    TriRay r = TriRay(vec3(0.0), vec3(0.0), 0u);
+    Hit best = Hit(0.0, BVH_INVALID, 0.0, 0.0);
+    bool failed = false;
+    // Subgroup-uniform: whether the queue may hold rays.
+    bool queued = true;
+    while (true) {
+        uvec4 idle = subgroupBallot(!walking);
+        uint idle_lanes = subgroupBallotBitCount(idle);
+        uint lanes = subgroupBallotBitCount(subgroupBallot(true));
+        if (queued && 4u * idle_lanes >= lanes) {
+            uint first = 0u;
+            if (subgroupElect()) {
+                first = atomicAdd(next_ray, idle_lanes);
+            }
+            first = subgroupBroadcastFirst(first);
+            queued = first + idle_lanes < pc.ray_count;
+            uint k = first + subgroupBallotExclusiveBitCount(idle);
+            if (!walking && k < pc.ray_count) {
+                Ray q = rays[k];
+                ray = k;
+                origin = q.origin;
+                tmin = q.tmin;
+                inv_dir = ray_inv_dir(q.dir);
+                r = tri_ray(q.origin, q.dir);
+                best = Hit(q.tmax, BVH_INVALID, 0.0, 0.0);
+                node = 0u;
+                sp = 0u;
+                top = BVH_INVALID;
+                steps = 0u;
+                failed = false;
+                walking = true;
+            }
+        }
+        if (subgroupBallotBitCount(subgroupBallot(walking)) == 0u) {
+            if (!queued) {
+                break;
+            }
+            continue;
+        }
+        if (walking) {
+            bool ended = ++steps > pc.static_tris || !walkable;
+            failed = failed || ended;
+            ended = ended || walk_bvh_step(0u, node, sp, top, g, st, origin, r, inv_dir, tmin, any_hit, best, failed);
+            if (ended) {
+                // A failed walk is reported, never silently wrong (trace_ray).
+                hits[ray] = failed ? Hit(-1.0, BVH_INVALID, 0.0, 0.0) : best;
+                walking = false;
+            }
+        }
+    }
+}

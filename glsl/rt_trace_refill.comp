@@ -1,17 +1,22 @@
 #version 460
 // rt.trace with its lanes refilled (a candidate walk for wide SIMD groups; issue 52):
-// closest-hit or any-hit traversal of the static BVH's binary compact nodes for a list
-// of rays, each ray's walk rt.trace's (walk_bvh_step), so its hit is rt.trace's bit for
-// bit. Where rt.trace gives each invocation one ray, and a SIMD group then takes as many
+// closest-hit or any-hit traversal of the static BVH's compact nodes for a list of
+// rays, each ray's walk rt.trace's (walk_bvh_step, walk_wide_step, walk_wide8_step), so
+// its hit is rt.trace's bit for bit. Where rt.trace gives each invocation one ray, and a SIMD group then takes as many
 // passes as its longest walk while its finished lanes idle, here an invocation walks
 // one step a pass, and when a quarter of its subgroup's lanes (or all) hold no ray,
 // those lanes take the next rays of a queue: one atomic a subgroup, each lane its place
 // by ballot (after Aila & Laine 2009, persistent threads with dynamic fetch). Each
 // invocation walks RAYS_PER_LANE rays on average (the dispatch's size, tracers).
+// The static layout it walks is a specialization (one pipeline a layout: lavapipe runs
+// every branch, uniform or not, so the others are compiled out).
 // Mirrored by cpu_ref::trace (tests/suite/trace.rs: hits equal rt.trace's).
 #extension GL_KHR_shader_subgroup_ballot : require
 #define TRAVERSE_BINDING 3
 #include "traverse.glsl"
+
+// The static layout walked: its children a node (2: binary, WIDE, WIDE8).
+layout(constant_id = 0) const uint SLOTS = 2u;
 
 layout(local_size_x = LBVH_WG) in;
 
@@ -29,15 +34,27 @@ layout(binding = 2, std430) coherent buffer Queue { uint next_ray; };
 
 layout(push_constant) uniform Push {
     uint ray_count;
-    uint static_tris;  // > 0: the static BVH, binary layout
+    uint static_tris;  // > 0: the static BVH, in the layout SLOTS names
     uint dynamic_tris; // 0: no dynamic BVH walked here
     uint any_hit;      // 1: stop at the first hit (shadow rays)
 } pc;
 
+// One step of the ray's walk in the layout SLOTS names (traverse.glsl).
+bool step(inout uint node, inout uint sp, inout uint top, vec3 g, vec3 st, vec3 origin, TriRay r, vec3 inv_dir,
+          float tmin, bool any_hit, inout Hit best, inout bool failed) {
+    if (SLOTS == WIDE8) {
+        return walk_wide8_step(node, sp, top, origin, r, inv_dir, tmin, any_hit, best, failed);
+    }
+    if (SLOTS == WIDE) {
+        return walk_wide_step(node, sp, top, g, st, origin, r, inv_dir, tmin, any_hit, best, failed);
+    }
+    return walk_bvh_step(0u, node, sp, top, g, st, origin, r, inv_dir, tmin, any_hit, best, failed);
+}
+
 void main() {
     bool any_hit = pc.any_hit != 0u;
-    // What this walk reads: the static BVH alone, in binary compact nodes (2 slots).
-    bool walkable = pc.static_tris != 0u && pc.dynamic_tris == 0u && texelFetch(s_nodes, 0).w == 2u;
+    // What this walk reads: the static BVH alone, in the layout SLOTS names.
+    bool walkable = pc.static_tris != 0u && pc.dynamic_tris == 0u && texelFetch(s_nodes, 0).w == SLOTS;
     vec3 g, st;
     static_grid(g, st);
     // The lane's ray and its walk.
@@ -87,7 +104,7 @@ void main() {
         if (walking) {
             bool ended = ++steps > pc.static_tris || !walkable;
             failed = failed || ended;
-            ended = ended || walk_bvh_step(0u, node, sp, top, g, st, origin, r, inv_dir, tmin, any_hit, best, failed);
+            ended = ended || step(node, sp, top, g, st, origin, r, inv_dir, tmin, any_hit, best, failed);
             if (ended) {
                 // A failed walk is reported, never silently wrong (trace_ray).
                 hits[ray] = failed ? Hit(-1.0, BVH_INVALID, 0.0, 0.0) : best;

@@ -311,6 +311,51 @@ void walk_bvh(uint bvh, vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool an
     WIDE_ORDER(t, link, 1, 3)                                                              \
     WIDE_ORDER(t, link, 1, 2)
 
+// One step of walk_wide: visits wide node `node` (on the grid g, st) and goes on as
+// walk_bvh_step does; true when the walk has ended.
+bool walk_wide_step(inout uint node, inout uint sp, inout uint top, vec3 g, vec3 st, vec3 origin, TriRay r,
+                    vec3 inv_dir, float tmin, bool any_hit, inout Hit best, inout bool failed) {
+    // Vectors, not arrays: a vector stays in registers where lavapipe keeps a private
+    // array in memory, read and written lane by lane.
+    vec4 t;
+    uvec4 link;
+    for (uint k = 0u; k < WIDE; ++k) {
+        uvec4 h = texelFetch(s_nodes, int(2u + WIDE * node + k));
+        vec3 lo, hi;
+        compact_box(h, g, st, lo, hi);
+        link[k] = h.w;
+        t[k] = h.w == BVH_INVALID ? 1.0 / 0.0 : box_entry(lo, hi, origin, inv_dir, tmin, best.t);
+    }
+    bool found = false;
+    for (uint k = 0u; k < WIDE; ++k) {
+        if (!found && t[k] != 1.0 / 0.0 && (link[k] & BVH_LEAF_BIT) != 0u) {
+            found = hit_leaf(0u, link[k], r, tmin, any_hit, best);
+            t[k] = 1.0 / 0.0;
+        }
+    }
+    if (found) {
+        return true;
+    }
+    for (uint k = 0u; k < WIDE; ++k) {
+        // A child entered beyond the best hit so far (a leaf may have just made it)
+        // holds no closer hit.
+        if (t[k] > best.t) {
+            t[k] = 1.0 / 0.0;
+        }
+    }
+    WIDE_ORDER4(t, link)
+    if (t[0] != 1.0 / 0.0) {
+        for (int k = int(WIDE) - 1; k > 0; --k) {
+            if (t[k] != 1.0 / 0.0) {
+                push_node(link[k], sp, top, failed);
+            }
+        }
+        node = link[0];
+        return false;
+    }
+    return !pop_node(node, sp, top);
+}
+
 // One ray's walk of the static BVH through its wide nodes (lbvh.compact): a step tests
 // a node's WIDE slots, the leaves among the hit ones at once, and goes on to the
 // nearest internal child, the others pushed far first (so the nearer pops first).
@@ -331,45 +376,7 @@ void walk_wide(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, ui
             failed = true;
             break;
         }
-        // Vectors, not arrays: a vector stays in registers where lavapipe keeps a
-        // private array in memory, read and written lane by lane.
-        vec4 t;
-        uvec4 link;
-        for (uint k = 0u; k < WIDE; ++k) {
-            uvec4 h = texelFetch(s_nodes, int(2u + WIDE * node + k));
-            vec3 lo, hi;
-            compact_box(h, g, st, lo, hi);
-            link[k] = h.w;
-            t[k] = h.w == BVH_INVALID ? 1.0 / 0.0 : box_entry(lo, hi, origin, inv_dir, tmin, best.t);
-        }
-        bool found = false;
-        for (uint k = 0u; k < WIDE; ++k) {
-            if (!found && t[k] != 1.0 / 0.0 && (link[k] & BVH_LEAF_BIT) != 0u) {
-                found = hit_leaf(0u, link[k], r, tmin, any_hit, best);
-                t[k] = 1.0 / 0.0;
-            }
-        }
-        if (found) {
-            break;
-        }
-        for (uint k = 0u; k < WIDE; ++k) {
-            // A child entered beyond the best hit so far (a leaf may have just made it)
-            // holds no closer hit.
-            if (t[k] > best.t) {
-                t[k] = 1.0 / 0.0;
-            }
-        }
-        WIDE_ORDER4(t, link)
-        if (t[0] != 1.0 / 0.0) {
-            for (int k = int(WIDE) - 1; k > 0; --k) {
-                if (t[k] != 1.0 / 0.0) {
-                    push_node(link[k], sp, top, failed);
-                }
-            }
-            node = link[0];
-            continue;
-        }
-        if (!pop_node(node, sp, top)) {
+        if (walk_wide_step(node, sp, top, g, st, origin, r, inv_dir, tmin, any_hit, best, failed)) {
             break;
         }
     }
@@ -397,6 +404,68 @@ vec4 wide8_entries(uvec3 wlo, uvec3 whi, uvec4 link, vec3 g, vec3 st, vec3 o, ve
     return mix(vec4(1.0 / 0.0), enter, hit);
 }
 
+// One step of walk_wide8: visits compressed wide node `node` and goes on as
+// walk_bvh_step does; true when the walk has ended.
+bool walk_wide8_step(inout uint node, inout uint sp, inout uint top, vec3 origin, TriRay r, vec3 inv_dir,
+                     float tmin, bool any_hit, inout Hit best, inout bool failed) {
+    int base = int(2u + WIDE8_TEXELS * node);
+    uvec4 h = texelFetch(s_nodes, base);
+    uvec4 q0 = texelFetch(s_nodes, base + 1);
+    uvec4 q1 = texelFetch(s_nodes, base + 2);
+    uvec4 q2 = texelFetch(s_nodes, base + 3);
+    uvec4 la = texelFetch(s_nodes, base + 4);
+    uvec4 lb = texelFetch(s_nodes, base + 5);
+    vec3 g = uintBitsToFloat(h.xyz);
+    vec3 st = uintBitsToFloat(((uvec3(h.w) >> uvec3(0u, 8u, 16u)) & 0xffu) << 23u);
+    vec4 ta = wide8_entries(uvec3(q0.x, q0.z, q1.x), uvec3(q1.z, q2.x, q2.z), la, g, st, origin, inv_dir, tmin,
+                            best.t);
+    vec4 tb = wide8_entries(uvec3(q0.y, q0.w, q1.y), uvec3(q1.w, q2.y, q2.w), lb, g, st, origin, inv_dir, tmin,
+                            best.t);
+    bool found = false;
+    for (uint k = 0u; k < 4u; ++k) {
+        if (!found && ta[k] != 1.0 / 0.0 && (la[k] & BVH_LEAF_BIT) != 0u) {
+            found = hit_leaf(0u, la[k], r, tmin, any_hit, best);
+            ta[k] = 1.0 / 0.0;
+        }
+    }
+    for (uint k = 0u; k < 4u; ++k) {
+        if (!found && tb[k] != 1.0 / 0.0 && (lb[k] & BVH_LEAF_BIT) != 0u) {
+            found = hit_leaf(0u, lb[k], r, tmin, any_hit, best);
+            tb[k] = 1.0 / 0.0;
+        }
+    }
+    if (found) {
+        return true;
+    }
+    // A child entered beyond the best hit so far (a leaf may have just made it)
+    // holds no closer hit.
+    ta = mix(ta, vec4(1.0 / 0.0), greaterThan(ta, vec4(best.t)));
+    tb = mix(tb, vec4(1.0 / 0.0), greaterThan(tb, vec4(best.t)));
+    WIDE_ORDER4(ta, la)
+    WIDE_ORDER4(tb, lb)
+    // Entered children first in each four: how many, and which four the nearest.
+    int na = int(dot(vec4(notEqual(ta, vec4(1.0 / 0.0))), vec4(1.0)));
+    int nb = int(dot(vec4(notEqual(tb, vec4(1.0 / 0.0))), vec4(1.0)));
+    if (na + nb == 0) {
+        return !pop_node(node, sp, top);
+    }
+    bool near_a = na > 0 && (nb == 0 || ta[0] <= tb[0]);
+    int ia = na - 1, ib = nb - 1;
+    int stop_a = near_a ? 1 : 0, stop_b = near_a ? 0 : 1;
+    for (int k = 0; k < int(WIDE8) - 1; ++k) {
+        bool more_a = ia >= stop_a, more_b = ib >= stop_b;
+        if (!more_a && !more_b) {
+            break;
+        }
+        bool take_a = more_a && (!more_b || ta[ia] > tb[ib]);
+        push_node(take_a ? la[ia] : lb[ib], sp, top, failed);
+        ia -= take_a ? 1 : 0;
+        ib -= take_a ? 0 : 1;
+    }
+    node = near_a ? la[0] : lb[0];
+    return false;
+}
+
 // One ray's walk of the static BVH through its compressed wide nodes (lbvh.compact):
 // a step tests a node's WIDE8 children (two vectors of four), the leaves among the
 // hit ones at once, and goes on to the nearest internal child; the others are pushed
@@ -415,64 +484,9 @@ void walk_wide8(vec3 origin, TriRay r, vec3 inv_dir, float tmin, bool any_hit, u
             failed = true;
             break;
         }
-        int base = int(2u + WIDE8_TEXELS * node);
-        uvec4 h = texelFetch(s_nodes, base);
-        uvec4 q0 = texelFetch(s_nodes, base + 1);
-        uvec4 q1 = texelFetch(s_nodes, base + 2);
-        uvec4 q2 = texelFetch(s_nodes, base + 3);
-        uvec4 la = texelFetch(s_nodes, base + 4);
-        uvec4 lb = texelFetch(s_nodes, base + 5);
-        vec3 g = uintBitsToFloat(h.xyz);
-        vec3 st = uintBitsToFloat(((uvec3(h.w) >> uvec3(0u, 8u, 16u)) & 0xffu) << 23u);
-        vec4 ta = wide8_entries(uvec3(q0.x, q0.z, q1.x), uvec3(q1.z, q2.x, q2.z), la, g, st, origin, inv_dir, tmin,
-                                best.t);
-        vec4 tb = wide8_entries(uvec3(q0.y, q0.w, q1.y), uvec3(q1.w, q2.y, q2.w), lb, g, st, origin, inv_dir, tmin,
-                                best.t);
-        bool found = false;
-        for (uint k = 0u; k < 4u; ++k) {
-            if (!found && ta[k] != 1.0 / 0.0 && (la[k] & BVH_LEAF_BIT) != 0u) {
-                found = hit_leaf(0u, la[k], r, tmin, any_hit, best);
-                ta[k] = 1.0 / 0.0;
-            }
-        }
-        for (uint k = 0u; k < 4u; ++k) {
-            if (!found && tb[k] != 1.0 / 0.0 && (lb[k] & BVH_LEAF_BIT) != 0u) {
-                found = hit_leaf(0u, lb[k], r, tmin, any_hit, best);
-                tb[k] = 1.0 / 0.0;
-            }
-        }
-        if (found) {
+        if (walk_wide8_step(node, sp, top, origin, r, inv_dir, tmin, any_hit, best, failed)) {
             break;
         }
-        // A child entered beyond the best hit so far (a leaf may have just made it)
-        // holds no closer hit.
-        ta = mix(ta, vec4(1.0 / 0.0), greaterThan(ta, vec4(best.t)));
-        tb = mix(tb, vec4(1.0 / 0.0), greaterThan(tb, vec4(best.t)));
-        WIDE_ORDER4(ta, la)
-        WIDE_ORDER4(tb, lb)
-        // Entered children first in each four: how many, and which four the nearest.
-        int na = int(dot(vec4(notEqual(ta, vec4(1.0 / 0.0))), vec4(1.0)));
-        int nb = int(dot(vec4(notEqual(tb, vec4(1.0 / 0.0))), vec4(1.0)));
-        if (na + nb == 0) {
-            if (!pop_node(node, sp, top)) {
-                break;
-            }
-            continue;
-        }
-        bool near_a = na > 0 && (nb == 0 || ta[0] <= tb[0]);
-        int ia = na - 1, ib = nb - 1;
-        int stop_a = near_a ? 1 : 0, stop_b = near_a ? 0 : 1;
-        for (int k = 0; k < int(WIDE8) - 1; ++k) {
-            bool more_a = ia >= stop_a, more_b = ib >= stop_b;
-            if (!more_a && !more_b) {
-                break;
-            }
-            bool take_a = more_a && (!more_b || ta[ia] > tb[ib]);
-            push_node(take_a ? la[ia] : lb[ib], sp, top, failed);
-            ia -= take_a ? 1 : 0;
-            ib -= take_a ? 0 : 1;
-        }
-        node = near_a ? la[0] : lb[0];
     }
 }
 

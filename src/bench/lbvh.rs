@@ -57,7 +57,7 @@ pub struct Options {
     /// `--local-sort-scatter` on a GPU).
     pub local_sort_scatter: bool,
     /// Also trace both sets through the walk with its lanes refilled
-    /// (`TracePass::refilled`), on the binary layout's cases.
+    /// (`TracePass::refilled`).
     pub refilled: bool,
 }
 
@@ -167,7 +167,7 @@ pub struct CaseReport {
     pub exact_nodes: Option<[RaySetReport; 2]>,
     /// The coherent and the incoherent set through the walk with its lanes refilled
     /// (`TracePass::refilled`: the same tree and layout, each invocation taking a new
-    /// ray when its walk ends), where `Options::refilled` and the layout is binary.
+    /// ray when its walk ends), where `Options::refilled`.
     pub refilled: Option<[RaySetReport; 2]>,
     /// The rays of `--rays-file`, when given.
     pub file: Option<RaySetReport>,
@@ -436,8 +436,8 @@ fn exact_walk(
     Ok(Some([walk(sets[0])?, walk(sets[1])?]))
 }
 
-/// The coherent and the incoherent set through the walk with its lanes refilled, where
-/// asked and the case's layout is the binary one it walks.
+/// The coherent and the incoherent set through the walk with its lanes refilled (in
+/// the case's layout), where asked.
 fn refilled_walk(
     ctx: &Arc<Context>,
     (opts, layout): (&Options, StaticLayout),
@@ -446,10 +446,10 @@ fn refilled_walk(
     cpu: &CpuCheck<'_>,
     timing: &mut TimingCheck,
 ) -> Result<Option<[RaySetReport; 2]>> {
-    if !opts.refilled || layout != StaticLayout::Binary {
+    if !opts.refilled {
         return Ok(None);
     }
-    let tracer = TracePass::<Lbvh>::refilled(ctx)?;
+    let tracer = TracePass::<Lbvh>::refilled(ctx, layout)?;
     let mut walk =
         |rays: &[Ray]| time_rays(&tracer, (scene, Through::Static), rays, opts.repeats, cpu, timing).map(|r| r.0);
     Ok(Some([walk(sets[0])?, walk(sets[1])?]))

@@ -10,6 +10,7 @@
 use crate::error::{Error, Result};
 use crate::gpu_types::{Hit, Ray};
 use crate::shaders;
+use crate::tracers::lbvh::StaticLayout;
 use crate::tracers::{Lbvh, Rays, TraceKernel, Tracer};
 use crate::vk::barrier::{self, access};
 use crate::vk::{Buffer, Context, GpuTimer, Resource, TimerReadout};
@@ -149,11 +150,11 @@ impl TracePass<Lbvh> {
     /// The walk with its lanes refilled (`glsl/rt_trace_refill.comp`): each invocation
     /// walks a step a pass and takes a new ray from a queue when its walk ends, so a
     /// SIMD group's lanes do not idle behind its longest walk. The same hits as `new`'s,
-    /// bit for bit. It walks the static BVH alone in its binary layout; a trace with a
-    /// dynamic BVH, or a static one in a wide layout, returns every ray as a failed walk
+    /// bit for bit. It walks the static BVH alone, in `layout`; a trace with a dynamic
+    /// BVH, or a static one in another layout, returns every ray as a failed walk
     /// (t = -1).
-    pub fn refilled(ctx: &Arc<Context>) -> Result<Self> {
-        let (comp, rgen) = (shaders::RT_TRACE_REFILL_COMP, shaders::RT_TRACE_RGEN);
+    pub fn refilled(ctx: &Arc<Context>, layout: StaticLayout) -> Result<Self> {
+        let comp = shaders::RT_TRACE_REFILL_COMP;
         let queue = Buffer::new(
             ctx,
             "trace.queue",
@@ -163,7 +164,7 @@ impl TracePass<Lbvh> {
         )?;
         Ok(Self {
             ctx: ctx.clone(),
-            kernel: TraceKernel::new::<TracePush>(ctx, NAME, comp, rgen)?,
+            kernel: TraceKernel::specialized::<TracePush>(ctx, NAME, comp, &[layout.slots()])?,
             queue: Some(queue),
         })
     }

@@ -199,6 +199,21 @@ impl<T: Tracer> TraceKernel<T> {
     }
 }
 
+impl TraceKernel<Lbvh> {
+    /// The own tracer's kernel `name` from `compute`, its specialization constants
+    /// `constant_id = i` set to `constants[i]` (`Pipeline::compute_specialized`).
+    pub fn specialized<P: Pod>(
+        ctx: &Arc<Context>,
+        name: &'static str,
+        compute: Shader,
+        constants: &[u32],
+    ) -> Result<Self> {
+        Ok(Self {
+            pipeline: Pipeline::compute_specialized::<P>(ctx, name, compute, constants)?,
+        })
+    }
+}
+
 /// One BVH and the triangles it was built over.
 #[derive(Clone, Copy)]
 pub struct Traceable<'a> {

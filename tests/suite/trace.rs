@@ -196,52 +196,56 @@ fn closest_hits_equal_brute_force() {
 
 /// The walk with its lanes refilled (`TracePass::refilled`: each invocation takes a new
 /// ray from a queue when its walk ends) gives rt.trace's hits bit for bit, closest and
-/// any hit, on trees of both builders (rays of a count that no subgroup or workgroup
-/// divides, so the queue's last take is partial), and the rays' hits are brute force's;
-/// a tree it does not walk (a wide layout, a dynamic BVH) fails every ray (t = -1)
-/// rather than answering wrongly.
+/// any hit, on trees of both builders in every layout (rays of a count that no subgroup
+/// or workgroup divides, so the queue's last take is partial), and the rays' hits are
+/// brute force's; a tree it does not walk (another layout, a dynamic BVH) fails every
+/// ray (t = -1) rather than answering wrongly.
 #[test]
 fn the_refilled_walk_gives_rt_traces_hits() {
     use speculum::tracers::lbvh::BvhKind;
     let ctx = common::context();
     let b = LbvhBuilder::new(&ctx).unwrap();
-    let [tracer, refilled] = [TracePass::<Lbvh>::new(&ctx), TracePass::<Lbvh>::refilled(&ctx)].map(Result::unwrap);
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
     let n = 3000;
     let (v, i) = random_soup(n, 1.0, default_size(n), 61);
     let rays = random_rays(12_345, &v, &i, 1.0, 62);
     let shadow: Vec<Ray> = rays.iter().map(|r| Ray { tmax: 0.9, ..*r }).collect();
     let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
-    let built = Built::new(&ctx, &b, &v, &i, MortonBits::Bits30);
-    for kind in BvhKind::ALL {
-        let (_, made) = b.build_now(built.geometry(), &built.bvh, kind).unwrap();
-        assert_eq!(made, kind);
-        let [(_, scene), _] = built.both_walks();
-        for (set, any_hit) in [(&rays, false), (&shadow, true)] {
-            let (want, _) = tracer.trace(set, scene, any_hit).unwrap();
-            let (got, _) = refilled.trace(set, scene, any_hit).unwrap();
-            let differ = want.iter().zip(&got).filter(|(a, b)| a != b).count();
-            assert_eq!(
-                differ,
-                0,
-                "{kind:?}, any hit {any_hit}: {differ} of {} hits differ",
-                set.len()
-            );
-            let hits = got.iter().filter(|h| h.prim != BVH_INVALID).count();
-            assert!(
-                hits > set.len() / 5 && hits < set.len(),
-                "{kind:?}: a mix of hits and misses ({hits})"
-            );
-            if !any_hit {
-                let ties = compare(&got, &cpu, set, |p| triangle(&v, &i, p as usize));
-                assert!(ties <= set.len() / 1000, "{ties} ties");
+    for layout in StaticLayout::ALL {
+        let refilled = TracePass::<Lbvh>::refilled(&ctx, layout).unwrap();
+        let built = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, layout);
+        for kind in BvhKind::ALL {
+            let (_, made) = b.build_now(built.geometry(), &built.bvh, kind).unwrap();
+            assert_eq!(made, kind);
+            let [(_, scene), _] = built.both_walks();
+            for (set, any_hit) in [(&rays, false), (&shadow, true)] {
+                let (want, _) = tracer.trace(set, scene, any_hit).unwrap();
+                let (got, _) = refilled.trace(set, scene, any_hit).unwrap();
+                let differ = want.iter().zip(&got).filter(|(a, b)| a != b).count();
+                let case = format!("{layout:?}, {kind:?}, any hit {any_hit}");
+                assert_eq!(differ, 0, "{case}: {differ} of {} hits differ", set.len());
+                let hits = got.iter().filter(|h| h.prim != BVH_INVALID).count();
+                assert!(
+                    hits > set.len() / 5 && hits < set.len(),
+                    "{case}: a mix of hits and misses ({hits})"
+                );
+                if !any_hit {
+                    let ties = compare(&got, &cpu, set, |p| triangle(&v, &i, p as usize));
+                    assert!(ties <= set.len() / 1000, "{ties} ties");
+                }
             }
         }
-    }
-    let wide = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, StaticLayout::Wide);
-    let [wide_static, _] = wide.both_walks();
-    for (walk, scene) in [wide_static, built.both_walks()[1]] {
-        let (got, _) = refilled.trace(&rays[..100], scene, false).unwrap();
-        assert!(got.iter().all(|h| h.t == -1.0), "{walk}: {:?}", got[0]);
+        // Another layout's nodes, and the dynamic BVH: every ray a failed walk.
+        let other = StaticLayout::ALL[(layout as usize + 1) % 3];
+        let elsewhere = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, other);
+        for (walk, scene) in [elsewhere.both_walks()[0], built.both_walks()[1]] {
+            let (got, _) = refilled.trace(&rays[..100], scene, false).unwrap();
+            assert!(
+                got.iter().all(|h| h.t == -1.0),
+                "{layout:?} through {other:?}, {walk}: {:?}",
+                got[0]
+            );
+        }
     }
     assert_eq!(ctx.validation_messages(), 0);
 }
@@ -567,7 +571,7 @@ fn the_deepest_built_tree_fits_the_stack() {
 /// unit's X and P, Z with Q and R, and P, Q, R each with two one-triangle leaves. The
 /// binary walks (static and dynamic) hold two pending nodes a unit (Z, P), the wide walk
 /// three (P, Q, R: the grandchildren of X but the next X). `units` of them overflow
-/// every walk's stack (t = -1); a third as many do not. The compressed wide walk gets
+/// every walk's stack (t = -1), its lanes refilled or not; a third as many do not. The compressed wide walk gets
 /// units of fourteen: X opened three levels to the next X and seven nodes of two
 /// leaves each, all seven held a unit.
 #[test]
@@ -642,7 +646,7 @@ fn a_tree_deeper_than_the_stack_is_reported() {
         tmax: f32::MAX,
     };
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
-    let refilled = TracePass::<Lbvh>::refilled(&ctx).unwrap();
+    let refilled = StaticLayout::ALL.map(|l| TracePass::<Lbvh>::refilled(&ctx, l).unwrap());
     for (count, overflows) in [(units, true), (units / 3, false)] {
         let count8 = if overflows { units8 } else { units8 / 3 };
         for (built, planted) in [
@@ -658,36 +662,18 @@ fn a_tree_deeper_than_the_stack_is_reported() {
             })
             .unwrap();
         }
-        for (walk, scene) in [
-            (
-                "static binary",
-                TraceScene {
-                    static_bvh: Some(binary.traceable()),
-                    dynamic_bvh: None,
-                },
-            ),
-            (
-                "static wide",
-                TraceScene {
-                    static_bvh: Some(wide.traceable()),
-                    dynamic_bvh: None,
-                },
-            ),
-            (
-                "static compressed wide",
-                TraceScene {
-                    static_bvh: Some(wide8.traceable()),
-                    dynamic_bvh: None,
-                },
-            ),
-            (
-                "dynamic",
-                TraceScene {
-                    static_bvh: None,
-                    dynamic_bvh: Some(binary.traceable()),
-                },
-            ),
-        ] {
+        // Each static layout's walk, and refilled; the dynamic walk.
+        let mut walks = vec![("dynamic".to_string(), &tracer, binary.both_walks()[1].1)];
+        for ((built, layout), refilled) in [&binary, &wide, &wide8]
+            .into_iter()
+            .zip(StaticLayout::ALL)
+            .zip(&refilled)
+        {
+            let scene = built.both_walks()[0].1;
+            walks.push((format!("static {layout:?}"), &tracer, scene));
+            walks.push((format!("static {layout:?}, lanes refilled"), refilled, scene));
+        }
+        for (walk, tracer, scene) in walks {
             let (hits, _) = tracer.trace(&[ray], scene, false).unwrap();
             assert_eq!(
                 hits[0].t == -1.0,
@@ -696,13 +682,6 @@ fn a_tree_deeper_than_the_stack_is_reported() {
                 hits[0]
             );
         }
-        // The walk with its lanes refilled (static, binary) reports it alike.
-        let scene = TraceScene {
-            static_bvh: Some(binary.traceable()),
-            dynamic_bvh: None,
-        };
-        let (hits, _) = refilled.trace(&[ray], scene, false).unwrap();
-        assert_eq!(hits[0].t == -1.0, overflows, "{count} units, refilled: {:?}", hits[0]);
     }
     assert_eq!(ctx.validation_messages(), 0);
 }
@@ -754,7 +733,8 @@ fn a_planted_cycle_ends_in_a_reported_overrun() {
         dir: [1.0, 0.0, 0.0],
         ..through
     };
-    let [tracer, refilled] = [TracePass::<Lbvh>::new(&ctx), TracePass::<Lbvh>::refilled(&ctx)].map(Result::unwrap);
+    let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
+    let refilled = TracePass::<Lbvh>::refilled(&ctx, StaticLayout::Binary).unwrap();
     let [as_static, as_dynamic] = built.both_walks();
     // The walk with its lanes refilled walks the static BVH alone.
     let walks = [(&tracer, as_static), (&tracer, as_dynamic), (&refilled, as_static)];

@@ -69,9 +69,9 @@ pub struct LbvhArgs {
     /// keep the direct one).
     #[arg(long)]
     pub local_sort_scatter: bool,
-    /// Also trace both ray sets of each binary-layout case through the walk with its
-    /// lanes refilled (a candidate for wide SIMD groups: an invocation takes a new ray
-    /// when its walk ends, so its group's lanes do not idle behind the longest walk)
+    /// Also trace both ray sets of each case through the walk with its lanes refilled
+    /// (a candidate for wide SIMD groups: an invocation takes a new ray when its walk
+    /// ends, so its group's lanes do not idle behind the longest walk)
     #[arg(long)]
     pub refilled: bool,
     #[command(flatten)]
@@ -400,7 +400,7 @@ fn print_walks(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
         other_walk("exact nodes (the dynamic BVH's walk, no compact)", sets);
     }
     if let Some(sets) = &case.refilled {
-        other_walk("lanes refilled (binary walk)", sets);
+        other_walk("lanes refilled (the same walk)", sets);
     }
     if let Some(f) = &case.file {
         text.line(format_args!(

@@ -2,16 +2,15 @@
 // rt.trace with its lanes refilled (a candidate walk for wide SIMD groups; issue 52):
 // closest-hit or any-hit traversal of the static BVH's compact nodes for a list of
 // rays, each ray's walk rt.trace's (walk_bvh_step, walk_wide_step, walk_wide8_step), so
-// its closest hit is rt.trace's bit for bit and its any hit the same occlusion
-// (docs/precision.md). Where rt.trace gives each invocation one ray, and a SIMD group
-// then takes as many passes as its longest walk while its finished lanes idle, here an
-// invocation walks one step a pass, and when a quarter of its subgroup's lanes (or
-// all) hold no ray, those lanes take the next rays of a queue: one atomic a subgroup,
-// each lane its place by ballot (after Aila & Laine 2009, persistent threads with
-// dynamic fetch). Each invocation walks RAYS_PER_LANE rays on average (the dispatch's
-// size, passes/rt_trace.rs). The static layout it walks is a specialization (one
-// pipeline a layout: lavapipe runs every branch, uniform or not, so the others are
-// compiled out).
+// its hit is rt.trace's bit for bit, closest or any (docs/precision.md). Where
+// rt.trace gives each invocation one ray, and a SIMD group then takes as many passes as
+// its longest walk while its finished lanes idle, here an invocation walks one step a
+// pass, and when a quarter of its subgroup's lanes (or all) hold no ray, those lanes
+// take the next rays of a queue: one atomic a subgroup, each lane its place by ballot
+// (after Aila & Laine 2009, persistent threads with dynamic fetch). Each invocation
+// walks RAYS_PER_LANE rays on average (the dispatch's size, passes/rt_trace.rs). The
+// static layout it walks is a specialization (one pipeline a layout: lavapipe runs
+// every branch, uniform or not, so the others are compiled out).
 // Mirrored by cpu_ref::trace (tests/suite/trace.rs: hits equal rt.trace's).
 #extension GL_KHR_shader_subgroup_ballot : require
 #define TRAVERSE_BINDING 3

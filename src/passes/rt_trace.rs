@@ -149,8 +149,8 @@ impl<T: Tracer> TracePass<T> {
 impl TracePass<Lbvh> {
     /// The walk with its lanes refilled (`glsl/rt_trace_refill.comp`): each invocation
     /// walks a step a pass and takes a new ray from a queue when its walk ends, so a
-    /// SIMD group's lanes do not idle behind its longest walk. The same closest hits as
-    /// `new`'s, bit for bit, and the same any-hit occlusion. It walks the static BVH alone, in `layout`; a trace with a dynamic
+    /// SIMD group's lanes do not idle behind its longest walk. The same hits as `new`'s,
+    /// bit for bit. It walks the static BVH alone, in `layout`; a trace with a dynamic
     /// BVH, or a static one in another layout, returns every ray as a failed walk
     /// (t = -1).
     pub fn refilled(ctx: &Arc<Context>, layout: StaticLayout) -> Result<Self> {

@@ -6,22 +6,7 @@
 
 layout(local_size_x = LBVH_WG) in;
 
-struct Ray {
-    vec3 origin;
-    float tmin;
-    vec3 dir;
-    float tmax;
-};
-
-layout(binding = 0, std430) readonly buffer Rays { Ray rays[]; };
-layout(binding = 1, std430) writeonly buffer Hits { Hit hits[]; };
-
-layout(push_constant) uniform Push {
-    uint ray_count;
-    uint static_tris;  // 0: no static BVH
-    uint dynamic_tris; // 0: no dynamic BVH
-    uint any_hit;      // 1: stop at the first hit (shadow rays)
-} pc;
+#include "ray_list.glsl"
 
 void main() {
     uint r = gl_GlobalInvocationID.x;

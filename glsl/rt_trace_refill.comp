@@ -21,24 +21,11 @@ layout(constant_id = 0) const uint SLOTS = 2u;
 
 layout(local_size_x = LBVH_WG) in;
 
-struct Ray {
-    vec3 origin;
-    float tmin;
-    vec3 dir;
-    float tmax;
-};
+#include "ray_list.glsl"
 
-layout(binding = 0, std430) readonly buffer Rays { Ray rays[]; };
-layout(binding = 1, std430) writeonly buffer Hits { Hit hits[]; };
-// The queue's head: the next ray no lane has taken (0 before the dispatch).
+// The queue's head: the next ray no lane has taken (0 before the dispatch). A dynamic
+// BVH (pc.dynamic_tris) is not walked here: every ray fails.
 layout(binding = 2, std430) coherent buffer Queue { uint next_ray; };
-
-layout(push_constant) uniform Push {
-    uint ray_count;
-    uint static_tris;  // > 0: the static BVH, in the layout SLOTS names
-    uint dynamic_tris; // 0: no dynamic BVH walked here
-    uint any_hit;      // 1: stop at the first hit (shadow rays)
-} pc;
 
 // One step of the ray's walk in the layout SLOTS names (traverse.glsl).
 bool step(inout uint node, inout uint sp, inout uint top, vec3 g, vec3 st, vec3 origin, TriRay r, vec3 inv_dir,
@@ -66,12 +53,13 @@ void main() {
     TriRay r = TriRay(vec3(0.0), vec3(0.0), 0u);
     Hit best = Hit(0.0, BVH_INVALID, 0.0, 0.0);
     bool failed = false;
-    // Subgroup-uniform: whether the queue may hold rays.
+    // Subgroup-uniform: whether the queue may hold rays; the subgroup's lanes (every
+    // one stays in the loop to its end).
     bool queued = true;
+    uint lanes = subgroupBallotBitCount(subgroupBallot(true));
     while (true) {
         uvec4 idle = subgroupBallot(!walking);
         uint idle_lanes = subgroupBallotBitCount(idle);
-        uint lanes = subgroupBallotBitCount(subgroupBallot(true));
         if (queued && 4u * idle_lanes >= lanes) {
             uint first = 0u;
             if (subgroupElect()) {

@@ -431,9 +431,7 @@ fn exact_walk(
         return Ok(None);
     }
     let exact = TraceScene::of_dynamic(bvh, geometry);
-    let mut walk =
-        |rays: &[Ray]| time_rays(tracer, (exact, Through::Dynamic), rays, opts.repeats, cpu, timing).map(|r| r.0);
-    Ok(Some([walk(sets[0])?, walk(sets[1])?]))
+    both_sets((tracer, exact, Through::Dynamic), sets, opts.repeats, cpu, timing).map(Some)
 }
 
 /// The coherent and the incoherent set through the walk with its lanes refilled (in
@@ -450,9 +448,20 @@ fn refilled_walk(
         return Ok(None);
     }
     let tracer = TracePass::<Lbvh>::refilled(ctx, layout)?;
-    let mut walk =
-        |rays: &[Ray]| time_rays(&tracer, (scene, Through::Static), rays, opts.repeats, cpu, timing).map(|r| r.0);
-    Ok(Some([walk(sets[0])?, walk(sets[1])?]))
+    both_sets((&tracer, scene, Through::Static), sets, opts.repeats, cpu, timing).map(Some)
+}
+
+/// Both ray sets through `tracer` and `scene` (`time_rays`, the hits' ids carrying
+/// `through`'s bit).
+fn both_sets(
+    (tracer, scene, through): (&TracePass<Lbvh>, TraceScene<'_>, Through),
+    sets: [&[Ray]; 2],
+    repeats: u32,
+    cpu: &CpuCheck<'_>,
+    timing: &mut TimingCheck,
+) -> Result<[RaySetReport; 2]> {
+    let mut walk = |rays: &[Ray]| time_rays(tracer, (scene, through), rays, repeats, cpu, timing).map(|r| r.0);
+    Ok([walk(sets[0])?, walk(sets[1])?])
 }
 
 impl CaseReport {
@@ -528,17 +537,11 @@ pub fn run_case(
     ];
     let ms = (build_ms.median, built.compact_ms.median);
     let embree = anchor((name, v, i), &sets, (opts.repeats, anchor_runs), ms)?;
-    let exact_nodes = exact_walk(
-        (opts, layout),
-        (&tracer, &bvh, geometry),
-        [&coherent_set, &incoherent_set],
-        &cpu,
-        &mut timing,
-    )?;
-    let sets = [&coherent_set[..], &incoherent_set[..]];
-    let refilled = refilled_walk(ctx, (opts, layout), scene, sets, &cpu, &mut timing)?;
-    let walk_per_ray = WalkPerRay::both(&packed, [&coherent_set, &incoherent_set], opts.check_rays, layout);
-    let khr_case = (v, i, [&coherent_set[..], &incoherent_set[..]]);
+    let both = [&coherent_set[..], &incoherent_set[..]];
+    let exact_nodes = exact_walk((opts, layout), (&tracer, &bvh, geometry), both, &cpu, &mut timing)?;
+    let refilled = refilled_walk(ctx, (opts, layout), scene, both, &cpu, &mut timing)?;
+    let walk_per_ray = WalkPerRay::both(&packed, both, opts.check_rays, layout);
+    let khr_case = (v, i, both);
     let khr = vendor_tracer(ctx, (opts, kind, layout), khr_case, &cpu, (&tracer, scene))?;
     let (file, kept) = match file_set {
         Some(((report, hits), rays)) => (Some(report), opts.keep_hits.then(|| (rays.clone(), hits))),

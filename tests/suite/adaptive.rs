@@ -302,11 +302,24 @@ fn a_recheck_prices_an_idle_path_and_shows_the_march() {
     assert!(ctx.ray_tracing.is_some() || ctx.driver_name != "llvmpipe");
     let khr = ctx.ray_tracing.is_some().then_some(Tracer::Khr);
     for tracer in std::iter::once(Tracer::Lbvh).chain(khr) {
-        recheck_while_marching(&ctx, tracer);
+        // A rate measured on a loaded machine can turn every tile rays-only (a march
+        // dearer than a ray): the frames then rightly stop marching and the run shows
+        // nothing of the rechecks; it is run again, at most `TRIES` runs.
+        const TRIES: usize = 3;
+        let mut idled = Vec::new();
+        while let Err(why) = recheck_while_marching(&ctx, tracer) {
+            idled.push(why);
+            assert!(idled.len() < TRIES, "{tracer:?}: every run went idle: {idled:?}");
+        }
     }
 }
 
-fn recheck_while_marching(ctx: &std::sync::Arc<speculum::vk::Context>, tracer: speculum::settings::Tracer) {
+/// `Err`: the frames went idle because no SSR-first tile marched (what the measured
+/// rate and the frame say), not for any price; every other failure panics.
+fn recheck_while_marching(
+    ctx: &std::sync::Arc<speculum::vk::Context>,
+    tracer: speculum::settings::Tracer,
+) -> Result<(), String> {
     use speculum::renderer::exchange::{Path, Paths, RECHECK_EVERY};
     let scene = speculum::scene::builtin::room().unwrap();
     let mut r = glossy_off(ctx, &scene, tracer);
@@ -324,7 +337,25 @@ fn recheck_while_marching(ctx: &std::sync::Arc<speculum::vk::Context>, tracer: s
         let (times, _) = r.render_frame_measured().unwrap();
         let recheck = k % RECHECK_EVERY == RECHECK_EVERY - 1;
         assert_eq!(times.get("reflect.recheck").is_some(), recheck, "{tracer:?} frame {k}");
-        assert!(times.get("ssr.trace").is_some(), "{tracer:?} frame {k} marches");
+        if times.get("ssr.trace").is_none() {
+            let p = r.hybrid_paths();
+            // Marching is priced below both idle paths (real prices against `far`'s
+            // mean), so only a frame with no SSR-first tile marching turns the frames
+            // idle (`Paths::marched`).
+            let march = p.price(Path::March).unwrap();
+            assert!(
+                p.next != Path::March
+                    && [Path::SkipMarch, Path::TraceAll]
+                        .iter()
+                        .all(|&i| p.price(i).unwrap() > march),
+                "{tracer:?} frame {k} does not march: {p:?}"
+            );
+            return Err(format!(
+                "frame {k}: rate {:?}, {:?}",
+                r.exchange_rate(),
+                r.tile_census().unwrap()
+            ));
+        }
         if recheck || (k + 1) % RECHECK_EVERY == RECHECK_EVERY - 1 {
             let frame = (r.read_output().unwrap(), tile_classes(&r));
             if recheck {
@@ -349,6 +380,7 @@ fn recheck_while_marching(ctx: &std::sync::Arc<speculum::vk::Context>, tracer: s
     let p = r.hybrid_paths();
     assert_eq!((p.next, p.frames[0]), (Path::March, 2 * RECHECK_EVERY as u64), "{p:?}");
     assert_eq!(ctx.validation_messages(), 0, "{tracer:?}");
+    Ok(())
 }
 
 /// Each tile's class after the last frame (known, rays-only), the rest of its state

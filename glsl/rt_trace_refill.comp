@@ -5,12 +5,12 @@
 // its hit is rt.trace's bit for bit, closest or any (docs/precision.md). Where
 // rt.trace gives each invocation one ray, and a SIMD group then takes as many passes as
 // its longest walk while its finished lanes idle, here an invocation walks one step a
-// pass, and when a quarter of its subgroup's lanes (or all) hold no ray, those lanes
+// pass, and when 1/SHARE of its subgroup's lanes (or all) hold no ray, those lanes
 // take the next rays of a queue: one atomic a subgroup, each lane its place by ballot
 // (after Aila & Laine 2009, persistent threads with dynamic fetch). Each invocation
-// walks RAYS_PER_LANE rays on average (the dispatch's size, passes/rt_trace.rs). The
-// static layout it walks is a specialization (one pipeline a layout: lavapipe runs
-// every branch, uniform or not, so the others are compiled out).
+// walks Refill::rays_per_lane rays on average (the dispatch's size, passes/rt_trace.rs).
+// The static layout it walks and SHARE are specializations (one pipeline a layout:
+// lavapipe runs every branch, uniform or not, so the others are compiled out).
 // Mirrored by cpu_ref::trace (tests/suite/trace.rs: hits equal rt.trace's).
 #extension GL_KHR_shader_subgroup_ballot : require
 #define TRAVERSE_BINDING 3
@@ -18,6 +18,9 @@
 
 // The static layout walked: its children a node (2: binary, WIDE, WIDE8).
 layout(constant_id = 0) const uint SLOTS = 2u;
+// Idle lanes take rays once they are at least 1/SHARE of the subgroup's (1: all; at
+// least 1, Refill::new).
+layout(constant_id = 1) const uint SHARE = 4u;
 
 layout(local_size_x = LBVH_WG) in;
 
@@ -60,7 +63,7 @@ void main() {
     while (true) {
         uvec4 idle = subgroupBallot(!walking);
         uint idle_lanes = subgroupBallotBitCount(idle);
-        if (queued && 4u * idle_lanes >= lanes) {
+        if (queued && SHARE * idle_lanes >= lanes) {
             uint first = 0u;
             if (subgroupElect()) {
                 first = atomicAdd(next_ray, idle_lanes);

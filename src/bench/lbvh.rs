@@ -9,12 +9,12 @@
 
 use super::anchor::{AnchorReport, AnchorRuns, AnchorSet};
 pub(crate) use super::rays::check_hits;
-use super::rays::{time_rays, Through};
+use super::rays::{both_sets, time_rays, RefilledReport, Through};
 pub use super::rays::{CpuCheck, RaySetReport};
 use crate::cpu_ref::lbvh::{check_bvh, sah_cost};
 use crate::error::Result;
 use crate::gpu_types::{GpuVertex, Hit, Ray};
-use crate::passes::rt_trace::TracePass;
+use crate::passes::rt_trace::{Refill, TracePass};
 use crate::report::{Header, PassTimes, Stat};
 use crate::shader_defines::SORT_RADIX_BITS;
 use crate::tracers::lbvh::ploc::{first_rounds, PlocScratch};
@@ -57,8 +57,8 @@ pub struct Options {
     /// `--local-sort-scatter` on a GPU).
     pub local_sort_scatter: bool,
     /// Also trace both sets through the walk with its lanes refilled
-    /// (`TracePass::refilled`).
-    pub refilled: bool,
+    /// (`TracePass::refilled`), in each of these shapes.
+    pub refilled: Vec<Refill>,
 }
 
 /// Mean steps (nodes visited), box tests and triangle tests of a ray's walk, and the
@@ -167,8 +167,8 @@ pub struct CaseReport {
     pub exact_nodes: Option<[RaySetReport; 2]>,
     /// The coherent and the incoherent set through the walk with its lanes refilled
     /// (`TracePass::refilled`: the same tree and layout, each invocation taking a new
-    /// ray when its walk ends), where `Options::refilled`.
-    pub refilled: Option<[RaySetReport; 2]>,
+    /// ray when its walk ends), in each shape of `Options::refilled`.
+    pub refilled: Vec<RefilledReport>,
     /// The rays of `--rays-file`, when given.
     pub file: Option<RaySetReport>,
     /// Embree 3 on the same triangles and rays, LOW then MEDIUM (built with the cargo
@@ -435,7 +435,7 @@ fn exact_walk(
 }
 
 /// The coherent and the incoherent set through the walk with its lanes refilled (in
-/// the case's layout), where asked.
+/// the case's layout), in each shape asked.
 fn refilled_walk(
     ctx: &Arc<Context>,
     (opts, layout): (&Options, StaticLayout),
@@ -443,25 +443,13 @@ fn refilled_walk(
     sets: [&[Ray]; 2],
     cpu: &CpuCheck<'_>,
     timing: &mut TimingCheck,
-) -> Result<Option<[RaySetReport; 2]>> {
-    if !opts.refilled {
-        return Ok(None);
-    }
-    let tracer = TracePass::<Lbvh>::refilled(ctx, layout)?;
-    both_sets((&tracer, scene, Through::Static), sets, opts.repeats, cpu, timing).map(Some)
-}
-
-/// Both ray sets through `tracer` and `scene` (`time_rays`, the hits' ids carrying
-/// `through`'s bit).
-fn both_sets(
-    (tracer, scene, through): (&TracePass<Lbvh>, TraceScene<'_>, Through),
-    sets: [&[Ray]; 2],
-    repeats: u32,
-    cpu: &CpuCheck<'_>,
-    timing: &mut TimingCheck,
-) -> Result<[RaySetReport; 2]> {
-    let mut walk = |rays: &[Ray]| time_rays(tracer, (scene, through), rays, repeats, cpu, timing).map(|r| r.0);
-    Ok([walk(sets[0])?, walk(sets[1])?])
+) -> Result<Vec<RefilledReport>> {
+    let walk = |&shape: &Refill| {
+        let tracer = TracePass::<Lbvh>::refilled(ctx, layout, shape)?;
+        let sets = both_sets((&tracer, scene, Through::Static), sets, opts.repeats, cpu, timing)?;
+        Ok(RefilledReport { shape, sets })
+    };
+    opts.refilled.iter().map(walk).collect()
 }
 
 impl CaseReport {
@@ -474,7 +462,8 @@ impl CaseReport {
             && sound(&self.coherent)
             && sound(&self.incoherent)
             && self.file.as_ref().is_none_or(sound)
-            && self.exact_nodes.iter().chain(&self.refilled).flatten().all(sound)
+            && self.exact_nodes.iter().flatten().all(sound)
+            && self.refilled.iter().flat_map(|r| &r.sets).all(sound)
             && self.khr.iter().flatten().all(super::khr::KhrReport::sound)
             && self.build_ms.median.is_finite()
             && self.build_rounds_check.settled()

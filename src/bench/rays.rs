@@ -145,3 +145,24 @@ pub fn time_rays<T: Tracer>(
     };
     Ok((report, hits))
 }
+
+/// Both ray sets through `tracer` and `scene` (`time_rays`, the hits' ids carrying
+/// `through`'s bit).
+pub fn both_sets<T: Tracer>(
+    (tracer, scene, through): (&TracePass<T>, T::Scene<'_>, Through),
+    sets: [&[Ray]; 2],
+    repeats: u32,
+    cpu: &CpuCheck<'_>,
+    timing: &mut TimingCheck,
+) -> Result<[RaySetReport; 2]> {
+    let mut walk = |rays: &[Ray]| time_rays(tracer, (scene, through), rays, repeats, cpu, timing).map(|r| r.0);
+    Ok([walk(sets[0])?, walk(sets[1])?])
+}
+
+/// Both ray sets through the walk with its lanes refilled in one shape.
+#[derive(Clone, Debug, Serialize)]
+pub struct RefilledReport {
+    pub shape: crate::passes::rt_trace::Refill,
+    /// The coherent and the incoherent set.
+    pub sets: [RaySetReport; 2],
+}

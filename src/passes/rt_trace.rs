@@ -21,9 +21,53 @@ use std::sync::Arc;
 
 pub const NAME: &str = "rt.trace";
 
-/// Rays an invocation of the refilled walk (`TracePass::<Lbvh>::refilled`) takes on
-/// average: its dispatch covers the rays over this many.
-pub const RAYS_PER_LANE: u32 = 4;
+/// The shape of the refilled walk (`TracePass::<Lbvh>::refilled`): a subgroup's idle
+/// lanes take new rays once they are at least 1/`share` of its lanes (1: all of them),
+/// and an invocation takes `rays_per_lane` rays on average (its dispatch covers the
+/// rays over this many).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Refill {
+    pub share: u32,
+    pub rays_per_lane: u32,
+}
+
+impl Refill {
+    /// A quarter of the lanes idle, four rays a lane.
+    pub const DEFAULT: Refill = Refill {
+        share: 4,
+        rays_per_lane: 4,
+    };
+    /// The largest `share` (one idle lane of 64 refills) and `rays_per_lane`.
+    pub const MAX_SHARE: u32 = 64;
+    pub const MAX_RAYS_PER_LANE: u32 = 1024;
+
+    /// The shape, its values checked (`SHARE:RAYS` in `bench lbvh --refill`).
+    pub fn new(share: u32, rays_per_lane: u32) -> Result<Self> {
+        if !(1..=Self::MAX_SHARE).contains(&share) || !(1..=Self::MAX_RAYS_PER_LANE).contains(&rays_per_lane) {
+            return Err(Error::Input(format!(
+                "{share}:{rays_per_lane}: a refill's idle share is 1 to {} (the lanes refill once 1/SHARE of them idle), its rays a lane 1 to {}",
+                Self::MAX_SHARE,
+                Self::MAX_RAYS_PER_LANE
+            )));
+        }
+        Ok(Self { share, rays_per_lane })
+    }
+}
+
+impl std::str::FromStr for Refill {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        let bad = || Error::Input(format!("{s}: a refill's shape is SHARE:RAYS, e.g. 4:4"));
+        let (share, rays) = s.split_once(':').ok_or_else(bad)?;
+        Self::new(share.parse().map_err(|_| bad())?, rays.parse().map_err(|_| bad())?)
+    }
+}
+
+impl std::fmt::Display for Refill {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}", self.share, self.rays_per_lane)
+    }
+}
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -49,9 +93,9 @@ pub struct RayBatch<'a> {
 pub struct TracePass<T: Tracer> {
     ctx: Arc<Context>,
     kernel: TraceKernel<T>,
-    /// The refilled walk's queue head (`TracePass::<Lbvh>::refilled`); `None`: one ray
-    /// an invocation.
-    queue: Option<Buffer>,
+    /// The refilled walk's queue head and rays a lane (`TracePass::<Lbvh>::refilled`);
+    /// `None`: one ray an invocation.
+    queue: Option<(Buffer, u32)>,
 }
 
 impl<T: Tracer> TracePass<T> {
@@ -76,7 +120,7 @@ impl<T: Tracer> TracePass<T> {
             any_hit: batch.any_hit as u32,
         };
         let (rays, hits) = (Resource::Buffer(batch.rays), Resource::Buffer(batch.hits));
-        let Some(queue) = &self.queue else {
+        let Some((queue, rays_per_lane)) = &self.queue else {
             let own = [("rays", rays), ("hits", hits)];
             return self.kernel.run(cmd, &own, &scene, push, Rays::Count(batch.count));
         };
@@ -88,7 +132,7 @@ impl<T: Tracer> TracePass<T> {
         // RAW: the kernel's atomics read the cleared head.
         barrier::record(device, cmd, &[barrier::memory(access::TRANSFER_WRITE, T::RUNS)], &[]);
         let own = [("rays", rays), ("hits", hits), ("queue", Resource::Buffer(queue))];
-        let lanes = batch.count.div_ceil(RAYS_PER_LANE);
+        let lanes = batch.count.div_ceil(*rays_per_lane);
         self.kernel.run(cmd, &own, &scene, push, Rays::Count(lanes));
     }
 
@@ -150,10 +194,10 @@ impl TracePass<Lbvh> {
     /// The walk with its lanes refilled (`glsl/rt_trace_refill.comp`): each invocation
     /// walks a step a pass and takes a new ray from a queue when its walk ends, so a
     /// SIMD group's lanes do not idle behind its longest walk. The same hits as `new`'s,
-    /// bit for bit. It walks the static BVH alone, in `layout`; a trace with a dynamic
-    /// BVH, or a static one in another layout, returns every ray as a failed walk
-    /// (t = -1).
-    pub fn refilled(ctx: &Arc<Context>, layout: StaticLayout) -> Result<Self> {
+    /// bit for bit, whatever the `shape`. It walks the static BVH alone, in `layout`; a
+    /// trace with a dynamic BVH, or a static one in another layout, returns every ray
+    /// as a failed walk (t = -1).
+    pub fn refilled(ctx: &Arc<Context>, layout: StaticLayout, shape: Refill) -> Result<Self> {
         let comp = shaders::RT_TRACE_REFILL_COMP;
         let queue = Buffer::new(
             ctx,
@@ -164,8 +208,8 @@ impl TracePass<Lbvh> {
         )?;
         Ok(Self {
             ctx: ctx.clone(),
-            kernel: TraceKernel::specialized::<TracePush>(ctx, NAME, comp, &[layout.slots()])?,
-            queue: Some(queue),
+            kernel: TraceKernel::specialized::<TracePush>(ctx, NAME, comp, &[layout.slots(), shape.share])?,
+            queue: Some((queue, shape.rays_per_lane)),
         })
     }
 }

@@ -4,6 +4,7 @@
 use crate::common;
 
 use speculum::bench::lbvh::{run_case, Options};
+use speculum::passes::rt_trace::Refill;
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::steady::WarmUp;
 use speculum::tracers::lbvh::{BvhKind, MortonBits, StaticLayout};
@@ -33,7 +34,8 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         keep_hits: false,
         khr_rays: 512,
         local_sort_scatter: false,
-        refilled: true,
+        // Two shapes: the default, and refills only once every lane idles.
+        refilled: vec![Refill::DEFAULT, Refill::new(1, 2).unwrap()],
     };
     // Each builder in every layout; the vendor tracer with the first of each.
     let cases = BvhKind::ALL.into_iter().flat_map(|k| StaticLayout::ALL.map(|l| (k, l)));
@@ -83,8 +85,10 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
             (None, false) => {}
             (e, _) => panic!("{layout:?}: exact nodes {e:?}"),
         }
-        // The walk with its lanes refilled, asked for: on every case.
-        sound(c.refilled.as_ref().expect("refilled"));
+        // The walk with its lanes refilled, asked for: on every case, in each shape.
+        let shapes: Vec<Refill> = c.refilled.iter().map(|r| r.shape).collect();
+        assert_eq!(shapes, opts.refilled, "{kind:?} {layout:?}");
+        c.refilled.iter().for_each(|r| sound(&r.sets));
         // Lanes in lockstep: random rays' walks differ in length, and a wider group
         // idles at least as many lanes.
         let busy = (incoherent.lanes_busy_32, incoherent.lanes_busy_8);
@@ -180,7 +184,7 @@ fn lbvh_benchmark_anchors_against_embree() {
         keep_hits: false,
         khr_rays: 0,
         local_sort_scatter: false,
-        refilled: false,
+        refilled: Vec::new(),
     };
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);
     let room = speculum::scene::builtin::room().unwrap();

@@ -268,6 +268,17 @@ fn small_defects_give_clear_lines() {
     );
     assert_refused(&["bench", "lbvh", "--tris", "0"], d, &["--tris 0", "1 to"]);
     assert_refused(&["bench", "lbvh", "--surface", "17"], d, &["--surface 17", "18 to"]);
+    // The refilled walk's shapes: SHARE:RAYS, each in its range.
+    for (shape, needle) in [
+        ("0:4", "1 to 64"),
+        ("65:4", "1 to 64"),
+        ("4:0", "1 to 1024"),
+        ("4", "SHARE:RAYS"),
+        ("4:x", "SHARE:RAYS"),
+    ] {
+        let args = ["bench", "lbvh", "--tris", "100", "--refill", "4:4", shape];
+        assert_refused(&args, d, &[&format!("--refill {shape}:"), needle]);
+    }
     // A ray with tmin > tmax says so.
     let ray: Vec<u8> = [0.0f32, 0.0, 0.0, 0.0, 0.0, 1.0, 5.0, 1.0]
         .iter()

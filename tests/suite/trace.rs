@@ -9,7 +9,7 @@ use rand::Rng;
 use speculum::cpu_ref::lbvh::triangle;
 use speculum::cpu_ref::trace::{brute_force, intersect, CpuBvh};
 use speculum::gpu_types::{GpuVertex, Hit, Ray};
-use speculum::passes::rt_trace::TracePass;
+use speculum::passes::rt_trace::{Refill, TracePass};
 use speculum::scene::soup::{default_size, random_soup};
 use speculum::shader_defines::{BVH_INVALID, BVH_LEAF_MAX, HIT_DYNAMIC};
 use speculum::tracers::lbvh::{Bvh, Geometry, LbvhBuilder, MortonBits, StaticLayout, UploadedTriangles};
@@ -197,9 +197,11 @@ fn closest_hits_equal_brute_force() {
 /// The walk with its lanes refilled (`TracePass::refilled`: each invocation takes a new
 /// ray from a queue when its walk ends) gives rt.trace's hits bit for bit, closest and
 /// any hit (each a real one), on trees of both builders in every layout (rays of a count that no subgroup
-/// or workgroup divides, so the queue's last take is partial), and the rays' hits are
-/// brute force's; a tree it does not walk (another layout, a dynamic BVH) fails every
-/// ray (t = -1) rather than answering wrongly.
+/// or workgroup divides, so the queue's last take is partial), in its default shape and
+/// the extremes (refills once every lane idles, one ray a lane; once one lane of 64
+/// idles, 37 rays a lane), and the rays' hits are brute force's; a tree it does not walk
+/// (another layout, a dynamic BVH) fails every ray (t = -1) rather than answering
+/// wrongly.
 #[test]
 fn the_refilled_walk_gives_rt_traces_hits() {
     use speculum::tracers::lbvh::BvhKind;
@@ -211,18 +213,27 @@ fn the_refilled_walk_gives_rt_traces_hits() {
     let rays = random_rays(12_345, &v, &i, 1.0, 62);
     let shadow: Vec<Ray> = rays.iter().map(|r| Ray { tmax: 0.9, ..*r }).collect();
     let cpu: Vec<Hit> = rays.iter().map(|r| brute_force(r, &v, &i)).collect();
+    let shapes = [
+        Refill::DEFAULT,
+        Refill::new(1, 1).unwrap(),
+        Refill::new(64, 37).unwrap(),
+    ];
     for layout in StaticLayout::ALL {
-        let refilled = TracePass::<Lbvh>::refilled(&ctx, layout).unwrap();
+        let refilled = shapes.map(|shape| TracePass::<Lbvh>::refilled(&ctx, layout, shape).unwrap());
         let built = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, layout);
         for kind in BvhKind::ALL {
             let (_, made) = b.build_now(built.geometry(), &built.bvh, kind).unwrap();
             assert_eq!(made, kind);
             let [(_, scene), _] = built.both_walks();
-            for (set, any_hit) in [(&rays, false), (&shadow, true)] {
+            let sets = [(&rays, false), (&shadow, true)];
+            for ((set, any_hit), (refilled, shape)) in sets
+                .into_iter()
+                .flat_map(|s| refilled.iter().zip(shapes).map(move |r| (s, r)))
+            {
                 let (want, _) = tracer.trace(set, scene, any_hit).unwrap();
                 let (got, _) = refilled.trace(set, scene, any_hit).unwrap();
                 let differ = want.iter().zip(&got).filter(|(a, b)| a != b).count();
-                let case = format!("{layout:?}, {kind:?}, any hit {any_hit}");
+                let case = format!("{layout:?}, {kind:?}, any hit {any_hit}, refill {shape}");
                 assert_eq!(differ, 0, "{case}: {differ} of {} hits differ", set.len());
                 let hits = got.iter().filter(|h| h.prim != BVH_INVALID).count();
                 assert!(
@@ -246,7 +257,7 @@ fn the_refilled_walk_gives_rt_traces_hits() {
         let other = StaticLayout::ALL[(layout as usize + 1) % 3];
         let elsewhere = Built::new_in(&ctx, &b, (&v, &i), MortonBits::Bits30, other);
         for (walk, scene) in [elsewhere.both_walks()[0], built.both_walks()[1]] {
-            let (got, _) = refilled.trace(&rays[..100], scene, false).unwrap();
+            let (got, _) = refilled[0].trace(&rays[..100], scene, false).unwrap();
             assert!(
                 got.iter().all(|h| h.t == -1.0),
                 "{layout:?} through {other:?}, {walk}: {:?}",
@@ -653,7 +664,7 @@ fn a_tree_deeper_than_the_stack_is_reported() {
         tmax: f32::MAX,
     };
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
-    let refilled = StaticLayout::ALL.map(|l| TracePass::<Lbvh>::refilled(&ctx, l).unwrap());
+    let refilled = StaticLayout::ALL.map(|l| TracePass::<Lbvh>::refilled(&ctx, l, Refill::DEFAULT).unwrap());
     for (count, overflows) in [(units, true), (units / 3, false)] {
         let count8 = if overflows { units8 } else { units8 / 3 };
         for (built, planted) in [
@@ -741,7 +752,7 @@ fn a_planted_cycle_ends_in_a_reported_overrun() {
         ..through
     };
     let tracer = TracePass::<Lbvh>::new(&ctx).unwrap();
-    let refilled = TracePass::<Lbvh>::refilled(&ctx, StaticLayout::Binary).unwrap();
+    let refilled = TracePass::<Lbvh>::refilled(&ctx, StaticLayout::Binary, Refill::DEFAULT).unwrap();
     let [as_static, as_dynamic] = built.both_walks();
     // The walk with its lanes refilled walks the static BVH alone.
     let walks = [(&tracer, as_static), (&tracer, as_dynamic), (&refilled, as_static)];

@@ -6,6 +6,7 @@ use anyhow::Result;
 use clap::Args;
 use speculum::bench::lbvh::{run_case, Options, Report};
 use speculum::output::Kind;
+use speculum::passes::rt_trace::Refill;
 use speculum::report::Header;
 use speculum::tracers::lbvh::{BvhKind, MortonBits, StaticLayout};
 use std::path::PathBuf;
@@ -71,11 +72,37 @@ pub struct LbvhArgs {
     pub local_sort_scatter: bool,
     /// Also trace both ray sets of each case through the walk with its lanes refilled
     /// (a candidate for wide SIMD groups: an invocation takes a new ray when its walk
-    /// ends, so its group's lanes do not idle behind the longest walk)
+    /// ends, so its group's lanes do not idle behind the longest walk), in its default
+    /// shape (4:4, `--refill`)
     #[arg(long)]
     pub refilled: bool,
+    /// The refilled walk in these shapes, SHARE:RAYS each: idle lanes take new rays
+    /// once they are 1/SHARE of their subgroup's (1 to 64; 1: all of them), an
+    /// invocation takes RAYS rays on average (1 to 1024)
+    #[arg(long, num_args = 1.., value_name = "SHARE:RAYS")]
+    pub refill: Vec<String>,
     #[command(flatten)]
     pub common: Common,
+}
+
+/// The refilled walk's shapes: `--refill`'s, after the default where `--refilled`
+/// asks for it too; each once.
+fn refill_shapes(args: &LbvhArgs) -> Result<Vec<Refill>> {
+    let default = args.refilled.then_some(Refill::DEFAULT);
+    let mut shapes = Vec::new();
+    for arg in &args.refill {
+        let shape = arg
+            .parse::<Refill>()
+            .map_err(|e| speculum::Error::Input(format!("--refill {e}")))?;
+        shapes.push(shape);
+    }
+    let mut once = Vec::new();
+    for shape in default.into_iter().chain(shapes) {
+        if !once.contains(&shape) {
+            once.push(shape);
+        }
+    }
+    Ok(once)
 }
 
 /// The vendor tracer's rays per set on a CPU device, without `--khr-rays`.
@@ -125,7 +152,7 @@ fn lbvh_options(args: &LbvhArgs) -> Result<Options> {
         keep_hits: dumping,
         khr_rays: args.khr_rays.unwrap_or(0),
         local_sort_scatter: false,
-        refilled: args.refilled,
+        refilled: refill_shapes(args)?,
     })
 }
 
@@ -399,8 +426,12 @@ fn print_walks(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     if let Some(sets) = &case.exact_nodes {
         other_walk("exact nodes (the dynamic BVH's walk, no compact)", sets);
     }
-    if let Some(sets) = &case.refilled {
-        other_walk("lanes refilled (the same walk)", sets);
+    for r in &case.refilled {
+        let label = format!(
+            "lanes refilled at 1/{} idle, {} rays a lane (the same walk)",
+            r.shape.share, r.shape.rays_per_lane
+        );
+        other_walk(&label, &r.sets);
     }
     if let Some(f) = &case.file {
         text.line(format_args!(

@@ -10,8 +10,8 @@
 // Each node at its place in preorder (bvh_order.glsl: lbvh_order_* ran before), its
 // children's links to their places; nodes not placed (inside a leaf; wide: at an odd
 // depth, the opened children; compressed wide: not at a depth divisible by three) are
-// not written. A tree whose root has no counts keeps
-// every node in its slot, as are the links.
+// not written. A tree that is not ordered (order_ordered: its root has no counts, or
+// it is ORDER_H_MAX or more deep) keeps every node in its slot, as are the links.
 // One invocation per binary node; the first also writes the header, whose first texel's
 // w says `slots` to the walk. Mirrored by cpu_ref::lbvh::compact_nodes (tests/lbvh.rs).
 #include "bvh.glsl"
@@ -139,9 +139,8 @@ void main() {
     if (i >= pc.node_count) {
         return;
     }
-    uint height = order_height(counts[0]);
-    bool ordered = height != 0u;
-    bool odd_rounds = (order_tree_rounds(counts[0], pc.node_count) & 1u) != 0u;
+    bool ordered = order_ordered(counts[0]);
+    bool odd_rounds = (order_tree_rounds(counts[0]) & 1u) != 0u;
     TraversalNode root = node_from_texels(nodes, 0u);
     vec3 g, st;
     compact_grid(min(root.lo0, root.lo1), max(root.hi0, root.hi1), g, st);

@@ -2,8 +2,8 @@
 // lbvh.compact, its order's first step (bvh_order.glsl), after the builder's counts:
 // each node's jump state of one step, to its parent: for each depth it may sit at mod
 // P, 1 where that is 0 (the placed ancestor before it) plus, after an internal first
-// sibling, that sibling's placed nodes (order_placed). Nothing when the root has no
-// counts (the nodes stay in place). The first invocation writes the jump rounds'
+// sibling, that sibling's placed nodes (order_placed). Nothing for a tree that keeps
+// its slots (order_ordered). The first invocation writes the jump rounds'
 // indirect arguments: the rounds the root's height needs get the groups, the rest of
 // those recorded none.
 #include "bvh.glsl"
@@ -28,15 +28,14 @@ void main() {
     if (i >= pc.node_count) {
         return;
     }
-    uint height = order_height(counts[0]);
     if (i == 0u) {
         uint groups = (pc.node_count + LBVH_WG - 1u) / LBVH_WG;
-        uint rounds = order_tree_rounds(counts[0], pc.node_count);
+        uint rounds = order_tree_rounds(counts[0]);
         for (uint r = 0u; r < pc.rounds; ++r) {
             args[r] = uvec4(r < rounds ? groups : 0u, 1u, 1u, 0u);
         }
     }
-    if (height == 0u) {
+    if (!order_ordered(counts[0])) {
         return;
     }
     if (i == 0u) {

@@ -147,6 +147,12 @@ pub const WIDE8_TEXELS: u32 = 6;
 /// which the benchmark counts as a mismatch.
 pub const TRACE_STACK: u32 = 152;
 
+/// The height a node's order counts hold (`glsl/shared/bvh_order.glsl`): that or more.
+/// A tree this deep keeps its nodes in their slots in the static walk's layout, where
+/// a shallower one is put in preorder by at most `order_rounds(ORDER_H_MAX - 1)` jump
+/// rounds (`tracers::lbvh::order::recorded_rounds`).
+pub const ORDER_H_MAX: u32 = 255;
+
 /// Binary-search steps that refine an SSR hit inside its last stride: log2 of the
 /// largest stride worth refining to one pixel (16 px).
 pub const SSR_REFINE_STEPS: u32 = 4;
@@ -314,6 +320,7 @@ pub const SHADER_DEFINES: &[(&str, u32)] = &[
     ("BVH_INVALID", BVH_INVALID),
     ("HIT_DYNAMIC", HIT_DYNAMIC),
     ("TRACE_STACK", TRACE_STACK),
+    ("ORDER_H_MAX", ORDER_H_MAX),
     ("WIDE", WIDE),
     ("WIDE8", WIDE8),
     ("WIDE8_TEXELS", WIDE8_TEXELS),

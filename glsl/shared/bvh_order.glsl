@@ -15,10 +15,10 @@
 //    M1), and its height H, in `counts` (a uvec4 a node: A, B, H | M0 << 8, M1;
 //    order_counts: a count is below 2^24, and H stops at ORDER_H_MAX). A node is
 //    counted as internal even where it became a leaf (its parent links the leaf, never
-//    the node). The root's H says how many jump rounds run (order_tree_rounds: at
-//    ORDER_H_MAX, those of a chain of every node, all the build records). A tree whose
-//    root has no counts (H = 0: nodes written by the host) keeps the nodes where they
-//    are.
+//    the node). The root's H says how many jump rounds run (order_tree_rounds, at most
+//    order_rounds(ORDER_H_MAX - 1), all a build records). A tree whose root has no
+//    counts (H = 0: nodes written by the host), or is ORDER_H_MAX or more deep, keeps
+//    the nodes where they are.
 // 2. lbvh_order_init: each node's step to its parent: what it adds to its place for
 //    each depth it may sit at mod P (1 where that depth is 0 mod P, for the placed
 //    ancestor before it, plus the placed nodes of its earlier sibling's subtree), as a
@@ -52,17 +52,25 @@ bool order_internal(uint c) {
     return (c & BVH_LEAF_BIT) == 0u;
 }
 
-// A node's height from its counts (0: none; ORDER_H_MAX: that or more).
-#define ORDER_H_MAX 255u
+// A node's height from its counts (0: none; ORDER_H_MAX, 255: that or more).
 uint order_height(uvec4 c) {
     return c.z & ORDER_H_MAX;
 }
 
-// The jump rounds the tree of `node_count` internal nodes whose root has counts c
-// needs (lbvh_order_init dispatches them; lbvh.compact reads the last).
-uint order_tree_rounds(uvec4 c, uint node_count) {
+// Whether the tree whose root has counts c is put in preorder: it has counts (H > 0,
+// not nodes written by the host) and a height below ORDER_H_MAX, so that the rounds a
+// build records (order_rounds(ORDER_H_MAX - 1) at most: lbvh::order::recorded_rounds)
+// reach its deepest node. Else its nodes keep their slots, where a walk reads them as
+// well (only its reads lie further apart); no tree the frame walks is that deep.
+bool order_ordered(uvec4 c) {
     uint h = order_height(c);
-    return order_rounds(h == ORDER_H_MAX ? node_count : h);
+    return h != 0u && h < ORDER_H_MAX;
+}
+
+// The jump rounds the tree whose root has counts c needs (lbvh_order_init dispatches
+// them; lbvh.compact reads the last): none for a tree that keeps its slots.
+uint order_tree_rounds(uvec4 c) {
+    return order_ordered(c) ? order_rounds(order_height(c)) : 0u;
 }
 
 // A node's internal nodes at depths 0, 1, 2 mod 3 below it, from its counts.

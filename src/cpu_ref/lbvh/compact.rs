@@ -269,8 +269,8 @@ pub fn order_counts(nodes: &[TraversalNode]) -> Option<Vec<[u32; 4]>> {
             // A child's internal nodes at depths 0, 1, 2 mod 3 below it.
             let thirds = |c: [u32; 4]| [c[2] >> 8, c[3], c[0] + c[1] - (c[2] >> 8) - c[3]];
             let (ta, tb) = (thirds(a), thirds(b));
-            // The height stops at 255 (the GPU then runs a chain's jump rounds).
-            let height = (1 + (a[2] & 0xff).max(b[2] & 0xff)).min(255);
+            // The height stops at ORDER_H_MAX (the tree then keeps its slots).
+            let height = (1 + (a[2] & 0xff).max(b[2] & 0xff)).min(crate::shader_defines::ORDER_H_MAX);
             counts[k] = Some([
                 1 + a[1] + b[1],
                 a[0] + b[0],
@@ -327,11 +327,21 @@ pub fn compact_places(nodes: &[TraversalNode], slots: u32) -> Option<Vec<u32>> {
 /// each at its place (`compact_places`), its internal children's links to theirs: the
 /// header and the nodes placed, as many as are written (the rest of the buffer is
 /// left as it was). For a tree `compact_places` orders, as the GPU does by its
-/// builder's counts; nodes planted without counts keep their slots there
-/// (`compact_nodes_placed` with each node's own).
+/// builder's counts; a tree `ORDER_H_MAX` or more deep, and nodes planted without
+/// counts, keep their slots there (`compact_nodes_placed` with each node's own).
 pub fn compact_nodes(nodes: &[TraversalNode], slots: u32) -> Vec<[u32; 4]> {
-    let place = compact_places(nodes, slots).expect("compact_nodes of a tree from the root with parent links back");
-    compact_nodes_placed(nodes, slots, &place)
+    compact_nodes_placed(nodes, slots, &written_places(nodes, slots))
+}
+
+/// Where `lbvh.compact` writes each node of a built tree (`compact_nodes`): its place
+/// in preorder (`compact_places`), or its own slot in a tree `ORDER_H_MAX` or more
+/// deep, which the order's jump rounds do not reach through.
+pub fn written_places(nodes: &[TraversalNode], slots: u32) -> Vec<u32> {
+    let h_max = crate::shader_defines::ORDER_H_MAX;
+    match order_counts(nodes).is_some_and(|c| c[0][2] & 0xff >= h_max) {
+        true => (0..nodes.len() as u32).collect(),
+        false => compact_places(nodes, slots).expect("compact_nodes of a tree from the root with parent links back"),
+    }
 }
 
 /// `compact_nodes` with each node at `place` (`BVH_INVALID`: not written); the places

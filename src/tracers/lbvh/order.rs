@@ -17,13 +17,19 @@ use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 /// Jump rounds recorded for `nodes` internal nodes: enough for the deepest tree they
-/// can make (a chain), `order_rounds` in `bvh_order.glsl` of a height of `nodes`; a
-/// tree runs the rounds its height needs, the rest dispatch nothing.
+/// can make that is put in preorder (`order_ordered` in `bvh_order.glsl`: a chain of
+/// them, or a tree `ORDER_H_MAX - 1` deep), `order_rounds` of that height; a tree runs
+/// the rounds its height needs, the rest dispatch nothing.
 pub fn recorded_rounds(nodes: u32) -> u32 {
-    if nodes <= 2 {
+    order_rounds(nodes.min(crate::shader_defines::ORDER_H_MAX - 1))
+}
+
+/// `order_rounds` of `bvh_order.glsl`: the jump rounds a tree of height `h` needs.
+fn order_rounds(h: u32) -> u32 {
+    if h <= 2 {
         0
     } else {
-        (nodes - 2).ilog2() + 1
+        (h - 2).ilog2() + 1
     }
 }
 

@@ -125,8 +125,11 @@ pub struct CaseReport {
     /// passes (a sort of one tile: the scatter alone, the others null).
     pub sort_steps_ms: PassTimes,
     /// GPU milliseconds of a whole build (for PLOC, its first submission:
-    /// `first_rounds` rounds and the tail).
+    /// `first_rounds` rounds and the tail), timed as one scope (its stages unstamped).
     pub build_ms: Stat,
+    /// The same builds timed stage by stage (`stages_ms`), the stamps between stages
+    /// and their barriers included.
+    pub staged_build_ms: Stat,
     /// PLOC rounds a build needed beyond the first submission's (submitted again,
     /// untimed; 0 for the LBVH).
     pub untimed_rounds: u32,
@@ -311,10 +314,11 @@ fn time_sort_steps(
     Ok(PassTimes::of_scopes(&steps, &STEPS))
 }
 
-/// What the timed builds of one case measured: per-stage samples, and the refit and
-/// compact nodes made after each build.
+/// What the timed builds of one case measured: per-stage samples, whole builds', and
+/// the refit and compact nodes made after each build.
 struct BuildTimes {
     stages: Timings,
+    whole_ms: Stat,
     refit_ms: Stat,
     compact_ms: Stat,
     /// PLOC rounds beyond the first submission's, the most any build needed.
@@ -324,9 +328,10 @@ struct BuildTimes {
 }
 
 /// One warm-up build (pipeline JIT), then `repeats` timed builds of `geometry` into
-/// `bvh` (PLOC with `scratch`, else the LBVH), each followed by the frame's refit and
-/// the compact nodes. Every readout that fails its self-check is measured again
-/// (`remeasure`: a build, a refit and a compaction do the same work each run).
+/// `bvh` (PLOC with `scratch`, else the LBVH), each timed stage by stage and again
+/// whole (`GpuTimer::outermost_only`), followed by the frame's refit and the compact
+/// nodes. Every readout that fails its self-check is measured again (`remeasure`: a
+/// build, a refit and a compaction do the same work each run).
 fn time_builds(
     ctx: &Arc<Context>,
     (builder, geometry, bvh): (&LbvhBuilder, Geometry<'_>, &Bvh),
@@ -340,10 +345,17 @@ fn time_builds(
     // just built (the schedule is made once per build, as the frame does, and is not
     // timed), then the compaction.
     let mut repeat = || -> Result<super::Round> {
-        let (extra, times, discarded) = remeasure(|| match scratch {
-            Some(scratch) => timed_ploc_build(&mut timer, builder, geometry, bvh, scratch).map(|(t, e)| (e, t)),
-            None => Ok((0, timed_build(&mut timer, builder, geometry, bvh)?)),
-        })?;
+        let build = |timer: &mut GpuTimer| {
+            remeasure(|| match scratch {
+                Some(scratch) => timed_ploc_build(timer, builder, geometry, bvh, scratch).map(|(t, e)| (e, t)),
+                None => Ok((0, timed_build(timer, builder, geometry, bvh)?)),
+            })
+        };
+        let (extra, times, discarded) = build(&mut timer)?;
+        timer.outermost_only(true);
+        let whole = build(&mut timer);
+        timer.outermost_only(false);
+        let (_, whole, whole_discarded) = whole?;
         untimed_rounds = untimed_rounds.max(extra);
         let schedule = RefitSchedule::of(ctx, bvh)?;
         let refit = remeasure_readout(|| {
@@ -351,18 +363,18 @@ fn time_builds(
         })?;
         let compact = remeasure_readout(|| timer.one_shot(|cmd, timer| builder.record_compact(cmd, timer, bvh)))?;
         tick();
-        Ok(vec![(times, discarded), refit, compact])
+        Ok(vec![(times, discarded), refit, compact, (whole, whole_discarded)])
     };
     // Untimed: its pipelines' first use. Then a repeat whose build strays beyond 2x the
     // median is measured again.
     repeat()?;
     let (measured, rounds_check) = super::measure_rounds(repeats, BUILD, repeat)?;
     let mut stages = Timings::default();
-    let (mut refits, mut compacts) = (Vec::new(), Vec::new());
+    let (mut refits, mut compacts, mut wholes) = (Vec::new(), Vec::new(), Vec::new());
     let mut timing = TimingCheck::default();
     for m in &measured {
         stages.add_measured(&m[0].0, m[0].1);
-        for ((readout, discarded), out) in m[1..].iter().zip([&mut refits, &mut compacts]) {
+        for ((readout, discarded), out) in m[1..].iter().zip([&mut refits, &mut compacts, &mut wholes]) {
             out.push(readout.first().map_or(f64::NAN, |r| r.1));
             timing.add_measured(readout.problem.as_deref(), *discarded);
         }
@@ -370,6 +382,7 @@ fn time_builds(
     timing.merge(stages.check());
     Ok(BuildTimes {
         stages,
+        whole_ms: Stat::of(&wholes).expect("repeats > 0"),
         refit_ms: Stat::of(&refits).expect("repeats > 0"),
         compact_ms: Stat::of(&compacts).expect("repeats > 0"),
         untimed_rounds,
@@ -494,7 +507,8 @@ pub fn run_case(
     let built = time_builds(ctx, (&builder, geometry, &bvh), scratch.as_ref(), opts.repeats, tick)?;
     let mut timing = built.timing;
     let stages_ms = PassTimes::of_scopes(&built.stages, &kind.stages());
-    let build_ms = built.stages.samples(BUILD).and_then(Stat::of).expect("repeats > 0");
+    let staged_build_ms = built.stages.samples(BUILD).and_then(Stat::of).expect("repeats > 0");
+    let build_ms = built.whole_ms;
 
     // Checks of the BVH as the timed builds (and refits) left it.
     let packed = bvh.read_packed()?;
@@ -546,6 +560,7 @@ pub fn run_case(
         stages_ms,
         sort_steps_ms,
         build_ms,
+        staged_build_ms,
         untimed_rounds: built.untimed_rounds,
         build_rounds_check: built.rounds_check.clone(),
         mtris_per_s: n as f64 / (build_ms.median * 1e3),

@@ -443,7 +443,7 @@ fn bench_reports_follow_the_schema() {
     }
     assert!(lbvh["settings"].is_null() && lbvh["options"]["repeats"] == 2);
     let case = &lbvh["cases"][0];
-    for k in ["build_ms", "refit_ms"] {
+    for k in ["build_ms", "staged_build_ms", "refit_ms"] {
         check_stat(&case[k], k);
     }
     check_stat(&case["coherent"]["trace_ms"], "trace_ms");

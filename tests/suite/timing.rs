@@ -142,6 +142,19 @@ fn one_shot_scopes_pass_their_self_check() {
         build.scopes
     );
     assert_eq!(build.len(), 5, "the build and its four stages: {:?}", build.scopes);
+    // Timed whole (`outermost_only`): the build's scope alone, then its stages again.
+    timer.outermost_only(true);
+    let (whole, _) =
+        speculum::vk::remeasure_readout(|| speculum::bench::lbvh::timed_build(&mut timer, &builder, geometry, &bvh))
+            .unwrap();
+    timer.outermost_only(false);
+    assert_eq!(whole.problem, None, "{:?}", whole.scopes);
+    let names: Vec<&str> = whole.scopes.iter().map(|s| s.0).collect();
+    assert_eq!(names, [speculum::bench::lbvh::BUILD], "{:?}", whole.scopes);
+    let (staged, _) =
+        speculum::vk::remeasure_readout(|| speculum::bench::lbvh::timed_build(&mut timer, &builder, geometry, &bvh))
+            .unwrap();
+    assert_eq!(staged.len(), 5, "stamped again: {:?}", staged.scopes);
     let (lo, hi) = (glam::Vec3::splat(-5.0), glam::Vec3::splat(5.0));
     let rays = speculum::bench::lbvh::incoherent_rays(lo, hi, 50_000, 3);
     timer

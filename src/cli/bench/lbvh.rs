@@ -330,11 +330,12 @@ fn print_lbvh_case(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
         r => format!(" (+{r} rounds untimed)"),
     };
     text.line(format_args!(
-        "{:<14} {:>9} tris  build {}{untimed} ({:7.2} Mtris/s) [{}]  refit {}  compact {}",
+        "{:<14} {:>9} tris  build {}{untimed} ({:7.2} Mtris/s) [by stage {:.3}: {}]  refit {}  compact {}",
         format!("{} {} {}", case.name, case.builder.name(), case.layout.name()),
         case.triangles,
         cell(Some(case.build_ms)),
         case.mtris_per_s,
+        case.staged_build_ms.median,
         stages.join(", "),
         cell(Some(case.refit_ms)),
         cell(Some(case.compact_ms))

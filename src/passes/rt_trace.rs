@@ -198,6 +198,8 @@ impl TracePass<Lbvh> {
     /// trace with a dynamic BVH, or a static one in another layout, returns every ray
     /// as a failed walk (t = -1).
     pub fn refilled(ctx: &Arc<Context>, layout: StaticLayout, shape: Refill) -> Result<Self> {
+        // Checked again (its fields are public): a share of 0 would never refill.
+        let shape = Refill::new(shape.share, shape.rays_per_lane)?;
         let comp = shaders::RT_TRACE_REFILL_COMP;
         let queue = Buffer::new(
             ctx,

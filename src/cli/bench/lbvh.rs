@@ -88,21 +88,14 @@ pub struct LbvhArgs {
 /// The refilled walk's shapes: `--refill`'s, after the default where `--refilled`
 /// asks for it too; each once.
 fn refill_shapes(args: &LbvhArgs) -> Result<Vec<Refill>> {
-    let default = args.refilled.then_some(Refill::DEFAULT);
-    let mut shapes = Vec::new();
+    let mut shapes = Vec::from_iter(args.refilled.then_some(Refill::DEFAULT));
     for arg in &args.refill {
-        let shape = arg
-            .parse::<Refill>()
-            .map_err(|e| speculum::Error::Input(format!("--refill {e}")))?;
-        shapes.push(shape);
-    }
-    let mut once = Vec::new();
-    for shape in default.into_iter().chain(shapes) {
-        if !once.contains(&shape) {
-            once.push(shape);
+        let shape = (arg.parse::<Refill>()).map_err(|e| speculum::Error::Input(format!("--refill {e}")))?;
+        if !shapes.contains(&shape) {
+            shapes.push(shape);
         }
     }
-    Ok(once)
+    Ok(shapes)
 }
 
 /// The vendor tracer's rays per set on a CPU device, without `--khr-rays`.

@@ -24,11 +24,12 @@ pub const NAME: &str = "rt.trace";
 /// The shape of the refilled walk (`TracePass::<Lbvh>::refilled`): a subgroup's idle
 /// lanes take new rays once they are at least 1/`share` of its lanes (1: all of them),
 /// and an invocation takes `rays_per_lane` rays on average (its dispatch covers the
-/// rays over this many).
+/// rays over this many). Made by `new` (or `DEFAULT`) alone, so its values are in
+/// range: a share of 0 would never refill.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Refill {
-    pub share: u32,
-    pub rays_per_lane: u32,
+    share: u32,
+    rays_per_lane: u32,
 }
 
 impl Refill {
@@ -51,6 +52,16 @@ impl Refill {
             )));
         }
         Ok(Self { share, rays_per_lane })
+    }
+
+    /// Idle lanes refill once they are 1/`share` of their subgroup's.
+    pub fn share(self) -> u32 {
+        self.share
+    }
+
+    /// Rays an invocation takes on average.
+    pub fn rays_per_lane(self) -> u32 {
+        self.rays_per_lane
     }
 }
 
@@ -198,8 +209,6 @@ impl TracePass<Lbvh> {
     /// trace with a dynamic BVH, or a static one in another layout, returns every ray
     /// as a failed walk (t = -1).
     pub fn refilled(ctx: &Arc<Context>, layout: StaticLayout, shape: Refill) -> Result<Self> {
-        // Checked again (its fields are public): a share of 0 would never refill.
-        let shape = Refill::new(shape.share, shape.rays_per_lane)?;
         let comp = shaders::RT_TRACE_REFILL_COMP;
         let queue = Buffer::new(
             ctx,

@@ -218,13 +218,9 @@ fn the_refilled_walk_gives_rt_traces_hits() {
         Refill::new(1, 1).unwrap(),
         Refill::new(64, 37).unwrap(),
     ];
-    // A shape made past `Refill::new` (a share of 0 would never refill) is refused.
+    // A shape out of range (a share of 0 would never refill) cannot be made.
     for (share, rays_per_lane) in [(0, 4), (4, 0)] {
-        let bad = Refill { share, rays_per_lane };
-        assert!(
-            TracePass::<Lbvh>::refilled(&ctx, StaticLayout::Binary, bad).is_err(),
-            "{bad}"
-        );
+        assert!(Refill::new(share, rays_per_lane).is_err(), "{share}:{rays_per_lane}");
     }
     for layout in StaticLayout::ALL {
         let refilled = shapes.map(|shape| TracePass::<Lbvh>::refilled(&ctx, layout, shape).unwrap());

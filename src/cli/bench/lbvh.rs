@@ -90,7 +90,9 @@ pub struct LbvhArgs {
 fn refill_shapes(args: &LbvhArgs) -> Result<Vec<Refill>> {
     let mut shapes = Vec::from_iter(args.refilled.then_some(Refill::DEFAULT));
     for arg in &args.refill {
-        let shape = (arg.parse::<Refill>()).map_err(|e| speculum::Error::Input(format!("--refill {e}")))?;
+        let shape = arg
+            .parse::<Refill>()
+            .map_err(|e| speculum::Error::Input(format!("--refill {e}")))?;
         if !shapes.contains(&shape) {
             shapes.push(shape);
         }
@@ -423,7 +425,8 @@ fn print_walks(text: &Text, case: &speculum::bench::lbvh::CaseReport) {
     for r in &case.refilled {
         let label = format!(
             "lanes refilled at 1/{} idle, {} rays a lane (the same walk)",
-            r.shape.share, r.shape.rays_per_lane
+            r.shape.share(),
+            r.shape.rays_per_lane()
         );
         other_walk(&label, &r.sets);
     }

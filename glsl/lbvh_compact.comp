@@ -23,8 +23,8 @@ layout(binding = 0) uniform utextureBuffer nodes;
 layout(binding = 1, std430) writeonly buffer Compact { uvec4 compact[]; };
 layout(binding = 2, std430) readonly buffer Counts { uvec4 counts[]; };
 // The jump states after an even and after an odd count of rounds.
-layout(binding = 3, std430) readonly buffer Jump0 { uvec4 jump0[]; };
-layout(binding = 4, std430) readonly buffer Jump1 { uvec4 jump1[]; };
+layout(binding = 3) uniform utextureBuffer jump0;
+layout(binding = 4) uniform utextureBuffer jump1;
 
 layout(push_constant) uniform Push {
     uint node_count;
@@ -37,7 +37,7 @@ uint place(uint i, bool ordered, bool odd_rounds) {
     if (!ordered) {
         return i;
     }
-    uvec4 st = odd_rounds ? jump1[i] : jump0[i];
+    uvec4 st = odd_rounds ? texelFetch(jump1, int(i)) : texelFetch(jump0, int(i));
     uint flags = st.w >> ORDER_FLAGS_SHIFT;
     bool placed = (st.x == 0u || st.x == BVH_INVALID) && (flags & ORDER_DEAD) == 0u && (flags & ORDER_LEN) == 0u;
     return placed && st.y < pc.node_count ? st.y : BVH_INVALID;

@@ -54,9 +54,6 @@ void main() {
     uint sib = pn.child0;
     bool after = side == 1u && order_internal(sib);
     uvec4 c = after ? counts[sib] : uvec4(0u);
-    uvec3 sum = uvec3(0u);
-    for (uint k = 0u; k < phases; ++k) {
-        sum[k] = (k == 0u ? 1u : 0u) + (after ? order_placed(c, phases, k) : 0u);
-    }
+    uvec3 sum = uvec3(1u, 0u, 0u) + (after ? order_placed(c, phases) : uvec3(0u));
     jump[i] = uvec4(p, sum.x, sum.y, sum.z | ((1u % phases) << ORDER_FLAGS_SHIFT));
 }

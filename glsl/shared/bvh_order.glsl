@@ -95,16 +95,24 @@ uint order_phases(uint slots) {
     return slots == WIDE ? 2u : (slots == WIDE8 ? 3u : 1u);
 }
 
-// The placed nodes of a subtree whose root (with counts c) sits at a depth k mod p.
-uint order_placed(uvec4 c, uint p, uint k) {
+// The placed nodes of a subtree whose root (with counts c) sits at a depth 0, 1, 2 mod
+// p, as a vector (those past p 0): selects, not a vector indexed per lane, which
+// lavapipe keeps as a private array, read and written lane by lane.
+uvec3 order_placed(uvec4 c, uint p) {
     if (p == 1u) {
-        return c.x + c.y;
+        return uvec3(c.x + c.y, 0u, 0u);
     }
     if (p == 2u) {
-        return k == 0u ? c.x : c.y;
+        return uvec3(c.x, c.y, 0u);
     }
-    uvec3 t = order_thirds(c);
-    return t[(3u - k) % 3u];
+    return order_thirds(c).xzy;
+}
+
+// A jump state's sums for depths 0, 1, 2 mod p turned by `by` places (component k
+// takes component (k + p - by) % p; those past p 0), by selects as order_placed.
+uvec3 order_turned(uvec3 s, uint p, uint by) {
+    uvec3 t = by == 0u ? s : (p == 2u ? s.yxz : (by == 1u ? s.zxy : s.yzx));
+    return t * uvec3(1u, p > 1u ? 1u : 0u, p > 2u ? 1u : 0u);
 }
 
 #endif

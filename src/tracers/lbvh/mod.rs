@@ -551,8 +551,8 @@ impl LbvhBuilder {
                 ("nodes", Resource::Texels(&bvh.node_texels)),
                 ("compact", Resource::Buffer(&compact.buffer)),
                 ("counts", Resource::Buffer(&bvh.counts)),
-                ("jump0", Resource::Buffer(&o.jump[0])),
-                ("jump1", Resource::Buffer(&o.jump[1])),
+                ("jump0", Resource::Texels(&o.jump_texels[0])),
+                ("jump1", Resource::Texels(&o.jump_texels[1])),
             ],
             &CompactPush {
                 node_count: nodes,

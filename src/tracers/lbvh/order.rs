@@ -10,7 +10,7 @@
 use crate::error::Result;
 use crate::shaders;
 use crate::vk::barrier::{self, access};
-use crate::vk::{Buffer, Context, Groups, Pipeline, Resource};
+use crate::vk::{Buffer, Context, Groups, Pipeline, Resource, TexelView};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -38,6 +38,8 @@ fn order_rounds(h: u32) -> u32 {
 pub struct OrderScratch {
     /// The jump states, read and written in turns.
     pub(super) jump: [Buffer; 2],
+    /// The same, as the rounds and lbvh.compact read them (texels of uvec4).
+    pub(super) jump_texels: [TexelView; 2],
     /// One `VkDispatchIndirectCommand` a recorded round, 16 bytes apart.
     args: Buffer,
 }
@@ -51,12 +53,14 @@ impl OrderScratch {
             Buffer::new(ctx, name, bytes.max(16), usage | extra, MemoryLocation::GpuOnly)
         };
         let n = u64::from(nodes.max(1));
-        let none = vk::BufferUsageFlags::empty();
+        let texels = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+        let jump = [
+            buf("lbvh.order.jump0", n * 16, texels)?,
+            buf("lbvh.order.jump1", n * 16, texels)?,
+        ];
         Ok(Self {
-            jump: [
-                buf("lbvh.order.jump0", n * 16, none)?,
-                buf("lbvh.order.jump1", n * 16, none)?,
-            ],
+            jump_texels: [TexelView::new(ctx, &jump[0])?, TexelView::new(ctx, &jump[1])?],
+            jump,
             args: buf(
                 "lbvh.order.args",
                 u64::from(recorded_rounds(nodes)) * 16,
@@ -137,7 +141,7 @@ impl OrderKernels {
             self.jump.dispatch(
                 cmd,
                 &[
-                    ("from", Resource::Buffer(&s.jump[r % 2])),
+                    ("from_state", Resource::Texels(&s.jump_texels[r % 2])),
                     ("to", Resource::Buffer(&s.jump[(r + 1) % 2])),
                 ],
                 &JumpPush { node_count, slots },

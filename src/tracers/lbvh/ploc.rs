@@ -238,7 +238,7 @@ impl PlocBuilder {
             self.scatter.dispatch(
                 cmd,
                 &[
-                    ("clusters", Resource::Buffer(&s.clusters[p])),
+                    ("cluster_texels", Resource::Texels(&s.cluster_texels[p])),
                     ("next_clusters", Resource::Buffer(&s.clusters[q])),
                     ("nearest", Resource::Buffer(&s.nearest)),
                     ("tile_offsets", Resource::Buffer(&s.tile_offsets)),

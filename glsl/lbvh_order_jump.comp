@@ -33,7 +33,6 @@ void main() {
         // k - lm.
         uvec3 ms = uvec3(me.yz, me.w & ORDER_SUM_MASK), ts = uvec3(t.yz, t.w & ORDER_SUM_MASK);
         uvec3 sum = ms + order_turned(ts, p, lm); // both 0 past p
-
         uint flags = ((lm + lt) % p) | (((me.w | t.w) >> ORDER_FLAGS_SHIFT) & ORDER_DEAD);
         me = uvec4(t.x, sum.x, sum.y, sum.z | (flags << ORDER_FLAGS_SHIFT));
     }

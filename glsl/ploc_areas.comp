@@ -9,15 +9,10 @@
 
 layout(local_size_x = LBVH_WG) in;
 
-// The clusters as texels of uvec4, 3 per cluster: lo and ref, hi and cost, the rest.
+// The clusters as texels (ploc.glsl: cluster_box_from_texels).
 layout(binding = 0) uniform utextureBuffer cluster_texels;
 layout(binding = 1, std430) writeonly buffer Areas { float areas[]; };
 layout(binding = 2, std430) readonly buffer State { PlocState state; };
-
-void cluster_box(uint j, out vec3 lo, out vec3 hi) {
-    lo = uintBitsToFloat(texelFetch(cluster_texels, int(3u * j)).xyz);
-    hi = uintBitsToFloat(texelFetch(cluster_texels, int(3u * j + 1u)).xyz);
-}
 
 void main() {
     uint c = state.count[pc.parity];
@@ -26,11 +21,11 @@ void main() {
         return;
     }
     vec3 lo, hi;
-    cluster_box(i, lo, hi);
+    cluster_box_from_texels(cluster_texels, i, lo, hi);
     uint last = min(c - 1u, i + PLOC_RADIUS);
     for (uint j = i + 1u; j <= last; ++j) {
         vec3 jlo, jhi;
-        cluster_box(j, jlo, jhi);
+        cluster_box_from_texels(cluster_texels, j, jlo, jhi);
         areas[(j - i - 1u) * pc.n + i] = bvh_area(min(lo, jlo), max(hi, jhi));
     }
 }

@@ -11,8 +11,7 @@
 
 layout(local_size_x = LBVH_WG) in;
 
-// The clusters as texels of uvec4, 3 per cluster (ploc_areas.comp): lavapipe loads a
-// storage buffer lane by lane and word by word, each behind a branch.
+// The clusters as texels (ploc.glsl: cluster_from_texels).
 layout(binding = 0) uniform utextureBuffer cluster_texels;
 layout(binding = 1, std430) writeonly buffer NextClusters { Cluster next_clusters[]; };
 layout(binding = 2, std430) readonly buffer Nearest { uint nearest[]; };
@@ -22,14 +21,6 @@ layout(binding = 5, std430) buffer TNodes { TraversalNode tnodes[]; };
 layout(binding = 6, std430) buffer TTris { TraversalTri ttris[]; };
 // The order counts (ploc.glsl: PLOC_WRITE_COUNTS).
 layout(binding = 7, std430) buffer Counts { uvec4 counts[]; };
-
-Cluster cluster_at(uint i) {
-    uvec4 t0 = texelFetch(cluster_texels, int(3u * i));
-    uvec4 t1 = texelFetch(cluster_texels, int(3u * i + 1u));
-    uvec4 t2 = texelFetch(cluster_texels, int(3u * i + 2u));
-    return Cluster(uintBitsToFloat(t0.xyz), t0.w, uintBitsToFloat(t1.xyz), uintBitsToFloat(t1.w), t2.x, t2.y, t2.z,
-                   t2.w);
-}
 
 void main() {
     uint c = state.count[pc.parity];
@@ -49,12 +40,12 @@ void main() {
     }
     uvec2 off = tile_offsets[gl_WorkGroupID.x];
     uint pos = off.x + (run & 0xffffu);
-    Cluster a = cluster_at(i);
+    Cluster a = cluster_from_texels(cluster_texels, i);
     if (!merge) {
         next_clusters[pos] = a;
         return;
     }
-    Cluster b = cluster_at(j);
+    Cluster b = cluster_from_texels(cluster_texels, j);
     uint slot = pc.n - 2u - (state.base_slot + off.y + (run >> 16));
     PLOC_WRITE_NODE(tnodes, ttris, slot, a, b)
     PLOC_WRITE_COUNTS(counts, slot, a, b)

@@ -30,6 +30,23 @@ struct Cluster {
     uint _pad0;
 };
 
+// Cluster i from a cluster array seen as texels of uvec4, 3 a cluster (lo and ref, hi
+// and cost, the rest): what the rounds read of the clusters the last round wrote
+// (lavapipe loads a storage buffer lane by lane and word by word, each behind a
+// branch). Its box alone: the first two texels.
+void cluster_box_from_texels(utextureBuffer clusters, uint i, out vec3 lo, out vec3 hi) {
+    lo = uintBitsToFloat(texelFetch(clusters, int(3u * i)).xyz);
+    hi = uintBitsToFloat(texelFetch(clusters, int(3u * i + 1u)).xyz);
+}
+
+Cluster cluster_from_texels(utextureBuffer clusters, uint i) {
+    uvec4 t0 = texelFetch(clusters, int(3u * i));
+    uvec4 t1 = texelFetch(clusters, int(3u * i + 1u));
+    uvec4 t2 = texelFetch(clusters, int(3u * i + 2u));
+    return Cluster(uintBitsToFloat(t0.xyz), t0.w, uintBitsToFloat(t1.xyz), uintBitsToFloat(t1.w), t2.x, t2.y, t2.z,
+                   t2.w);
+}
+
 #define PLOC_SCATTERED 0x80000000u
 
 // The build's state. Round r reads count[r % 2] and writes count[(r + 1) % 2].

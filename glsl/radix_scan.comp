@@ -4,7 +4,8 @@
 // tile: for 1M keys, 4096 entries in a GPU's tiles of 4K keys, 2048 in a CPU device's
 // tiles of 8K). Each invocation sums a contiguous segment, the workgroup scans the
 // segment sums, each segment is rewritten with its offset. No workgroup waits on
-// another.
+// another. Not run for a sort of few tiles, whose scatter finds its offsets itself
+// (radix_scatter.comp: FUSED_TILES).
 // CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
 #include "radix.glsl"
 #define WG_SCAN_SIZE SORT_WG

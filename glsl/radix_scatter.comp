@@ -18,6 +18,11 @@
 // L2 while the output fits in it (1M keys), maybe read and written back per store
 // beyond it (the H200's sort of 10M keys took 36x its 1M sort). Same slots, same
 // result; tests/suite/lbvh.rs sorts with both.
+//
+// FUSED_TILES (sort.rs: SortTile::fused): a sort of 2..FUSED_TILES tiles finds each
+// tile's global offsets here, from the count's histograms as they were written, and
+// the scan does not run: a dispatch and a barrier fewer a pass, for each workgroup
+// reading the SORT_BINS x num_tiles counts (steps 1-3 in main).
 // CPU reference: cpu_ref::lbvh::sort_pairs, the whole sort (tests/lbvh.rs).
 #include "radix.glsl"
 #define WG_SCAN_SIZE SORT_WG
@@ -25,6 +30,7 @@
 
 layout(local_size_x_id = 1) in;
 layout(constant_id = 2) const bool LOCAL_ORDER = false;
+layout(constant_id = 3) const uint FUSED_TILES = 0u;
 
 layout(binding = 0) uniform utextureBuffer keys_in;
 layout(binding = 1) uniform utextureBuffer values_in;
@@ -36,6 +42,10 @@ shared uint s_counts[SORT_BINS * SORT_WG];
 shared uint s_base[SORT_BINS];
 // LOCAL_ORDER: where each digit's keys start in the tile's output order.
 shared uint s_first[SORT_BINS];
+// FUSED_TILES: each invocation's sums of its digit's counts, over all its tiles and
+// over those before this tile; then each digit's total.
+shared uint s_fused[2u * SORT_WG];
+shared uint s_digit_total[SORT_BINS];
 
 // LOCAL_ORDER: word `w` of every pair of the tile (the key's words, then the value)
 // into its place in the tile's output order, s_counts reused for it (SORT_ITEMS ==
@@ -106,12 +116,39 @@ void main() {
     uint l = gl_LocalInvocationID.x;
     uint tile = gl_WorkGroupID.x;
     uint base = tile * SORT_TILE + l * SORT_ITEMS;
+    // FUSED_TILES, step 1: invocation l sums digit l % SORT_BINS over every (SORT_WG /
+    // SORT_BINS)-th tile from the count's histograms (`offsets` unscanned). The
+    // exchanges below ride on the barriers the tile's own ranking has.
+    bool fused = pc.num_tiles > 1u && pc.num_tiles <= FUSED_TILES;
+    if (fused) {
+        uint d = l % SORT_BINS;
+        uint all_tiles = 0u;
+        uint before = 0u;
+        for (uint t = l / SORT_BINS; t < pc.num_tiles; t += SORT_WG / SORT_BINS) {
+            uint c = offsets[d * pc.num_tiles + t];
+            all_tiles += c;
+            before += t < tile ? c : 0u;
+        }
+        s_fused[l] = all_tiles;
+        s_fused[SORT_WG + l] = before;
+    }
 
     uvec4 h = count_digits(keys_in, base);
     for (uint d = 0u; d < SORT_BINS; ++d) {
         s_counts[d * SORT_WG + l] = digit_count(h, d);
     }
     barrier();
+    // FUSED_TILES, step 2: digit l's total over all tiles, and its keys in the tiles
+    // before this one (kept here), from the invocations that summed it.
+    uint fused_before = 0u;
+    if (fused && l < SORT_BINS) {
+        uint all_tiles = 0u;
+        for (uint j = l; j < SORT_WG; j += SORT_BINS) {
+            all_tiles += s_fused[j];
+            fused_before += s_fused[SORT_WG + j];
+        }
+        s_digit_total[l] = all_tiles;
+    }
 
     // Exclusive scan of the SORT_BINS * SORT_WG counts: invocation l scans the
     // SORT_BINS consecutive entries starting at l * SORT_BINS.
@@ -129,12 +166,19 @@ void main() {
     }
     barrier();
 
-    // The tile's first slot of each digit, less the scanned count before its first
-    // invocation; added to this invocation's column, its first slot of each digit. A
-    // single tile's scan already counts every earlier key: no global offsets (the
-    // count and scan kernels do not run).
+    // The tile's first slot of each digit (scanned, or found here where fused), less
+    // the scanned count before its first invocation; added to this invocation's
+    // column, its first slot of each digit. A single tile's scan already counts every
+    // earlier key: no global offsets (the count and scan kernels do not run).
     if (l < SORT_BINS) {
-        s_base[l] = pc.num_tiles == 1u ? 0u : offsets[l * pc.num_tiles + tile] - s_counts[l * SORT_WG];
+        // FUSED_TILES, step 3 (the totals written before the scan's barriers): the
+        // keys of every smaller digit, and of this one in the earlier tiles.
+        uint fused_first = fused_before;
+        for (uint e = 0u; e < SORT_BINS; ++e) {
+            fused_first += fused && e < l ? s_digit_total[e] : 0u;
+        }
+        uint global_first = fused ? fused_first : offsets[l * pc.num_tiles + tile];
+        s_base[l] = pc.num_tiles == 1u ? 0u : global_first - s_counts[l * SORT_WG];
         s_first[l] = s_counts[l * SORT_WG];
     }
     barrier();

@@ -189,10 +189,13 @@ pub(super) fn select(list: &[(vk::PhysicalDevice, DeviceInfo)], wanted: Option<&
 /// Vulkan guarantees depth attachments of D16 and of D24 or D32 only, so it is checked.
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
-/// Shared memory of the sort's scatter (`radix_scatter.comp`: `s_counts[SORT_BINS *
-/// SORT_WG]` and `s_base[SORT_BINS]`, 32-bit words, with the GPU's workgroup), the most
-/// any kernel declares: 16,448 bytes, above the 16,384 every Vulkan device has.
-pub const SHARED_BYTES_NEEDED: u32 = (SORT_BINS * SORT_WG_GPU + SORT_BINS) * 4;
+/// Shared memory of the sort's scatter with the GPU's workgroup, the most any kernel
+/// declares, in 32-bit words (`radix_scatter.comp`): `s_counts[SORT_BINS * SORT_WG]`;
+/// `s_base`, `s_first` and `s_digit_total`, `SORT_BINS` each; `s_fused[2 * SORT_WG]`;
+/// and its workgroup scan's (`wg_scan.glsl`) `SORT_WG` and `SORT_WG / 16 + 1`. 19,716
+/// bytes, above the 16,384 every Vulkan device has (GPUs have 32K or more).
+pub const SHARED_BYTES_NEEDED: u32 =
+    (SORT_BINS * SORT_WG_GPU + 3 * SORT_BINS + 2 * SORT_WG_GPU + SORT_WG_GPU + SORT_WG_GPU / 16 + 1) * 4;
 
 /// What a device's limits and depth format lack for Speculum's kernels, as one line
 /// naming it (`None` when nothing): workgroups of `REFIT_TOP_WG` invocations along x
@@ -251,7 +254,7 @@ mod tests {
             ..gpu
         };
         let line = limits_shortfall(&few_bytes, depth).unwrap();
-        assert!(line.contains("16448 bytes") && line.contains("has 16384"), "{line}");
+        assert!(line.contains("19716 bytes") && line.contains("has 16384"), "{line}");
         let line = limits_shortfall(&gpu, vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT).unwrap();
         assert!(line.contains("D32_SFLOAT"), "{line}");
     }

@@ -193,16 +193,32 @@ fn radix_sort_is_a_stable_sort() {
             wg: SORT_WG_GPU,
             items: SORT_ITEMS_MAX,
             local: false,
+            fused: 16,
         },
         SortTile {
             wg: SORT_WG_CPU,
             items: SORT_ITEMS_MAX,
             local: false,
+            fused: 16,
         },
         SortTile {
             wg: SORT_WG_CPU,
             items: 64,
             local: false,
+            fused: 0,
+        },
+        // Every sort of more than one tile scanned, and fused past the defaults.
+        SortTile {
+            fused: 0,
+            ..SortTile::GPU
+        },
+        SortTile {
+            fused: 0,
+            ..SortTile::CPU
+        },
+        SortTile {
+            fused: 1000,
+            ..SortTile::CPU
         },
     ];
     for tile in shapes {

@@ -1,5 +1,6 @@
 //! `lbvh.sort`: stable LSD radix sort of (key, value) pairs, 4 bits per pass, each pass
-//! count → scan → scatter (reduce-then-scan: no workgroup waits on another). A tile is
+//! count → scan → scatter (reduce-then-scan: no workgroup waits on another; a sort of
+//! few tiles, count → scatter, `SortTile::fused`). A tile is
 //! one workgroup's keys, `SortTile::wg` threads x `SortTile::items` keys, its shape
 //! chosen for the device (`SortTile::for_device`).
 //! CPU reference: `cpu_ref::lbvh::sort_pairs` (tests/suite/lbvh.rs).
@@ -15,6 +16,15 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
+
+/// `SortTile::fused` of a GPU's tiles: up to 1M keys, each scatter workgroup reads
+/// 16 x 256 counts (16 a thread) where the scan costs a dispatch and a barrier, which a
+/// GPU's small sorts are made of (the H200 sorted the Sponza-class model's 66K keys in
+/// 0.17 ms, 24 dispatches: their barriers, not its keys).
+const SORT_FUSED_TILES_GPU: u32 = 256;
+/// ... and of a CPU device's: up to 256K keys, a quarter as many counts a workgroup,
+/// each read one lane at a time on lavapipe, 8 a thread at most.
+const SORT_FUSED_TILES_CPU: u32 = 32;
 
 /// The sort's steps, each under its scope in every pass where the sort is timed step
 /// by step (`RadixSort::record_timed`: `bench lbvh`), summed over the passes.
@@ -100,6 +110,11 @@ pub struct SortTile {
     /// LOCAL_ORDER; tiles of `SORT_BINS` keys a thread), where it writes each key to
     /// its slot from the invocation that read it.
     pub local: bool,
+    /// A sort of 2 to this many tiles runs no scan: each scatter workgroup finds its
+    /// tile's offsets from the count's histograms itself (`radix_scatter.comp`'s
+    /// FUSED_TILES), reading all `SORT_BINS` x tiles of them, where a scan is a
+    /// dispatch and a barrier a pass. 0: always the scan.
+    pub fused: u32,
 }
 
 impl SortTile {
@@ -108,6 +123,7 @@ impl SortTile {
         wg: SORT_WG_GPU,
         items: SORT_ITEMS_GPU,
         local: false,
+        fused: SORT_FUSED_TILES_GPU,
     };
     /// A GPU's, written out in order (`SortTile::local`): a candidate for large sorts,
     /// for a GPU run to measure (`bench lbvh --local-sort-scatter`).
@@ -121,6 +137,7 @@ impl SortTile {
         wg: SORT_WG_CPU,
         items: SORT_ITEMS_CPU,
         local: false,
+        fused: SORT_FUSED_TILES_CPU,
     };
 
     pub fn for_device(kind: vk::PhysicalDeviceType) -> Self {
@@ -181,7 +198,7 @@ impl RadixSort {
         );
         let c = [tile.items, tile.wg];
         let kernel = |name, shader| Pipeline::compute_specialized::<SortPush>(ctx, name, shader, &c);
-        let scatter = [tile.items, tile.wg, tile.local as u32];
+        let scatter = [tile.items, tile.wg, tile.local as u32, tile.fused];
         Ok(Self {
             ctx: ctx.clone(),
             tile,
@@ -234,6 +251,7 @@ impl RadixSort {
             // One tile ranks its keys without global offsets (radix_scatter.comp): a
             // small sort (a few bodies, `room`) is one dispatch per pass, not three.
             if num_tiles > 1 {
+                let fused = num_tiles <= self.tile.fused;
                 let count = [
                     ("keys", Resource::Texels(&b.key_texels[i])),
                     ("counts", Resource::Buffer(&b.counts)),
@@ -243,12 +261,14 @@ impl RadixSort {
                     // RAW: the scan reads the histograms just written.
                     barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
                 });
-                let scan = [("counts", Resource::Buffer(&b.counts))];
-                step(SCAN, &mut || {
-                    self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
-                    // RAW: the scatter reads the scanned offsets.
-                    barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
-                });
+                if !fused {
+                    let scan = [("counts", Resource::Buffer(&b.counts))];
+                    step(SCAN, &mut || {
+                        self.scan.dispatch(cmd, &scan, &push, Groups::Exact([1, 1, 1]));
+                        // RAW: the scatter reads the scanned offsets.
+                        barrier::global(d, cmd, access::COMPUTE_WRITE, rw);
+                    });
+                }
             }
             let scatter = [
                 ("keys_in", Resource::Texels(&b.key_texels[i])),

@@ -56,6 +56,9 @@ pub struct Options {
     /// The sort's scatter writes its tiles out in order (`sort::SortTile::local`;
     /// `--local-sort-scatter` on a GPU).
     pub local_sort_scatter: bool,
+    /// Every sort of more than one tile runs its scan (`sort::SortTile::fused` 0;
+    /// `--sort-scan`).
+    pub sort_scan: bool,
     /// Also trace both sets through the walk with its lanes refilled
     /// (`TracePass::refilled`), in each of these shapes.
     pub refilled: Vec<Refill>,

@@ -40,6 +40,10 @@ pub struct ContextDesc {
     /// The sort's scatter writes a GPU tile's pairs out in order
     /// (`sort::SortTile::local`), a candidate `bench lbvh --sort-scatter local` measures.
     pub local_sort_scatter: bool,
+    /// Every sort of more than one tile runs its scan (`sort::SortTile::fused` 0), as
+    /// before the scatter found small sorts' offsets itself: what `bench lbvh
+    /// --sort-scan` compares the fused passes against.
+    pub sort_scan: bool,
     /// Leave the vendor tracer's extensions off, as on a device without them
     /// (`Context::ray_tracing` is `None`, `ray_tracing_missing` says so): how the tests
     /// reach `tracer = khr`'s error on a device that has them.
@@ -86,6 +90,8 @@ pub struct Context {
     pub lockstep_fit: Option<bool>,
     /// `ContextDesc::local_sort_scatter`.
     pub local_sort_scatter: bool,
+    /// `ContextDesc::sort_scan`.
+    pub sort_scan: bool,
     /// Vulkan version the device supports (`vk::make_api_version` encoding).
     pub api_version: u32,
     /// The driver's raw version number (its encoding is the vendor's).
@@ -432,6 +438,7 @@ impl Context {
             kernels_for: desc.kernels_for.unwrap_or(props.device_type),
             lockstep_fit: desc.lockstep_fit,
             local_sort_scatter: desc.local_sort_scatter,
+            sort_scan: desc.sort_scan,
             api_version: props.api_version,
             driver_version: props.driver_version,
             driver_name,

@@ -34,6 +34,7 @@ fn small_lbvh_benchmark_is_valid_and_consistent() {
         keep_hits: false,
         khr_rays: 512,
         local_sort_scatter: false,
+        sort_scan: false,
         // Two shapes: the default, and refills only once every lane idles.
         refilled: vec![Refill::DEFAULT, Refill::new(1, 2).unwrap()],
     };
@@ -191,6 +192,7 @@ fn lbvh_benchmark_anchors_against_embree() {
         keep_hits: false,
         khr_rays: 0,
         local_sort_scatter: false,
+        sort_scan: false,
         refilled: Vec::new(),
     };
     let (v, i) = random_soup(3000, 1.0, default_size(3000), 11);

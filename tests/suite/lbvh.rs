@@ -162,6 +162,30 @@ fn bounds_morton_and_sort_match_cpu_exactly() {
     }
 }
 
+/// `sort_scan` (`bench lbvh --sort-scan`) scans every sort of more than one tile, on
+/// a GPU's tiles and a CPU device's alike; without it each keeps its fused sizes.
+#[test]
+fn sort_scan_turns_the_fused_offsets_off() {
+    use ash::vk::PhysicalDeviceType as Kind;
+    for (kind, tile) in [(Kind::DISCRETE_GPU, SortTile::GPU), (Kind::CPU, SortTile::CPU)] {
+        assert!(tile.fused > 1, "{kind:?}: {tile:?}");
+        for scan in [false, true] {
+            let ctx = common::context_with(speculum::vk::ContextDesc {
+                kernels_for: Some(kind),
+                sort_scan: scan,
+                ..Default::default()
+            });
+            let fused = if scan { 0 } else { tile.fused };
+            assert_eq!(
+                RadixSort::new(&ctx).unwrap().tile(),
+                SortTile { fused, ..tile },
+                "{kind:?}"
+            );
+            assert_eq!(ctx.validation_messages(), 0);
+        }
+    }
+}
+
 /// `local_sort_scatter` (`bench lbvh --local-sort-scatter`) gives the sort written out
 /// in order where the tiles are a GPU's, and leaves a CPU device's tiles direct.
 #[test]

@@ -70,6 +70,11 @@ pub struct LbvhArgs {
     /// keep the direct one).
     #[arg(long)]
     pub local_sort_scatter: bool,
+    /// Every sort of more than one tile runs its scan pass by pass, as before the
+    /// scatter found the offsets of a sort of few tiles itself (up to 256 tiles on a
+    /// GPU, 32 on a CPU device): what the fused passes are measured against.
+    #[arg(long)]
+    pub sort_scan: bool,
     /// Also trace both ray sets of each case through the walk with its lanes refilled
     /// (a candidate for wide SIMD groups: an invocation takes a new ray when its walk
     /// ends, so its group's lanes do not idle behind the longest walk), in its default
@@ -147,6 +152,7 @@ fn lbvh_options(args: &LbvhArgs) -> Result<Options> {
         keep_hits: dumping,
         khr_rays: args.khr_rays.unwrap_or(0),
         local_sort_scatter: false,
+        sort_scan: args.sort_scan,
         refilled: refill_shapes(args)?,
     })
 }
@@ -175,6 +181,7 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
     let text = Text::new(&[c.json.as_deref()], c.quiet);
     let ctx = speculum::vk::Context::new(&speculum::vk::ContextDesc {
         local_sort_scatter: args.local_sort_scatter,
+        sort_scan: args.sort_scan,
         ..c.gpu.desc()
     })?;
     let mut opts = opts;
@@ -186,10 +193,11 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
         "LBVH on {} ({}-bit Morton{}, median (p10–p90) of {} runs, GPU ms)",
         ctx.device_name,
         args.bits.bits(),
-        if opts.local_sort_scatter {
-            ", sort written out in order"
-        } else {
-            ""
+        match (opts.local_sort_scatter, opts.sort_scan) {
+            (true, true) => ", sort written out in order, every sort scanned",
+            (true, false) => ", sort written out in order",
+            (false, true) => ", every sort scanned",
+            (false, false) => "",
         },
         opts.repeats
     ));

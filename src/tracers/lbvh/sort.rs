@@ -150,11 +150,12 @@ impl SortTile {
 
     /// The tile `RadixSort::new` makes on `ctx`: the device's (`Context::kernels_for`),
     /// written out in order where `Context::local_sort_scatter` asks and the tile allows
-    /// (a GPU's).
+    /// (a GPU's), every sort scanned where `Context::sort_scan` asks.
     pub fn of_context(ctx: &Context) -> Self {
         let tile = Self::for_device(ctx.kernels_for);
         let local = ctx.local_sort_scatter && tile.items == SORT_BINS;
-        Self { local, ..tile }
+        let fused = if ctx.sort_scan { 0 } else { tile.fused };
+        Self { local, fused, ..tile }
     }
 
     /// Keys per tile.

@@ -171,13 +171,17 @@ void main() {
     // column, its first slot of each digit. A single tile's scan already counts every
     // earlier key: no global offsets (the count and scan kernels do not run).
     if (l < SORT_BINS) {
-        // FUSED_TILES, step 3 (the totals written before the scan's barriers): the
-        // keys of every smaller digit, and of this one in the earlier tiles.
-        uint fused_first = fused_before;
-        for (uint e = 0u; e < SORT_BINS; ++e) {
-            fused_first += fused && e < l ? s_digit_total[e] : 0u;
+        uint global_first = 0u;
+        if (fused) {
+            // FUSED_TILES, step 3 (the totals written before the scan's barriers): the
+            // keys of every smaller digit, and of this one in the earlier tiles.
+            global_first = fused_before;
+            for (uint e = 0u; e < l; ++e) {
+                global_first += s_digit_total[e];
+            }
+        } else if (pc.num_tiles > 1u) {
+            global_first = offsets[l * pc.num_tiles + tile];
         }
-        uint global_first = fused ? fused_first : offsets[l * pc.num_tiles + tile];
         s_base[l] = pc.num_tiles == 1u ? 0u : global_first - s_counts[l * SORT_WG];
         s_first[l] = s_counts[l * SORT_WG];
     }

@@ -53,11 +53,9 @@ pub struct Options {
     /// Rays of each set the vendor tracer traces (the first of them; 0: no vendor
     /// tracer), on the first builder's case (`bench::khr`).
     pub khr_rays: u32,
-    /// The sort's scatter writes its tiles out in order (`sort::SortTile::local`;
-    /// `--local-sort-scatter` on a GPU).
+    /// The sort's scatter writes its tiles out in order (`sort::SortTile::local`; `--local-sort-scatter`).
     pub local_sort_scatter: bool,
-    /// Every sort of more than one tile runs its scan (`sort::SortTile::fused` 0;
-    /// `--sort-scan`).
+    /// Every sort of more than one tile runs its scan (`sort::SortTile::fused` 0; `--sort-scan`).
     pub sort_scan: bool,
     /// Also trace both sets through the walk with its lanes refilled
     /// (`TracePass::refilled`), in each of these shapes.

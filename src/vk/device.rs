@@ -193,7 +193,7 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// declares, in 32-bit words (`radix_scatter.comp`): `s_counts[SORT_BINS * SORT_WG]`;
 /// `s_base`, `s_first` and `s_digit_total`, `SORT_BINS` each; `s_fused[2 * SORT_WG]`;
 /// and its workgroup scan's (`wg_scan.glsl`) `SORT_WG` and `SORT_WG / 16 + 1`. 19,716
-/// bytes, above the 16,384 every Vulkan device has (GPUs have 32K or more).
+/// bytes, above the 16,384 every Vulkan device has (NVIDIA GPUs have 48K).
 pub const SHARED_BYTES_NEEDED: u32 =
     (SORT_BINS * SORT_WG_GPU + 3 * SORT_BINS + 2 * SORT_WG_GPU + SORT_WG_GPU + SORT_WG_GPU / 16 + 1) * 4;
 

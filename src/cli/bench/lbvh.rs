@@ -190,15 +190,15 @@ pub(super) fn lbvh(args: LbvhArgs) -> Result<()> {
     opts.rays = args.rays.unwrap_or(if cpu { RAYS_ON_A_CPU } else { RAYS_ON_A_GPU });
     opts.khr_rays = args.khr_rays.unwrap_or(if cpu { KHR_RAYS_ON_A_CPU } else { opts.rays });
     text.line(format_args!(
-        "LBVH on {} ({}-bit Morton{}, median (p10–p90) of {} runs, GPU ms)",
+        "LBVH on {} ({}-bit Morton{}{}, median (p10–p90) of {} runs, GPU ms)",
         ctx.device_name,
         args.bits.bits(),
-        match (opts.local_sort_scatter, opts.sort_scan) {
-            (true, true) => ", sort written out in order, every sort scanned",
-            (true, false) => ", sort written out in order",
-            (false, true) => ", every sort scanned",
-            (false, false) => "",
+        if opts.local_sort_scatter {
+            ", sort written out in order"
+        } else {
+            ""
         },
+        if opts.sort_scan { ", every sort scanned" } else { "" },
         opts.repeats
     ));
     if args.local_sort_scatter && !opts.local_sort_scatter {
